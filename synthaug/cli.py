@@ -1,0 +1,53 @@
+"""The ``synthaug`` command line: one subcommand per module, imported lazily.
+
+Each subcommand module exposes ``add_arguments(parser)`` and ``main(args) -> int``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# name -> (module, one-line help)
+SUBCOMMANDS: dict[str, tuple[str, str]] = {
+    "preview": ("synthaug.data.preview", "PNG grid of synthetic samples (real beside synthetic with --seeds)"),
+    "bench": ("synthaug.data.bench", "benchmarks: `synthaug bench render` prints JSON samples/s"),
+    "ingest": ("synthaug.data.ingest_cli", "videos + boxes (or images + COCO) -> seed set with backgrounds"),
+    "detect": ("synthaug.detectors.cli", "checkpoint + video/images -> per-frame detections JSON"),
+    "evaluate": ("synthaug.evaluate.cli", "detections + labels -> precision-recall PNG and AP"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="synthaug", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (module, help_) in SUBCOMMANDS.items():
+        p = sub.add_parser(name, help=help_, description=help_)
+        p.set_defaults(_module=module)
+        try:
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError as e:
+            if e.name and (e.name == module or module.startswith(e.name + ".")):
+                p.set_defaults(_unavailable=f"`synthaug {name}` is not available in this version")
+                continue
+            raise
+        mod.add_arguments(p)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    if getattr(args, "_unavailable", None):
+        print(args._unavailable, file=sys.stderr)
+        return 2
+    mod = importlib.import_module(args._module)
+    return int(mod.main(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
