@@ -149,6 +149,26 @@ def gaussian_blur_fft(
     return out[..., pad:pad + h, pad:pad + w]
 
 
+def _blur_groups(stack: torch.Tensor, groups: int, sigma_u: torch.Tensor, sigma_v: torch.Tensor | None,
+                 angle: torch.Tensor | None, *, pad: int, border: str) -> torch.Tensor:
+    """Blur ``groups`` stacked (B, C, H, W) blocks of ``stack`` with the same per-(B, C) kernels.
+
+    Same result as :func:`gaussian_blur_fft` on the σ's repeated ``groups`` times,
+    but the transfer function (the costly ``exp``) is computed once.
+    """
+    b, gc, h, w = stack.shape
+    c = gc // groups
+    hp, wp = next_fast_len(h + 2 * pad), next_fast_len(w + 2 * pad)
+    pads = (pad, wp - w - pad, pad, hp - h - pad)
+    x = F.pad(stack, pads) if border == "constant" else F.pad(stack, pads, mode=border)
+    spec = torch.fft.rfft2(x).view(b, groups, c, hp, wp // 2 + 1)
+    sv = sigma_u if sigma_v is None else sigma_v
+    ang = torch.zeros_like(sigma_u) if angle is None else angle
+    spec = spec * gaussian_transfer(hp, wp, sigma_u, sv, ang)[:, None]
+    out = torch.fft.irfft2(spec.view(b, gc, hp, wp // 2 + 1), s=(hp, wp))
+    return out[..., pad:pad + h, pad:pad + w]
+
+
 def diffuse_material(
     normals: torch.Tensor,
     coverage: torch.Tensor,
@@ -215,8 +235,9 @@ def motion_blur(
     su = _per_channel(sigma_u, b, c, object_color, "sigma_u")
     sv = _per_channel(sigma_v, b, c, object_color, "sigma_v")
     an = _per_channel(angle, b, c, object_color, "angle")
-    out = gaussian_blur_fft(stack, torch.cat([su, su], 1), torch.cat([sv, sv], 1), torch.cat([an, an], 1),
-                            pad=pad, border="constant")
+    if b == 0:
+        return object_color.clone(), coverage.expand(b, c, *coverage.shape[2:]).clone()
+    out = _blur_groups(stack, 2, su, sv, an, pad=pad, border="constant")
     premul_b, cov_b = out[:, :c], out[:, c:].clamp(0.0, 1.0)
     color = premul_b / cov_b.clamp_min(1e-6)
     color = torch.where(cov_b > 1e-6, color, torch.zeros_like(color))
@@ -244,7 +265,9 @@ def boundary_blur(image: torch.Tensor, coverage: torch.Tensor, sigma_s: torch.Te
     b, c = image.shape[:2]
     s = _per_channel(sigma_s, b, c, image, "sigma_s")
     cov = coverage.expand(b, c, *coverage.shape[2:])
-    out = gaussian_blur_fft(torch.cat([image, cov], 1), torch.cat([s, s], 1), pad=pad, border="replicate")
+    if b == 0:
+        return image.clone()
+    out = _blur_groups(torch.cat([image, cov], 1), 2, s, None, None, pad=pad, border="replicate")
     blurred, m = out[:, :c], out[:, c:].clamp(0.0, 1.0)
     band = (4.0 * m * (1.0 - m)).clamp(0.0, 1.0)
     return image + band * (blurred - image)

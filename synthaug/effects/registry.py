@@ -105,9 +105,16 @@ def register_effect(cls: type[Effect]) -> type[Effect]:
     return cls
 
 
+_BUILTIN_LOADED = False
+
+
 def _ensure_builtin() -> None:
-    # importing the module registers the paper's effects
-    import synthaug.effects.paper  # noqa: F401
+    # importing the module registers the paper's effects (once; this is on a hot path)
+    global _BUILTIN_LOADED
+    if not _BUILTIN_LOADED:
+        import synthaug.effects.paper  # noqa: F401
+
+        _BUILTIN_LOADED = True
 
 
 def get_effect(name: str) -> Effect:
