@@ -18,3 +18,23 @@ def shared_data() -> Path:
     if not (SHARED_DATA / "README.md").exists():
         pytest.skip(f"real data not found at {SHARED_DATA} (clone ../shared beside the repo to run this test)")
     return SHARED_DATA
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _private_view_cache(tmp_path_factory):
+    """Keep the tests' view-cache sprites out of the user's ~/.cache."""
+    old = os.environ.get("SYNTHAUG_CACHE")
+    os.environ["SYNTHAUG_CACHE"] = str(tmp_path_factory.mktemp("synthaug_cache"))
+    yield
+    if old is None:
+        os.environ.pop("SYNTHAUG_CACHE", None)
+    else:
+        os.environ["SYNTHAUG_CACHE"] = old
+
+
+@pytest.fixture(scope="session")
+def small_cache():
+    """A coarse view cache of the built-in quadcopter (30° grid, 48 px sprites)."""
+    from synthaug.render.cache import ViewCache
+
+    return ViewCache.build("quadcopter", step_deg=30, sprite_size=48)
