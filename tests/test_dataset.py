@@ -1,0 +1,212 @@
+"""SyntheticObjectDataset: determinism across workers, mixing, modes, bad inputs, fork safety."""
+
+import json
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+import torch
+from torch.utils.data import DataLoader, Dataset
+
+from synthaug.data.procedural import sky_backgrounds
+from synthaug.data.synthetic import SyntheticObjectDataset, collate_detection
+from synthaug.params import CaptureParams
+
+
+class RealPatches(Dataset):
+    def __init__(self, n=6, size=40):
+        g = torch.Generator().manual_seed(123)
+        self.x = torch.rand(n, 1, size, size, generator=g)
+
+    def __len__(self):
+        return len(self.x)
+
+    def __getitem__(self, i):
+        return self.x[i], 1
+
+
+@pytest.fixture(scope="module")
+def backgrounds():
+    return sky_backgrounds(4, (64, 72), seed=1)
+
+
+def make(backgrounds, small_cache, **kw):
+    kw.setdefault("length", 40)
+    return SyntheticObjectDataset("quadcopter", backgrounds, cache=small_cache, **kw)
+
+
+def _bytes(loader):
+    out = []
+    for images, targets in loader:
+        out.append(images.numpy().tobytes())
+        out.append(targets["theta"].numpy().tobytes())
+        out.append(targets["labels"].numpy().tobytes())
+    return out
+
+
+@pytest.mark.slow
+def test_identical_bytes_with_0_1_2_workers(backgrounds, small_cache):
+    ds = make(backgrounds, small_cache, length=None, real=RealPatches(), synthetic_per_real=5)
+    ds.set_epoch(3)
+    runs = [_bytes(DataLoader(ds, batch_size=7, num_workers=w, shuffle=False)) for w in (0, 1, 2)]
+    assert runs[0] == runs[1] == runs[2]
+
+
+def test_item_is_a_pure_function_of_seed_epoch_index(backgrounds, small_cache):
+    a = make(backgrounds, small_cache, seed=5)
+    b = make(backgrounds, small_cache, seed=5)
+    assert torch.equal(a[7][0], b[7][0])
+    assert torch.equal(a[7][0], a.__getitems__([3, 7, 1])[1][0])  # batch composition doesn't matter
+    c = make(backgrounds, small_cache, seed=6)
+    assert not torch.equal(a[7][0], c[7][0])
+    before = a[7][0].clone()
+    a.set_epoch(1)
+    assert not torch.equal(a[7][0], before)
+    a.set_epoch(0)
+    assert torch.equal(a[7][0], before)
+
+
+def test_mixing_with_a_users_dataset(backgrounds, small_cache):
+    real = RealPatches(n=6)
+    ds = make(backgrounds, small_cache, length=None, real=real, synthetic_per_real=2.5)
+    assert len(ds) == 6 + 15
+    img, target = ds[2]
+    assert torch.equal(img, real[2][0]) and target["synthetic"].item() is False and target["labels"].item() == 1
+    assert target["seed_index"].item() == -1 and torch.isnan(target["theta"]).all()
+    batch = next(iter(DataLoader(ds, batch_size=len(ds))))
+    assert batch[0].shape == (21, 1, 40, 40)
+    assert batch[1]["synthetic"].sum().item() == 15
+
+
+def test_patch_items_targets_and_negatives(backgrounds, small_cache):
+    ds = make(backgrounds, small_cache, negative_fraction=0.5, length=60)
+    labels, seen_neg = [], 0
+    for i in range(len(ds)):
+        img, t = ds[i]
+        assert img.shape == (1, 40, 40) and img.dtype == torch.float32
+        assert 0.0 <= img.min() and img.max() <= 1.0
+        labels.append(int(t["labels"]))
+        # Θ metadata: the seed's capture parameters, the item's own pose
+        row = ds.params[int(t["seed_index"])].to_vector()[0]
+        torch.testing.assert_close(t["theta"][5:], row[5:])
+        if t["labels"] == 0:  # a negative is an untouched crop of the seed's background
+            bg = torch.from_numpy(backgrounds[int(t["seed_index"])]).float() / 255
+            windows = bg.unfold(0, 40, 1).unfold(1, 40, 1)
+            assert (windows - img[0]).abs().amax((-1, -2)).min() < 1e-6
+            seen_neg += 1
+    assert 15 < seen_neg < 45 and set(labels) == {0, 1}
+
+
+def test_object_changes_the_patch_and_effects_can_be_ablated(backgrounds, small_cache):
+    ds = make(backgrounds, small_cache, negative_fraction=0.0)
+    ds_off = make(backgrounds, small_cache, negative_fraction=0.0, effects=["material"])
+    img, t = ds[0]
+    img_off, _ = ds_off[0]
+    s = int(t["seed_index"])
+    assert not torch.equal(img, img_off)
+    bgs = torch.from_numpy(backgrounds[s]).float() / 255
+    windows = bgs.unfold(0, 40, 1).unfold(1, 40, 1)
+    assert (windows - img_off[0]).abs().amax((-1, -2)).min() > 0.05  # the object is there
+
+
+def test_frame_mode_boxes(small_cache):
+    frames = sky_backgrounds(2, (120, 160), seed=3)
+    ds = SyntheticObjectDataset("quadcopter", frames, cache=small_cache, mode="frame", length=12,
+                                object_size=(16, 30), effects=["material"])
+    loader = DataLoader(ds, batch_size=4, collate_fn=collate_detection)
+    images, targets = next(iter(loader))
+    for img, t in zip(images, targets):
+        assert img.shape == (1, 120, 160)
+        assert t["boxes"].dtype == torch.float32 and t["boxes"].shape == (1, 4)
+        assert t["labels"].dtype == torch.int64 and t["labels"].tolist() == [1]
+        x0, y0, x1, y1 = t["boxes"][0].tolist()
+        assert 0 <= x0 < x1 <= 160 and 0 <= y0 < y1 <= 120
+        assert 4 <= max(x1 - x0, y1 - y0) <= 31
+        bg = torch.from_numpy(frames[int(t["seed_index"])]).float() / 255
+        changed = (img[0] - bg).abs() > 0.02
+        ys, xs = torch.nonzero(changed, as_tuple=True)
+        inside = (xs >= x0 - 1) & (xs < x1 + 1) & (ys >= y0 - 1) & (ys < y1 + 1)
+        assert inside.float().mean() > 0.95  # the object lives in its box
+
+
+def test_rgb_mode(small_cache):
+    frames = np.stack([np.dstack([b, b // 2, b // 3]) for b in sky_backgrounds(2, (50, 50), seed=0)])
+    ds = SyntheticObjectDataset("quadcopter", frames, cache=small_cache, length=4, channels=3)
+    img, t = ds[0]
+    assert img.shape == (3, 40, 40) and t["theta"].shape == (5 + 6 * 3,)
+
+
+def test_reads_a_fitted_parameter_file(tmp_path, backgrounds, small_cache):
+    theta = CaptureParams({"sigma_s": [0.5, 1.0, 1.5, 2.0], "w_d": [0.1, 0.2, 0.3, 0.4]})
+    theta.save(tmp_path / "fit.json")
+    ds = make(backgrounds, small_cache, params=tmp_path / "fit.json")
+    _, t = ds[0]
+    s = int(t["seed_index"])
+    assert t["theta"][5].item() == pytest.approx([0.5, 1.0, 1.5, 2.0][s])
+
+
+def test_bad_inputs(tmp_path, backgrounds, small_cache):
+    with pytest.raises(ValueError, match=r"backgrounds\[1\] is 30x30, smaller than the 40x40 patch"):
+        make([backgrounds[0], np.zeros((30, 30), np.uint8)], small_cache)
+    with pytest.raises(ValueError, match="params has 2 rows but there are 4 backgrounds"):
+        make(backgrounds, small_cache, params=CaptureParams.default(2))
+    bad = tmp_path / "bad.json"
+    CaptureParams.default(4).save(bad)
+    doc = json.loads(bad.read_text())
+    doc["rows"][1]["theta"]["sigma_s"] = [float("nan")]
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match="sigma_s .* must be finite, got nan"):
+        make(backgrounds, small_cache, params=bad)
+    with pytest.raises(ValueError, match="mode must be"):
+        make(backgrounds, small_cache, mode="video")
+    with pytest.raises(ValueError, match="backgrounds is empty"):
+        make([], small_cache)
+    with pytest.raises(ValueError, match="length must be given"):
+        make(backgrounds, small_cache, length=None)
+    with pytest.raises(ValueError, match=r"expected an \(H, W\) or \(H, W, C\) image"):
+        make([np.zeros((2, 50, 50, 2))], small_cache)
+    with pytest.raises(ValueError, match="effects .* have no parameters"):
+        make(backgrounds, small_cache, effects=["material", "vignetting_unknown"])
+    with pytest.raises(IndexError, match="out of range"):
+        make(backgrounds, small_cache)[40]
+    with pytest.raises(FileNotFoundError, match="mesh file not found"):
+        SyntheticObjectDataset("/nonexistent/mesh.obj", backgrounds, length=2)
+
+
+FORK_SCRIPT = textwrap.dedent("""
+    import os, sys
+    os.environ["PYOPENGL_PLATFORM"] = "egl"
+    import numpy as np, torch, trimesh, pyrender
+    from torch.utils.data import DataLoader
+    # 1. the user's own code renders with pyrender in the main process first
+    scene = pyrender.Scene()
+    scene.add(pyrender.Mesh.from_trimesh(trimesh.creation.box()))
+    scene.add(pyrender.OrthographicCamera(1, 1), pose=np.array([[1,0,0,0],[0,1,0,0],[0,0,1,3],[0,0,0,1.]]))
+    r = pyrender.OffscreenRenderer(32, 32)
+    r.render(scene)
+    from synthaug.data.synthetic import SyntheticObjectDataset
+    bgs = np.full((2, 48, 48), 128, np.uint8)
+    # 2. our exact renderer also renders in the main process before the fork
+    ds = SyntheticObjectDataset("quadcopter", bgs, length=8, render="exact", negative_fraction=0.0)
+    first = ds[0][0]
+    # 3. forked DataLoader workers render exact samples
+    loader = DataLoader(ds, batch_size=4, num_workers=2, multiprocessing_context="fork")
+    images = torch.cat([b[0] for b in loader])
+    assert torch.equal(images[0], first), "worker result differs from main-process result"
+    print("OK", images.shape[0], flush=True)
+""")
+
+
+@pytest.mark.slow
+def test_dataloader_workers_render_after_the_main_process_rendered(tmp_path):
+    """Forked workers must not deadlock even though the parent holds a GL context."""
+    script = tmp_path / "fork_after_render.py"
+    script.write_text(FORK_SCRIPT)
+    try:
+        proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240)
+    except subprocess.TimeoutExpired:
+        pytest.fail("DataLoader workers hung after the main process rendered (fork after GL context)")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "OK 8" in proc.stdout
