@@ -1,0 +1,104 @@
+"""``synthaug preview``: a PNG grid of synthetic samples (real beside synthetic with ``--seeds``).
+
+Examples::
+
+    synthaug preview --out preview.png                      # built-in quadcopter on generated skies
+    synthaug preview --mesh plane.glb --seeds seeds/drone --params fit.json --out preview.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import torch
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--out", default="preview.png", help="output PNG")
+    parser.add_argument("--mesh", default="quadcopter", help="mesh file or built-in name (default: quadcopter)")
+    parser.add_argument("--seeds", default=None, help="seed-set folder: show real seeds beside synthetic samples")
+    parser.add_argument("--params", default=None, help="capture-parameter file (one row per seed)")
+    parser.add_argument("--n", type=int, default=48, help="samples (without --seeds) or seeds shown (with)")
+    parser.add_argument("--per-seed", type=int, default=4, help="synthetic samples per real seed (with --seeds)")
+    parser.add_argument("--mode", choices=["patch", "frame"], default="patch")
+    parser.add_argument("--size", type=int, default=40, help="patch side")
+    parser.add_argument("--zoom", type=int, default=3, help="nearest-neighbour upscaling of each tile")
+    parser.add_argument("--effects", nargs="*", default=None, help="effects to apply (default: all)")
+    parser.add_argument("--seed", type=int, default=0)
+
+
+def _tile_grid(tiles: list[np.ndarray], cols: int, pad: int = 2, zoom: int = 1) -> np.ndarray:
+    """uint8 (H, W) tiles of equal size -> one grid image, white separators."""
+    h, w = tiles[0].shape
+    rows = math.ceil(len(tiles) / cols)
+    grid = np.full((rows * (h * zoom + pad) + pad, cols * (w * zoom + pad) + pad), 255, np.uint8)
+    for k, t in enumerate(tiles):
+        r, c = divmod(k, cols)
+        t = np.kron(t, np.ones((zoom, zoom), np.uint8)) if zoom > 1 else t
+        y, x = pad + r * (h * zoom + pad), pad + c * (w * zoom + pad)
+        grid[y:y + h * zoom, x:x + w * zoom] = t
+    return grid
+
+
+def _u8(img: torch.Tensor) -> np.ndarray:
+    a = img.detach().float().clamp(0, 1)
+    a = a[0] if a.shape[0] == 1 else a.mean(0)
+    return np.round(a.numpy() * 255).astype(np.uint8)
+
+
+def main(args: argparse.Namespace) -> int:
+    from PIL import Image
+
+    from synthaug.data.procedural import sky_backgrounds
+    from synthaug.data.synthetic import SyntheticObjectDataset
+    from synthaug.params import CaptureParams
+    from synthaug.render.cache import ViewCache
+
+    if args.n < 1 or args.per_seed < 1 or args.zoom < 1:
+        print("--n, --per-seed and --zoom must be >= 1", file=sys.stderr)
+        return 2
+    cache = ViewCache.build(args.mesh, sprite_size=96 if args.mode == "patch" else 128)
+    out = Path(args.out)
+    if args.seeds is None:
+        if args.mode == "patch":
+            bgs = sky_backgrounds(8, (args.size * 2, args.size * 2), seed=args.seed)
+        else:
+            bgs = sky_backgrounds(4, (256, 320), seed=args.seed)
+        params = CaptureParams.load(args.params) if args.params else None
+        ds = SyntheticObjectDataset(args.mesh, bgs, params, length=args.n, mode=args.mode, patch_size=args.size,
+                                    negative_fraction=0.0, effects=args.effects, seed=args.seed, cache=cache)
+        tiles = [_u8(img) for img, _ in ds.__getitems__(list(range(len(ds))))]
+        cols = 8 if args.mode == "patch" else 2
+        grid = _tile_grid(tiles, cols, zoom=args.zoom if args.mode == "patch" else 1)
+        info = {"samples": len(tiles), "mode": args.mode}
+    else:
+        from synthaug.data.seedset import SeedSet
+
+        seeds = SeedSet.load(args.seeds)
+        n = min(args.n, len(seeds))
+        params = CaptureParams.load(args.params) if args.params else None
+        if params is not None and params.batch_size != len(seeds):
+            print(f"{args.params} has {params.batch_size} rows but {args.seeds} has {len(seeds)} seeds", file=sys.stderr)
+            return 2
+        if params is None:
+            params = CaptureParams.sample(len(seeds), generator=torch.Generator().manual_seed(args.seed))
+        tiles = []
+        for k in range(n):
+            ds = SyntheticObjectDataset(args.mesh, [seeds.backgrounds[k]], params[k], length=args.per_seed,
+                                        patch_size=seeds.patch_size, object_scale=seeds.object_fraction,
+                                        negative_fraction=0.0, effects=args.effects, seed=args.seed + k,
+                                        cache=cache)
+            tiles.append(seeds.patches[k])
+            tiles.append(seeds.backgrounds[k])
+            tiles += [_u8(img) for img, _ in ds.__getitems__(list(range(args.per_seed)))]
+        grid = _tile_grid(tiles, 2 + args.per_seed, zoom=args.zoom)
+        info = {"seeds": n, "columns": ["real", "background"] + ["synthetic"] * args.per_seed}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(grid).save(out)
+    print(json.dumps({"preview": str(out), **info}))
+    return 0
