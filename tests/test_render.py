@@ -145,3 +145,10 @@ def test_bad_mesh_files_give_clear_errors(tmp_path):
         load_mesh(points)
     with pytest.raises(ValueError, match="directory"):
         load_mesh(tmp_path)
+
+
+def test_renders_a_shared_mesh(shared_data):
+    with Renderer(shared_data / "meshes" / "twin_prop_airplane.glb") as r:
+        cov, nrm = r.layers([0.0], [math.pi / 2], [0.0], [0.0], [0.0], size=40)
+    assert 30 < float(cov.sum()) < 0.9 * 1600
+    assert float((nrm.norm(dim=1)[cov[:, 0] > 0.99] - 1).abs().max()) < 0.02

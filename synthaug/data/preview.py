@@ -29,6 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--size", type=int, default=40, help="patch side")
     parser.add_argument("--zoom", type=int, default=3, help="nearest-neighbour upscaling of each tile")
     parser.add_argument("--effects", nargs="*", default=None, help="effects to apply (default: all)")
+    parser.add_argument("--step-deg", type=float, default=5.0, help="view-cache grid step (degrees)")
     parser.add_argument("--seed", type=int, default=0)
 
 
@@ -62,7 +63,7 @@ def main(args: argparse.Namespace) -> int:
     if args.n < 1 or args.per_seed < 1 or args.zoom < 1:
         print("--n, --per-seed and --zoom must be >= 1", file=sys.stderr)
         return 2
-    cache = ViewCache.build(args.mesh, sprite_size=96 if args.mode == "patch" else 128)
+    cache = ViewCache.build(args.mesh, step_deg=args.step_deg, sprite_size=96 if args.mode == "patch" else 128)
     out = Path(args.out)
     if args.seeds is None:
         if args.mode == "patch":
