@@ -1,0 +1,183 @@
+"""The fitting objective d(X_i, S(Θ, B_i)), batched over candidate Θ's.
+
+Optimisers search a box ``u ∈ [0, 1]^D``; :class:`FitSpace` maps it to Θ
+(pose + capture parameters) and back. :class:`RenderObjective` renders a whole
+population of candidates in one torch pass (view cache + effects) and scores
+it with a registered distance: this is what makes population optimisers such
+as CMA-ES fast here.
+
+Randomness: the object-noise field is drawn once per seed (common random
+numbers), so the objective is a deterministic function of Θ.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+import torch
+
+from synthaug.effects.pipeline import sample_fields, simulate
+from synthaug.params import POSE_SPECS, CaptureParams, _effect_specs, _effective_effect_names
+
+
+@dataclass(frozen=True)
+class FitSpace:
+    """Free Θ columns, their search bounds, and the map ``u ∈ [0, 1]^D -> Θ``.
+
+    Periodic angles (α, γ, α_m) wrap, so the optimiser may leave [0, 1] on those.
+
+    Attributes:
+        names: column names of ``CaptureParams.to_vector`` (all of them).
+        low, high: search bounds per column.
+        free: mask of columns the optimiser moves; the others stay at ``fixed``.
+        fixed: values of the non-free columns.
+        periodic: mask of wrapping columns.
+    """
+
+    names: tuple[str, ...]
+    low: np.ndarray
+    high: np.ndarray
+    free: np.ndarray
+    fixed: np.ndarray
+    periodic: np.ndarray
+    channels: int
+    effects: tuple[str, ...]
+
+    @classmethod
+    def default(
+        cls,
+        *,
+        channels: int = 1,
+        effects: Sequence[str] | None = None,
+        translation: float = 0.15,
+        bounds: dict[str, tuple[float, float]] | None = None,
+        fixed: dict[str, float] | None = None,
+    ) -> "FitSpace":
+        """Θ with every field free within its spec range; t_x, t_y within ±``translation``
+        (the annotated centre is the patch centre). ``fixed`` pins fields (e.g. to
+        switch an effect's parameters off), ``bounds`` narrows ranges."""
+        eff = _effective_effect_names(effects)
+        specs = POSE_SPECS + _effect_specs(eff)
+        names, low, high, per = [], [], [], []
+        for s in specs:
+            k = channels if s.per_channel else 1
+            lo, hi = s.low, s.high
+            if s.name in ("t_x", "t_y"):
+                lo, hi = -translation, translation
+            if bounds and s.name in bounds:
+                lo, hi = bounds[s.name]
+            for c in range(k):
+                names.append(f"{s.name}[{c}]" if k > 1 else s.name)
+                low.append(lo)
+                high.append(hi)
+                per.append(s.periodic)
+        n = len(names)
+        free = np.ones(n, bool)
+        fixed_v = np.zeros(n)
+        for key, value in dict(fixed or {}).items():
+            cols = [i for i, nm in enumerate(names) if nm == key or nm.startswith(key + "[")]
+            if not cols:
+                raise ValueError(f"fixed: unknown parameter {key!r}")
+            free[cols] = False
+            fixed_v[cols] = value
+        unknown = sorted(set(bounds or {}) - {s.name for s in specs})
+        if unknown:
+            raise ValueError(f"bounds: unknown parameter(s) {unknown}")
+        return cls(tuple(names), np.array(low, float), np.array(high, float), free, fixed_v,
+                   np.array(per, bool), channels, eff)
+
+    @property
+    def dim(self) -> int:
+        return int(self.free.sum())
+
+    def to_vector(self, u: np.ndarray | torch.Tensor) -> torch.Tensor:
+        """(N, D) search coordinates -> (N, P) Θ vectors (float64)."""
+        u = torch.as_tensor(np.asarray(u, dtype=np.float64)) if not isinstance(u, torch.Tensor) else u.double()
+        if u.ndim == 1:
+            u = u[None]
+        if u.shape[1] != self.dim:
+            raise ValueError(f"expected (N, {self.dim}) search coordinates, got {tuple(u.shape)}")
+        per = torch.as_tensor(self.periodic[self.free])
+        u = torch.where(per, torch.remainder(u, 1.0), u.clamp(0.0, 1.0))
+        lo = torch.as_tensor(self.low[self.free])
+        hi = torch.as_tensor(self.high[self.free])
+        v = torch.as_tensor(self.fixed).repeat(u.shape[0], 1)
+        v[:, torch.as_tensor(self.free)] = lo + (hi - lo) * u
+        return v
+
+    def to_theta(self, u: np.ndarray | torch.Tensor) -> CaptureParams:
+        return CaptureParams.from_vector(self.to_vector(u), channels=self.channels, effects=self.effects,
+                                         validate=False)
+
+    def from_theta(self, theta: CaptureParams) -> np.ndarray:
+        """Θ -> (N, D) search coordinates (periodic values folded)."""
+        v = theta.to_vector().double().numpy()[:, self.free]
+        lo, hi = self.low[self.free], self.high[self.free]
+        u = (v - lo) / np.where(hi > lo, hi - lo, 1.0)
+        per = self.periodic[self.free]
+        u[:, per] = np.mod(u[:, per], 1.0)
+        return np.clip(u, 0.0, 1.0) if not per.any() else np.where(per, u, np.clip(u, 0.0, 1.0))
+
+    def free_names(self) -> list[str]:
+        return [n for n, f in zip(self.names, self.free) if f]
+
+
+class RenderObjective:
+    """``f(u) = d(X, S(Θ(u), B))`` for a population of candidates at once.
+
+    Args:
+        target: (1, C, P, P) real seed patch X_i in [0, 1].
+        background: (1, C, P, P) its background B_i.
+        cache: :class:`~synthaug.render.cache.ViewCache` of the mesh.
+        distance: a distance module ``d(x_real, x_syn) -> (N,)``.
+        space: the search space.
+        object_scale: mesh unit length as a fraction of the patch side.
+        noise_seed: seed of the fixed object-noise field.
+        chunk: candidates rendered per torch pass.
+    """
+
+    def __init__(self, target: torch.Tensor, background: torch.Tensor, cache: Any, distance: Any, space: FitSpace,
+                 *, object_scale: float = 0.7, noise_seed: int = 0, chunk: int = 256) -> None:
+        if target.ndim != 4 or target.shape[0] != 1:
+            raise ValueError(f"target must be (1, C, P, P), got {tuple(target.shape)}")
+        if background.shape != target.shape:
+            raise ValueError(f"background {tuple(background.shape)} must match target {tuple(target.shape)}")
+        if target.shape[1] != space.channels:
+            raise ValueError(f"target has {target.shape[1]} channels, the search space {space.channels}")
+        self.target = target.float()
+        self.background = background.float()
+        self.cache = cache
+        self.distance = distance
+        self.space = space
+        self.object_scale = float(object_scale)
+        self.chunk = int(chunk)
+        shape = tuple(target.shape)
+        self.fields = sample_fields(space.effects, shape, torch.Generator().manual_seed(int(noise_seed)))
+        self.n_evals = 0
+
+    def render(self, u: np.ndarray | torch.Tensor) -> torch.Tensor:
+        """S(Θ(u), B) for (N, D) coordinates -> (N, C, P, P)."""
+        theta = self.space.to_theta(u)
+        n = theta.batch_size
+        size = self.target.shape[-1]
+        cov, nrm = self.cache.layers(theta.alpha.float(), theta.beta.float(), theta.gamma.float(),
+                                     theta.t_x.float(), theta.t_y.float(), size=size,
+                                     object_scale=self.object_scale)
+        fields = {k: v.expand(n, *v.shape[1:]) for k, v in self.fields.items()}
+        return simulate(cov, nrm, self.background.expand(n, -1, -1, -1), theta.to(torch.float32),
+                        fields=fields)
+
+    @torch.no_grad()
+    def __call__(self, u: np.ndarray | torch.Tensor) -> np.ndarray:
+        u = np.atleast_2d(np.asarray(u, dtype=np.float64))
+        out = np.empty(len(u))
+        for i in range(0, len(u), self.chunk):
+            images = self.render(u[i:i + self.chunk])
+            out[i:i + self.chunk] = self.distance(self.target, images).double().numpy()
+        self.n_evals += len(u)
+        if not np.all(np.isfinite(out)):
+            out = np.where(np.isfinite(out), out, math.inf)
+        return out
