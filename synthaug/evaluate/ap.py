@@ -1,0 +1,292 @@
+"""Average precision AP = ∫₀¹ p(r) dr and precision–recall curves of a detector on frames.
+
+Matching rule (PASCAL VOC's): all detections of all frames are sorted by
+decreasing score; each, in turn, is compared with the ground-truth boxes of
+its own frame; it is a true positive if the box it overlaps most has
+IoU ≥ ``iou_threshold`` (0.5) and has not been claimed by a higher-scoring
+detection, otherwise a false positive (a duplicate of a found object is a
+false positive). Precision and recall are evaluated at every distinct score
+(detections with equal scores enter together), and
+
+- ``ap`` — the paper's AveP, ``∫ p(r) dr`` of the raw step curve:
+  ``Σ_k (r_k - r_{k-1}) p_k`` over distinct scores (scikit-learn's
+  ``average_precision_score`` convention);
+- ``ap_envelope`` — the same integral of the monotone envelope
+  ``p̂(r) = max_{r' ≥ r} p(r')`` (VOC 2010+ "all points"), reported beside it.
+
+Frames: a ``None`` entry in the detections means the frame was not processed
+(e.g. skipped by a frame stride): that frame and its objects are left out.
+A ``None`` ground truth (object not visible) is a frame with no object: its
+detections are all false positives.
+
+Example:
+    >>> import numpy as np
+    >>> dets = [np.array([[0, 0, 10, 10, 0.9]]), np.array([[50, 50, 10, 10, 0.8]])]
+    >>> gts = [np.array([[0, 0, 10, 10]]), np.array([[0, 0, 10, 10]])]
+    >>> round(evaluate_detections(dets, gts).ap, 3)   # p = 1 up to r = 0.5, then nothing
+    0.5
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+
+@dataclass
+class PRResult:
+    """Precision–recall curve and AP of one evaluation.
+
+    Attributes:
+        precision: precision at each distinct score threshold, high to low score.
+        recall: recall at the same thresholds.
+        thresholds: the distinct scores.
+        ap: ``∫ p(r) dr`` of the step curve (NaN when there is no ground truth).
+        ap_envelope: the same with the monotone precision envelope.
+        n_ground_truth: objects in the evaluated frames.
+        n_detections: detections in the evaluated frames.
+        n_true_positives: detections matched to an object.
+        n_frames: frames evaluated (processed and labelled).
+        iou_threshold: the matching IoU.
+    """
+
+    precision: np.ndarray
+    recall: np.ndarray
+    thresholds: np.ndarray
+    ap: float
+    ap_envelope: float
+    n_ground_truth: int
+    n_detections: int
+    n_true_positives: int
+    n_frames: int
+    iou_threshold: float
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def metrics(self) -> dict[str, Any]:
+        """JSON-ready summary (no curves)."""
+        best_f1 = 0.0
+        if self.precision.size:
+            f1 = 2 * self.precision * self.recall / np.maximum(self.precision + self.recall, 1e-12)
+            best_f1 = float(f1.max())
+        return {
+            "ap": _json_float(self.ap),
+            "ap_envelope": _json_float(self.ap_envelope),
+            "iou_threshold": self.iou_threshold,
+            "n_frames": self.n_frames,
+            "n_ground_truth": self.n_ground_truth,
+            "n_detections": self.n_detections,
+            "n_true_positives": self.n_true_positives,
+            "max_recall": float(self.recall.max()) if self.recall.size else 0.0,
+            "best_f1": best_f1,
+            **self.extra,
+        }
+
+
+def _json_float(x: float) -> float | None:
+    return None if math.isnan(x) else float(x)
+
+
+def iou_xywh(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Pairwise IoU of ``[x, y, w, h]`` boxes, ``(K, 4) x (M, 4) -> (K, M)``.
+
+    Example:
+        >>> iou_xywh(np.array([[0, 0, 2, 2]]), np.array([[1, 0, 2, 2], [5, 5, 1, 1]])).round(4)
+        array([[0.3333, 0.    ]])
+    """
+    a = np.asarray(a, dtype=np.float64).reshape(-1, 4)
+    b = np.asarray(b, dtype=np.float64).reshape(-1, 4)
+    x1 = np.maximum(a[:, None, 0], b[None, :, 0])
+    y1 = np.maximum(a[:, None, 1], b[None, :, 1])
+    x2 = np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
+    y2 = np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
+    inter = np.clip(x2 - x1, 0, None) * np.clip(y2 - y1, 0, None)
+    union = (a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None, :] - inter
+    return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
+
+
+def match_detections(
+    detections: Sequence[np.ndarray | None],
+    ground_truth: Sequence[np.ndarray | None],
+    iou_threshold: float = 0.5,
+) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """Label every detection true/false positive with the VOC rule (module docstring).
+
+    Args:
+        detections: per frame, ``(K, 5)`` ``[x, y, w, h, score]`` or None (not processed).
+        ground_truth: per frame, ``(G, 4)`` ``[x, y, w, h]`` or None (no object).
+            Only the first ``min(len(detections), len(ground_truth))`` frames count.
+        iou_threshold: minimum IoU of a match (inclusive).
+
+    Returns:
+        ``(scores, is_true_positive, n_ground_truth, n_frames)``, the first two
+        sorted by decreasing score (stable: earlier frame first on ties).
+    """
+    if not 0.0 < iou_threshold <= 1.0:
+        raise ValueError(f"iou_threshold must be in (0, 1], got {iou_threshold}")
+    frames = min(len(detections), len(ground_truth))
+    entries: list[tuple[float, int, int]] = []  # (score, frame, row)
+    dets: dict[int, np.ndarray] = {}
+    gts: dict[int, np.ndarray] = {}
+    n_gt = 0
+    n_frames = 0
+    for f in range(frames):
+        if detections[f] is None:
+            continue
+        n_frames += 1
+        d = np.asarray(detections[f], dtype=np.float64).reshape(-1, 5)
+        g = np.zeros((0, 4)) if ground_truth[f] is None else np.asarray(ground_truth[f], dtype=np.float64).reshape(-1, 4)
+        dets[f], gts[f] = d, g
+        n_gt += g.shape[0]
+        entries.extend((float(d[k, 4]), f, k) for k in range(d.shape[0]))
+    entries.sort(key=lambda e: -e[0])  # sort is stable: frame order on ties
+    claimed = {f: np.zeros(g.shape[0], dtype=bool) for f, g in gts.items()}
+    scores = np.array([e[0] for e in entries], dtype=np.float64)
+    is_tp = np.zeros(len(entries), dtype=bool)
+    for i, (_, f, k) in enumerate(entries):
+        g = gts[f]
+        if g.shape[0] == 0:
+            continue
+        ious = iou_xywh(dets[f][k : k + 1, :4], g)[0]
+        j = int(np.argmax(ious))
+        if ious[j] >= iou_threshold and not claimed[f][j]:
+            claimed[f][j] = True
+            is_tp[i] = True
+    return scores, is_tp, n_gt, n_frames
+
+
+def precision_recall(scores: np.ndarray, is_tp: np.ndarray, n_ground_truth: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Precision and recall at each distinct score (scores sorted decreasingly).
+
+    Example:
+        >>> p, r, t = precision_recall(np.array([0.9, 0.8, 0.8]), np.array([True, False, True]), 4)
+        >>> p.tolist(), r.tolist(), t.tolist()
+        ([1.0, 0.6666666666666666], [0.25, 0.5], [0.9, 0.8])
+    """
+    scores = np.asarray(scores, dtype=np.float64)
+    is_tp = np.asarray(is_tp, dtype=bool)
+    if scores.size == 0:
+        return np.zeros(0), np.zeros(0), np.zeros(0)
+    if np.any(np.diff(scores) > 0):
+        raise ValueError("scores must be sorted by decreasing value")
+    tp = np.cumsum(is_tp)
+    fp = np.cumsum(~is_tp)
+    # last index of each run of equal scores: ties enter the curve together
+    last = np.r_[np.nonzero(np.diff(scores))[0], scores.size - 1]
+    precision = tp[last] / (tp[last] + fp[last])
+    recall = tp[last] / n_ground_truth if n_ground_truth > 0 else np.full(last.size, np.nan)
+    return precision, recall, scores[last]
+
+
+def average_precision(precision: np.ndarray, recall: np.ndarray, *, envelope: bool = False) -> float:
+    """``∫ p(r) dr`` of a step precision–recall curve (recall non-decreasing).
+
+    Args:
+        precision: precision at each threshold.
+        recall: recall at the same thresholds, starting implicitly from 0.
+        envelope: integrate ``max_{r' >= r} p(r')`` instead of ``p`` (VOC 2010+).
+
+    Returns:
+        AP in [0, 1]; 0 for an empty curve, NaN if the recall is NaN (no ground truth).
+
+    Example:
+        >>> average_precision(np.array([1.0, 0.5, 2 / 3]), np.array([0.5, 0.5, 1.0]))
+        0.8333333333333333
+        >>> average_precision(np.array([1.0, 0.5, 2 / 3]), np.array([0.5, 0.5, 1.0]), envelope=True)
+        0.8333333333333333
+    """
+    precision = np.asarray(precision, dtype=np.float64)
+    recall = np.asarray(recall, dtype=np.float64)
+    if precision.shape != recall.shape:
+        raise ValueError(f"precision and recall must have the same shape, got {precision.shape} and {recall.shape}")
+    if recall.size == 0:
+        return 0.0
+    if np.isnan(recall).any():
+        return float("nan")
+    if envelope:
+        precision = np.maximum.accumulate(precision[::-1])[::-1]
+    steps = np.diff(np.r_[0.0, recall])
+    if np.any(steps < -1e-12):
+        raise ValueError("recall must be non-decreasing")
+    return float(np.sum(steps * precision))
+
+
+def evaluate_detections(
+    detections: Sequence[np.ndarray | None],
+    ground_truth: Sequence[np.ndarray | None],
+    iou_threshold: float = 0.5,
+) -> PRResult:
+    """Precision–recall curve and AP of per-frame detections against per-frame boxes.
+
+    Args:
+        detections: per frame ``(K, 5)`` ``[x, y, w, h, score]``, or None for a frame not processed.
+        ground_truth: per frame ``(G, 4)`` ``[x, y, w, h]``, or None for "no object".
+        iou_threshold: IoU of a match (0.5 in the paper).
+
+    Returns:
+        A :class:`PRResult`.
+    """
+    scores, is_tp, n_gt, n_frames = match_detections(detections, ground_truth, iou_threshold)
+    precision, recall, thresholds = precision_recall(scores, is_tp, n_gt)
+    if n_gt == 0:
+        ap = ap_env = float("nan")
+    else:
+        ap = average_precision(precision, recall)
+        ap_env = average_precision(precision, recall, envelope=True)
+    return PRResult(
+        precision=precision,
+        recall=recall if n_gt > 0 else np.zeros_like(recall),
+        thresholds=thresholds,
+        ap=ap,
+        ap_envelope=ap_env,
+        n_ground_truth=n_gt,
+        n_detections=int(scores.size),
+        n_true_positives=int(is_tp.sum()),
+        n_frames=n_frames,
+        iou_threshold=float(iou_threshold),
+    )
+
+
+def plot_pr(results: dict[str, PRResult], path: str | Path, *, title: str = "") -> Path:
+    """Write a precision–recall plot (PNG, matplotlib Agg) with one curve per result.
+
+    Args:
+        results: ``{label: PRResult}``; the AP is appended to each label.
+        path: PNG file to write (parent folders created).
+        title: figure title.
+
+    Returns:
+        The path written.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(5, 4.5), dpi=120)
+    try:
+        for label, res in results.items():
+            # step curve from (r=0, p=first precision) as integrated by `ap`
+            r = np.r_[0.0, res.recall]
+            p = np.r_[res.precision[:1] if res.precision.size else [1.0], res.precision]
+            ap = "n/a" if math.isnan(res.ap) else f"{res.ap:.3f}"
+            ax.step(r, p, where="pre", label=f"{label} (AP {ap})")
+        ax.set_xlim(0, 1)
+        ax.set_ylim(0, 1.02)
+        ax.set_xlabel("recall")
+        ax.set_ylabel("precision")
+        ax.grid(alpha=0.3)
+        if title:
+            ax.set_title(title)
+        if results:
+            ax.legend(loc="lower left", fontsize=8)
+        fig.tight_layout()
+        fig.savefig(path)
+    finally:
+        plt.close(fig)
+    return path
