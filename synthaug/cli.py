@@ -14,6 +14,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "preview": ("synthaug.data.preview", "PNG grid of synthetic samples (real beside synthetic with --seeds)"),
     "bench": ("synthaug.data.bench", "benchmarks: `synthaug bench render` prints JSON samples/s"),
     "ingest": ("synthaug.data.ingest_cli", "videos + boxes (or images + COCO) -> seed set with backgrounds"),
+    "fit": ("synthaug.fit.cli", "seed set + mesh + distance -> fitted capture parameters per seed"),
     "detect": ("synthaug.detectors.cli", "checkpoint + video/images -> per-frame detections JSON"),
     "evaluate": ("synthaug.evaluate.cli", "detections + labels -> precision-recall PNG and AP"),
 }

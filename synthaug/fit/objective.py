@@ -45,6 +45,12 @@ class FitSpace:
     periodic: np.ndarray
     channels: int
     effects: tuple[str, ...]
+    scale_range: tuple[float, float] | None = None
+
+    # With ``scale_range`` (an extension of the paper's Θ), one more search
+    # coordinate, the last, sets the object scale log-uniformly in that range:
+    # real boxes are often loose (the object fills much less of the patch than
+    # the box says), and a fixed scale then cannot match the seed.
 
     @classmethod
     def default(
@@ -55,6 +61,7 @@ class FitSpace:
         translation: float = 0.15,
         bounds: dict[str, tuple[float, float]] | None = None,
         fixed: dict[str, float] | None = None,
+        scale_range: tuple[float, float] | None = None,
     ) -> "FitSpace":
         """Θ with every field free within its spec range; t_x, t_y within ±``translation``
         (the annotated centre is the patch centre). ``fixed`` pins fields (e.g. to
@@ -86,12 +93,31 @@ class FitSpace:
         unknown = sorted(set(bounds or {}) - {s.name for s in specs})
         if unknown:
             raise ValueError(f"bounds: unknown parameter(s) {unknown}")
+        if scale_range is not None and not (0 < scale_range[0] <= scale_range[1]):
+            raise ValueError(f"scale_range must be (low, high) with 0 < low <= high, got {scale_range}")
         return cls(tuple(names), np.array(low, float), np.array(high, float), free, fixed_v,
-                   np.array(per, bool), channels, eff)
+                   np.array(per, bool), channels, eff,
+                   None if scale_range is None else (float(scale_range[0]), float(scale_range[1])))
 
     @property
     def dim(self) -> int:
+        return int(self.free.sum()) + (self.scale_range is not None)
+
+    @property
+    def theta_dim(self) -> int:
         return int(self.free.sum())
+
+    def scale(self, u: np.ndarray | torch.Tensor, default: float) -> torch.Tensor:
+        """Object scale of each candidate: the last coordinate (log-uniform) or ``default``."""
+        u = torch.as_tensor(np.atleast_2d(np.asarray(u, dtype=np.float64)))
+        if self.scale_range is None:
+            return torch.full((u.shape[0],), float(default), dtype=torch.float64)
+        lo, hi = self.scale_range
+        return torch.exp(math.log(lo) + (math.log(hi) - math.log(lo)) * u[:, -1].clamp(0.0, 1.0))
+
+    def scale_to_u(self, scale: float) -> float:
+        lo, hi = self.scale_range  # type: ignore[misc]
+        return float(np.clip((math.log(scale) - math.log(lo)) / (math.log(hi) - math.log(lo) or 1.0), 0.0, 1.0))
 
     def to_vector(self, u: np.ndarray | torch.Tensor) -> torch.Tensor:
         """(N, D) search coordinates -> (N, P) Θ vectors (float64)."""
@@ -100,6 +126,7 @@ class FitSpace:
             u = u[None]
         if u.shape[1] != self.dim:
             raise ValueError(f"expected (N, {self.dim}) search coordinates, got {tuple(u.shape)}")
+        u = u[:, : self.theta_dim]
         per = torch.as_tensor(self.periodic[self.free])
         u = torch.where(per, torch.remainder(u, 1.0), u.clamp(0.0, 1.0))
         lo = torch.as_tensor(self.low[self.free])
@@ -119,10 +146,13 @@ class FitSpace:
         u = (v - lo) / np.where(hi > lo, hi - lo, 1.0)
         per = self.periodic[self.free]
         u[:, per] = np.mod(u[:, per], 1.0)
-        return np.clip(u, 0.0, 1.0) if not per.any() else np.where(per, u, np.clip(u, 0.0, 1.0))
+        u = np.where(per, u, np.clip(u, 0.0, 1.0))
+        if self.scale_range is not None:  # the scale is not in Θ: start it mid-range
+            u = np.concatenate([u, np.full((len(u), 1), 0.5)], axis=1)
+        return u
 
     def free_names(self) -> list[str]:
-        return [n for n, f in zip(self.names, self.free) if f]
+        return [n for n, f in zip(self.names, self.free) if f] + (["object_scale"] if self.scale_range else [])
 
 
 class RenderObjective:
@@ -163,9 +193,9 @@ class RenderObjective:
         theta = self.space.to_theta(u)
         n = theta.batch_size
         size = self.target.shape[-1]
+        scale = self.space.scale(u, self.object_scale).float()
         cov, nrm = self.cache.layers(theta.alpha.float(), theta.beta.float(), theta.gamma.float(),
-                                     theta.t_x.float(), theta.t_y.float(), size=size,
-                                     object_scale=self.object_scale)
+                                     theta.t_x.float(), theta.t_y.float(), size=size, object_scale=scale)
         fields = {k: v.expand(n, *v.shape[1:]) for k, v in self.fields.items()}
         return simulate(cov, nrm, self.background.expand(n, -1, -1, -1), theta.to(torch.float32),
                         fields=fields)
