@@ -105,7 +105,7 @@ def build_distance(name: str, seeds: Any | None = None, *, seed: int = 0, **kwar
     except (KeyError, ValueError):
         raise ValueError(f"unknown distance {name!r}; registered: {list_distances()}") from None
     kw = dict(kwargs)
-    if entry.needs_fit and not {"net", "checkpoint", "detector"} & set(kw):
+    if entry.needs_fit and not {"net", "checkpoint", "detector", "positives"} & set(kw):
         if seeds is None:
             raise ValueError(f"distance {name!r} is trained on the seeds: give a seed set")
         if len(seeds.negatives) == 0:
@@ -120,7 +120,7 @@ def build_distance(name: str, seeds: Any | None = None, *, seed: int = 0, **kwar
 
 
 def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance: Any, cfg: FitConfig, *,
-            seed: int, object_scale: float, x0: np.ndarray | None = None) -> dict[str, Any]:
+            seed: int, object_scale: float, x0: np.ndarray | None = None, space: Any = None) -> dict[str, Any]:
     """Fit Θ for one seed. Returns ``{"theta": list, "distance": float, "stats": dict}``.
 
     The pose starts at the annotated centre (t = 0); rotations and capture
@@ -129,7 +129,7 @@ def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance
     from synthaug.fit.objective import FitSpace, RenderObjective
     from synthaug.fit.optimizers import get_optimizer
 
-    space = FitSpace.default(channels=target.shape[1], effects=cfg.effects, translation=cfg.translation,
+    space = space or FitSpace.default(channels=target.shape[1], effects=cfg.effects, translation=cfg.translation,
                              bounds={k: tuple(v) for k, v in cfg.bounds.items()
                                      if k in CaptureParams.vector_names(effects=cfg.effects)},
                              scale_range=(cfg.scale_range[0] * object_scale, cfg.scale_range[1] * object_scale)

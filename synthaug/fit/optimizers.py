@@ -73,23 +73,34 @@ class Optimizer(abc.ABC):
 
 
 class CMAES(Optimizer):
-    """CMA-ES with IPOP restarts (population doubles at each restart).
+    """CMA-ES after a batched uniform exploration, with IPOP restarts.
+
+    A fraction ``explore`` of the budget is spent on uniform samples (one
+    batched call); CMA-ES then starts from the best of them, and restarts (with
+    a population ``grow`` times larger, IPOP) from the next best distinct ones.
 
     Args:
         popsize: first population size (default 4 + 3 ln D, at least 12).
         sigma0: initial step size in [0, 1]-units.
         max_restarts: restarts while budget remains.
+        explore: fraction of the budget spent on the uniform look.
+        share_budget: split the remaining budget evenly between runs (else a run
+            goes on until CMA-ES's own stopping rules).
+        grow: population factor per restart.
     """
 
     name = "cmaes"
 
     def __init__(self, popsize: int | None = None, sigma0: float = 0.2, max_restarts: int = 3,
-                 explore: float = 0.25) -> None:
+                 explore: float = 0.25, share_budget: bool = False, grow: float = 2.0,
+                 explore_dims: tuple[int, ...] | None = None) -> None:
         if sigma0 <= 0:
             raise ValueError(f"sigma0 must be > 0, got {sigma0}")
         if not 0 <= explore < 1:
             raise ValueError(f"explore must be in [0, 1), got {explore}")
         self.popsize, self.sigma0, self.max_restarts, self.explore = popsize, sigma0, max_restarts, explore
+        self.share_budget, self.grow = share_budget, grow
+        self.explore_dims = explore_dims
 
     def minimize(self, f, dim, *, x0=None, seed=0, budget=1500):
         import cma
@@ -104,15 +115,24 @@ class CMAES(Optimizer):
         if n_explore > 0:
             # a batched uniform look over the whole box first: the pose part of the
             # landscape is multimodal, and CMA-ES restarts from the best distinct points
-            xs = rng.random((n_explore, dim))
+            if self.explore_dims is None:
+                xs = rng.random((n_explore, dim))
+            else:  # explore only these coordinates (e.g. the pose), the others stay at x0
+                base = np.full(dim, 0.5) if x0 is None else np.clip(np.asarray(x0, float), 0, 1)
+                xs = np.repeat(base[None], n_explore, axis=0)
+                dims = list(self.explore_dims)
+                xs[:, dims] = rng.random((n_explore, len(dims)))
             if x0 is not None:
                 xs[0] = np.clip(np.asarray(x0, float), 0, 1)
             vals = track(xs)
             starts = [xs[i] for i in np.argsort(vals)[: self.max_restarts + 1]]
         start = starts.pop(0) if starts else (np.full(dim, 0.5) if x0 is None else np.clip(np.asarray(x0, float), 0, 1))
         while track.n < budget and restarts <= self.max_restarts:
+            # share what is left between this run and the restarts still to come
+            runs_left = self.max_restarts + 1 - restarts
+            share = budget - track.n if (runs_left <= 1 or not self.share_budget) else max((budget - track.n) // runs_left, 4 * pop)
             opts = {"bounds": [0.0, 1.0], "seed": int(rng.integers(1, 2**31 - 1)), "popsize": pop, "verbose": -9,
-                    "maxfevals": budget - track.n, "tolfun": 1e-9, "tolx": 1e-7}
+                    "maxfevals": share, "tolfun": 1e-9, "tolx": 1e-7}
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 es = cma.CMAEvolutionStrategy(start, self.sigma0, opts)
@@ -122,8 +142,8 @@ class CMAES(Optimizer):
                         break
                     es.tell(xs, list(track(np.asarray(xs))))
             restarts += 1
-            pop *= 2
-            start = track.best_x if restarts == 1 and not starts else (starts.pop(0) if starts else rng.random(dim))
+            pop = int(pop * self.grow)
+            start = starts.pop(0) if starts else rng.random(dim)
             if track.n + pop > budget:
                 break
         return OptimResult(track.best_x, track.best, track.n, time.perf_counter() - t0, restarts - 1, track.trace)
