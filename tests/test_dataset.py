@@ -210,3 +210,20 @@ def test_dataloader_workers_render_after_the_main_process_rendered(tmp_path):
         pytest.fail("DataLoader workers hung after the main process rendered (fork after GL context)")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "OK 8" in proc.stdout
+
+
+def test_per_seed_object_scale_from_a_fit_file(tmp_path, small_cache):
+    bgs = np.full((2, 40, 40), 200, np.uint8)
+    theta = CaptureParams({"w_d": [0.1, 0.1]})
+    theta.save(tmp_path / "fit.json", extra=[{"object_scale": 0.25}, {"object_scale": 0.9}])
+    ds = SyntheticObjectDataset("quadcopter", bgs, tmp_path / "fit.json", cache=small_cache, length=40,
+                                negative_fraction=0.0, effects=["material"], pose_ranges={"beta": (1.2, 1.5)})
+    area = {0: [], 1: []}
+    for i in range(len(ds)):
+        img, t = ds[i]
+        area[int(t["seed_index"])].append(float((img < 0.6).float().sum()))
+    # areas scale with the square of the object scale: (0.9 / 0.25)^2 ≈ 13
+    assert np.median(area[1]) > 6 * np.median(area[0]) > 0
+    fixed = SyntheticObjectDataset("quadcopter", bgs, tmp_path / "fit.json", cache=small_cache, length=4,
+                                   object_scale=0.5)
+    assert fixed.seed_scales is None

@@ -82,7 +82,11 @@ def main(args: argparse.Namespace) -> int:
 
         seeds = SeedSet.load(args.seeds)
         n = min(args.n, len(seeds))
-        params = CaptureParams.load(args.params) if args.params else None
+        params, scales = None, None
+        if args.params:
+            params, extra, _ = CaptureParams.load_with_extra(args.params)
+            if extra and all("object_scale" in e for e in extra):
+                scales = [e["object_scale"] for e in extra]
         if params is not None and params.batch_size != len(seeds):
             print(f"{args.params} has {params.batch_size} rows but {args.seeds} has {len(seeds)} seeds", file=sys.stderr)
             return 2
@@ -90,8 +94,9 @@ def main(args: argparse.Namespace) -> int:
             params = CaptureParams.sample(len(seeds), generator=torch.Generator().manual_seed(args.seed))
         tiles = []
         for k in range(n):
+            scale = float(scales[k]) if scales is not None else seeds.object_fraction
             ds = SyntheticObjectDataset(args.mesh, [seeds.backgrounds[k]], params[k], length=args.per_seed,
-                                        patch_size=seeds.patch_size, object_scale=seeds.object_fraction,
+                                        patch_size=seeds.patch_size, object_scale=scale,
                                         negative_fraction=0.0, effects=args.effects, seed=args.seed + k,
                                         cache=cache)
             tiles.append(seeds.patches[k])

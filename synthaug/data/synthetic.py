@@ -146,7 +146,9 @@ class SyntheticObjectDataset(Dataset):
             composited into a whole background frame, box target).
         patch_size: side of patches in patch mode (the paper: 40).
         object_scale: mesh unit length (its longest side) as a fraction of the
-            patch side — match the seed set's ``object_fraction``.
+            patch side. None: the per-seed scales of a fit file written with
+            ``fit_scale`` (``synthaug fit``'s default), else 0.7 (the seed
+            sets' default ``object_fraction``).
         negative_fraction: patch mode: fraction of synthetic items that are
             background-only patches (label 0); frame mode: fraction of frames
             without an object.
@@ -175,7 +177,7 @@ class SyntheticObjectDataset(Dataset):
         length: int | None = None,
         mode: Mode = "patch",
         patch_size: int = 40,
-        object_scale: float = 0.7,
+        object_scale: float | None = None,
         negative_fraction: float | None = None,
         object_size: tuple[float, float] = (20.0, 60.0),
         pose_ranges: Mapping[str, tuple[float, float]] | None = None,
@@ -196,7 +198,7 @@ class SyntheticObjectDataset(Dataset):
             raise ValueError(f"channels must be 1 or 3, got {channels}")
         if patch_size < 8:
             raise ValueError(f"patch_size must be >= 8, got {patch_size}")
-        if not 0 < object_scale <= 1.5:
+        if object_scale is not None and not 0 < object_scale <= 1.5:
             raise ValueError(f"object_scale must be in (0, 1.5], got {object_scale}")
         neg = (0.5 if mode == "patch" else 0.0) if negative_fraction is None else float(negative_fraction)
         if not 0.0 <= neg <= 1.0:
@@ -207,7 +209,8 @@ class SyntheticObjectDataset(Dataset):
         self.mode: Mode = mode
         self.channels = channels
         self.patch_size = int(patch_size)
-        self.object_scale = float(object_scale)
+        self.object_scale = 0.7 if object_scale is None else float(object_scale)
+        self.seed_scales: torch.Tensor | None = None
         self.negative_fraction = neg
         self.object_size = (float(lo_sz), float(hi_sz))
         self.seed = int(seed)
@@ -219,7 +222,9 @@ class SyntheticObjectDataset(Dataset):
         n_seeds = len(self.backgrounds)
         if n_seeds == 0:
             raise ValueError("backgrounds is empty: give at least one background image")
-        self.params = self._load_params(params, n_seeds)
+        self.params, scales = self._load_params(params, n_seeds)
+        if object_scale is None and scales is not None:
+            self.seed_scales = scales
         if self.params is None:  # "for now sampled": one row per seed from the default ranges
             g = torch.Generator().manual_seed(self.seed)
             self.params = CaptureParams.sample(n_seeds, generator=g, channels=channels)
@@ -291,16 +296,19 @@ class SyntheticObjectDataset(Dataset):
         return out
 
     @staticmethod
-    def _load_params(params: Any, n: int) -> CaptureParams:
+    def _load_params(params: Any, n: int) -> tuple[CaptureParams | None, torch.Tensor | None]:
         if params is None:
-            return None  # type: ignore[return-value]  # replaced below
+            return None, None  # sampled below
+        scales = None
         if isinstance(params, (str, os.PathLike)):
-            params = CaptureParams.load(Path(params))
+            params, extra, _ = CaptureParams.load_with_extra(Path(params))
+            if extra and all("object_scale" in e for e in extra):
+                scales = torch.tensor([float(e["object_scale"]) for e in extra])
         if not isinstance(params, CaptureParams):
             raise ValueError(f"params must be CaptureParams, a path or None, got {type(params).__name__}")
         if params.batch_size != n:
             raise ValueError(f"params has {params.batch_size} rows but there are {n} backgrounds (one row per seed)")
-        return params
+        return params, scales
 
     def _validate_sizes(self) -> None:
         if self.params.channels != self.channels:
@@ -416,7 +424,8 @@ class SyntheticObjectDataset(Dataset):
             for d in draws
         ])
         if self.mode == "patch":
-            scale = torch.full((len(draws),), self.object_scale)
+            scale = (self.seed_scales[seeds].float() if self.seed_scales is not None
+                     else torch.full((len(draws),), self.object_scale))
         else:
             scale = torch.tensor([d["object_px"] / crop for d in draws])
         cov, nrm = self._layers(pose, crop, scale)
