@@ -164,6 +164,11 @@ class SyntheticObjectDataset(Dataset):
             ``"exact"`` (one GL render per item in a private subprocess, slow).
         cache: a prebuilt :class:`~synthaug.render.cache.ViewCache` to use.
         cache_options: keyword arguments for ``ViewCache.build``.
+        capture_sampling: ``"seed"`` (the paper: each item keeps one seed's
+            capture parameters), ``"kde"`` (drawn from a kernel density over all
+            seeds: combinations no seed had) or ``"uniform"`` (each parameter
+            uniform between its min and max over the seeds: the paper's Fig. 10
+            baseline). The background always comes from one seed.
     """
 
     def __init__(
@@ -188,6 +193,7 @@ class SyntheticObjectDataset(Dataset):
         render: Literal["cache", "exact"] = "cache",
         cache: Any = None,
         cache_options: Mapping[str, Any] | None = None,
+        capture_sampling: Literal["seed", "kde", "uniform"] = "seed",
     ) -> None:
         super().__init__()
         if mode not in ("patch", "frame"):
@@ -233,6 +239,14 @@ class SyntheticObjectDataset(Dataset):
         if missing:
             raise ValueError(f"effects {missing} have no parameters in params (which has {list(self.params.effects)})")
         self._validate_sizes()
+        if capture_sampling not in ("seed", "kde", "uniform"):
+            raise ValueError(f"capture_sampling must be 'seed', 'kde' or 'uniform', got {capture_sampling!r}")
+        self.capture_sampling = capture_sampling
+        self._density = None
+        if capture_sampling != "seed":
+            from synthaug.fit.density import CaptureDensity
+
+            self._density = CaptureDensity(self.params, kind=capture_sampling)
         self._random_effects = [e for e in ordered(list(self.effects))
                                 if e.sample_fields((0, 1, 1, 1), torch.Generator())]
 
@@ -396,6 +410,8 @@ class SyntheticObjectDataset(Dataset):
         for eff in self._random_effects:
             fields.update(eff.sample_fields((1, self.channels, crop, crop), g))
         d["fields"] = fields
+        if self._density is not None:
+            d["capture"] = self._density.sample(1, generator=g)[0]
         return d
 
     def _layers(self, pose: dict[str, torch.Tensor], size: int, object_scale: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -415,6 +431,8 @@ class SyntheticObjectDataset(Dataset):
         crop = self.patch_size if self.mode == "patch" else self._crop_size()
         seeds = torch.tensor([d["seed_index"] for d in draws])
         theta_rows = self.params[seeds]
+        if self._density is not None:
+            theta_rows = self._density.to_params(torch.stack([d["capture"] for d in draws]))
         pose = {n: torch.tensor([d["pose"][n] for d in draws]) for n in POSE_NAMES}
         theta = theta_rows.replace(**pose) if self._pose_in_range(pose) else CaptureParams(
             {**theta_rows.as_dict(), **pose}, channels=self.channels, effects=self.params.effects, validate=False)
