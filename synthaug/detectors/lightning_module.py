@@ -1,0 +1,270 @@
+"""Lightning training of the patch CNN: :class:`PatchDetectorModule` and :class:`PatchDataModule`.
+
+The typed ``__init__`` signatures are the configuration schema of
+``python train/fit.py --config configs/<name>.yaml`` (LightningCLI). Data come
+from a seed-set folder (``SeedSet.load(dir).patches`` as positives,
+``.negatives`` and optionally ``.backgrounds`` as negatives), from generated
+toy patches (:mod:`synthaug.detectors.toy`, for tests and tiny runs), and/or
+from any user ``Dataset`` of ``(patch (1, S, S) float, label float)`` items.
+
+Items are pure functions of ``(seed, index)`` (the horizontal-flip augmentation
+is the odd half of the index range), so the worker count never changes the
+data; the train/val split is drawn once from ``seed``.
+
+Example:
+    >>> dm = PatchDataModule(generated_positives=8, generated_negatives=8, val_fraction=0.25, batch_size=4)
+    >>> dm.setup("fit")
+    >>> len(dm.train_set), len(dm.val_set)
+    (24, 4)
+    >>> x, y = next(iter(dm.train_dataloader()))
+    >>> x.shape, y.dtype
+    (torch.Size([4, 1, 40, 40]), torch.float32)
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import lightning as L
+import torch
+from torch import Tensor, nn
+from torch.utils.data import ConcatDataset, DataLoader, Dataset
+
+from synthaug.detectors.base import save_detector
+from synthaug.detectors.cnn import CNNDetector, PatchCNN, load_patch_cnn
+
+__all__ = ["PatchDetectorModule", "PatchDataModule", "PatchDataset", "export_detector"]
+
+
+class PatchDetectorModule(L.LightningModule):
+    """Binary object/background training of a :class:`~synthaug.detectors.cnn.PatchCNN`.
+
+    Args:
+        channels: network width ``(c1, c2, c3, c4)``, see ``PatchCNN``.
+        window: patch side (40 in the paper).
+        lr: Adam learning rate.
+        weight_decay: Adam (L2) weight decay.
+        pos_weight: weight of the positive class in the BCE loss; None balances
+            the classes from the data module's counts when available, else 1.
+        init_seed: seeds the weight initialisation.
+    """
+
+    def __init__(
+        self,
+        channels: tuple[int, int, int, int] = (8, 16, 32, 64),
+        window: int = 40,
+        lr: float = 3e-3,
+        weight_decay: float = 1e-4,
+        pos_weight: float | None = None,
+        init_seed: int = 0,
+    ) -> None:
+        super().__init__()
+        if lr <= 0:
+            raise ValueError(f"lr must be > 0, got {lr}")
+        if weight_decay < 0:
+            raise ValueError(f"weight_decay must be >= 0, got {weight_decay}")
+        if pos_weight is not None and pos_weight <= 0:
+            raise ValueError(f"pos_weight must be > 0 or None, got {pos_weight}")
+        # plain lists/ints/floats only, so the Lightning checkpoint loads with weights_only=True
+        self.save_hyperparameters({"channels": [int(c) for c in channels], "window": int(window), "lr": float(lr),
+                                   "weight_decay": float(weight_decay), "pos_weight": pos_weight,
+                                   "init_seed": int(init_seed)})
+        self.net = PatchCNN(channels, window=window, generator=torch.Generator().manual_seed(init_seed))
+        self.lr = lr
+        self.weight_decay = weight_decay
+        self.pos_weight = pos_weight
+
+    def forward(self, x: Tensor) -> Tensor:
+        return self.net(x)
+
+    def _pos_weight(self) -> Tensor | None:
+        if self.pos_weight is not None:
+            return torch.tensor(float(self.pos_weight), device=self.device)
+        dm = getattr(self.trainer, "datamodule", None) if self._trainer is not None else None
+        ratio = getattr(dm, "negative_positive_ratio", None)
+        return None if ratio is None else torch.tensor(float(ratio), device=self.device)
+
+    def _step(self, batch: tuple[Tensor, Tensor], stage: str) -> Tensor:
+        x, y = batch
+        logits = self.net(x)
+        loss = nn.functional.binary_cross_entropy_with_logits(logits, y, pos_weight=self._pos_weight())
+        acc = ((logits > 0).float() == y).float().mean()
+        self.log(f"{stage}_loss", loss, prog_bar=True, sync_dist=stage != "train", batch_size=len(y))
+        self.log(f"{stage}_acc", acc, prog_bar=stage != "train", sync_dist=stage != "train", batch_size=len(y))
+        return loss
+
+    def training_step(self, batch: tuple[Tensor, Tensor], batch_idx: int) -> Tensor:
+        return self._step(batch, "train")
+
+    def validation_step(self, batch: tuple[Tensor, Tensor], batch_idx: int) -> Tensor:
+        return self._step(batch, "val")
+
+    def configure_optimizers(self) -> torch.optim.Optimizer:
+        return torch.optim.Adam(self.net.parameters(), lr=self.lr, weight_decay=self.weight_decay)
+
+    def to_detector(self) -> CNNDetector:
+        """A copy of the network as a ``save_detector``-able :class:`CNNDetector` (kind "cnn")."""
+        net = PatchCNN(self.net.channels, window=self.net.window)
+        net.load_state_dict({k: v.detach().cpu() for k, v in self.net.state_dict().items()})
+        return CNNDetector(net)
+
+
+class PatchDataset(Dataset):
+    """Labelled patches with a deterministic horizontal-flip doubling.
+
+    Item ``i`` is patch ``i // 2``, mirrored when ``i`` is odd (when ``flip``).
+
+    Args:
+        patches: float patches in [0, 1], ``(N, 1, S, S)``.
+        labels: 1 object, 0 background, ``(N,)``.
+        flip: double the set with mirrored copies.
+    """
+
+    def __init__(self, patches: Tensor, labels: Tensor, flip: bool = True) -> None:
+        if patches.dim() != 4 or patches.shape[1] != 1 or labels.shape != (patches.shape[0],):
+            raise ValueError(f"patches must be (N, 1, S, S) with labels (N,), got {tuple(patches.shape)} and {tuple(labels.shape)}")
+        self.patches = patches.float()
+        self.labels = labels.float()
+        self.flip = flip
+
+    def __len__(self) -> int:
+        return len(self.patches) * (2 if self.flip else 1)
+
+    def __getitem__(self, i: int) -> tuple[Tensor, Tensor]:
+        j, mirrored = (i // 2, i % 2 == 1) if self.flip else (i, False)
+        x = self.patches[j]
+        return (x.flip(-1) if mirrored else x), self.labels[j]
+
+
+def _u8_to_float(a: Any) -> Tensor:
+    t = torch.as_tensor(a)
+    if t.dtype == torch.uint8:
+        t = t.float() / 255.0
+    t = t.float()
+    return t[:, None] if t.dim() == 3 else t
+
+
+class PatchDataModule(L.LightningDataModule):
+    """Positives and negatives for :class:`PatchDetectorModule`.
+
+    Args:
+        seed_dir: a seed-set folder (``synthaug ingest`` output); paths are
+            relative to the working directory (the repo root for the configs).
+        backgrounds_as_negatives: also use the seed set's object-free background
+            crops as negatives.
+        generated_positives: number of generated toy object patches to add.
+        generated_negatives: number of generated toy background patches to add.
+        extra_dataset: any Dataset of ``(patch (1, S, S), label)`` items, added to training.
+        val_fraction: fraction of the (seed / generated) patches held out for validation.
+        batch_size: mini-batch size.
+        num_workers: DataLoader workers.
+        flip: mirrored copies as augmentation.
+        seed: seeds the split and the generated patches.
+    """
+
+    def __init__(
+        self,
+        seed_dir: str | None = None,
+        backgrounds_as_negatives: bool = True,
+        generated_positives: int = 0,
+        generated_negatives: int = 0,
+        extra_dataset: Dataset | None = None,
+        val_fraction: float = 0.2,
+        batch_size: int = 64,
+        num_workers: int = 0,
+        flip: bool = True,
+        seed: int = 0,
+    ) -> None:
+        super().__init__()
+        if not 0.0 <= val_fraction < 1.0:
+            raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
+        if batch_size < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        if generated_positives < 0 or generated_negatives < 0:
+            raise ValueError(f"generated counts must be >= 0, got {generated_positives}, {generated_negatives}")
+        if seed_dir is None and generated_positives == 0 and extra_dataset is None:
+            raise ValueError("PatchDataModule has no data: give seed_dir, generated_positives/negatives or extra_dataset")
+        self.seed_dir = seed_dir
+        self.backgrounds_as_negatives = backgrounds_as_negatives
+        self.generated_positives = generated_positives
+        self.generated_negatives = generated_negatives
+        self.extra_dataset = extra_dataset
+        self.val_fraction = val_fraction
+        self.batch_size = batch_size
+        self.num_workers = num_workers
+        self.flip = flip
+        self.seed = seed
+        self.negative_positive_ratio: float | None = None
+        self.train_set: Dataset | None = None
+        self.val_set: Dataset | None = None
+
+    def load_patches(self) -> tuple[Tensor, Tensor]:
+        """All positives and negatives (seed set + generated), float ``(N, 1, S, S)``."""
+        pos: list[Tensor] = []
+        neg: list[Tensor] = []
+        if self.seed_dir is not None:
+            from synthaug.data.seedset import SeedSet
+
+            s = SeedSet.load(self.seed_dir)
+            pos.append(_u8_to_float(s.patches))
+            if len(s.negatives):
+                neg.append(_u8_to_float(s.negatives))
+            if self.backgrounds_as_negatives and len(s.backgrounds):
+                neg.append(_u8_to_float(s.backgrounds))
+        if self.generated_positives or self.generated_negatives:
+            from synthaug.detectors.toy import toy_patches
+
+            gp, gn = toy_patches(self.generated_positives, self.generated_negatives, seed=self.seed)
+            pos.append(gp)
+            neg.append(gn)
+        size = (pos or neg)[0].shape[-1] if (pos or neg) else 40
+        empty = torch.zeros(0, 1, size, size)
+        return (torch.cat(pos) if pos else empty), (torch.cat(neg) if neg else empty)
+
+    def setup(self, stage: str | None = None) -> None:
+        if self.train_set is not None:
+            return
+        pos, neg = self.load_patches()
+        g = torch.Generator().manual_seed(self.seed)
+        train_parts: list[Dataset] = []
+        val_parts: list[Dataset] = []
+        for x, label in ((pos, 1.0), (neg, 0.0)):
+            if len(x) == 0:
+                continue
+            perm = torch.randperm(len(x), generator=g)
+            n_val = int(round(len(x) * self.val_fraction))
+            y = torch.full((len(x),), label)
+            train_parts.append(PatchDataset(x[perm[n_val:]], y[perm[n_val:]], self.flip))
+            if n_val:
+                val_parts.append(PatchDataset(x[perm[:n_val]], y[perm[:n_val]], flip=False))
+        if self.extra_dataset is not None:
+            train_parts.append(self.extra_dataset)
+        if not train_parts:
+            raise ValueError(f"no training patches found (seed_dir={self.seed_dir!r})")
+        if len(pos) and len(neg):
+            self.negative_positive_ratio = len(neg) / len(pos)
+        self.train_set = ConcatDataset(train_parts)
+        self.val_set = ConcatDataset(val_parts) if val_parts else None
+
+    def train_dataloader(self) -> DataLoader:
+        # the shuffle order is drawn from an explicit generator (Lightning's DDP sampler re-seeds it per epoch)
+        return DataLoader(self.train_set, batch_size=self.batch_size, shuffle=True, num_workers=self.num_workers,
+                          generator=torch.Generator().manual_seed(self.seed), persistent_workers=self.num_workers > 0)
+
+    def val_dataloader(self) -> DataLoader | list:
+        if self.val_set is None:
+            return []
+        return DataLoader(self.val_set, batch_size=self.batch_size, shuffle=False, num_workers=self.num_workers)
+
+
+def export_detector(checkpoint: str | Path, out: str | Path) -> Path:
+    """Convert a ``PatchDetectorModule`` Lightning checkpoint into a ``save_detector`` file.
+
+    Both files load with ``weights_only=True``; the result is what
+    ``synthaug detect`` and the ``cnn`` distance read.
+
+    Raises:
+        FileNotFoundError / ValueError: see :func:`~synthaug.detectors.cnn.load_patch_cnn`.
+    """
+    return save_detector(CNNDetector(load_patch_cnn(checkpoint)), out)

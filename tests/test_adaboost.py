@@ -1,0 +1,183 @@
+"""AdaBoost of Levi–Weiss stumps: stump search and boosting against numpy, dense scoring against crops."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from synthaug.detectors.adaboost import AdaBoostDetector, best_stumps, train_adaboost
+from synthaug.detectors.base import load_detector, save_detector
+from synthaug.detectors.toy import toy_frame, toy_patches
+from synthaug.detectors.weak_learners import WeakLearners, edge_orientation_energy, exhaustive_candidates
+
+
+def _np_best_stump(f: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[float, float, float]:
+    """Brute force: every midpoint threshold, both polarities."""
+    w = w / w.sum()
+    vals = np.unique(f)
+    best = (2.0, 0.0, 1.0)
+    for a, b in zip(vals[:-1], vals[1:]):
+        tau = (a + b) / 2
+        for pol in (1.0, -1.0):
+            pred = (pol * (f - tau) > 0).astype(float)
+            err = float((w * (pred != y)).sum())
+            if err < best[0] - 1e-12:
+                best = (err, tau, pol)
+    return best
+
+
+def test_best_stumps_match_brute_force() -> None:
+    rng = np.random.default_rng(0)
+    n, m = 40, 12
+    f = rng.random((n, m)).round(2)  # ties on purpose
+    f[:, 3] = 0.5  # a constant column
+    y = (rng.random(n) < 0.4).astype(float)
+    w = rng.random(n)
+    err, tau, pol = best_stumps(torch.from_numpy(f), torch.from_numpy(y).long(), torch.from_numpy(w))
+    assert err[3] == 0.5
+    for j in range(m):
+        if j == 3:
+            continue
+        ref_err, _, _ = _np_best_stump(f[:, j], y, w)
+        assert err[j].item() == pytest.approx(ref_err, abs=1e-6)
+        # the returned threshold/polarity achieve that error
+        pred = (pol[j].item() * (f[:, j] - tau[j].item()) > 0).astype(float)
+        assert float((w / w.sum() * (pred != y)).sum()) == pytest.approx(ref_err, abs=1e-6)
+
+
+def _np_adaboost(f: np.ndarray, y: np.ndarray, rounds: int) -> tuple[list[int], list[float]]:
+    """Textbook discrete AdaBoost (class-balanced start), returns chosen columns and α."""
+    n_pos, n_neg = y.sum(), (1 - y).sum()
+    w = np.where(y == 1, 0.5 / n_pos, 0.5 / n_neg)
+    chosen, alphas = [], []
+    for _ in range(rounds):
+        errs = [_np_best_stump(f[:, j], y, w) for j in range(f.shape[1])]
+        j = int(np.argmin([e[0] for e in errs]))
+        err, tau, pol = errs[j]
+        alpha = 0.5 * math.log((1 - err) / err)
+        h = (pol * (f[:, j] - tau) > 0).astype(float)
+        w = w * np.exp(-alpha * (2 * y - 1) * (2 * h - 1))
+        w = w / w.sum()
+        chosen.append(j)
+        alphas.append(alpha)
+    return chosen, alphas
+
+
+def test_train_adaboost_matches_numpy_reference() -> None:
+    pos, neg = toy_patches(20, 30, seed=3)
+    det = train_adaboost(pos, neg, n_rounds=5, candidates=40, step=8, seed=1)
+    # rebuild the same candidate subset and feature matrix independently
+    rects, orients = exhaustive_candidates(40, 4, step=8, min_size=4)
+    pick = torch.randperm(len(rects), generator=torch.Generator().manual_seed(1))[:40].sort().values
+    rects, orients = rects[pick], orients[pick]
+    f = edge_orientation_energy(torch.cat([pos, neg]).double(), rects, orients).numpy()
+    y = np.r_[np.ones(20), np.zeros(30)]
+    chosen, alphas = _np_adaboost(f, y, 5)
+    assert det.learners.rects.tolist() == rects[chosen].tolist()
+    assert det.learners.orientations.tolist() == orients[chosen].tolist()
+    np.testing.assert_allclose(det.alphas.numpy(), alphas, rtol=1e-4)
+
+
+@pytest.fixture(scope="module")
+def trained() -> AdaBoostDetector:
+    pos, neg = toy_patches(150, 300, seed=0)
+    return train_adaboost(pos, neg, n_rounds=40, candidates=3000, seed=0)
+
+
+def test_generalises_on_toy_data(trained: AdaBoostDetector) -> None:
+    pos, neg = toy_patches(100, 100, seed=99)
+    s = trained.score_patches(torch.cat([pos, neg]))
+    acc = ((s[:100] > 0).float().mean() + (s[100:] <= 0).float().mean()) / 2
+    assert acc > 0.9, acc
+    assert (trained.alphas > 0).all()
+
+
+@pytest.mark.parametrize("size", [(200, 280), (163, 201)])
+def test_score_map_equals_scoring_every_crop(trained: AdaBoostDetector, size: tuple[int, int]) -> None:
+    frame, _ = toy_frame(*size, n_objects=3, seed=5)
+    trained.cascade = False
+    try:
+        dense = trained.score_map(frame)
+    finally:
+        trained.cascade = True
+    cols = torch.nn.functional.unfold(frame, 40, stride=trained.stride)[0].T.reshape(-1, 1, 40, 40)
+    ref = trained.score_patches(cols).reshape(dense.shape)
+    assert dense.shape == ((size[0] - 40) // 4 + 1, (size[1] - 40) // 4 + 1)
+    torch.testing.assert_close(dense, ref, atol=1e-5, rtol=0)
+
+
+def test_score_map_off_grid_learners_match_crops() -> None:
+    # random rectangles (not on a 4-px grid): the g = 1 integral-image path
+    g = torch.Generator().manual_seed(3)
+    wl = WeakLearners.random(25, generator=g, reference=toy_patches(20, 20, seed=1)[0])
+    wl.weights = torch.rand(25, generator=g) + 0.1
+    det = AdaBoostDetector(wl, stride=3, cascade=False)
+    assert det._grid() == 1
+    frame, _ = toy_frame(120, 160, 2, seed=2)
+    dense = det.score_map(frame)
+    cols = torch.nn.functional.unfold(frame, 40, stride=3)[0].T.reshape(-1, 1, 40, 40)
+    torch.testing.assert_close(dense, det.score_patches(cols).reshape(dense.shape), atol=1e-5, rtol=0)
+
+
+def test_cascade_is_a_lower_bound_and_keeps_positives(trained: AdaBoostDetector) -> None:
+    frame, _ = toy_frame(240, 320, n_objects=4, seed=7)
+    trained.cascade = False
+    exact = trained.score_map(frame)
+    trained.cascade = True
+    fast = trained.score_map(frame)
+    assert (fast <= exact + 1e-5).all()
+    survived = (fast - exact).abs() < 1e-5
+    assert survived.float().mean() < 0.5  # the cascade drops most background windows
+    ends = torch.tensor(trained._stage_ends()) - 1
+    # every training positive passes every stage
+    pos, _ = toy_patches(150, 0, seed=0)
+    assert (trained.partial_scores(pos)[:, ends[:-1]] >= trained.rejection[:-1]).all()
+    # and unseen positives that the full classifier accepts are rarely rejected early
+    unseen, _ = toy_patches(300, 0, seed=123)
+    part = trained.partial_scores(unseen)
+    rejected = (part[:, ends[:-1]] < trained.rejection[:-1]).any(1)
+    assert (rejected & (part[:, -1] > 0)).float().mean() < 0.05
+
+
+def test_detect_multiscale_finds_toy_objects(trained: AdaBoostDetector) -> None:
+    from synthaug.detectors.sliding import box_iou, detect_multiscale, xywh_to_xyxy
+
+    frame, boxes = toy_frame(200, 240, n_objects=3, seed=11)
+    dets = detect_multiscale(trained, frame, scales=(1.0,), score_threshold=0.0, nms_iou=0.3)
+    assert len(dets) >= 3
+    iou = box_iou(xywh_to_xyxy(boxes), xywh_to_xyxy(dets[:, :4]))
+    assert (iou.max(1).values >= 0.5).all()
+
+
+def test_small_image_and_save_load(trained: AdaBoostDetector, tmp_path) -> None:
+    assert trained.score_map(torch.rand(1, 1, 30, 100)).shape == (0, 16)
+    path = save_detector(trained, tmp_path / "ada.pt")
+    back = load_detector(path)
+    assert isinstance(back, AdaBoostDetector) and back.stride == trained.stride
+    frame, _ = toy_frame(120, 160, 2, seed=3)
+    torch.testing.assert_close(back.score_map(frame), trained.score_map(frame))
+    raw = torch.load(path, weights_only=True)
+    raw["state"]["rejection"] = torch.zeros(1)
+    torch.save(raw, tmp_path / "bad.pt")
+    with pytest.raises(ValueError, match="rejection"):
+        load_detector(tmp_path / "bad.pt")
+    (tmp_path / "corrupt.pt").write_bytes(path.read_bytes()[:100])
+    with pytest.raises(ValueError, match="corrupt.pt"):
+        load_detector(tmp_path / "corrupt.pt")
+
+
+def test_bad_inputs() -> None:
+    pos, neg = toy_patches(4, 4, seed=0)
+    with pytest.raises(ValueError, match="negatives"):
+        train_adaboost(pos, neg[:0])
+    with pytest.raises(ValueError, match="candidates"):
+        train_adaboost(pos, neg, candidates="all")
+    with pytest.raises(ValueError, match="n_rounds"):
+        train_adaboost(pos, neg, n_rounds=0)
+    with pytest.raises(ValueError, match="no weak learner"):
+        train_adaboost(pos, pos.clone(), n_rounds=3, candidates=50)
+    with pytest.raises(ValueError, match=r"\(N, 1, 40, 40\)"):
+        AdaBoostDetector(WeakLearners.random(3, generator=torch.Generator())).score_patches(torch.rand(2, 1, 20, 20))

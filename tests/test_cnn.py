@@ -1,0 +1,149 @@
+"""PatchCNN: fully convolutional scoring == per-crop scoring, d_CNN = eq. 6, checkpoints."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from synthaug.detectors.base import load_detector, save_detector
+from synthaug.detectors.cnn import CNNDetector, PatchCNN, load_patch_cnn, train_patch_cnn
+from synthaug.detectors.toy import toy_frame, toy_patches
+from synthaug.distances import get_distance
+from synthaug.distances.cnn import CNNDistance
+
+
+def _net(seed: int = 0, channels=(8, 16, 32, 64)) -> PatchCNN:
+    return PatchCNN(channels, generator=torch.Generator().manual_seed(seed))
+
+
+def test_shapes_and_layers() -> None:
+    net = _net()
+    x = torch.rand(3, 1, 40, 40)
+    acts = net.layer_activations(x)
+    assert [tuple(a.shape[1:]) for a in acts] == [(8, 18, 18), (16, 8, 8), (32, 3, 3), (64, 1, 1), (1, 1, 1)]
+    torch.testing.assert_close(net(x), acts[-1].flatten())
+    assert net(x[:0]).shape == (0,)
+
+
+@pytest.mark.parametrize("size", [(40, 40), (47, 55), (48, 96), (121, 163)])
+def test_score_map_equals_scoring_every_crop(size: tuple[int, int]) -> None:
+    det = CNNDetector(_net(1))
+    img = torch.rand(1, 1, *size, generator=torch.Generator().manual_seed(2))
+    dense = det.score_map(img)
+    assert dense.shape == ((size[0] - 40) // 8 + 1, (size[1] - 40) // 8 + 1)
+    crops = torch.nn.functional.unfold(img, 40, stride=8)[0].T.reshape(-1, 1, 40, 40)
+    torch.testing.assert_close(dense, det.score_patches(crops).reshape(dense.shape), atol=1e-4, rtol=1e-4)
+    assert det.score_map(torch.rand(1, 1, 39, 100)).shape == (0, 8)
+
+
+def test_seeded_init_is_reproducible() -> None:
+    a, b, c = _net(5), _net(5), _net(6)
+    assert all(torch.equal(p, q) for p, q in zip(a.parameters(), b.parameters()))
+    assert not torch.equal(a.conv1.weight, c.conv1.weight)
+
+
+def test_cnn_distance_is_eq6() -> None:
+    net = _net(3)
+    d = CNNDistance(net)
+    real = torch.rand(1, 1, 40, 40, generator=torch.Generator().manual_seed(4))
+    syn = torch.rand(5, 1, 40, 40, generator=torch.Generator().manual_seed(5))
+    # reference: numpy sum over neurons of layers 2..5, written out layer by layer
+    with torch.no_grad():
+        ar = [a.numpy().astype(np.float64) for a in net.layer_activations(real)]
+        as_ = [a.numpy().astype(np.float64) for a in net.layer_activations(syn)]
+    ref = np.sqrt(sum(((ar[n] - as_[n]) ** 2).reshape(5, -1).sum(1) for n in range(1, 5)))
+    np.testing.assert_allclose(d(real, syn).detach().numpy(), ref, rtol=1e-5)
+    # layer 1 is excluded: a distance over layers 1..N is strictly larger here
+    assert (CNNDistance(net, first_layer=1)(real, syn) > d(real, syn)).all()
+
+
+def test_cnn_distance_sources_and_frozen_net(tmp_path) -> None:
+    pos, neg = toy_patches(40, 40, seed=0)
+    d = get_distance("cnn", positives=pos, negatives=neg, epochs=1)
+    assert not any(p.requires_grad for p in d.net.parameters())
+    path = save_detector(CNNDetector(d.net), tmp_path / "cnn.pt")
+    d2 = get_distance("cnn", checkpoint=path)
+    x = torch.rand(3, 1, 40, 40)
+    torch.testing.assert_close(d2(x[:1], x), d(x[:1], x))
+    d.train()
+    assert not d.net.training
+    with pytest.raises(ValueError, match="exactly one"):
+        get_distance("cnn")
+    with pytest.raises(ValueError, match="exactly one"):
+        get_distance("cnn", net=_net(), checkpoint=path)
+    with pytest.raises(ValueError, match=r"\(B, 1, 40, 40\)"):
+        d(torch.rand(1, 1, 32, 32), torch.rand(2, 1, 32, 32))
+
+
+def test_train_patch_cnn_learns_toy_task() -> None:
+    pos, neg = toy_patches(80, 160, seed=0)
+    net = train_patch_cnn(pos, neg, epochs=4, seed=0)
+    tp, tn = toy_patches(100, 100, seed=77)
+    with torch.no_grad():
+        s = net(torch.cat([tp, tn]))
+    acc = ((s[:100] > 0).float().mean() + (s[100:] <= 0).float().mean()) / 2
+    assert acc > 0.9, acc
+
+
+def test_detect_multiscale_runs() -> None:
+    from synthaug.detectors.sliding import detect_multiscale
+
+    frame, _ = toy_frame(200, 240, n_objects=2, seed=1)
+    dets = detect_multiscale(CNNDetector(_net()), frame, scales=(1.0, 0.8), max_detections=5)
+    assert dets.shape == (5, 5)
+    assert (dets[:, 2:4] > 0).all() and (dets[:-1, 4] >= dets[1:, 4]).all()
+
+
+def test_checkpoint_roundtrip_mismatch_and_corrupt(tmp_path) -> None:
+    det = CNNDetector(_net(7))
+    path = save_detector(det, tmp_path / "cnn.pt")
+    back = load_detector(path)
+    x = torch.rand(4, 1, 40, 40)
+    torch.testing.assert_close(back.score_patches(x), det.score_patches(x))
+    # weights_only loading works on the raw file
+    raw = torch.load(path, weights_only=True)
+    # mismatched: the config says wider layers than the weights have
+    raw["state"]["config"]["channels"] = [16, 16, 32, 64]
+    torch.save(raw, tmp_path / "mismatch.pt")
+    with pytest.raises(ValueError, match=r"mismatch\.pt.*do not match PatchCNN\(channels=\[16, 16, 32, 64\]"):
+        load_detector(tmp_path / "mismatch.pt")
+    (tmp_path / "corrupt.pt").write_bytes(path.read_bytes()[: len(path.read_bytes()) // 2])
+    with pytest.raises(ValueError, match="corrupt.pt"):
+        load_detector(tmp_path / "corrupt.pt")
+    with pytest.raises(ValueError, match="corrupt.pt"):
+        load_patch_cnn(tmp_path / "corrupt.pt")
+    with pytest.raises(FileNotFoundError):
+        load_patch_cnn(tmp_path / "missing.pt")
+    torch.save({"something": 1}, tmp_path / "other.pt")
+    with pytest.raises(ValueError, match="neither"):
+        load_patch_cnn(tmp_path / "other.pt")
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [({"channels": (8, 16, 32)}, "channels"), ({"channels": (8, 0, 32, 64)}, "channels"),
+     ({"window": 41}, "pool exactly"), ({"window": 8}, "window")],
+)
+def test_bad_construction(kwargs, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        PatchCNN(**kwargs)
+
+
+def test_forward_rejects_wrong_patch_size() -> None:
+    with pytest.raises(ValueError, match="forward expects"):
+        _net()(torch.rand(2, 1, 48, 48))
+    with pytest.raises(ValueError, match="PatchCNN"):
+        CNNDetector("not a net")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("size", [(8, 8), (9, 12), (7, 5)])
+def test_fast_max_pool_matches_torch(size: tuple[int, int]) -> None:
+    from synthaug.detectors.cnn import _max_pool2
+
+    x = torch.randn(2, 3, *size, generator=torch.Generator().manual_seed(0))
+    assert torch.equal(_max_pool2(x), torch.nn.functional.max_pool2d(x, 2))
+    # gradients reach the input through the pooling (used by the differentiable cnn distance)
+    xr = x.clone().requires_grad_(True)
+    _max_pool2(xr).sum().backward()
+    assert xr.grad.sum().item() == pytest.approx(2 * 3 * (size[0] // 2) * (size[1] // 2))
