@@ -238,7 +238,7 @@ def test_fit_cli(tmp_path, capsys):
 
     seeds = _seedset(tmp_path)
     rc = main(["fit", "--seeds", str(seeds), "--out", str(tmp_path / "f.json"), "--budget", "60", "--no-progress",
-               "--distance", "eucl"])
+               "--distance", "eucl", "--step-deg", "30", "--sprite-size", "48"])
     assert rc == 0
     assert json.loads(capsys.readouterr().out)["seeds"] == 4
     assert main(["fit", "--seeds", str(tmp_path / "nothing"), "--out", str(tmp_path / "g.json")]) == 2

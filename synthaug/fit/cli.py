@@ -24,6 +24,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--object-scale", type=float, default=None,
                         help="mesh size / patch side (default: the seed set's object_fraction)")
     parser.add_argument("--effects", nargs="*", default=None, help="effects in Θ (default: the paper's four)")
+    parser.add_argument("--no-fit-scale", action="store_true", help="keep the object scale fixed (the paper)")
+    parser.add_argument("--step-deg", type=float, default=5.0, help="view-cache grid step (degrees)")
+    parser.add_argument("--sprite-size", type=int, default=96, help="view-cache sprite side (px)")
     parser.add_argument("--workers", type=int, default=1, help="local processes")
     parser.add_argument("--dask", default=None, help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
     parser.add_argument("--no-progress", action="store_true")
@@ -34,7 +37,8 @@ def main(args: argparse.Namespace) -> int:
 
     try:
         cfg = FitConfig(distance=args.distance, optimizer=args.optimizer, budget=args.budget, seed=args.seed,
-                        object_scale=args.object_scale, effects=tuple(args.effects) if args.effects else None)
+                        object_scale=args.object_scale, effects=tuple(args.effects) if args.effects else None,
+                        fit_scale=not args.no_fit_scale, step_deg=args.step_deg, sprite_size=args.sprite_size)
         out = fit_seedset(args.seeds, args.mesh, args.out, cfg, workers=args.workers, dask_address=args.dask,
                           progress=not args.no_progress)
     except (ValueError, FileNotFoundError) as e:
