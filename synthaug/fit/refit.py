@@ -1,0 +1,181 @@
+"""Synthetic patches in Lightning training, and the d_CNN refit that follows the network.
+
+- :class:`SyntheticPatchDataModule`: :class:`~synthaug.detectors.lightning_module.PatchDataModule`
+  (real seeds as positives, backgrounds/negatives as negatives) plus a lazily
+  rendered :class:`~synthaug.data.synthetic.SyntheticObjectDataset` stream at
+  ``synthetic_per_real`` synthetic patches per real seed, generated from a
+  capture-parameter file (``synthaug fit`` output) or sampled.
+- :class:`CNNDistanceRefit`: a callback that, every ``every_n_epochs`` epochs,
+  freezes a copy of the network being trained, makes it the ``cnn`` distance
+  (eq. 6: activations of layers 2..N), refits Θ for every seed against it, and
+  hands the new capture parameters to the synthetic stream — so the synthetic
+  images follow the network as it learns (issue 5, item 4). Each refit is
+  written to ``<log_dir>/refit/epoch_NNN.json``.
+
+Both are usable from ``python train/fit.py --config ...`` (see
+``configs/cnn_drone_refit.yaml``).
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+import lightning as L
+import torch
+from torch.utils.data import ConcatDataset, DataLoader, Dataset
+
+from synthaug.detectors.lightning_module import PatchDataModule
+
+
+class SyntheticPatches(Dataset):
+    """Adapter: ``SyntheticObjectDataset`` items -> ``(patch, float label)`` for the patch trainer."""
+
+    def __init__(self, dataset: Any) -> None:
+        self.dataset = dataset
+
+    def __len__(self) -> int:
+        return len(self.dataset)
+
+    def __getitem__(self, i: int) -> tuple[torch.Tensor, torch.Tensor]:
+        return self.__getitems__([i])[0]
+
+    def __getitems__(self, indices: list[int]) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        return [(img, target["labels"].float()) for img, target in self.dataset.__getitems__(indices)]
+
+
+class SyntheticPatchDataModule(PatchDataModule):
+    """Real seed patches + a synthetic stream generated from the same seeds.
+
+    Args:
+        seed_dir: seed-set folder (positives; negatives and backgrounds as negatives).
+        mesh: mesh file or built-in name.
+        params: capture-parameter file (``synthaug fit``); None samples Θ per seed.
+        synthetic_per_real: synthetic positives per real seed.
+        synthetic_negative_fraction: fraction of the synthetic items that are
+            background-only patches (label 0).
+        step_deg, sprite_size: view-cache options.
+        **kwargs: :class:`PatchDataModule` arguments (batch_size, val_fraction...).
+    """
+
+    def __init__(
+        self,
+        seed_dir: str,
+        mesh: str = "quadcopter",
+        params: str | None = None,
+        synthetic_per_real: float = 10.0,
+        synthetic_negative_fraction: float = 0.0,
+        step_deg: float = 5.0,
+        sprite_size: int = 96,
+        backgrounds_as_negatives: bool = True,
+        val_fraction: float = 0.2,
+        batch_size: int = 64,
+        num_workers: int = 0,
+        flip: bool = True,
+        seed: int = 0,
+    ) -> None:
+        super().__init__(seed_dir=seed_dir, backgrounds_as_negatives=backgrounds_as_negatives,
+                         val_fraction=val_fraction, batch_size=batch_size, num_workers=num_workers, flip=flip,
+                         seed=seed)
+        if synthetic_per_real < 0:
+            raise ValueError(f"synthetic_per_real must be >= 0, got {synthetic_per_real}")
+        self.mesh = mesh
+        self.params = params
+        self.synthetic_per_real = synthetic_per_real
+        self.synthetic_negative_fraction = synthetic_negative_fraction
+        self.cache_options = {"step_deg": step_deg, "sprite_size": sprite_size}
+        self.synthetic: Any = None
+
+    def setup(self, stage: str | None = None) -> None:
+        if self.train_set is not None:
+            return
+        from synthaug.data.seedset import SeedSet
+        from synthaug.data.synthetic import SyntheticObjectDataset
+
+        super().setup(stage)
+        seeds = SeedSet.load(self.seed_dir)
+        n_syn = int(round(self.synthetic_per_real * len(seeds)))
+        self.synthetic = SyntheticObjectDataset(self.mesh, seeds, self.params, length=n_syn,
+                                                patch_size=seeds.patch_size,
+                                                negative_fraction=self.synthetic_negative_fraction,
+                                                seed=self.seed, cache_options=self.cache_options)
+        self.train_set = ConcatDataset([*self.train_set.datasets, SyntheticPatches(self.synthetic)])
+
+    def train_dataloader(self) -> DataLoader:
+        # not persistent: a refit of the capture parameters reaches the workers at the next epoch
+        return DataLoader(self.train_set, batch_size=self.batch_size, shuffle=True, num_workers=self.num_workers,
+                          generator=torch.Generator().manual_seed(self.seed + 7919 * self._epoch()))
+
+    def _epoch(self) -> int:
+        trainer = getattr(self, "trainer", None)
+        return int(trainer.current_epoch) if trainer is not None else 0
+
+    def update_params(self, params: Any, scales: torch.Tensor | None = None) -> None:
+        """Swap in new capture parameters (one row per seed) for the synthetic stream."""
+        if self.synthetic is None:
+            raise RuntimeError("setup() has not run")
+        if params.batch_size != self.synthetic.params.batch_size:
+            raise ValueError(f"expected {self.synthetic.params.batch_size} rows, got {params.batch_size}")
+        self.synthetic.params = params
+        if scales is not None:
+            self.synthetic.seed_scales = scales
+
+
+class SyntheticEpochs(L.Callback):
+    """Calls ``set_epoch`` on the synthetic stream: new poses and noise every epoch."""
+
+    def on_train_epoch_start(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        dm = trainer.datamodule
+        if getattr(dm, "synthetic", None) is not None:
+            dm.synthetic.set_epoch(trainer.current_epoch)
+
+
+class CNNDistanceRefit(L.Callback):
+    """Refit Θ per seed with the current network as d_CNN, every ``every_n_epochs`` epochs.
+
+    Args:
+        every_n_epochs: refit period.
+        budget: objective evaluations per seed per refit.
+        first_layer: first CNN layer of the distance (the paper: 2).
+        optimizer: ``cmaes`` or ``anneal``.
+        seed: base seed of the fits.
+    """
+
+    def __init__(self, every_n_epochs: int = 1, budget: int = 400, first_layer: int = 2, optimizer: str = "cmaes",
+                 seed: int = 0) -> None:
+        if every_n_epochs < 1:
+            raise ValueError(f"every_n_epochs must be >= 1, got {every_n_epochs}")
+        self.every_n_epochs = every_n_epochs
+        self.budget = budget
+        self.first_layer = first_layer
+        self.optimizer = optimizer
+        self.seed = seed
+        self.history: list[dict[str, Any]] = []
+
+    def on_train_epoch_end(self, trainer: L.Trainer, pl_module: L.LightningModule) -> None:
+        epoch = trainer.current_epoch
+        if (epoch + 1) % self.every_n_epochs or epoch + 1 >= trainer.max_epochs:
+            return
+        dm = trainer.datamodule
+        if not isinstance(dm, SyntheticPatchDataModule) or dm.synthetic is None:
+            raise ValueError("CNNDistanceRefit needs a SyntheticPatchDataModule")
+        from synthaug.distances.cnn import CNNDistance
+        from synthaug.fit.fitting import FitConfig, fit_seedset
+        from synthaug.params import CaptureParams
+
+        net = copy.deepcopy(pl_module.net).cpu()
+        distance = CNNDistance(net, first_layer=self.first_layer)
+        out_dir = Path(trainer.log_dir or trainer.default_root_dir) / "refit"
+        out = out_dir / f"epoch_{epoch:03d}.json"
+        if trainer.is_global_zero:
+            cfg = FitConfig(distance="cnn", optimizer=self.optimizer, budget=self.budget, seed=self.seed + epoch,
+                            step_deg=dm.cache_options["step_deg"], sprite_size=dm.cache_options["sprite_size"])
+            fit_seedset(dm.seed_dir, dm.mesh, out, cfg, distance=distance)
+        trainer.strategy.barrier()
+        params, extra, meta = CaptureParams.load_with_extra(out)
+        scales = torch.tensor([e["object_scale"] for e in extra]) if all("object_scale" in e for e in extra) else None
+        dm.update_params(params, scales)
+        med = float(meta["distance_median"])
+        self.history.append({"epoch": epoch, "file": str(out), "distance_median": med})
+        pl_module.log("refit_distance_median", med, sync_dist=False)

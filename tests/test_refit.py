@@ -1,0 +1,59 @@
+"""Synthetic patches in Lightning training and the d_CNN refit callback."""
+
+import json
+
+import lightning as L
+import numpy as np
+import pytest
+import torch
+
+from synthaug.data.procedural import sky_backgrounds
+from synthaug.data.seedset import write_seedset
+from synthaug.detectors.lightning_module import PatchDetectorModule
+from synthaug.fit.refit import CNNDistanceRefit, SyntheticEpochs, SyntheticPatchDataModule
+from synthaug.params import CaptureParams
+
+
+def _seeds(tmp_path, n=6):
+    bgs = sky_backgrounds(n, (40, 40), seed=0)
+    patches = bgs.copy()
+    patches[:, 16:24, 10:30] = 30
+    frames = sky_backgrounds(n, (64, 64), seed=1)
+    path = tmp_path / "seeds"
+    write_seedset(path, patches=patches, backgrounds=bgs, boxes=[[0, 0, 20, 8]] * n, centres=[[20, 20]] * n,
+                  crops=[[20, 20, 40]] * n, records=[{"video": "v"}] * n, frames=list(frames),
+                  background_frames=list(frames), negatives=sky_backgrounds(12, (40, 40), seed=2),
+                  metadata={"patch_size": 40, "object_fraction": 0.7})
+    return path
+
+
+def test_datamodule_mixes_synthetic_patches(tmp_path):
+    dm = SyntheticPatchDataModule(str(_seeds(tmp_path)), synthetic_per_real=3, step_deg=30, sprite_size=48,
+                                  val_fraction=0.0, batch_size=8)
+    dm.setup("fit")
+    assert len(dm.synthetic) == 18
+    n_real_pos, n_neg = 6, 12 + 6
+    assert len(dm.train_set) == 2 * (n_real_pos + n_neg) + 18  # flipped copies of the real ones
+    x, y = next(iter(dm.train_dataloader()))
+    assert x.shape == (8, 1, 40, 40) and y.dtype == torch.float32
+
+
+@pytest.mark.slow
+def test_refit_callback_updates_the_synthetic_stream(tmp_path):
+    seeds = _seeds(tmp_path)
+    dm = SyntheticPatchDataModule(str(seeds), synthetic_per_real=2, step_deg=30, sprite_size=48, batch_size=16,
+                                  val_fraction=0.0)
+    refit = CNNDistanceRefit(every_n_epochs=1, budget=40)
+    trainer = L.Trainer(max_epochs=2, accelerator="cpu", logger=False, enable_checkpointing=False,
+                        enable_progress_bar=False, enable_model_summary=False, default_root_dir=tmp_path,
+                        callbacks=[SyntheticEpochs(), refit])
+    model = PatchDetectorModule(channels=(4, 8, 8, 8))
+    before = dm.synthetic.params.to_vector().clone() if dm.synthetic is not None else None
+    trainer.fit(model, datamodule=dm)
+    assert before is None  # setup runs inside fit
+    assert len(refit.history) == 1  # after epoch 0 (none after the last epoch)
+    out = refit.history[0]["file"]
+    doc = json.loads(open(out).read())
+    assert doc["metadata"]["config"]["distance"] == "cnn" and len(doc["rows"]) == 6
+    torch.testing.assert_close(dm.synthetic.params.to_vector(), CaptureParams.load(out).to_vector())
+    assert dm.synthetic.seed_scales is not None
