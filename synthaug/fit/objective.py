@@ -166,11 +166,12 @@ class RenderObjective:
         space: the search space.
         object_scale: mesh unit length as a fraction of the patch side.
         noise_seed: seed of the fixed object-noise field.
-        chunk: candidates rendered per torch pass.
+        chunk: candidates rendered per torch pass (about 100 is fastest here: larger
+            batches fall out of cache).
     """
 
     def __init__(self, target: torch.Tensor, background: torch.Tensor, cache: Any, distance: Any, space: FitSpace,
-                 *, object_scale: float = 0.7, noise_seed: int = 0, chunk: int = 256) -> None:
+                 *, object_scale: float = 0.7, noise_seed: int = 0, chunk: int = 96) -> None:
         if target.ndim != 4 or target.shape[0] != 1:
             raise ValueError(f"target must be (1, C, P, P), got {tuple(target.shape)}")
         if background.shape != target.shape:
