@@ -166,12 +166,18 @@ class RenderObjective:
         space: the search space.
         object_scale: mesh unit length as a fraction of the patch side.
         noise_seed: seed of the fixed object-noise field.
+        origin: (1, 2) pixel (x, y) of the patch's top-left corner in its full
+            frame, and frame_size (1, 2) the frame's (W, H): for position-aware
+            effects (vignetting, lens distortion...).
+        extras: extra (1, ...) layers passed to the effects.
         chunk: candidates rendered per torch pass (about 100 is fastest here: larger
             batches fall out of cache).
     """
 
     def __init__(self, target: torch.Tensor, background: torch.Tensor, cache: Any, distance: Any, space: FitSpace,
-                 *, object_scale: float = 0.7, noise_seed: int = 0, chunk: int = 96) -> None:
+                 *, object_scale: float = 0.7, noise_seed: int = 0, chunk: int = 96,
+                 origin: torch.Tensor | None = None, frame_size: torch.Tensor | None = None,
+                 extras: dict[str, torch.Tensor] | None = None) -> None:
         if target.ndim != 4 or target.shape[0] != 1:
             raise ValueError(f"target must be (1, C, P, P), got {tuple(target.shape)}")
         if background.shape != target.shape:
@@ -187,6 +193,9 @@ class RenderObjective:
         self.chunk = int(chunk)
         shape = tuple(target.shape)
         self.fields = sample_fields(space.effects, shape, torch.Generator().manual_seed(int(noise_seed)))
+        self.origin = None if origin is None else torch.as_tensor(origin, dtype=torch.float32).reshape(1, 2)
+        self.frame_size = None if frame_size is None else torch.as_tensor(frame_size, dtype=torch.float32).reshape(1, 2)
+        self.extras = dict(extras or {})
         self.n_evals = 0
 
     def render(self, u: np.ndarray | torch.Tensor) -> torch.Tensor:
@@ -198,8 +207,10 @@ class RenderObjective:
         cov, nrm = self.cache.layers(theta.alpha.float(), theta.beta.float(), theta.gamma.float(),
                                      theta.t_x.float(), theta.t_y.float(), size=size, object_scale=scale)
         fields = {k: v.expand(n, *v.shape[1:]) for k, v in self.fields.items()}
+        expand = lambda t: None if t is None else t.expand(n, *t.shape[1:])  # noqa: E731
         return simulate(cov, nrm, self.background.expand(n, -1, -1, -1), theta.to(torch.float32),
-                        fields=fields)
+                        fields=fields, origin=expand(self.origin), frame_size=expand(self.frame_size),
+                        extras={k: expand(v) for k, v in self.extras.items()})
 
     @torch.no_grad()
     def __call__(self, u: np.ndarray | torch.Tensor) -> np.ndarray:
