@@ -112,9 +112,9 @@ def _ensure_builtin() -> None:
     # importing the module registers the paper's effects (once; this is on a hot path)
     global _BUILTIN_LOADED
     if not _BUILTIN_LOADED:
-        import synthaug.effects.paper  # noqa: F401
-
         _BUILTIN_LOADED = True
+        import synthaug.effects.paper  # noqa: F401
+        import synthaug.effects.camera  # noqa: F401  (the candidate camera effects of the diagnosis)
 
 
 def get_effect(name: str) -> Effect:

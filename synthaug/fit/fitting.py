@@ -120,7 +120,8 @@ def build_distance(name: str, seeds: Any | None = None, *, seed: int = 0, **kwar
 
 
 def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance: Any, cfg: FitConfig, *,
-            seed: int, object_scale: float, x0: np.ndarray | None = None, space: Any = None) -> dict[str, Any]:
+            seed: int, object_scale: float, x0: np.ndarray | None = None, space: Any = None,
+            geometry: dict[str, torch.Tensor] | None = None) -> dict[str, Any]:
     """Fit Θ for one seed. Returns ``{"theta": list, "distance": float, "stats": dict}``.
 
     The pose starts at the annotated centre (t = 0); rotations and capture
@@ -134,8 +135,10 @@ def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance
                                      if k in CaptureParams.vector_names(effects=cfg.effects)},
                              scale_range=(cfg.scale_range[0] * object_scale, cfg.scale_range[1] * object_scale)
                              if cfg.fit_scale else None)
+    geo = geometry or {}
     objective = RenderObjective(target, background, cache, distance, space, object_scale=object_scale,
-                                noise_seed=seed)
+                                noise_seed=seed, origin=geo.get("origin"), frame_size=geo.get("frame_size"),
+                                extras={"frame_scale": geo["frame_scale"]} if "frame_scale" in geo else None)
     if x0 is None:
         x0 = np.random.default_rng(seed).random(space.dim)
         names = space.free_names()
@@ -176,7 +179,18 @@ def _fit_index(index: int, seeds_path: str, mesh: Any, cfg: FitConfig, distance:
     target = patches_tensor(seeds.patches[index:index + 1])
     background = patches_tensor(seeds.backgrounds[index:index + 1])
     t0 = time.perf_counter()
-    res = fit_one(target, background, ctx["cache"], ctx["distance"], cfg, seed=s, object_scale=scale)
+    geometry = None
+    if cfg.effects is not None and set(cfg.effects) - {"boundary_blur", "motion_blur", "object_noise", "material"}:
+        # camera effects may depend on where the patch sits in its frame (vignetting, distortion...)
+        if "geometry" not in ctx:
+            from synthaug.diagnose.reference_camera import seed_geometry
+
+            ctx["geometry"] = seed_geometry(seeds)
+        g = ctx["geometry"]
+        geometry = {"origin": g["origin"][index:index + 1], "frame_size": g["frame_size"][index:index + 1],
+                    "frame_scale": g["frame_scale"][index:index + 1]}
+    res = fit_one(target, background, ctx["cache"], ctx["distance"], cfg, seed=s, object_scale=scale,
+                  geometry=geometry)
     res["stats"]["seconds"] = round(time.perf_counter() - t0, 3)
     res["index"] = index
     res["generator_seed"] = s

@@ -1,0 +1,697 @@
+"""The measured-data simulator ("reference camera"): seed sets like real ones, with known hidden effects.
+
+Diagnosis (issue 6) must find what the simulation S(Θ, B) misses. To test
+it, this module makes *measured data* whose truth is known: whole camera
+frames with an object at a random place and size, captured through a richer
+camera than the model's, with any chosen candidate effects switched on
+("hidden"), then cut into a seed set in the exact
+:func:`~synthaug.data.seedset.write_seedset` format, so ``SeedSet.load`` and
+``synthaug fit`` read it like an ingested one.
+
+Per seed:
+
+1. a scene background b (procedural sky, or given frames) and a pose, size
+   and place of the object, rendered through a view cache of the *real* mesh
+   (which may differ from the coarse mesh the fit gets: ``mesh_perturbation``);
+2. object-only physics on the object layers: Lambert material w_d, hidden
+   ``specular``, ``rotor_blur`` (true rotor parts of the built-in quadcopter),
+   the paper's motion blur, hidden ``rolling_shutter`` (along the motion
+   direction), the out-of-list ``interlacing``; overlay on b, then the paper's
+   boundary blur and object noise (all at frame scale);
+3. the camera on the WHOLE frame, in physical order: haze → defocus →
+   chromatic aberration → lens distortion → vignetting → exposure → white
+   balance → sensor noise (read + shot) → tone curve → sharpening → 8-bit →
+   JPEG (OpenCV's real codec);
+4. the background frame B through the SAME camera without the object (its
+   noise reduced by ``background_noise_factor``, as an aligned median of
+   several frames is), so B_i contains the whole-frame effects exactly as
+   with real data;
+5. the box of the object's (geometrically warped) coverage, then object and
+   background patches with :func:`~synthaug.data.seedset.crop_patch`.
+
+The truth is stored: the header's ``reference_camera`` block (hidden effects
+and their settings, mesh, noise, ranges), each record's ``truth`` (Θ in patch
+units, the hidden parameters actually used, object size and place) and
+``truth.json``, a :class:`~synthaug.params.CaptureParams` file over
+``PAPER_EFFECTS + hidden`` with per-seed ``object_scale``, ``origin``,
+``frame_size`` and ``frame_scale`` extras, which is what a fit should recover.
+
+Example:
+    >>> import tempfile, os
+    >>> from synthaug.data.seedset import SeedSet
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     p = make_measured_seedset(os.path.join(d, "m"), n_seeds=2, hidden={"vignetting": {"vignette_k": 0.3}},
+    ...                               frame_size=(96, 128), object_px=(16, 20), view_step_deg=30, sprite_size=48)
+    ...     s = SeedSet.load(p)
+    ...     len(s), s.patches.shape, s.metadata["reference_camera"]["hidden"]
+    (2, (2, 40, 40), {'vignetting': {'vignette_k': 0.3}})
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import torch
+
+import synthaug.effects.camera  # noqa: F401  (registers the candidate effects)
+from synthaug.effects import camera_functional as Cx
+from synthaug.effects.camera import CAMERA_EFFECTS
+from synthaug.effects.functional import gaussian_blur_fft
+from synthaug.effects.pipeline import apply_effects
+from synthaug.effects.registry import PAPER_EFFECTS, RenderState, get_effect
+from synthaug.effects import functional as Fx
+from synthaug.params import CaptureParams
+
+__all__ = [
+    "REALISTIC_STRENGTHS",
+    "REALISTIC_RANGES",
+    "OUTSIDE_EFFECTS",
+    "PAPER_RANGES",
+    "WHOLE_FRAME_EFFECTS",
+    "OBJECT_ONLY_EFFECTS",
+    "make_measured_seedset",
+    "quadcopter_parts",
+    "perturb_mesh",
+    "resolve_hidden",
+    "seed_geometry",
+    "load_truth",
+]
+
+Strength = float | tuple[float, float]
+
+# Typical settings of each candidate (a float is one value for the whole seed set,
+# the camera's; a (low, high) pair is drawn per seed, for scene-dependent effects).
+REALISTIC_STRENGTHS: dict[str, dict[str, Strength]] = {
+    "vignetting": {"vignette_k": 0.3},
+    "gamma": {"gamma_g": 0.75},
+    "shot_noise": {"shot_sigma": 0.04},
+    "defocus": {"defocus_sigma": 1.0},
+    "compression": {"jpeg_quality": 40.0},
+    "specular": {"specular_ks": (0.3, 0.6), "specular_shininess": 30.0},
+    "haze": {"haze_amount": (0.15, 0.4), "haze_airlight": 0.85},
+    "chromatic_aberration": {"ca_shift": 2.0},
+    "white_balance": {"wb_gain": 0.9},
+    "sharpening": {"sharpen_amount": 1.0, "sharpen_sigma": 1.0},
+    "lens_distortion": {"distortion_k1": -0.15},
+    "rolling_shutter": {"rs_magnitude": (0.06, 0.15)},
+    "rotor_blur": {"rotor_opacity": (0.15, 0.4)},
+    "exposure": {"exposure_gain": 0.85, "exposure_offset": 0.04},
+    "interlacing": {"interlace_shift": (1.0, 2.0)},
+}
+
+# The realistic span of each setting (documentation, and for tests drawing strengths).
+REALISTIC_RANGES: dict[str, dict[str, tuple[float, float]]] = {
+    "vignetting": {"vignette_k": (0.2, 0.4)},
+    "gamma": {"gamma_g": (0.7, 1.4)},
+    "shot_noise": {"shot_sigma": (0.02, 0.06)},
+    "defocus": {"defocus_sigma": (0.7, 1.5)},
+    "compression": {"jpeg_quality": (30.0, 60.0)},
+    "specular": {"specular_ks": (0.2, 0.6), "specular_shininess": (10.0, 60.0)},
+    "haze": {"haze_amount": (0.1, 0.4), "haze_airlight": (0.7, 0.95)},
+    "chromatic_aberration": {"ca_shift": (1.0, 3.0)},
+    "white_balance": {"wb_gain": (0.8, 1.25)},
+    "sharpening": {"sharpen_amount": (0.5, 1.5), "sharpen_sigma": (0.7, 1.5)},
+    "lens_distortion": {"distortion_k1": (-0.2, 0.1)},
+    "rolling_shutter": {"rs_magnitude": (0.05, 0.15)},
+    "rotor_blur": {"rotor_opacity": (0.1, 0.5)},
+    "exposure": {"exposure_gain": (0.8, 1.3), "exposure_offset": (-0.05, 0.05)},
+    "interlacing": {"interlace_shift": (0.5, 2.5)},
+}
+
+# Effects the reference camera can hide that are NOT candidates of the model
+# (for the "unexplained" case): interlaced fields of a moving object.
+OUTSIDE_EFFECTS: tuple[str, ...] = ("interlacing",)
+
+WHOLE_FRAME_EFFECTS: tuple[str, ...] = (
+    "haze", "defocus", "chromatic_aberration", "lens_distortion", "vignetting", "exposure", "white_balance",
+    "shot_noise", "gamma", "sharpening", "compression",
+)
+OBJECT_ONLY_EFFECTS: tuple[str, ...] = ("specular", "rotor_blur", "rolling_shutter", "interlacing")
+
+# Per-seed ranges of the paper's parameters, in patch pixels (σ) / intensity.
+PAPER_RANGES: dict[str, tuple[float, float]] = {
+    "w_d": (0.05, 0.7),
+    "sigma_s": (0.3, 1.2),
+    "sigma_u": (0.0, 2.0),
+    "sigma_v": (0.0, 0.6),
+    "alpha_m": (-math.pi / 2, math.pi / 2),
+    "sigma_n": (0.0, 0.03),
+}
+
+_REFERENCE_ONLY_PARAMS = {"rolling_shutter": ("rs_magnitude",), "interlacing": ("interlace_shift",)}
+_FORMAT = "synthaug.reference_camera"
+_VERSION = 1
+
+
+# ------------------------------------------------------------------ hidden
+def resolve_hidden(
+    hidden: Mapping[str, Mapping[str, Strength]] | Sequence[str] | None,
+) -> dict[str, dict[str, Strength]]:
+    """Hidden effects with every setting filled in (defaults from :data:`REALISTIC_STRENGTHS`).
+
+    Args:
+        hidden: ``{effect: {param: value or (low, high)}}`` (missing params take
+            their realistic default), or a list of effect names, or None.
+
+    Returns:
+        ``{effect: {param: value or (low, high)}}``, in :data:`CAMERA_EFFECTS` order.
+
+    Example:
+        >>> resolve_hidden(["defocus"])
+        {'defocus': {'defocus_sigma': 1.0}}
+    """
+    if hidden is None:
+        return {}
+    if isinstance(hidden, str):
+        raise ValueError(f"hidden must be a mapping or a list of effect names, got the string {hidden!r}")
+    items = dict(hidden) if isinstance(hidden, Mapping) else {name: {} for name in hidden}
+    known = set(CAMERA_EFFECTS) | set(OUTSIDE_EFFECTS)
+    out: dict[str, dict[str, Strength]] = {}
+    for name in list(CAMERA_EFFECTS) + list(OUTSIDE_EFFECTS):
+        if name not in items:
+            continue
+        given = dict(items[name] or {})
+        allowed = set(REALISTIC_STRENGTHS[name])
+        if name in CAMERA_EFFECTS:
+            allowed |= {s.name for s in get_effect(name).params}
+        if name == "rolling_shutter" and ({"rs_skew", "rs_stretch"} & set(given)):
+            base = {}  # explicit shear instead of a magnitude along the motion direction
+        else:
+            base = dict(REALISTIC_STRENGTHS[name])
+        bad = sorted(set(given) - allowed)
+        if bad:
+            raise ValueError(f"hidden[{name!r}]: unknown parameter(s) {bad}; known: {sorted(allowed)}")
+        merged = {**base, **given}
+        for k, v in merged.items():
+            merged[k] = _check_strength(name, k, v)
+        out[name] = merged
+    unknown = sorted(set(items) - known)
+    if unknown:
+        raise ValueError(f"unknown hidden effect(s) {unknown}; candidates: {sorted(known)}")
+    return out
+
+
+def _check_strength(effect: str, name: str, v: Any) -> Strength:
+    if isinstance(v, (tuple, list)):
+        if len(v) != 2 or not all(math.isfinite(float(x)) for x in v) or float(v[0]) > float(v[1]):
+            raise ValueError(f"hidden[{effect!r}][{name!r}] must be a number or (low, high), got {v!r}")
+        lo, hi = float(v[0]), float(v[1])
+        _check_in_spec(effect, name, lo)
+        _check_in_spec(effect, name, hi)
+        return (lo, hi)
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"hidden[{effect!r}][{name!r}] must be a number or (low, high), got {v!r}") from None
+    if not math.isfinite(x):
+        raise ValueError(f"hidden[{effect!r}][{name!r}] must be finite, got {v!r}")
+    _check_in_spec(effect, name, x)
+    return x
+
+
+def _check_in_spec(effect: str, name: str, x: float) -> None:
+    if effect not in CAMERA_EFFECTS:
+        return
+    for s in get_effect(effect).params:
+        if s.name == name and not (s.low <= x <= s.high):
+            raise ValueError(f"hidden[{effect!r}][{name!r}] must be in [{s.low}, {s.high}], got {x}")
+
+
+def _draw_strengths(settings: dict[str, dict[str, Strength]], rng: np.random.Generator) -> dict[str, dict[str, float]]:
+    out = {}
+    for eff, params in settings.items():
+        out[eff] = {k: (float(rng.uniform(v[0], v[1])) if isinstance(v, tuple) else float(v))
+                    for k, v in sorted(params.items())}
+    return out
+
+
+# ------------------------------------------------------------------ meshes
+def quadcopter_parts(**kwargs: Any):
+    """The built-in quadcopter (normalised) and a boolean mask of its rotor faces.
+
+    Rotors are found as the connected components that are thin discs (height
+    < 1.5 % of the model, span > 20 %), so the mask follows
+    :func:`~synthaug.render.mesh.make_quadcopter` whatever its face order.
+
+    Returns:
+        (mesh, rotor_faces) with rotor_faces a (F,) bool array; 4 discs.
+    """
+    import trimesh
+
+    from synthaug.render.mesh import make_quadcopter
+
+    mesh = make_quadcopter(**kwargs)
+    groups = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(mesh.faces)))
+    mask = np.zeros(len(mesh.faces), bool)
+    n_rotors = 0
+    for faces in groups:
+        faces = np.asarray(faces)
+        pts = mesh.vertices[np.unique(mesh.faces[faces])]
+        ext = pts.max(0) - pts.min(0)
+        if ext[2] < 0.015 and min(ext[0], ext[1]) > 0.2:
+            mask[faces] = True
+            n_rotors += 1
+    if n_rotors != 4:
+        raise RuntimeError(f"expected 4 rotor discs in the quadcopter, found {n_rotors}")
+    return mesh, mask
+
+
+def perturb_mesh(mesh: Any, amount: float, *, seed: int = 0):
+    """A smoothly deformed copy of ``mesh`` (the real object ≠ the coarse model).
+
+    Every vertex moves by ``amount`` × (unit-size mesh) × a smooth random field
+    (three random sinusoids of the position, 1-3 cycles per unit), so parts
+    bend, swell and shift coherently. Faces are kept (same face order).
+
+    Example:
+        >>> from synthaug.render.mesh import make_quadcopter
+        >>> m = make_quadcopter()
+        >>> p = perturb_mesh(m, 0.05, seed=1)
+        >>> p.faces.shape == m.faces.shape, 0 < float(abs(p.vertices - m.vertices).max()) < 0.2
+        (True, True)
+    """
+    import trimesh
+
+    if not 0 <= amount <= 0.5:
+        raise ValueError(f"mesh_perturbation must be in [0, 0.5], got {amount}")
+    rng = np.random.default_rng(seed)
+    v = np.asarray(mesh.vertices, np.float64)
+    disp = np.zeros_like(v)
+    for _ in range(3):
+        freq = rng.normal(size=3)
+        freq *= rng.uniform(1.0, 3.0) * 2 * np.pi / np.linalg.norm(freq)
+        direction = rng.normal(size=3)
+        direction /= np.linalg.norm(direction)
+        disp += np.sin(v @ freq + rng.uniform(0, 2 * np.pi))[:, None] * direction / math.sqrt(3)
+    return trimesh.Trimesh(vertices=v + amount * disp, faces=np.asarray(mesh.faces), process=False)
+
+
+def _pinned(mesh: Any, lo: np.ndarray, hi: np.ndarray):
+    """``mesh`` plus two sub-pixel triangles at the corners ``lo``/``hi``.
+
+    Normalisation (centre and scale of the bounding box) then equals that of the
+    mesh whose bounds these are, so the two render at the same place and size.
+    """
+    import trimesh
+
+    eps = 1e-5
+    tri = np.array([[0, 0, 0], [eps, 0, 0], [0, eps, 0]], np.float64)
+    v = np.concatenate([mesh.vertices, lo + tri, hi - tri])
+    n = len(mesh.vertices)
+    f = np.concatenate([mesh.faces, [[n, n + 1, n + 2], [n + 3, n + 5, n + 4]]])
+    return trimesh.Trimesh(vertices=v, faces=f, process=False)
+
+
+def _real_object(mesh: Any, perturbation: float, seed: int) -> tuple[Any, Any | None, str]:
+    """(full mesh, mesh without rotors or None, description)."""
+    from synthaug.render.mesh import load_mesh, normalize_mesh
+
+    if isinstance(mesh, str) and mesh == "quadcopter":
+        full, rotor = quadcopter_parts()
+        desc = "quadcopter"
+    else:
+        full, rotor = load_mesh(mesh), None
+        desc = str(mesh) if isinstance(mesh, (str, os.PathLike)) else "<Trimesh>"
+    if perturbation > 0:
+        full = perturb_mesh(full, perturbation, seed=seed)
+        desc += f" perturbed {perturbation:g} (seed {seed})"
+    full = normalize_mesh(full)
+    if rotor is None:
+        return full, None, desc
+    import trimesh
+
+    body = trimesh.Trimesh(vertices=full.vertices, faces=full.faces[~rotor], process=False)
+    body.remove_unreferenced_vertices()
+    return full, _pinned(body, full.bounds[0], full.bounds[1]), desc
+
+
+# ------------------------------------------------------------------ camera
+def _blur_pad(sigma: float) -> int:
+    return int(math.ceil(3.0 * sigma)) + 2
+
+
+def _camera(img: torch.Tensor, cam: dict[str, dict[str, float]], noise: torch.Tensor, noise_factor: float,
+            read_noise: float) -> torch.Tensor:
+    """The whole-frame camera on a (1, 1, H, W) float64 scene image, up to (not including) 8-bit/JPEG."""
+    one = lambda v: torch.tensor([float(v)], dtype=img.dtype)  # noqa: E731
+    if "haze" in cam:
+        img = Cx.haze(img, one(cam["haze"]["haze_amount"]), one(cam["haze"]["haze_airlight"]))
+    if "defocus" in cam:
+        s = cam["defocus"]["defocus_sigma"]
+        img = gaussian_blur_fft(img, one(s), pad=_blur_pad(s), border="replicate")
+    if "chromatic_aberration" in cam:
+        img = Cx.chromatic_aberration(img, one(cam["chromatic_aberration"]["ca_shift"]), border="border")
+    if "lens_distortion" in cam:
+        img = Cx.lens_distortion(img, one(cam["lens_distortion"]["distortion_k1"]), recentre=False, border="border")
+    if "vignetting" in cam:
+        img = Cx.vignetting(img, one(cam["vignetting"]["vignette_k"]))
+    if "exposure" in cam:
+        img = Cx.exposure(img, one(cam["exposure"]["exposure_gain"]), one(cam["exposure"]["exposure_offset"]))
+    if "white_balance" in cam:
+        img = Cx.white_balance(img, one(cam["white_balance"]["wb_gain"]))
+    shot = cam.get("shot_noise", {}).get("shot_sigma", 0.0)
+    std = torch.sqrt(read_noise ** 2 + shot ** 2 * img.clamp(0.0, 1.0))
+    img = img + noise_factor * std * noise
+    if "gamma" in cam:
+        img = Cx.gamma_curve(img.clamp(0.0, 1.0), one(cam["gamma"]["gamma_g"]))
+    if "sharpening" in cam:
+        s = cam["sharpening"]["sharpen_sigma"]
+        img = Cx.unsharp_mask(img, one(cam["sharpening"]["sharpen_amount"]), one(s), pad=_blur_pad(s),
+                              border="replicate")
+    return img
+
+
+def _to_u8(img: torch.Tensor, cam: dict[str, dict[str, float]]) -> np.ndarray:
+    import cv2
+
+    u8 = np.clip(np.round(img[0, 0].numpy() * 255.0), 0, 255).astype(np.uint8)
+    if "compression" in cam:
+        q = int(round(cam["compression"]["jpeg_quality"]))
+        ok, buf = cv2.imencode(".jpg", u8, [cv2.IMWRITE_JPEG_QUALITY, q])
+        if not ok:
+            raise RuntimeError("JPEG encoding failed")
+        u8 = cv2.imdecode(buf, cv2.IMREAD_GRAYSCALE)
+    return u8
+
+
+def _interlace(color: torch.Tensor, cov: torch.Tensor, shift: float, angle: float) -> tuple[torch.Tensor, torch.Tensor]:
+    """Odd rows from the second field, the object displaced by ``shift`` px along ``angle``."""
+    b, c, h, w = color.shape
+    yy = torch.arange(h, dtype=color.dtype)[None, None, :, None]
+    xx = torch.arange(w, dtype=color.dtype)[None, None, None, :]
+    stack = torch.cat([color * cov, cov.expand(b, c, h, w)], 1)
+    moved = Cx._sample(stack, xx - shift * math.cos(angle), yy - shift * math.sin(angle), "zeros")
+    odd = (torch.arange(h) % 2 == 1)[None, None, :, None]
+    out = torch.where(odd, moved, stack)
+    premul, cv = out[:, :c], out[:, c:].clamp(0.0, 1.0)
+    return torch.where(cv > 1e-6, premul / cv.clamp_min(1e-6), torch.zeros_like(premul)), cv
+
+
+def _box(cov: np.ndarray, threshold: float = 0.5) -> np.ndarray | None:
+    mask = cov >= threshold
+    if not mask.any():
+        return None
+    ys = np.nonzero(mask.any(1))[0]
+    xs = np.nonzero(mask.any(0))[0]
+    return np.array([xs[0], ys[0], xs[-1] + 1 - xs[0], ys[-1] + 1 - ys[0]], np.float64)
+
+
+# ------------------------------------------------------------------ main
+def make_measured_seedset(
+    out_dir: str | os.PathLike,
+    *,
+    n_seeds: int = 50,
+    hidden: Mapping[str, Mapping[str, Strength]] | Sequence[str] | None = None,
+    mesh: Any = "quadcopter",
+    mesh_perturbation: float = 0.0,
+    frame_size: tuple[int, int] = (256, 320),
+    patch_size: int = 40,
+    object_fraction: float = 0.7,
+    object_px: tuple[float, float] = (22.0, 40.0),
+    seed: int = 0,
+    backgrounds: Sequence[np.ndarray] | None = None,
+    paper_ranges: Mapping[str, tuple[float, float]] | None = None,
+    read_noise: float = 0.004,
+    background_noise_factor: float = 0.35,
+    n_videos: int = 5,
+    view_step_deg: float = 10.0,
+    sprite_size: int = 64,
+) -> Path:
+    """Write a measured seed set through the reference camera (see the module docstring).
+
+    Args:
+        out_dir: the seed-set folder (replaced if it exists).
+        n_seeds: number of seeds.
+        hidden: camera effects switched on, ``{name: {param: value or (low, high)}}``
+            or a list of names (realistic defaults: :data:`REALISTIC_STRENGTHS`);
+            names from :data:`~synthaug.effects.camera.CAMERA_EFFECTS` or
+            :data:`OUTSIDE_EFFECTS`. A value is the camera's (every seed), a
+            pair is drawn per seed. ``rolling_shutter`` takes ``rs_magnitude``
+            (px per row, along each seed's motion direction α_m) or explicit
+            ``rs_skew``/``rs_stretch``.
+        mesh: the REAL object: ``"quadcopter"`` (with true rotor parts), a path
+            or a trimesh.
+        mesh_perturbation: smooth deformation of the real mesh (fraction of its
+            size, :func:`perturb_mesh`), so it differs from the fit's coarse model.
+        frame_size: (H, W) of the frames.
+        patch_size, object_fraction: seed-set patch geometry.
+        object_px: (min, max) object size (mesh unit length) in frame pixels.
+        seed: everything is a pure function of this seed.
+        backgrounds: scene frames (uint8 or float in [0, 1], (H, W)), cycled;
+            default: procedural skies.
+        paper_ranges: overrides of :data:`PAPER_RANGES` (patch units).
+        read_noise: std of the whole-frame sensor noise (intensity).
+        background_noise_factor: the background frame's noise relative to the
+            frame's (an aligned median of ~9 frames: about 0.35).
+        n_videos: seeds are spread over this many "videos" (record ``video``).
+        view_step_deg, sprite_size: the view cache of the real mesh.
+
+    Returns:
+        the seed-set folder.
+    """
+    from synthaug.data.procedural import sky_backgrounds
+    from synthaug.data.seedset import crop_patch, write_seedset
+    from synthaug.render.cache import ViewCache
+
+    if n_seeds < 1:
+        raise ValueError(f"n_seeds must be >= 1, got {n_seeds}")
+    h_f, w_f = (int(v) for v in frame_size)
+    lo_px, hi_px = (float(v) for v in object_px)
+    if not 4 <= lo_px <= hi_px:
+        raise ValueError(f"object_px must be (low, high) with 4 <= low <= high, got {object_px}")
+    crop_side = int(math.ceil(2.5 * hi_px / 2)) * 2
+    if crop_side + 2 > min(h_f, w_f):
+        raise ValueError(f"frame_size {frame_size} is too small for objects of {hi_px} px (need > {crop_side + 2})")
+    if not 0 <= read_noise <= 0.2:
+        raise ValueError(f"read_noise must be in [0, 0.2], got {read_noise}")
+    if not 0 <= background_noise_factor <= 1:
+        raise ValueError(f"background_noise_factor must be in [0, 1], got {background_noise_factor}")
+    if n_videos < 1:
+        raise ValueError(f"n_videos must be >= 1, got {n_videos}")
+    settings = resolve_hidden(hidden)
+    ranges = dict(PAPER_RANGES)
+    bad = sorted(set(paper_ranges or {}) - set(ranges))
+    if bad:
+        raise ValueError(f"paper_ranges: unknown parameter(s) {bad}; known: {sorted(ranges)}")
+    ranges.update({k: (float(v[0]), float(v[1])) for k, v in dict(paper_ranges or {}).items()})
+
+    full_mesh, body_mesh, mesh_desc = _real_object(mesh, mesh_perturbation, seed)
+    cache = ViewCache.build(full_mesh, step_deg=view_step_deg, sprite_size=sprite_size)
+    body_cache = None if body_mesh is None else ViewCache.build(body_mesh, step_deg=view_step_deg,
+                                                                 sprite_size=sprite_size)
+
+    if backgrounds is None:
+        scenes = [b.astype(np.float64) / 255.0 for b in sky_backgrounds(n_seeds, (h_f, w_f), seed=seed)]
+    else:
+        if len(backgrounds) == 0:
+            raise ValueError("backgrounds must hold at least one frame")
+        scenes = []
+        for i in range(n_seeds):
+            b = np.asarray(backgrounds[i % len(backgrounds)])
+            if b.shape != (h_f, w_f):
+                raise ValueError(f"backgrounds[{i % len(backgrounds)}] has shape {b.shape}, expected {(h_f, w_f)}")
+            scenes.append(b.astype(np.float64) / 255.0 if b.dtype == np.uint8 else b.astype(np.float64))
+
+    object_effects = [e for e in ("specular", "rotor_blur", "rolling_shutter") if e in settings]
+    patches, bg_patches, boxes, centres, crops, records, frames, bg_frames = [], [], [], [], [], [], [], []
+    truth_rows: list[dict[str, Any]] = []
+    truth_extra: list[dict[str, Any]] = []
+    for i in range(n_seeds):
+        # two streams per seed: the scene (pose, place, Θ, noise) does not depend on what is hidden,
+        # so the same seed with and without an effect differs only by the effect
+        rng = np.random.default_rng([seed, i, 0])
+        cam = _draw_strengths(settings, np.random.default_rng([seed, i, 1]))
+        paper = {k: float(rng.uniform(*ranges[k])) for k in ("w_d", "sigma_s", "sigma_u", "sigma_v", "alpha_m",
+                                                              "sigma_n")}
+        alpha, beta, gamma = rng.uniform(-math.pi, math.pi), rng.uniform(-math.pi / 2, math.pi / 2), \
+            rng.uniform(-math.pi, math.pi)
+        size_px = float(rng.uniform(lo_px, hi_px))
+        x0 = int(rng.integers(1, w_f - crop_side - 1))
+        y0 = int(rng.integers(1, h_f - crop_side - 1))
+        gen = torch.Generator().manual_seed(int(rng.integers(2 ** 62)))
+
+        pose = [torch.tensor([float(v)]) for v in (alpha, beta, gamma, 0.0, 0.0)]
+        cov, nrm = cache.layers(*pose, size=crop_side, object_scale=size_px / crop_side, dtype=torch.float64)
+        rotor = None
+        if body_cache is not None:
+            cov_body, _ = body_cache.layers(*pose, size=crop_side, object_scale=size_px / crop_side,
+                                            dtype=torch.float64)
+            rotor = (cov - cov_body).clamp(0.0, 1.0)
+        if "rolling_shutter" in cam:
+            rs = cam["rolling_shutter"]
+            if "rs_magnitude" in rs:  # readout shear along this seed's motion
+                rs["rs_skew"] = rs["rs_magnitude"] * math.cos(paper["alpha_m"])
+                rs["rs_stretch"] = rs["rs_magnitude"] * math.sin(paper["alpha_m"])
+        # the box an annotator draws: the sharp object, after the geometric warps
+        cov_geo = cov
+        if "rolling_shutter" in cam:
+            rs = cam["rolling_shutter"]
+            cov_geo = Cx.rolling_shutter(cov, cov, torch.tensor([rs["rs_skew"]]), torch.tensor([rs["rs_stretch"]]))[1]
+        cov_frame = np.zeros((h_f, w_f))
+        cov_frame[y0:y0 + crop_side, x0:x0 + crop_side] = cov_geo[0, 0].numpy()
+        if "lens_distortion" in cam:
+            cov_frame = Cx.lens_distortion(torch.from_numpy(cov_frame)[None, None],
+                                           torch.tensor([cam["lens_distortion"]["distortion_k1"]], dtype=torch.float64),
+                                           recentre=False).numpy()[0, 0]
+        box = _box(cov_frame)
+        if box is None:  # pragma: no cover - a unit-size mesh is never empty at >= 4 px
+            raise RuntimeError(f"seed {i}: the object is not visible")
+        side = max(box[2], box[3]) / object_fraction
+        frame_scale = side / patch_size
+
+        # object physics on the crop, at frame scale (σ in frame px)
+        scene = torch.from_numpy(scenes[i])[None, None]
+        bg_crop = scene[..., y0:y0 + crop_side, x0:x0 + crop_side]
+        values: dict[str, Any] = {
+            "w_d": paper["w_d"], "sigma_s": paper["sigma_s"] * frame_scale, "sigma_u": paper["sigma_u"] * frame_scale,
+            "sigma_v": paper["sigma_v"] * frame_scale, "alpha_m": paper["alpha_m"], "sigma_n": paper["sigma_n"],
+        }
+        for eff in object_effects:
+            values.update({s.name: cam[eff][s.name] for s in get_effect(eff).params})
+        obj_names = ("material", "motion_blur") + tuple(object_effects)
+        theta = CaptureParams(values, effects=PAPER_EFFECTS + tuple(object_effects), validate=False)
+        extras = {} if rotor is None else {"part_rotor": rotor}
+        state = RenderState(object_color=Fx.diffuse_material(nrm, cov, torch.tensor([[0.5]], dtype=torch.float64)),
+                            coverage=cov, normals=nrm, background=bg_crop, extras=extras,
+                            fields={"noise": torch.randn(bg_crop.shape, generator=gen, dtype=torch.float64)})
+        state = apply_effects(state, theta.to(torch.float64), obj_names, clamp=False)
+        if "interlacing" in cam:
+            col, cv = _interlace(state.object_color, state.coverage, cam["interlacing"]["interlace_shift"],
+                                 paper["alpha_m"])
+            state = state.replace(object_color=col, coverage=cv)
+        state = apply_effects(state, theta.to(torch.float64), ("boundary_blur", "object_noise"), clamp=False)
+        frame_lin = scene.clone()
+        frame_lin[..., y0:y0 + crop_side, x0:x0 + crop_side] = state.image
+
+        # the whole-frame camera, on the frame and on the object-free background
+        noise_f = torch.randn(scene.shape, generator=gen, dtype=torch.float64)
+        noise_b = torch.randn(scene.shape, generator=gen, dtype=torch.float64)
+        frame_u8 = _to_u8(_camera(frame_lin, cam, noise_f, 1.0, read_noise), cam)
+        bg_u8 = _to_u8(_camera(scene, cam, noise_b, background_noise_factor, read_noise), cam)
+
+        patch, crop = crop_patch(frame_u8, box=box, patch_size=patch_size, object_fraction=object_fraction)
+        bg_patch, _ = crop_patch(bg_u8, crop=crop, patch_size=patch_size)
+        cx, cy = float(crop[0]), float(crop[1])
+        origin = [cx - side / 2, cy - side / 2]
+        render_c = (x0 + (crop_side - 1) / 2.0, y0 + (crop_side - 1) / 2.0)
+        g_alpha, g_beta = (float(v) for v in cache.grid_pose(torch.tensor([alpha]), torch.tensor([beta])))
+        theta_patch = {
+            "alpha": g_alpha, "beta": g_beta, "gamma": float(gamma),
+            "t_x": (render_c[0] - cx) / side, "t_y": (render_c[1] - cy) / side,
+            **{k: paper[k] for k in ("w_d", "sigma_s", "sigma_u", "sigma_v", "alpha_m", "sigma_n")},
+        }
+        hidden_model = _model_units(cam, frame_scale)
+        truth_rows.append({**theta_patch, **{k: v for e in hidden_model.values() for k, v in e.items()}})
+        truth_extra.append({"object_scale": size_px / side, "origin": origin, "frame_size": [w_f, h_f],
+                            "frame_scale": frame_scale})
+        patches.append(patch)
+        bg_patches.append(bg_patch)
+        boxes.append(box)
+        centres.append([box[0] + box[2] / 2, box[1] + box[3] / 2])
+        crops.append(crop)
+        frames.append(frame_u8)
+        bg_frames.append(bg_u8)
+        records.append({
+            "video": f"refcam{i % n_videos:02d}", "frame": i // n_videos, "class": "drone",
+            "background_method": "reference_camera", "background_quality": 1.0, "split": "train",
+            "truth": {"theta": theta_patch, "hidden": cam, "hidden_model": hidden_model, "object_px": size_px,
+                      "object_scale": size_px / side, "render_centre": list(render_c), "origin": origin,
+                      "frame_scale": frame_scale, "alpha_requested": float(alpha), "beta_requested": float(beta),
+                      "sigma_frame": {k: values[k] for k in ("sigma_s", "sigma_u", "sigma_v")}},
+        })
+
+    hidden_model_effects = tuple(e for e in settings if e in CAMERA_EFFECTS)
+    truth_bytes = _truth_file(truth_rows, truth_extra, hidden_model_effects)
+    meta = {
+        "patch_size": patch_size, "object_fraction": object_fraction, "frame_size": [w_f, h_f],
+        "source": {"generator": _FORMAT, "version": _VERSION},
+        "reference_camera": {
+            "format": _FORMAT, "version": _VERSION, "hidden": settings, "mesh": mesh_desc,
+            "mesh_perturbation": mesh_perturbation, "seed": seed, "read_noise": read_noise,
+            "background_noise_factor": background_noise_factor, "paper_ranges": ranges,
+            "object_px": [lo_px, hi_px], "view_step_deg": view_step_deg, "sprite_size": sprite_size,
+            "whole_frame": [e for e in settings if e in WHOLE_FRAME_EFFECTS],
+            "object_only": [e for e in settings if e in OBJECT_ONLY_EFFECTS],
+            "truth_file": "truth.json",
+        },
+    }
+    return write_seedset(out_dir, patches=np.stack(patches), backgrounds=np.stack(bg_patches), boxes=boxes,
+                         centres=centres, crops=crops, records=records, frames=frames, background_frames=bg_frames,
+                         metadata=meta, extra_files={"truth.json": truth_bytes})
+
+
+def _model_units(cam: dict[str, dict[str, float]], frame_scale: float) -> dict[str, dict[str, float]]:
+    """The hidden settings as the model's parameters of a patch (σ in patch px)."""
+    out: dict[str, dict[str, float]] = {}
+    for eff, params in cam.items():
+        if eff not in CAMERA_EFFECTS:
+            continue
+        p = {s.name: params[s.name] for s in get_effect(eff).params if s.name in params}
+        if eff == "defocus":
+            p["defocus_sigma"] = params["defocus_sigma"] / frame_scale
+        if eff == "sharpening":
+            p["sharpen_sigma"] = params["sharpen_sigma"] / frame_scale
+        out[eff] = p
+    return out
+
+
+def _truth_file(rows: list[dict[str, Any]], extra: list[dict[str, Any]], effects: tuple[str, ...]) -> bytes:
+    names = PAPER_EFFECTS + effects
+    specs = {s.name: s for e in names for s in get_effect(e).params}
+    values: dict[str, list[float]] = {}
+    for row in rows:
+        for k, v in row.items():
+            if k in specs:  # clip into the spec range so the file loads (records keep the raw values)
+                v = min(max(v, specs[k].low), specs[k].high) if not specs[k].periodic else v
+            values.setdefault(k, []).append(v)
+    theta = CaptureParams(values, effects=names, validate=False).wrapped()
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "truth.json"
+        theta.save(path, extra=extra, metadata={"generator": _FORMAT, "version": _VERSION,
+                                                "note": "true Θ per seed in patch units (σ in patch px)"})
+        return path.read_bytes()
+
+
+# ------------------------------------------------------------------ readers
+def seed_geometry(seeds: Any) -> dict[str, torch.Tensor]:
+    """Where each seed patch sits in its frame, for the position-aware effects.
+
+    Args:
+        seeds: a :class:`~synthaug.data.seedset.SeedSet` (or a path to one).
+
+    Returns:
+        ``origin`` (N, 2), ``frame_size`` (N, 2) (W, H), ``frame_scale`` (N,)
+        float32, as :func:`synthaug.effects.simulate` takes them
+        (``origin=``, ``frame_size=``, ``extras={"frame_scale": ...}``).
+    """
+    from synthaug.data.seedset import SeedSet
+
+    if isinstance(seeds, (str, os.PathLike)):
+        seeds = SeedSet.load(seeds)
+    crops = torch.as_tensor(np.asarray(seeds.crops, np.float64))
+    side = crops[:, 2]
+    origin = crops[:, :2] - side[:, None] / 2
+    fs = seeds.metadata.get("frame_size")
+    if fs is not None:
+        frame_size = torch.tensor([[float(fs[0]), float(fs[1])]], dtype=torch.float64).expand(len(seeds), 2)
+    else:
+        frame_size = torch.tensor([[float(s) for s in seeds.frame(i).shape[::-1]] for i in range(len(seeds))],
+                                  dtype=torch.float64).reshape(-1, 2)
+    return {"origin": origin.float(), "frame_size": frame_size.float().contiguous(),
+            "frame_scale": (side / seeds.patch_size).float()}
+
+
+def load_truth(path: str | os.PathLike) -> tuple[CaptureParams, list[dict[str, Any]], dict[str, Any]]:
+    """The true Θ of a reference-camera seed set: ``(theta, per-seed extras, reference_camera header)``."""
+    path = Path(path)
+    theta, extra, _ = CaptureParams.load_with_extra(path / "truth.json")
+    header = json.loads((path / "seedset.json").read_text())
+    if "reference_camera" not in header:
+        raise ValueError(f"{path}: not a reference-camera seed set (no 'reference_camera' in its header)")
+    return theta, extra, header["reference_camera"]
