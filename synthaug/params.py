@@ -27,12 +27,13 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 import torch
+
+from synthaug._io import atomic_write_text  # noqa: F401  (re-exported: used by other modules)
 
 FORMAT_NAME = "synthaug.capture_params"
 FORMAT_VERSION = 1
@@ -443,20 +444,3 @@ def _broadcast(spec: ParamSpec, t: torch.Tensor, batch: int, channels: int) -> t
     if t.ndim == 1 and t.shape[0] in (1, batch):
         return t.expand(batch).clone() if t.shape[0] != batch else t
     raise ValueError(f"{spec.name}: expected shape (B,) or scalar, got {tuple(t.shape)}")
-
-
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` so that readers never see a half-written file."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise

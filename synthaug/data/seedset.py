@@ -56,6 +56,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from synthaug._io import atomic_write_bytes
+
 __all__ = [
     "FORMAT_NAME",
     "FORMAT_VERSION",
@@ -71,23 +73,6 @@ FORMAT_NAME = "synthaug.seedset"
 FORMAT_VERSION = 1
 HEADER = "seedset.json"
 ARRAYS = "arrays.npz"
-
-
-def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` so that readers never see a half-written file."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def replace_dir(tmp: Path, final: Path) -> None:
