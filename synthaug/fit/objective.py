@@ -109,7 +109,8 @@ class FitSpace:
 
     def scale(self, u: np.ndarray | torch.Tensor, default: float) -> torch.Tensor:
         """Object scale of each candidate: the last coordinate (log-uniform) or ``default``."""
-        u = torch.as_tensor(np.atleast_2d(np.asarray(u, dtype=np.float64)))
+        u = u.double() if isinstance(u, torch.Tensor) else torch.as_tensor(np.asarray(u, dtype=np.float64))
+        u = u[None] if u.ndim == 1 else u
         if self.scale_range is None:
             return torch.full((u.shape[0],), float(default), dtype=torch.float64)
         lo, hi = self.scale_range
