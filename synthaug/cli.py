@@ -16,6 +16,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "bench": ("synthaug.data.bench", "benchmarks: `synthaug bench render` prints JSON samples/s"),
     "ingest": ("synthaug.data.ingest_cli", "videos + boxes (or images + COCO) -> seed set with backgrounds"),
     "fit": ("synthaug.fit.cli", "seed set + mesh + distance -> fitted capture parameters per seed"),
+    "diagnose": ("synthaug.diagnose.cli", "seed set + mesh + fit -> what the simulation gets wrong, ranked findings"),
     "detect": ("synthaug.detectors.cli", "checkpoint + video/images -> per-frame detections JSON"),
     "evaluate": ("synthaug.evaluate.cli", "detections + labels -> precision-recall PNG and AP"),
 }

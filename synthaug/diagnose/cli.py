@@ -1,0 +1,49 @@
+"""``synthaug diagnose``: seed set + mesh + fit → report.json and report.md of what the simulation misses.
+
+Example::
+
+    synthaug diagnose --seeds data/halmstad/seedsets/drone_100 --mesh ../shared/data/meshes/quadcopter.glb \\
+        --fit fits/drone_100_hog.json --distance hog --out results/diagnose/drone_100
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--seeds", required=True, help="seed-set folder")
+    parser.add_argument("--mesh", default="quadcopter", help="the mesh the fit used (file or built-in name)")
+    parser.add_argument("--fit", required=True, help="fit file (synthaug fit output)")
+    parser.add_argument("--distance", default="hog", help="the detector's distance (normally the fit's)")
+    parser.add_argument("--out", required=True, help="output folder (report.json, report.md, plots)")
+    parser.add_argument("--candidates", nargs="*", default=None, help="candidate effects (default: all 14)")
+    parser.add_argument("--folds", type=int, default=5, help="cross-validation folds over seeds")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--alpha", type=float, default=0.01, help="family-wise significance level")
+    parser.add_argument("--no-plots", action="store_true")
+    parser.add_argument("--quiet", action="store_true")
+
+
+def main(args: argparse.Namespace) -> int:
+    from synthaug.diagnose.report import diagnose
+
+    try:
+        report = diagnose(args.seeds, args.mesh, args.fit, distance=args.distance, out_dir=args.out,
+                          candidates=args.candidates, k=args.folds, seed=args.seed, alpha=args.alpha,
+                          plots=not args.no_plots,
+                          progress=None if args.quiet else (lambda s: print(s, file=sys.stderr)))
+    except (ValueError, FileNotFoundError) as e:
+        print(f"synthaug diagnose: {e}", file=sys.stderr)
+        return 2
+    print(json.dumps({"out": args.out, "significant": report["significant"],
+                      "findings": [f["effect"] for f in report["findings"]], "seconds": round(report["seconds"], 1)}))
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    p = argparse.ArgumentParser(prog="synthaug diagnose", description=__doc__)
+    add_arguments(p)
+    sys.exit(main(p.parse_args()))

@@ -1,0 +1,565 @@
+"""Residual analysis: what the fitted simulation gets wrong, and where (issue 6, item 1).
+
+For every seed the residual ``r_i = X_i - S(Θ_i, B_i)`` between the real patch
+and its best-fit synthetic image is measured in pixels (and, per seed, in the
+detector's feature space), in the object-centred patch frame, with masks from
+the fitted coverage (object interior, boundary band, background) and the
+patch's place in its full frame. Each *structure measure* is a statistic over
+seeds with a null reference, so that a residual which is pure fitting noise
+reads as nothing significant:
+
+===================  ==========================================================
+measure              statistic and null
+===================  ==========================================================
+interior_bias        mean residual in the object interior; t-test over seeds
+boundary_bias        mean residual in the boundary band; t-test over seeds
+radial               interior bias vs r² (frame position); permutation test
+tone_curve           per-seed slope of residual vs fitted intensity; t-test
+noise_vs_signal      per-seed slope of squared residual vs intensity; t-test
+high_frequency       log power ratio real/synthetic above 0.25 cycles/px; t-test
+block_8x8            residual jump across the frame's 8-px block grid vs
+                     elsewhere; t-test over seeds of the log ratio
+motion_direction     residual gradient energy along vs across the fitted motion
+                     direction α_m; t-test of the log ratio
+rows / columns       peak of the residual's row (column) spectrum over the
+                     background region's spectrum; t-test over seeds
+rotor_parts          mean residual on the rotor discs vs the body; t-test
+colour               per-channel bias (grayscale seed sets: not applicable)
+===================  ==========================================================
+
+Fitted parameters can silently absorb a missing effect, which shows as a
+dependence of a per-seed value on seed metadata; :func:`parameter_dependence`
+tests every (parameter, metadata) pair with a permutation test of Spearman's ρ.
+
+All tests use an explicit ``numpy.random.Generator``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+import torch
+
+__all__ = [
+    "DiagnosisData",
+    "load_diagnosis_data",
+    "render_with",
+    "region_masks",
+    "structure_measures",
+    "parameter_dependence",
+    "seed_metadata",
+    "aligned_maps",
+    "t_test",
+    "permutation_spearman",
+]
+
+
+# Smallest effect size a structure measure must reach to count (besides p < α): the approximations every
+# fit makes (a coarse view grid, the crop's resampling blur, a mesh that is not the object) leave a small
+# systematic residual that is not a missing camera effect.
+EFFECT_FLOORS: dict[str, float] = {
+    "interior_bias": 0.03, "boundary_bias": 0.03, "background_bias": 0.03, "radial": 0.5, "tone_curve": 0.3,
+    "noise_vs_signal": 0.02, "high_frequency": 0.7, "block_8x8": 0.3, "motion_direction": 0.5,
+    "periodic_rows": 0.7, "periodic_columns": 0.7, "rotor_parts": 0.05,
+}
+
+
+# ------------------------------------------------------------------ stats
+def t_test(x: np.ndarray) -> tuple[float, float, float]:
+    """One-sample two-sided t-test of mean 0 (normal approximation for the p-value).
+
+    Returns:
+        (mean, t, p). NaNs are ignored; fewer than 3 values give (mean, 0, 1).
+
+    Example:
+        >>> m, t, p = t_test(np.array([1.0, 1.1, 0.9, 1.05, 0.95]))
+        >>> round(m, 2), p < 1e-3
+        (1.0, True)
+    """
+    x = np.asarray(x, np.float64)
+    x = x[np.isfinite(x)]
+    if len(x) < 3:
+        return (float(x.mean()) if len(x) else 0.0), 0.0, 1.0
+    m = float(x.mean())
+    s = float(x.std(ddof=1))
+    if s == 0:
+        return m, (0.0 if m == 0 else math.copysign(1e6, m)), (1.0 if m == 0 else 0.0)
+    t = m / (s / math.sqrt(len(x)))
+    # Student t with n-1 dof
+    from scipy import stats
+
+    p = float(2 * stats.t.sf(abs(t), len(x) - 1))
+    return m, float(t), p
+
+
+def _rank(x: np.ndarray) -> np.ndarray:
+    from scipy.stats import rankdata
+
+    return rankdata(x)
+
+
+def permutation_spearman(x: np.ndarray, y: np.ndarray, rng: np.random.Generator, n_perm: int = 9999
+                         ) -> tuple[float, float]:
+    """Spearman's ρ of (x, y) and its two-sided permutation p-value.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> x = np.arange(30.0)
+        >>> rho, p = permutation_spearman(x, x + rng.normal(size=30), rng)
+        >>> rho > 0.9, p < 0.01
+        (True, True)
+    """
+    x = np.asarray(x, np.float64)
+    y = np.asarray(y, np.float64)
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    if len(x) < 5 or np.ptp(x) == 0 or np.ptp(y) == 0:
+        return 0.0, 1.0
+    rx = _rank(x) - (len(x) + 1) / 2
+    ry = _rank(y) - (len(y) + 1) / 2
+    den = math.sqrt(float((rx * rx).sum() * (ry * ry).sum()))
+    rho = float((rx * ry).sum() / den)
+    null = (rng.permuted(np.tile(ry, (n_perm, 1)), axis=1) @ rx) / den
+    p = (1 + int((np.abs(null) >= abs(rho) - 1e-12).sum())) / (n_perm + 1)
+    return rho, float(p)
+
+
+# ------------------------------------------------------------------ data
+@dataclass
+class DiagnosisData:
+    """Everything needed to re-render the fitted images of a seed set, batched.
+
+    Shape:
+        real, background, coverage: (N, 1, P, P) float32 in [0, 1];
+        normals (N, 3, P, P); origin, frame_size (N, 2); frame_scale (N,);
+        fields: random fields (N, 1, P, P) (the fit's object-noise field, a shot-noise field).
+    """
+
+    real: torch.Tensor
+    background: torch.Tensor
+    coverage: torch.Tensor
+    normals: torch.Tensor
+    theta: Any
+    fields: dict[str, torch.Tensor]
+    origin: torch.Tensor
+    frame_size: torch.Tensor
+    frame_scale: torch.Tensor
+    part_rotor: torch.Tensor | None
+    distance_name: str
+    distance: Any
+    records: list[dict[str, Any]] = field(default_factory=list)
+    fit_distance: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return int(self.real.shape[0])
+
+    def subset(self, idx: Sequence[int] | np.ndarray) -> "DiagnosisData":
+        idx_t = torch.as_tensor(np.asarray(idx, np.int64))
+        take = lambda t: None if t is None else t[idx_t]  # noqa: E731
+        return DiagnosisData(
+            real=take(self.real), background=take(self.background), coverage=take(self.coverage),
+            normals=take(self.normals), theta=self.theta[idx_t], fields={k: take(v) for k, v in self.fields.items()},
+            origin=take(self.origin), frame_size=take(self.frame_size), frame_scale=take(self.frame_scale),
+            part_rotor=take(self.part_rotor), distance_name=self.distance_name, distance=self.distance,
+            records=[self.records[int(i)] for i in idx_t] if self.records else [],
+            fit_distance=None if self.fit_distance is None else self.fit_distance[np.asarray(idx, np.int64)])
+
+
+def _rotor_layers(cache_body: Any, theta: Any, size: int, scale: torch.Tensor, cov: torch.Tensor) -> torch.Tensor:
+    cov_b, _ = cache_body.layers(theta.alpha.float(), theta.beta.float(), theta.gamma.float(), theta.t_x.float(),
+                                 theta.t_y.float(), size=size, object_scale=scale)
+    return (cov - cov_b).clamp(0.0, 1.0)
+
+
+def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance: str | Any = "hog") -> DiagnosisData:
+    """Load a seed set and its fit, and render the fitted layers of every seed.
+
+    Args:
+        seeds: a :class:`~synthaug.data.seedset.SeedSet` or its folder.
+        fit_path: the fit file (``synthaug fit`` output).
+        mesh: the mesh given to the fit (path or built-in name; ``"quadcopter"``
+            also gives its rotor parts).
+        distance: the detector's distance (name or module), e.g. ``"hog"``.
+
+    Returns:
+        a :class:`DiagnosisData`.
+    """
+    import os
+
+    from synthaug.data.seedset import SeedSet
+    from synthaug.diagnose.reference_camera import seed_geometry
+    from synthaug.effects.pipeline import sample_fields
+    from synthaug.fit.fitting import build_distance, patches_tensor
+    from synthaug.params import CaptureParams
+    from synthaug.render.cache import ViewCache
+
+    if isinstance(seeds, (str, os.PathLike)):
+        seeds = SeedSet.load(seeds)
+    theta, extra, meta = CaptureParams.load_with_extra(fit_path)
+    if theta.batch_size != len(seeds):
+        raise ValueError(f"{fit_path} has {theta.batch_size} rows but the seed set has {len(seeds)} seeds")
+    if theta.channels != 1:
+        raise ValueError(f"only grayscale fits are supported, got {theta.channels} channels")
+    cfg = meta.get("config", {})
+    step, sprite = cfg.get("step_deg", 5.0), cfg.get("sprite_size", 96)
+    cache = ViewCache.build(mesh, step_deg=step, sprite_size=sprite)
+    p = seeds.patch_size
+    scale = torch.tensor([float(e.get("object_scale", meta.get("object_scale", 0.7))) for e in extra])
+    cov, nrm = cache.layers(theta.alpha.float(), theta.beta.float(), theta.gamma.float(), theta.t_x.float(),
+                            theta.t_y.float(), size=p, object_scale=scale)
+    part_rotor = None
+    if isinstance(mesh, str) and mesh == "quadcopter":
+        from synthaug.diagnose.reference_camera import _real_object
+
+        _, body, _ = _real_object("quadcopter", 0.0, 0)
+        body_cache = ViewCache.build(body, step_deg=step, sprite_size=sprite)
+        part_rotor = _rotor_layers(body_cache, theta, p, scale, cov)
+    fields: dict[str, list[torch.Tensor]] = {}
+    names = tuple(theta.effects) + (("shot_noise",) if "shot_noise" not in theta.effects else ())
+    for e in extra:
+        # the fit's own object-noise field first (same generator, same order), then the candidates'
+        f = sample_fields(names, (1, 1, p, p), torch.Generator().manual_seed(int(e.get("generator_seed", 0))))
+        for k, v in f.items():
+            fields.setdefault(k, []).append(v)
+    geo = seed_geometry(seeds)
+    dist = build_distance(distance, seeds) if isinstance(distance, str) else distance
+    name = distance if isinstance(distance, str) else getattr(distance, "name", type(distance).__name__)
+    return DiagnosisData(
+        real=patches_tensor(seeds.patches), background=patches_tensor(seeds.backgrounds), coverage=cov,
+        normals=nrm, theta=theta, fields={k: torch.cat(v) for k, v in fields.items()}, origin=geo["origin"],
+        frame_size=geo["frame_size"], frame_scale=geo["frame_scale"], part_rotor=part_rotor,
+        distance_name=str(name), distance=dist, records=list(seeds.records),
+        fit_distance=np.array([float(e.get("distance", np.nan)) for e in extra]))
+
+
+def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor | float]] | None = None, *,
+                w_d: torch.Tensor | None = None, clamp: bool = True) -> torch.Tensor:
+    """S(Θ_i ⊕ φ, B_i) for every seed of ``data``: the fit's Θ extended by candidate effects.
+
+    Args:
+        data: the seeds and their fitted layers.
+        extension: ``{effect: {param: value}}``, a value a scalar (camera-wide)
+            or an (N,) tensor (per seed). Effects already in Θ are overridden.
+        w_d: (N,) albedo replacing the fitted w_d (the per-seed nuisance re-solve).
+
+    Returns:
+        (N, 1, P, P) synthetic images.
+    """
+    from synthaug.effects.pipeline import simulate
+    from synthaug.params import CaptureParams
+
+    extension = dict(extension or {})
+    n = len(data)
+    values = {k: v.float() for k, v in data.theta.as_dict().items()}
+    if w_d is not None:
+        values["w_d"] = torch.as_tensor(w_d, dtype=torch.float32).reshape(n, 1)
+    effects = tuple(data.theta.effects) + tuple(e for e in extension if e not in data.theta.effects)
+    for eff, params in extension.items():
+        for k, v in params.items():
+            values[k] = torch.as_tensor(v, dtype=torch.float32).reshape(-1, 1).expand(n, 1)
+    theta = CaptureParams(values, effects=effects, validate=False)
+    extras: dict[str, torch.Tensor] = {"frame_scale": data.frame_scale}
+    if data.part_rotor is not None:
+        extras["part_rotor"] = data.part_rotor
+    fields = {k: v for k, v in data.fields.items()}
+    return simulate(data.coverage, data.normals, data.background, theta, fields=fields, origin=data.origin,
+                    frame_size=data.frame_size, extras=extras, clamp=clamp)
+
+
+def pairwise_distance(data: DiagnosisData, syn: torch.Tensor, real: torch.Tensor | None = None) -> np.ndarray:
+    """d(X_i, Y_i) per seed in the detector's distance (features when it has them)."""
+    real = data.real if real is None else real
+    dist = data.distance
+    with torch.no_grad():
+        if hasattr(dist, "features"):
+            return (dist.features(real) - dist.features(syn)).flatten(1).norm(dim=1).double().numpy()
+        return np.array([float(dist(real[i:i + 1], syn[i:i + 1])[0]) for i in range(len(real))])
+
+
+def pixel_distance(real: torch.Tensor, syn: torch.Tensor) -> np.ndarray:
+    """Pixel L2 per seed (eq. 2)."""
+    return (real - syn).flatten(1).norm(dim=1).double().numpy()
+
+
+def solve_albedo(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None,
+                 *, lo: float = 0.0, hi: float = 1.0) -> torch.Tensor:
+    """Per-seed w_d minimising the pixel L2, by a linear fit between two renders.
+
+    The image is affine in w_d for the paper's effects (material → blurs →
+    overlay), so two renders give the exact least-squares w_d; with a
+    nonlinear extension it is the secant solution.
+    """
+    a = render_with(data, extension, w_d=torch.full((len(data),), 0.2), clamp=False)
+    b = render_with(data, extension, w_d=torch.full((len(data),), 0.6), clamp=False)
+    slope = (b - a) / 0.4
+    num = ((data.real - a) * slope).flatten(1).sum(1)
+    den = (slope * slope).flatten(1).sum(1).clamp_min(1e-9)
+    return (0.2 + num / den).clamp(lo, hi)
+
+
+# ------------------------------------------------------------------ masks and maps
+def region_masks(coverage: torch.Tensor, *, band: int = 2) -> dict[str, torch.Tensor]:
+    """Interior / boundary band / background masks from the fitted coverage.
+
+    Args:
+        coverage: (N, 1, P, P) fitted coverage.
+        band: half-width (px) of the boundary band around the coverage edge.
+
+    Returns:
+        bool masks (N, 1, P, P): ``interior`` (coverage eroded by ``band``),
+        ``boundary`` (dilated minus eroded), ``background`` (outside the dilation).
+
+    Example:
+        >>> c = torch.zeros(1, 1, 20, 20); c[..., 5:15, 5:15] = 1
+        >>> m = region_masks(c)
+        >>> int(m["interior"].sum()), int(m["boundary"].sum()), int(m["background"].sum())
+        (36, 160, 204)
+    """
+    import torch.nn.functional as F
+
+    obj = (coverage > 0.5).float()
+    k = 2 * band + 1
+    dil = F.max_pool2d(obj, k, 1, band) > 0.5
+    ero = -F.max_pool2d(-obj, k, 1, band) > 0.5
+    return {"interior": ero, "boundary": dil & ~ero, "background": ~dil}
+
+
+def aligned_maps(residual: torch.Tensor) -> dict[str, np.ndarray]:
+    """Mean and RMS residual over seeds in the object-centred patch frame (P, P)."""
+    r = residual[:, 0].double().numpy()
+    return {"mean": r.mean(0), "rms": np.sqrt((r ** 2).mean(0))}
+
+
+def seed_metadata(data: DiagnosisData) -> dict[str, np.ndarray]:
+    """Per-seed metadata a fitted parameter may depend on.
+
+    Returns:
+        ``radial_r2`` (squared distance of the patch centre from the frame
+        centre, 1 at the corners), ``frame_x``, ``frame_y`` (same, signed),
+        ``background_brightness`` (mean of B_i), ``object_size`` (frame px per
+        patch px: the object's size in the frame), ``inverse_size``.
+    """
+    p = data.real.shape[-1]
+    c = data.origin.double() + (p / 2.0) * data.frame_scale.double()[:, None]
+    fs = data.frame_size.double()
+    half_diag = 0.5 * fs.norm(dim=1)
+    dx = (c[:, 0] - (fs[:, 0] - 1) / 2) / half_diag
+    dy = (c[:, 1] - (fs[:, 1] - 1) / 2) / half_diag
+    size = data.frame_scale.double()
+    return {"radial_r2": (dx ** 2 + dy ** 2).numpy(), "frame_x": dx.numpy(), "frame_y": dy.numpy(),
+            "background_brightness": data.background.double().mean((1, 2, 3)).numpy(),
+            "object_size": size.numpy(), "inverse_size": (1.0 / size).numpy()}
+
+
+def _masked_mean(x: torch.Tensor, m: torch.Tensor) -> np.ndarray:
+    m = m.float()
+    return ((x * m).flatten(1).sum(1) / m.flatten(1).sum(1).clamp_min(1.0)).double().numpy()
+
+
+def _slope(x: np.ndarray, y: np.ndarray) -> float:
+    if len(x) < 4 or np.ptp(x) < 1e-6:
+        return float("nan")
+    xc = x - x.mean()
+    return float((xc * (y - y.mean())).sum() / (xc * xc).sum())
+
+
+def _log_power_ratio(real: torch.Tensor, syn: torch.Tensor, weight: torch.Tensor, fmin: float) -> np.ndarray:
+    """Per-seed log(power of real / power of synthetic) above ``fmin`` cycles/px, in a window."""
+    p = real.shape[-1]
+    w = weight.float()
+    fr = torch.fft.fft2((real - real.mean((-2, -1), keepdim=True)) * w)
+    fs = torch.fft.fft2((syn - syn.mean((-2, -1), keepdim=True)) * w)
+    f = torch.fft.fftfreq(p)
+    rad = torch.sqrt(f[:, None] ** 2 + f[None, :] ** 2)
+    sel = (rad > fmin)[None, None]
+    pr = (fr.abs() ** 2 * sel).flatten(1).sum(1)
+    ps = (fs.abs() ** 2 * sel).flatten(1).sum(1)
+    return torch.log((pr + 1e-9) / (ps + 1e-9)).double().numpy()
+
+
+def _block_jump_ratio(residual: torch.Tensor, data: DiagnosisData, weight: torch.Tensor) -> np.ndarray:
+    """Per-seed log ratio of residual jumps across the frame's 8-px block grid vs other jumps."""
+    from synthaug.effects.camera_functional import frame_coordinates
+
+    n, _, p, _ = residual.shape
+    g = frame_coordinates(n, p, p, origin=data.origin, frame_size=data.frame_size, frame_scale=data.frame_scale)
+    out = []
+    jx = (residual[..., :, 1:] - residual[..., :, :-1]) ** 2
+    jy = (residual[..., 1:, :] - residual[..., :-1, :]) ** 2
+    wx = weight[..., :, 1:] * weight[..., :, :-1]
+    wy = weight[..., 1:, :] * weight[..., :-1, :]
+    # a jump between two pixels crosses a block edge when floor(frame coordinate / 8) changes
+    bx = torch.floor((g["x"][..., :, 1:] + 0.5) / 8) != torch.floor((g["x"][..., :, :-1] + 0.5) / 8)
+    by = torch.floor((g["y"][..., 1:, :] + 0.5) / 8) != torch.floor((g["y"][..., :-1, :] + 0.5) / 8)
+    for i in range(n):
+        on = torch.cat([(jx[i] * wx[i])[bx[i]], (jy[i] * wy[i])[by[i]]])
+        off = torch.cat([(jx[i] * wx[i])[~bx[i]], (jy[i] * wy[i])[~by[i]]])
+        won = torch.cat([wx[i][bx[i]], wy[i][by[i]]]).sum()
+        woff = torch.cat([wx[i][~bx[i]], wy[i][~by[i]]]).sum()
+        if won < 1 or woff < 1:
+            out.append(float("nan"))
+            continue
+        out.append(math.log((float(on.sum() / won) + 1e-9) / (float(off.sum() / woff) + 1e-9)))
+    return np.array(out)
+
+
+def _directional_ratio(residual: torch.Tensor, alpha_m: torch.Tensor, weight: torch.Tensor) -> np.ndarray:
+    """Per-seed log(residual gradient energy along the motion direction / across it)."""
+    gx = torch.zeros_like(residual)
+    gy = torch.zeros_like(residual)
+    gx[..., :, 1:-1] = (residual[..., :, 2:] - residual[..., :, :-2]) / 2
+    gy[..., 1:-1, :] = (residual[..., 2:, :] - residual[..., :-2, :]) / 2
+    a = alpha_m.float().reshape(-1, 1, 1, 1)
+    along = gx * torch.cos(a) + gy * torch.sin(a)
+    across = -gx * torch.sin(a) + gy * torch.cos(a)
+    ea = (along ** 2 * weight).flatten(1).sum(1)
+    ec = (across ** 2 * weight).flatten(1).sum(1)
+    return torch.log((ea + 1e-9) / (ec + 1e-9)).double().numpy()
+
+
+def _line_spectrum(residual: torch.Tensor, weight: torch.Tensor, axis: int) -> np.ndarray:
+    """(N, P//2+1) power of the residual's profile along ``axis`` (-2: rows, y; -1: columns, x), per seed.
+
+    Each line across ``axis`` is transformed, power averaged over the other axis.
+    """
+    r = (residual * weight)[:, 0]
+    if axis == -2:
+        r = r.transpose(-2, -1)
+    r = r - r.mean(-1, keepdim=True)
+    spec = torch.fft.rfft(r, dim=-1).abs() ** 2
+    return spec.mean(1).double().numpy()
+
+
+def structure_measures(data: DiagnosisData, syn: torch.Tensor, *, rng: np.random.Generator,
+                       alpha: float = 0.01) -> dict[str, dict[str, Any]]:
+    """The residual's measured structure, each measure with its null test.
+
+    Args:
+        data: the seeds.
+        syn: (N, 1, P, P) best-fit synthetic images.
+        rng: generator of the permutation tests.
+        alpha: significance level (Bonferroni-corrected over the measures).
+
+    Returns:
+        ``{measure: {"value": effect size, "p": p-value, "significant": bool,
+        "description": str, ...}}``.
+    """
+    real = data.real
+    res = real - syn
+    n, _, p, _ = res.shape
+    m = region_masks(data.coverage)
+    obj = data.coverage > 0.5
+    meta = seed_metadata(data)
+    out: dict[str, dict[str, Any]] = {}
+
+    def put(name: str, x: np.ndarray | float, pval: float, desc: str, **more: Any) -> None:
+        out[name] = {"value": float(np.nanmean(x)) if isinstance(x, np.ndarray) else float(x), "p": float(pval),
+                     "description": desc, **more}
+
+    bg_rms = float(np.sqrt(np.nanmean(_masked_mean(res ** 2, m["background"]))))
+    for region in ("interior", "boundary", "background"):
+        b = _masked_mean(res, m[region])
+        mean, t, pv = t_test(b)
+        e = np.sqrt(_masked_mean(res ** 2, m[region]))
+        put(f"{region}_bias", b, pv, f"mean residual (real - synthetic) in the {region}: {mean:+.4f}",
+            rms=float(np.nanmean(e)), rms_over_background=float(np.nanmean(e) / max(bg_rms, 1e-6)))
+    ib = _masked_mean(res, m["interior"] | m["boundary"])
+    rho, pv = permutation_spearman(meta["radial_r2"], ib, rng)
+    put("radial", rho, pv, f"object residual vs radial position in the frame: Spearman rho {rho:+.2f}")
+
+    slopes, vslopes = [], []
+    for i in range(n):
+        mi = obj[i, 0]
+        if int(mi.sum()) < 8:
+            slopes.append(np.nan)
+            vslopes.append(np.nan)
+            continue
+        x = syn[i, 0][mi].double().numpy()
+        y = res[i, 0][mi].double().numpy()
+        slopes.append(_slope(x, y))
+        yc = y - np.mean(y)
+        vslopes.append(_slope(x, yc ** 2))
+    mean, t, pv = t_test(np.array(slopes))
+    put("tone_curve", mean, pv, f"object residual vs fitted intensity: mean slope {mean:+.3f} "
+        f"({'real brighter where bright' if mean > 0 else 'real darker where bright'})")
+    mean, t, pv = t_test(np.array(vslopes))
+    put("noise_vs_signal", mean, pv, f"residual variance vs fitted intensity: mean slope {mean:+.2e}")
+
+    wobj = (m["interior"] | m["boundary"]).float()
+    lr = _log_power_ratio(real, syn, wobj, 0.25)
+    mean, t, pv = t_test(lr)
+    put("high_frequency", mean, pv, f"high-frequency power (> 0.25 cycles/px) real/synthetic on the object: "
+        f"{math.exp(mean):.2f}x ({'real sharper or noisier' if mean > 0 else 'real blurrier'})")
+    bj = _block_jump_ratio(res, data, wobj)
+    mean, t, pv = t_test(bj)
+    put("block_8x8", mean, pv, f"residual jumps across the frame's 8x8 block grid vs elsewhere: "
+        f"{math.exp(mean):.2f}x")
+    dr = _directional_ratio(res, data.theta.alpha_m[:, 0], (m["boundary"] | m["interior"]).float())
+    mean, t, pv = t_test(dr)
+    put("motion_direction", mean, pv, f"residual gradient energy along/across the fitted motion direction: "
+        f"{math.exp(mean):.2f}x")
+    # anisotropic periodic structure (interlaced fields, sensor banding): the row spectrum over the column
+    # spectrum at the same frequency, high frequencies only (a shape misfit is broadband and isotropic)
+    w_n = np.maximum(wobj.flatten(1).sum(1).numpy()[:, None], 1)
+    spec_rows = _line_spectrum(res, wobj, -2) / w_n
+    spec_cols = _line_spectrum(res, wobj, -1) / w_n
+    freqs = np.fft.rfftfreq(p)
+    hi = np.nonzero(freqs >= 0.2)[0]
+    for label, a, b, what in (("rows", spec_rows, spec_cols, "vertical (along image columns: row-to-row)"),
+                              ("columns", spec_cols, spec_rows, "horizontal (column-to-column)")):
+        lr = np.log((a[:, hi] + 1e-12) / (b[:, hi] + 1e-12))
+        j = int(np.nanargmax(np.nanmean(lr, 0)))
+        mean, t, pv = t_test(lr[:, j])
+        pv = min(1.0, pv * len(hi))  # the peak was chosen among the frequencies
+        f = float(freqs[hi[j]])
+        put(f"periodic_{label}", mean, pv, f"{what} periodic structure: peak at {f:.3f} cycles/px "
+            f"(period {1 / f:.1f} px), {math.exp(mean):.1f}x the power of the other direction",
+            frequency=f, period_px=float(1 / f))
+    if data.part_rotor is not None:
+        rot = (data.part_rotor > 0.3) & obj
+        body = obj & ~rot
+        d = _masked_mean(res, rot) - _masked_mean(res, body)
+        keep = (rot.flatten(1).sum(1) > 3).numpy()
+        mean, t, pv = t_test(d[keep])
+        put("rotor_parts", mean, pv, f"residual on the rotor discs minus on the body: {mean:+.4f}")
+    out["colour"] = {"value": 0.0, "p": 1.0, "description": "grayscale seed set: colour channels not applicable"}
+    n_tests = len(out)
+    for k, v in out.items():
+        floor = EFFECT_FLOORS.get(k, 0.0)
+        v["significant"] = bool(v["p"] < alpha / n_tests and abs(v["value"]) >= floor)
+        v["floor"] = floor
+    return out
+
+
+def parameter_dependence(values: dict[str, np.ndarray], meta: dict[str, np.ndarray], *,
+                         rng: np.random.Generator, alpha: float = 0.01, n_perm: int = 9999) -> list[dict[str, Any]]:
+    """Dependence of fitted per-seed parameters on seed metadata (an absorbed effect).
+
+    Args:
+        values: ``{parameter: (N,)}`` fitted values.
+        meta: ``{metadata: (N,)}`` (:func:`seed_metadata`).
+        rng: generator of the permutation tests.
+        alpha: family-wise level (Bonferroni over all pairs).
+
+    Returns:
+        one dict per pair: ``parameter``, ``metadata``, ``rho``, ``p``, ``significant``.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> r2 = rng.random(40)
+        >>> out = parameter_dependence({"w_d": 0.5 * (1 - 0.3 * r2)}, {"radial_r2": r2}, rng=rng)
+        >>> out[0]["rho"] < -0.99, out[0]["significant"]
+        (True, True)
+    """
+    rows = []
+    for pn, pv in values.items():
+        for mn, mv in meta.items():
+            rho, p = permutation_spearman(mv, pv, rng, n_perm)
+            rows.append({"parameter": pn, "metadata": mn, "rho": rho, "p": p})
+    k = max(len(rows), 1)
+    for r in rows:
+        r["significant"] = bool(r["p"] < alpha / k)
+    return rows
