@@ -17,6 +17,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "ingest": ("synthaug.data.ingest_cli", "videos + boxes (or images + COCO) -> seed set with backgrounds"),
     "fit": ("synthaug.fit.cli", "seed set + mesh + distance -> fitted capture parameters per seed"),
     "diagnose": ("synthaug.diagnose.cli", "seed set + mesh + fit -> what the simulation gets wrong, ranked findings"),
+    "experiment": ("synthaug.evaluate.experiments_cli", "the paper's experiments and the baselines on real videos"),
     "detect": ("synthaug.detectors.cli", "checkpoint + video/images -> per-frame detections JSON"),
     "evaluate": ("synthaug.evaluate.cli", "detections + labels -> precision-recall PNG and AP"),
 }

@@ -1,0 +1,127 @@
+"""``synthaug experiment``: run the paper's experiments on videos in the shared format.
+
+Usage::
+
+    python -m synthaug.evaluate.experiments_cli baselines --class drone --out results/baselines \\
+        --cells results/cells_drone.json --stride-k 15
+
+    python -m synthaug.evaluate.experiments_cli fig11_ratio table1_perturbation --class drone \\
+        --out results/paper/drone --cells results/cells_drone.json --detectors cnn hog
+
+Each experiment writes ``<name>.md`` (table), ``<name>.png`` (plot) and
+``<name>.json`` (numbers) into ``--out``; trained-and-scored configurations
+("cells") are cached in ``--cells`` so that a rerun resumes and experiments
+share cells. Ratios of synthetic to real images are chosen on the validation
+videos by ``fig11_ratio`` (``<out>/chosen_ratio.json``) and used by the
+experiments that follow. Capture-parameter fits missing from ``--fits`` are
+made on the fly (``synthaug fit`` defaults, CMA-ES).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from synthaug.evaluate.experiments import EXPERIMENTS
+
+    parser.add_argument("experiments", nargs="+", choices=[*EXPERIMENTS, "all"], help="experiments to run, in order")
+    parser.add_argument("--class", dest="class_name", default="drone", help="object class (selects videos and seed sets)")
+    parser.add_argument("--out", type=Path, required=True, help="results folder")
+    parser.add_argument("--cells", type=Path, default=None, help="cell cache JSON (default <out>/cells.json)")
+    parser.add_argument("--seedsets", type=Path, default=Path("data/halmstad/seedsets"), help="folder of <class>_<n> seed sets")
+    parser.add_argument("--mesh", default=None, help="mesh (default: quadcopter for drone, twin_prop_airplane for airplane)")
+    parser.add_argument("--fits", type=Path, default=None, help="folder of capture-parameter fits (default <out>/fits)")
+    parser.add_argument("--videos", type=Path, default=Path("../shared/data/halmstad/videos"))
+    parser.add_argument("--labels", type=Path, default=Path("../shared/data/halmstad/labels"))
+    parser.add_argument("--split", type=Path, default=Path("configs/splits/halmstad.json"))
+    parser.add_argument("--stride-k", type=int, default=15, help="score every k-th test frame")
+    parser.add_argument("--val-stride-k", type=int, default=30, help="every k-th validation frame (model selection)")
+    parser.add_argument("--max-test-videos", type=int, default=None)
+    parser.add_argument("--max-val-videos", type=int, default=None)
+    parser.add_argument("--scales", type=float, nargs="+", default=None, help="pyramid factors (default: sliding.DEFAULT_SCALES)")
+    parser.add_argument("--detectors", nargs="+", default=None, choices=["hog", "adaboost", "cnn"],
+                        help="detectors (default: each experiment's own)")
+    parser.add_argument("--ratios", type=float, nargs="+", default=None, help="fig11: synthetic per real")
+    parser.add_argument("--seed-counts", type=int, nargs="+", default=None, help="baselines / fig12: seed-set sizes")
+    parser.add_argument("--distances", nargs="+", default=None, help="table2: distances")
+    parser.add_argument("--frame-step", type=int, default=1, help="baselines: use every n-th labelled training frame")
+    parser.add_argument("--refit", action="store_true", help="fig9: refit Θ without each effect (the paper) instead of dropping it at generation")
+    parser.add_argument("--report-only", action="store_true", help="train nothing: rewrite the tables from the cell cache (missing cells show '–')")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--threads", type=int, default=1, help="torch threads")
+    parser.add_argument("--fit-workers", type=int, default=2)
+    parser.add_argument("--fit-budget", type=int, default=1500)
+    parser.add_argument("--cnn-epochs", type=int, default=12)
+    parser.add_argument("--cnn-max-steps", type=int, default=1200)
+    parser.add_argument("--ada-rounds", type=int, default=100)
+    parser.add_argument("--ada-candidates", type=int, default=2000)
+    parser.add_argument("--hog-components", type=int, default=3)
+    parser.add_argument("--hog-mining-rounds", type=int, default=2)
+
+
+DEFAULT_MESH = {"drone": "../shared/data/meshes/quadcopter.glb", "airplane": "../shared/data/meshes/twin_prop_airplane.glb"}
+
+
+def main(args: argparse.Namespace) -> int:
+    import torch
+
+    from synthaug.evaluate.experiments import EXPERIMENTS, ExperimentContext, TrainOptions
+
+    if args.threads < 1:
+        print(f"synthaug experiment: error: --threads must be >= 1, got {args.threads}", file=sys.stderr)
+        return 2
+    torch.set_num_threads(args.threads)
+    mesh = args.mesh or DEFAULT_MESH.get(args.class_name)
+    if mesh is None:
+        print(f"synthaug experiment: error: no default mesh for class {args.class_name!r}; give --mesh", file=sys.stderr)
+        return 2
+    opts = TrainOptions(hog_components=args.hog_components, hog_mining_rounds=args.hog_mining_rounds, ada_rounds=args.ada_rounds,
+                        ada_candidates=args.ada_candidates, cnn_epochs=args.cnn_epochs, cnn_max_steps=args.cnn_max_steps)
+
+    def log(msg: str) -> None:
+        print(f"[{time.strftime('%H:%M:%S')}] {msg}", flush=True)
+
+    try:
+        ctx = ExperimentContext(out_dir=args.out, class_name=args.class_name, seedsets_dir=args.seedsets, mesh=mesh, fits_dir=args.fits,
+                                videos_dir=args.videos, labels_dir=args.labels, split_file=args.split, stride_k=args.stride_k,
+                                val_stride_k=args.val_stride_k, max_test_videos=args.max_test_videos, max_val_videos=args.max_val_videos,
+                                scales=None if args.scales is None else tuple(args.scales), options=opts, seed=args.seed,
+                                fit_workers=args.fit_workers, fit_budget=args.fit_budget, log=log, cells_path=args.cells,
+                                cached_only=args.report_only)
+        names = list(EXPERIMENTS) if "all" in args.experiments else list(args.experiments)
+        summary = {}
+        for name in names:
+            kw: dict = {}
+            if args.detectors is not None:
+                kw["detectors"] = args.detectors
+            if name == "fig11_ratio" and args.ratios is not None:
+                kw["ratios"] = args.ratios
+            if name in ("baselines", "fig12_seeds") and args.seed_counts is not None:
+                kw["seed_counts"] = args.seed_counts
+            if name == "baselines":
+                kw["frame_step"] = args.frame_step
+            if name == "table2_detector_distance" and args.distances is not None:
+                kw["distances"] = args.distances
+            if name == "fig9_effects_off":
+                kw["refit"] = args.refit
+            t0 = time.perf_counter()
+            log(f"experiment {name} {kw}")
+            EXPERIMENTS[name](ctx, **kw)
+            summary[name] = {"seconds": round(time.perf_counter() - t0, 1), "table": str(args.out / f"{name}.md")}
+            log(f"experiment {name} done in {summary[name]['seconds']}s")
+    except (ValueError, FileNotFoundError) as e:
+        print(f"synthaug experiment: error: {e}", file=sys.stderr)
+        return 2
+    print(json.dumps(summary))
+    return 0
+
+
+if __name__ == "__main__":
+    _parser = argparse.ArgumentParser(prog="synthaug experiment", description=__doc__.split("\n\n")[0])
+    add_arguments(_parser)
+    sys.exit(main(_parser.parse_args()))
