@@ -76,7 +76,6 @@ DETECTORS: tuple[str, ...] = ("hog", "adaboost", "cnn")
 PAPER_DISTANCE: dict[str, str] = {"hog": "hog", "adaboost": "wl_learned", "cnn": "cnn"}
 """The distance the paper pairs with each detector (d_HOG, d_WL^L, d_CNN)."""
 DISTANCES: tuple[str, ...] = ("eucl", "hog", "wl_random", "wl_learned", "cnn")
-EFFECT_LABELS: dict[str, str] = {}
 
 
 # --------------------------------------------------------------------------- training
@@ -844,11 +843,11 @@ def _plot(path: Path, kind: Literal["bar", "line"], series: Mapping[str, Mapping
     try:
         if kind == "line":
             for label, pts in series.items():
-                xs = list(pts.keys())
-                ys = [np.nan if pts[x] is None else pts[x] for x in xs]
+                xs = [x for x in pts if pts[x] is not None]  # missing cells: the line joins the measured points
+                ys = [pts[x] for x in xs]
                 xp = [x + 1 for x in xs] if logx else xs
                 ax.plot(xp, ys, marker="o", label=label)
-                if marks and label in marks and marks[label] in pts:
+                if marks and label in marks and pts.get(marks[label]) is not None:
                     x = marks[label]
                     ax.plot([x + 1 if logx else x], [pts[x]], marker="*", markersize=14, color="k", linestyle="none")
             if logx:
@@ -1009,7 +1008,7 @@ def table1_perturbation(ctx: ExperimentContext, *, detectors: Sequence[str] = DE
     return numbers
 
 
-EFFECT_ABBREV = {"boundary_blur": "BB", "motion_blur": "MB", "noise": "RN", "material": "MP"}
+EFFECT_ABBREV = {"boundary_blur": "BB", "motion_blur": "MB", "object_noise": "RN", "material": "MP"}
 
 
 def _paper_effects() -> list[str]:
