@@ -57,7 +57,7 @@ class FitConfig:
 
     distance: str = "hog"
     optimizer: str = "cmaes"
-    budget: int = 1500
+    budget: int = 3500
     seed: int = 0
     object_scale: float | None = None
     effects: tuple[str, ...] | None = None
