@@ -6,8 +6,9 @@ never modifies its inputs. All are differentiable in their continuous
 parameters: the Gaussian blurs are applied in the Fourier domain with the
 *analytic* transfer function of an anisotropic Gaussian,
 ``Ĝ(f) = exp(-2π² fᵀ Σ f)``, which is smooth in (σ_u, σ_v, α_m), exactly the
-identity at σ = 0, and costs the same for every σ (a 15×15 per-sample kernel by
-grouped convolution is ~6× slower here, see ``benchmarks/bench_effects.py``).
+identity at σ = 0, and costs the same for every σ (the project brief measured a
+15×15 per-sample kernel by grouped convolution at ~500 patches/s against
+~3,200 by FFT, 64×64, one thread).
 
 Example:
     >>> import torch
