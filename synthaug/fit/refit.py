@@ -12,8 +12,8 @@
   images follow the network as it learns (issue 5, item 4). Each refit is
   written to ``<log_dir>/refit/epoch_NNN.json``.
 
-Both are usable from ``python train/fit.py --config ...`` (see
-``configs/cnn_drone_refit.yaml``).
+Both are used from Python (``train/refit_experiment.py``); ``train/fit.py``'s
+LightningCLI is not yet in subclass mode, so a YAML config cannot select them.
 """
 
 from __future__ import annotations
