@@ -444,3 +444,17 @@ def _broadcast(spec: ParamSpec, t: torch.Tensor, batch: int, channels: int) -> t
     if t.ndim == 1 and t.shape[0] in (1, batch):
         return t.expand(batch).clone() if t.shape[0] != batch else t
     raise ValueError(f"{spec.name}: expected shape (B,) or scalar, got {tuple(t.shape)}")
+
+
+def fitted_object_scales(extra: Sequence[Mapping[str, Any]]) -> torch.Tensor | None:
+    """Per-seed object scales stored by ``synthaug fit`` in a file's ``extra`` rows, or None.
+
+    Example:
+        >>> fitted_object_scales([{"object_scale": 0.3}, {"object_scale": 0.5}]).tolist()
+        [0.30000001192092896, 0.5]
+        >>> fitted_object_scales([{"distance": 1.0}]) is None
+        True
+    """
+    if not extra or not all("object_scale" in e for e in extra):
+        return None
+    return torch.tensor([float(e["object_scale"]) for e in extra], dtype=torch.float32)

@@ -57,7 +57,7 @@ def main(args: argparse.Namespace) -> int:
 
     from synthaug.data.procedural import sky_backgrounds
     from synthaug.data.synthetic import SyntheticObjectDataset
-    from synthaug.params import CaptureParams
+    from synthaug.params import CaptureParams, fitted_object_scales
     from synthaug.render.cache import ViewCache
 
     if args.n < 1 or args.per_seed < 1 or args.zoom < 1:
@@ -85,8 +85,7 @@ def main(args: argparse.Namespace) -> int:
         params, scales = None, None
         if args.params:
             params, extra, _ = CaptureParams.load_with_extra(args.params)
-            if extra and all("object_scale" in e for e in extra):
-                scales = [e["object_scale"] for e in extra]
+            scales = fitted_object_scales(extra)
         if params is not None and params.batch_size != len(seeds):
             print(f"{args.params} has {params.batch_size} rows but {args.seeds} has {len(seeds)} seeds", file=sys.stderr)
             return 2

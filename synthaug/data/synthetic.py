@@ -43,7 +43,7 @@ from torch.utils.data import Dataset
 
 from synthaug.effects.pipeline import simulate
 from synthaug.effects.registry import ordered
-from synthaug.params import POSE_NAMES, POSE_SPECS, CaptureParams
+from synthaug.params import POSE_NAMES, POSE_SPECS, CaptureParams, fitted_object_scales
 
 __all__ = ["SyntheticObjectDataset", "collate_detection", "item_generator"]
 
@@ -316,8 +316,7 @@ class SyntheticObjectDataset(Dataset):
         scales = None
         if isinstance(params, (str, os.PathLike)):
             params, extra, _ = CaptureParams.load_with_extra(Path(params))
-            if extra and all("object_scale" in e for e in extra):
-                scales = torch.tensor([float(e["object_scale"]) for e in extra])
+            scales = fitted_object_scales(extra)
         if not isinstance(params, CaptureParams):
             raise ValueError(f"params must be CaptureParams, a path or None, got {type(params).__name__}")
         if params.batch_size != n:

@@ -270,8 +270,7 @@ def fit_seedset(
         elif callable(progress):
             progress(len({int(p.stem.split("_")[1]) for p in parts.glob("seed_*.json")}), len(todo_all))
 
-    ViewCache_build_args = (mesh, cfg)
-    _warm_cache(*ViewCache_build_args)  # build sprites once (GL subprocess) before workers load them
+    _warm_cache(mesh, cfg)  # build sprites once (GL subprocess) before workers load them
     if dask_address is not None:
         _run_dask(dask_address, todo, seeds_path, mesh, cfg, distance, str(parts), tick)
     elif workers <= 1:

@@ -162,7 +162,7 @@ class CNNDistanceRefit(L.Callback):
             raise ValueError("CNNDistanceRefit needs a SyntheticPatchDataModule")
         from synthaug.distances.cnn import CNNDistance
         from synthaug.fit.fitting import FitConfig, fit_seedset
-        from synthaug.params import CaptureParams
+        from synthaug.params import CaptureParams, fitted_object_scales
 
         net = copy.deepcopy(pl_module.net).cpu()
         distance = CNNDistance(net, first_layer=self.first_layer)
@@ -174,7 +174,7 @@ class CNNDistanceRefit(L.Callback):
             fit_seedset(dm.seed_dir, dm.mesh, out, cfg, distance=distance)
         trainer.strategy.barrier()
         params, extra, meta = CaptureParams.load_with_extra(out)
-        scales = torch.tensor([e["object_scale"] for e in extra]) if all("object_scale" in e for e in extra) else None
+        scales = fitted_object_scales(extra)
         dm.update_params(params, scales)
         med = float(meta["distance_median"])
         self.history.append({"epoch": epoch, "file": str(out), "distance_median": med})
