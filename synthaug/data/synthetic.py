@@ -380,7 +380,8 @@ class SyntheticObjectDataset(Dataset):
             t = {"labels": torch.as_tensor(target, dtype=torch.int64)}
         t.setdefault("synthetic", torch.tensor(False))
         t.setdefault("seed_index", torch.tensor(-1, dtype=torch.int64))
-        t.setdefault("theta", torch.full((self.params.to_vector().shape[1],), float("nan")))
+        t.setdefault("theta", torch.full((len(CaptureParams.vector_names(channels=self.channels,
+                                                                        effects=self.params.effects)),), float("nan")))
         return image, t
 
     # -------------------------------------------------------- synthesis
