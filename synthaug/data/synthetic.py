@@ -247,8 +247,7 @@ class SyntheticObjectDataset(Dataset):
             from synthaug.fit.density import CaptureDensity
 
             self._density = CaptureDensity(self.params, kind=capture_sampling)
-        self._random_effects = [e for e in ordered(list(self.effects))
-                                if e.sample_fields((0, 1, 1, 1), torch.Generator())]
+        self._random_effects = [e for e in ordered(list(self.effects)) if e.is_random]
 
         ranges = {s.name: s.sampling_range for s in POSE_SPECS}
         for k, v in dict(pose_ranges or {}).items():

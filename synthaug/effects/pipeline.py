@@ -97,7 +97,7 @@ def simulate(
         raise ValueError(f"layers {tuple(coverage.shape[-2:])} and background {tuple(background.shape[-2:])} differ in size")
     names = list(theta.effects if effects is None else effects)
     if fields is None:
-        needs = any(get_effect(n).sample_fields((0, 1, 1, 1), torch.Generator()) for n in names)
+        needs = any(get_effect(n).is_random for n in names)
         if needs and generator is None:
             raise ValueError("these effects draw random fields: pass `fields` or a `generator`")
         fields = sample_fields(names, tuple(background.shape), generator) if needs else {}

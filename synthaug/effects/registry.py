@@ -85,6 +85,11 @@ class Effect:
         """Random fields this effect needs, for an image batch of ``shape`` (B, C, H, W)."""
         return {}
 
+    @property
+    def is_random(self) -> bool:
+        """Whether the effect draws random fields (it overrides :meth:`sample_fields`)."""
+        return type(self).sample_fields is not Effect.sample_fields
+
     def apply(self, state: RenderState, **params: torch.Tensor) -> RenderState:  # pragma: no cover - abstract
         raise NotImplementedError
 
