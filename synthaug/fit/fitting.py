@@ -155,19 +155,23 @@ def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance
 _CTX: dict[str, Any] = {}
 
 
-def _context(seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any) -> dict[str, Any]:
-    """Per-process state (seed set, view cache, distance), built once per process."""
+def _context(seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, *, seeds: Any = None,
+             cache: Any = None) -> dict[str, Any]:
+    """Per-process state (seed set, view cache, distance), built once per process.
+
+    ``seeds`` / ``cache`` hand over objects the caller already loaded (in-process
+    runs). The distance is refreshed on every call: it is not part of the key,
+    and a caller may pass a new one with the same configuration (the d_CNN refit).
+    """
     key = json.dumps([seeds_path, str(mesh), _cfg_json(cfg)], sort_keys=True, default=str)
     if _CTX.get("key") != key:
         from synthaug.data.seedset import SeedSet
-        from synthaug.render.cache import ViewCache
 
         torch.set_num_threads(1)
-        seeds = SeedSet.load(seeds_path)
         _CTX.clear()
-        _CTX.update(key=key, seeds=seeds,
-                    cache=ViewCache.build(mesh, step_deg=cfg.step_deg, sprite_size=cfg.sprite_size),
-                    distance=distance)
+        _CTX.update(key=key, seeds=seeds if seeds is not None else SeedSet.load(seeds_path),
+                    cache=cache if cache is not None else _warm_cache(mesh, cfg))
+    _CTX["distance"] = distance
     return _CTX
 
 
@@ -270,13 +274,19 @@ def fit_seedset(
         elif callable(progress):
             progress(len({int(p.stem.split("_")[1]) for p in parts.glob("seed_*.json")}), len(todo_all))
 
-    _warm_cache(mesh, cfg)  # build sprites once (GL subprocess) before workers load them
+    cache = _warm_cache(mesh, cfg)  # build sprites once (GL subprocess) before workers load them
     if dask_address is not None:
         _run_dask(dask_address, todo, seeds_path, mesh, cfg, distance, str(parts), tick)
     elif workers <= 1:
-        for i in todo:
-            _fit_index(i, seeds_path, mesh, cfg, distance, str(parts))
-            tick()
+        # one thread, as in worker processes (same floating-point results); the caller's setting is restored
+        threads = torch.get_num_threads()
+        try:
+            _context(seeds_path, mesh, cfg, distance, seeds=seeds, cache=cache)
+            for i in todo:
+                _fit_index(i, seeds_path, mesh, cfg, distance, str(parts))
+                tick()
+        finally:
+            torch.set_num_threads(threads)
     else:
         import multiprocessing as mp
         from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -294,10 +304,10 @@ def fit_seedset(
     return out
 
 
-def _warm_cache(mesh: Any, cfg: FitConfig) -> None:
+def _warm_cache(mesh: Any, cfg: FitConfig) -> Any:
     from synthaug.render.cache import ViewCache
 
-    ViewCache.build(mesh, step_deg=cfg.step_deg, sprite_size=cfg.sprite_size)
+    return ViewCache.build(mesh, step_deg=cfg.step_deg, sprite_size=cfg.sprite_size)
 
 
 def _run_dask(address: Any, todo: list[int], seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any,
