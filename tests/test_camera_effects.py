@@ -513,3 +513,41 @@ def test_rgb_effects_are_per_channel():
         gray = CaptureParams({n: (v[:, c] if v.ndim == 2 else v) for n, v in theta.as_dict().items()}, effects=effects)
         one = simulate(_t(cov), _t(nrm), _t(bg[:, c:c + 1]), gray, fields={k: f[:, c:c + 1] for k, f in fields.items()})
         torch.testing.assert_close(rgb[:, c:c + 1], one, atol=1e-9, rtol=0)
+
+
+def test_jpeg_on_the_frame_grid_matches_opencv_through_a_crop():
+    """A crop at an offset that is not a multiple of 8: the coding error of OpenCV's JPEG of the whole frame is
+    reproduced on the frame's grid, not on the patch's."""
+    import cv2
+
+    from synthaug.effects.camera_functional import jpeg_difference_on_frame_grid, jpeg_quantize
+
+    yy, xx = np.mgrid[0:96, 0:128]
+    bg = 0.5 + 0.1 * np.sin(xx / 9.0) + 0.05 * np.cos(yy / 7.0)
+    fr = bg.copy()
+    fr[40:66, 50:83] = 0.15
+
+    def coded(a):
+        u8 = np.round(a * 255).astype(np.uint8)
+        return cv2.imdecode(cv2.imencode(".jpg", u8, [cv2.IMWRITE_JPEG_QUALITY, 40])[1], 0) / 255.0, u8 / 255.0
+
+    (jf, f), (jb, b) = coded(fr), coded(bg)
+    x0, y0, p = 37, 29, 48
+    cut = lambda a: torch.tensor(a[y0:y0 + p, x0:x0 + p])[None, None]  # noqa: E731
+    target = cut(jf) - cut(f) - (cut(jb) - cut(b))  # the object's coding error, as the patch sees it
+    img = cut(f) - cut(b) + cut(jb)
+    bgp = cut(jb)
+    model = jpeg_difference_on_frame_grid(img, bgp, 40.0, origin=torch.tensor([[float(x0), float(y0)]]),
+                                          frame_scale=torch.tensor([1.0])) - img
+    patch_grid = jpeg_quantize(img, 40.0) - jpeg_quantize(bgp, 40.0) + bgp - img
+    corr = lambda a, c: float(np.corrcoef(a.flatten().numpy(), c.flatten().numpy())[0, 1])  # noqa: E731
+    assert corr(model, target) > 0.8
+    assert corr(patch_grid, target) < 0.6
+    # quality 100 is off; a batch of mixed scales keeps its shape
+    two = torch.rand(2, 1, 20, 20, dtype=torch.float64)
+    out = jpeg_difference_on_frame_grid(two, two.flip(0), torch.tensor([100.0, 40.0]),
+                                        origin=torch.tensor([[3.5, 7.0], [10.0, 1.0]]),
+                                        frame_scale=torch.tensor([1.4, 0.7]))
+    assert out.shape == two.shape and torch.equal(out[0], two[0])
+    with pytest.raises(ValueError, match="frame_scale"):
+        jpeg_difference_on_frame_grid(two, two, 40.0, origin=torch.zeros(2, 2), frame_scale=torch.tensor([1.0, 0.0]))

@@ -155,3 +155,29 @@ def test_interrupted_write_leaves_nothing(tmp_path, monkeypatch):
     # the old seed set is intact and no temporary folder is left
     assert np.array_equal(SeedSet.load(tmp_path / "s").patches, before)
     assert not [p for p in os.listdir(tmp_path) if p.startswith(".")]
+
+
+@pytest.mark.parametrize("frame_scale", [0.6, 1.0, 1.6, 2.5])
+def test_crop_resampling_sigma_matches_the_measured_blur_of_crop_patch(frame_scale):
+    """A Gaussian blob of known σ, cut at random sub-pixel places: its second moment in the patch is
+    (σ / frame_scale)² plus the predicted resampling variance (averaged over phases)."""
+    from synthaug.data.seedset import crop_patch, crop_resampling_sigma
+
+    rng = np.random.default_rng(0)
+    sb, p = 2.0, 40
+    yy, xx = np.mgrid[0:130, 0:130]
+    var = []
+    for _ in range(40):
+        cx, cy = rng.uniform(60, 70, 2)
+        img = np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (2 * sb ** 2)).astype(np.float32)
+        patch, _ = crop_patch(img, crop=[cx + rng.uniform(-1, 1), cy + rng.uniform(-1, 1), p * frame_scale],
+                              patch_size=p)
+        w = patch.astype(np.float64).sum(0)
+        x = np.arange(p)
+        mu = (w * x).sum() / w.sum()
+        var.append((w * (x - mu) ** 2).sum() / w.sum())
+    blob = (sb / frame_scale) ** 2
+    extra = float(crop_resampling_sigma(frame_scale)) ** 2
+    assert np.mean(var) - blob == pytest.approx(extra, rel=0.1)
+    with pytest.raises(ValueError, match="positive"):
+        crop_resampling_sigma([1.0, 0.0])

@@ -65,6 +65,7 @@ __all__ = [
     "write_seedset",
     "crop_patch",
     "crop_geometry",
+    "crop_resampling_sigma",
     "atomic_write_bytes",
     "replace_dir",
 ]
@@ -158,6 +159,27 @@ def crop_patch(
     patch = cv2.warpAffine(src, M, (patch_size, patch_size), flags=cv2.INTER_LINEAR,
                            borderMode=cv2.BORDER_REPLICATE)
     return patch, c
+
+
+def crop_resampling_sigma(frame_scale: Any) -> np.ndarray:
+    """Std (patch px) of the blur :func:`crop_patch` puts on a seed patch, per axis.
+
+    A seed patch is a resampled crop: for ``frame_scale = side / P > 1``
+    (downscaling) the Gaussian pre-blur of σ = 0.4 patch px, then bilinear
+    interpolation, whose tent kernel has variance 1/6 frame px² on average
+    over the sub-pixel phase, i.e. ``1 / (6 frame_scale²)`` patch px².
+    The background patch B_i went through the same resampling; a rendered
+    object layer did not, so a model that composites a render over B_i
+    needs this blur on the object to match the seed patch.
+
+    Example:
+        >>> [round(float(v), 3) for v in crop_resampling_sigma([0.5, 1.0, 2.0])]
+        [0.816, 0.408, 0.449]
+    """
+    fs = np.asarray(frame_scale, dtype=np.float64)
+    if np.any(~np.isfinite(fs)) or np.any(fs <= 0):
+        raise ValueError(f"frame_scale must be positive and finite, got {frame_scale}")
+    return np.sqrt(np.where(fs > 1.0, 0.16, 0.0) + 1.0 / (6.0 * fs * fs))
 
 
 def _u8_stack(arrs: Any, p: int, name: str) -> np.ndarray:

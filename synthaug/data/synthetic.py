@@ -169,6 +169,12 @@ class SyntheticObjectDataset(Dataset):
             seeds: combinations no seed had) or ``"uniform"`` (each parameter
             uniform between its min and max over the seeds: the paper's Fig. 10
             baseline). The background always comes from one seed.
+        seed_geometry: patch mode: where each seed's background patch sits in its
+            frame, ``{"origin": (N, 2), "frame_size": (N, 2), "frame_scale": (N,)}``
+            as :func:`synthaug.diagnose.reference_camera.seed_geometry` returns it,
+            passed to the position-aware camera effects (vignetting, chromatic
+            aberration, lens distortion, the JPEG block grid); None: the patch is
+            taken as the frame. The paper's four effects do not read it.
     """
 
     def __init__(
@@ -194,6 +200,7 @@ class SyntheticObjectDataset(Dataset):
         cache: Any = None,
         cache_options: Mapping[str, Any] | None = None,
         capture_sampling: Literal["seed", "kde", "uniform"] = "seed",
+        seed_geometry: Mapping[str, Any] | None = None,
     ) -> None:
         super().__init__()
         if mode not in ("patch", "frame"):
@@ -242,6 +249,7 @@ class SyntheticObjectDataset(Dataset):
         if capture_sampling not in ("seed", "kde", "uniform"):
             raise ValueError(f"capture_sampling must be 'seed', 'kde' or 'uniform', got {capture_sampling!r}")
         self.capture_sampling = capture_sampling
+        self.seed_geometry = None if seed_geometry is None else self._check_geometry(seed_geometry, n_seeds)
         self._density = None
         if capture_sampling != "seed":
             from synthaug.fit.density import CaptureDensity
@@ -321,6 +329,24 @@ class SyntheticObjectDataset(Dataset):
         if params.batch_size != n:
             raise ValueError(f"params has {params.batch_size} rows but there are {n} backgrounds (one row per seed)")
         return params, scales
+
+    def _check_geometry(self, geo: Mapping[str, Any], n: int) -> dict[str, torch.Tensor]:
+        if self.mode != "patch":
+            raise ValueError("seed_geometry is for patch mode (frame mode places the object in the frame itself)")
+        shapes = {"origin": (n, 2), "frame_size": (n, 2), "frame_scale": (n,)}
+        missing = sorted(set(shapes) - set(geo))
+        if missing:
+            raise ValueError(f"seed_geometry lacks {missing} (needs {sorted(shapes)})")
+        out = {}
+        for k, shape in shapes.items():
+            t = torch.as_tensor(geo[k], dtype=torch.float32)
+            if tuple(t.shape) != shape or not bool(torch.isfinite(t).all()):
+                raise ValueError(f"seed_geometry[{k!r}] must be finite with shape {shape} (one row per seed), "
+                                 f"got {tuple(t.shape)}")
+            out[k] = t
+        if bool((out["frame_scale"] <= 0).any()) or bool((out["frame_size"] <= 0).any()):
+            raise ValueError("seed_geometry frame_scale and frame_size must be > 0")
+        return out
 
     def _validate_sizes(self) -> None:
         if self.params.channels != self.channels:
@@ -448,13 +474,21 @@ class SyntheticObjectDataset(Dataset):
         cov, nrm = self._layers(pose, crop, scale)
         fields = {k: torch.cat([d["fields"][k] for d in draws]) for k in draws[0]["fields"]}
         frame_size = origin = None
+        extras: dict[str, torch.Tensor] = {}
+        if self.mode == "patch" and self.seed_geometry is not None:  # the seed's place in its frame
+            geo = self.seed_geometry
+            fsc = geo["frame_scale"][seeds]
+            crop_xy = torch.tensor([d["crop_xy"] for d in draws], dtype=torch.float32)
+            origin = geo["origin"][seeds] + crop_xy * fsc[:, None]
+            frame_size = geo["frame_size"][seeds]
+            extras["frame_scale"] = fsc
         if self.mode == "frame":
             origin = torch.tensor([d["crop_xy"] for d in draws], dtype=torch.float32)
             frame_size = torch.tensor([[self.backgrounds[d["seed_index"]].shape[-1],
                                         self.backgrounds[d["seed_index"]].shape[-2]] for d in draws],
                                       dtype=torch.float32)
         images = simulate(cov, nrm, bgs, theta, effects=self.effects, fields=fields, origin=origin,
-                          frame_size=frame_size)
+                          frame_size=frame_size, extras=extras)
         vec = theta.to_vector().float()
         out = []
         for k, d in enumerate(draws):

@@ -3,7 +3,8 @@
 Example::
 
     synthaug diagnose --seeds data/halmstad/seedsets/drone_100 --mesh ../shared/data/meshes/quadcopter.glb \\
-        --fit fits/drone_100_hog.json --distance hog --out results/diagnose/drone_100
+        --fit fits/drone_100_hog.json --distance hog --out results/diagnose/drone_100 \\
+        --extended-fit fits/drone_100_hog_extended.json
 """
 
 from __future__ import annotations
@@ -25,6 +26,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--alpha", type=float, default=0.01, help="family-wise significance level")
     parser.add_argument("--no-plots", action="store_true")
     parser.add_argument("--quiet", action="store_true")
+    parser.add_argument("--extended-fit", default=None, metavar="PATH",
+                        help="also write the fit extended by the first finding's effect (per-seed patch units); "
+                             "nothing is written when there is no candidate-effect finding")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -38,8 +42,17 @@ def main(args: argparse.Namespace) -> int:
     except (ValueError, FileNotFoundError) as e:
         print(f"synthaug diagnose: {e}", file=sys.stderr)
         return 2
+    extended = None
+    if args.extended_fit:
+        from synthaug.diagnose.extend import extend_fit
+
+        try:
+            extended = str(extend_fit(args.fit, args.seeds, report, args.extended_fit))
+        except ValueError as e:  # no candidate-effect finding: the report stands, no extension is written
+            print(f"synthaug diagnose: --extended-fit not written: {e}", file=sys.stderr)
     print(json.dumps({"out": args.out, "significant": report["significant"],
-                      "findings": [f["effect"] for f in report["findings"]], "seconds": round(report["seconds"], 1)}))
+                      "findings": [f["effect"] for f in report["findings"]], "seconds": round(report["seconds"], 1),
+                      **({"extended_fit": extended} if args.extended_fit else {})}))
     return 0
 
 

@@ -420,6 +420,7 @@ def make_measured_seedset(
     read_noise: float = 0.004,
     background_noise_factor: float = 0.35,
     n_videos: int = 5,
+    per_video: Sequence[str] = ("w_d",),
     view_step_deg: float = 10.0,
     sprite_size: int = 64,
 ) -> Path:
@@ -450,6 +451,11 @@ def make_measured_seedset(
         background_noise_factor: the background frame's noise relative to the
             frame's (an aligned median of ~9 frames: about 0.35).
         n_videos: seeds are spread over this many "videos" (record ``video``).
+        per_video: paper parameters drawn once per video rather than per seed.
+            Default ``("w_d",)``: the diffuse weight is the object's paint under
+            the scene's light, the same for every frame of a video (the
+            orientation's shading is rendered); a camera effect that w_d
+            absorbs then shows *within* a video.
         view_step_deg, sprite_size: the view cache of the real mesh.
 
     Returns:
@@ -474,6 +480,10 @@ def make_measured_seedset(
         raise ValueError(f"background_noise_factor must be in [0, 1], got {background_noise_factor}")
     if n_videos < 1:
         raise ValueError(f"n_videos must be >= 1, got {n_videos}")
+    per_video = tuple(per_video)
+    bad_pv = sorted(set(per_video) - set(PAPER_RANGES))
+    if bad_pv:
+        raise ValueError(f"per_video: unknown parameter(s) {bad_pv}; known: {sorted(PAPER_RANGES)}")
     settings = resolve_hidden(hidden)
     ranges = dict(PAPER_RANGES)
     bad = sorted(set(paper_ranges or {}) - set(ranges))
@@ -509,6 +519,9 @@ def make_measured_seedset(
         cam = _draw_strengths(settings, np.random.default_rng([seed, i, 1]))
         paper = {k: float(rng.uniform(*ranges[k])) for k in ("w_d", "sigma_s", "sigma_u", "sigma_v", "alpha_m",
                                                               "sigma_n")}
+        video_rng = np.random.default_rng([seed, i % n_videos, 2])
+        for k in per_video:  # the scene's light on the object's paint: one value per video
+            paper[k] = float(video_rng.uniform(*ranges[k]))
         alpha, beta, gamma = rng.uniform(-math.pi, math.pi), rng.uniform(-math.pi / 2, math.pi / 2), \
             rng.uniform(-math.pi, math.pi)
         size_px = float(rng.uniform(lo_px, hi_px))
@@ -616,6 +629,7 @@ def make_measured_seedset(
             "mesh_perturbation": mesh_perturbation, "seed": seed, "read_noise": read_noise,
             "background_noise_factor": background_noise_factor, "paper_ranges": ranges,
             "object_px": [lo_px, hi_px], "view_step_deg": view_step_deg, "sprite_size": sprite_size,
+            "per_video": list(per_video), "n_videos": n_videos,
             "whole_frame": [e for e in settings if e in WHOLE_FRAME_EFFECTS],
             "object_only": [e for e in settings if e in OBJECT_ONLY_EFFECTS],
             "truth_file": "truth.json",

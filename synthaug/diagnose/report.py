@@ -7,7 +7,9 @@ Example (the shipped demo data with vignetting hidden; slow, so not run here)::
     report["findings"][0]["effect"]   # 'vignetting'
 
 A finding is a candidate effect whose extension helps on held-out seeds
-(significant after correction for the number of candidates), or
+(significant after correction for the number of candidates; the second and
+later findings are screened again on top of those before them, forward
+selection, so one effect's gain is not reported twice under two names), or
 ``"unexplained"`` when the residual has significant structure that no
 candidate explains, with that structure described. A clean case reports no
 finding.
@@ -73,15 +75,50 @@ def _jsonable(x: Any) -> Any:
     return x
 
 
-def _extended_render(data: Any, row: dict[str, Any]) -> tuple[torch.Tensor, dict[str, float]]:
-    from synthaug.diagnose.residuals import render_with, solve_albedo
-    from synthaug.diagnose.screening import extension_values
-
+def _setting(row: dict[str, Any]) -> dict[str, float]:
     space = "feature" if row["channel"] == "distance:feature" else "pixel"
-    setting = row["screen"][space]["setting"]
-    ext = extension_values(data, row["effect"], setting)
+    return row["screen"][space]["setting"]
+
+
+def _extended_render(data: Any, row: dict[str, Any], given: dict[str, Any] | None = None
+                     ) -> tuple[torch.Tensor, dict[str, float]]:
+    from synthaug.diagnose.residuals import render_with, solve_albedo
+    from synthaug.diagnose.screening import extension_values, given_values
+
+    setting = _setting(row)
+    ext = {**given_values(data, given), **extension_values(data, row["effect"], setting)}
     w = solve_albedo(data, ext)
     return render_with(data, ext, w_d=w), setting
+
+
+def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha: float, max_effects: int,
+                       say: Callable[[str], None]) -> tuple[list[dict[str, Any]], list[tuple[dict, dict]]]:
+    """Screen every candidate, accept the best significant one, re-screen the other significant ones on top
+    of it (their conditional gain), and so on: an effect whose gain another one already explains drops out.
+
+    Returns:
+        (rows of the first round, [(accepted row, the extensions it was screened on top of)]).
+    """
+    from synthaug.diagnose.screening import ABSORPTION, screen_candidates
+
+    n_tests = max(len(order), 1) * 2 + sum(1 for c in order if c in ABSORPTION)
+    rows = screen_candidates(data, order, k=k, seed=seed, alpha=alpha, progress=lambda c: say(f"  {c}"))
+    first = rows
+    accepted: dict[str, dict[str, float]] = {}
+    picked: list[tuple[dict, dict]] = []
+    while len(picked) < max_effects:
+        sig = [r for r in rows if r["significant"] and r["effect"] not in accepted]
+        if not sig:
+            break
+        top = sig[0]
+        picked.append((top, dict(accepted)))
+        accepted[top["effect"]] = _setting(top)
+        rest = [r["effect"] for r in sig[1:]]
+        if not rest:
+            break
+        say(f"re-screening {rest} on top of {list(accepted)}")
+        rows = screen_candidates(data, rest, k=k, seed=seed, alpha=alpha, given=accepted, n_tests=n_tests)
+    return first, picked
 
 
 def diagnose(
@@ -97,6 +134,7 @@ def diagnose(
     alpha: float = 0.01,
     plots: bool = True,
     progress: Callable[[str], None] | None = None,
+    max_effects: int = 3,
 ) -> dict[str, Any]:
     """Diagnose a fitted simulation against its measured seed set.
 
@@ -112,6 +150,8 @@ def diagnose(
         alpha: family-wise significance level.
         plots: write the PNG plots with the markdown report.
         progress: called with a short message at each step.
+        max_effects: at most this many effects are accepted by forward selection
+            (each later one screened on top of those before it: ``given``).
 
     Returns:
         the report: ``findings`` (ranked; each ``effect`` — a candidate name or
@@ -122,10 +162,11 @@ def diagnose(
     from synthaug.diagnose.residuals import (
         load_diagnosis_data,
         parameter_dependence,
+        seed_groups,
         seed_metadata,
         structure_measures,
     )
-    from synthaug.diagnose.screening import CANDIDATE_GRIDS, base_render, kfold, realism_accuracy, screen_candidates
+    from synthaug.diagnose.screening import CANDIDATE_GRIDS, base_render, kfold, realism_accuracy
 
     t0 = time.perf_counter()
     say = progress or (lambda s: None)
@@ -149,23 +190,23 @@ def diagnose(
     for p in _FITTED_PARAMS:
         fitted[p] = th[p][:, 0].double().numpy()
     dependence = parameter_dependence(fitted, {k_: v for k_, v in meta.items() if k_ != "inverse_size"}, rng=rng,
-                                      alpha=alpha)
+                                      alpha=alpha, groups=seed_groups(data))
     order, hinted = _order(structure, names)
     say(f"screening {len(order)} candidates")
-    rows = screen_candidates(data, order, k=k, seed=seed, alpha=alpha, progress=lambda c: say(f"  {c}"))
+    rows, picked = _forward_selection(data, order, k=k, seed=seed, alpha=alpha, max_effects=max_effects, say=say)
     folds = kfold(len(data), k, np.random.default_rng(seed + 1))
     acc_base = realism_accuracy(data, syn0, folds)
     findings: list[dict[str, Any]] = []
     ext_images = None
-    for rank, row in enumerate(r for r in rows if r["significant"]):
-        syn1, setting = _extended_render(data, row)
+    for rank, (row, given) in enumerate(picked):
+        syn1, setting = _extended_render(data, row, given)
         if rank == 0:
             ext_images = (row["effect"], syn1)
-        acc = realism_accuracy(data, syn1, folds) if rank < 3 else None
+        acc = realism_accuracy(data, syn1, folds)
         sc = row["screen"]
         findings.append({
             "effect": row["effect"], "significant": True, "channel": row["channel"], "score": row["score"],
-            "p_adjusted": row["p_adjusted"], "setting": setting,
+            "p_adjusted": row["p_adjusted"], "setting": setting, "given": list(given),
             "gains": {"heldout_feature": sc["feature"]["gain"], "heldout_pixel": sc["pixel"]["gain"],
                       "absorbed_parameter_r2": None if row["absorption"] is None else row["absorption"]["gain"],
                       "realism_accuracy_before": acc_base, "realism_accuracy_after": acc},
@@ -297,7 +338,8 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                 f"({inp['distance']}), {100 * (g['heldout_pixel'] or 0):.1f} % (pixels)"
                 + (f"; absorbed-parameter R² {g['absorbed_parameter_r2']:.2f}" if f["channel"] == "absorbed" else "")
                 + (f"; real-vs-synthetic accuracy {100 * g['realism_accuracy_before']:.0f} % → {100 * acc:.0f} %"
-                   if acc is not None else ""))
+                   if acc is not None else "")
+                + (f"; gains measured on top of {', '.join(f['given'])}" if f.get("given") else ""))
         lines.append("")
     lines += ["## Residual structure", "", "| measure | value | p | significant | description |",
               "|---|---|---|---|---|"]

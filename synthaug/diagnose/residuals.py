@@ -54,6 +54,8 @@ __all__ = [
     "aligned_maps",
     "t_test",
     "permutation_spearman",
+    "within_groups",
+    "seed_groups",
 ]
 
 
@@ -101,9 +103,33 @@ def _rank(x: np.ndarray) -> np.ndarray:
     return rankdata(x)
 
 
-def permutation_spearman(x: np.ndarray, y: np.ndarray, rng: np.random.Generator, n_perm: int = 9999
-                         ) -> tuple[float, float]:
+def within_groups(x: np.ndarray, groups: np.ndarray | None) -> np.ndarray:
+    """``x`` minus its group's mean (groups of one seed give NaN); ``x`` itself when ``groups`` is None.
+
+    Example:
+        >>> within_groups(np.array([1.0, 3.0, 10.0, 14.0, 5.0]), np.array([0, 0, 1, 1, 2])).tolist()
+        [-1.0, 1.0, -2.0, 2.0, nan]
+    """
+    x = np.asarray(x, np.float64)
+    if groups is None:
+        return x
+    groups = np.asarray(groups)
+    out = np.full_like(x, np.nan)
+    for g in np.unique(groups):
+        sel = groups == g
+        if sel.sum() >= 2:
+            out[sel] = x[sel] - x[sel].mean()
+    return out
+
+
+def permutation_spearman(x: np.ndarray, y: np.ndarray, rng: np.random.Generator, n_perm: int = 9999,
+                         groups: np.ndarray | None = None) -> tuple[float, float]:
     """Spearman's ρ of (x, y) and its two-sided permutation p-value.
+
+    With ``groups`` (e.g. the video of each seed) the dependence is measured
+    *within* groups: both variables are centred per group and ``y`` is
+    permuted only inside its group, so a per-group nuisance (the light of a
+    video) neither creates nor hides a dependence.
 
     Example:
         >>> rng = np.random.default_rng(0)
@@ -112,17 +138,22 @@ def permutation_spearman(x: np.ndarray, y: np.ndarray, rng: np.random.Generator,
         >>> rho > 0.9, p < 0.01
         (True, True)
     """
-    x = np.asarray(x, np.float64)
-    y = np.asarray(y, np.float64)
+    x = within_groups(x, groups)
+    y = within_groups(y, groups)
+    g = np.zeros(len(x), np.int64) if groups is None else np.unique(np.asarray(groups), return_inverse=True)[1]
     ok = np.isfinite(x) & np.isfinite(y)
-    x, y = x[ok], y[ok]
+    x, y, g = x[ok], y[ok], g[ok]
     if len(x) < 5 or np.ptp(x) == 0 or np.ptp(y) == 0:
         return 0.0, 1.0
     rx = _rank(x) - (len(x) + 1) / 2
     ry = _rank(y) - (len(y) + 1) / 2
     den = math.sqrt(float((rx * rx).sum() * (ry * ry).sum()))
     rho = float((rx * ry).sum() / den)
-    null = (rng.permuted(np.tile(ry, (n_perm, 1)), axis=1) @ rx) / den
+    perm = np.tile(np.arange(len(x)), (n_perm, 1))
+    for gi in np.unique(g):  # permute inside each group only
+        idx = np.nonzero(g == gi)[0]
+        perm[:, idx] = idx[rng.permuted(np.tile(np.arange(len(idx)), (n_perm, 1)), axis=1)]
+    null = (ry[perm] @ rx) / den
     p = (1 + int((np.abs(null) >= abs(rho) - 1e-12).sum())) / (n_perm + 1)
     return rho, float(p)
 
@@ -152,6 +183,7 @@ class DiagnosisData:
     distance: Any
     records: list[dict[str, Any]] = field(default_factory=list)
     fit_distance: np.ndarray | None = None
+    resample_sigma: torch.Tensor | None = None  # (N,) patch px: the seed patches' crop resampling blur
 
     def __len__(self) -> int:
         return int(self.real.shape[0])
@@ -165,7 +197,8 @@ class DiagnosisData:
             origin=take(self.origin), frame_size=take(self.frame_size), frame_scale=take(self.frame_scale),
             part_rotor=take(self.part_rotor), distance_name=self.distance_name, distance=self.distance,
             records=[self.records[int(i)] for i in idx_t] if self.records else [],
-            fit_distance=None if self.fit_distance is None else self.fit_distance[np.asarray(idx, np.int64)])
+            fit_distance=None if self.fit_distance is None else self.fit_distance[np.asarray(idx, np.int64)],
+            resample_sigma=take(self.resample_sigma))
 
 
 def _rotor_layers(cache_body: Any, theta: Any, size: int, scale: torch.Tensor, cov: torch.Tensor) -> torch.Tensor:
@@ -174,7 +207,8 @@ def _rotor_layers(cache_body: Any, theta: Any, size: int, scale: torch.Tensor, c
     return (cov - cov_b).clamp(0.0, 1.0)
 
 
-def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance: str | Any = "hog") -> DiagnosisData:
+def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance: str | Any = "hog",
+                        resampling: bool = True) -> DiagnosisData:
     """Load a seed set and its fit, and render the fitted layers of every seed.
 
     Args:
@@ -183,13 +217,18 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         mesh: the mesh given to the fit (path or built-in name; ``"quadcopter"``
             also gives its rotor parts).
         distance: the detector's distance (name or module), e.g. ``"hog"``.
+        resampling: put the seed patches' known crop-resampling blur
+            (:func:`~synthaug.data.seedset.crop_resampling_sigma`) on the
+            rendered object in every model, base and extended: a seed patch
+            and its background are resampled crops, a render is not, and
+            without it a missing blur of ~0.4 px reads as a camera effect.
 
     Returns:
         a :class:`DiagnosisData`.
     """
     import os
 
-    from synthaug.data.seedset import SeedSet
+    from synthaug.data.seedset import SeedSet, crop_resampling_sigma
     from synthaug.diagnose.reference_camera import seed_geometry
     from synthaug.effects.pipeline import sample_fields
     from synthaug.fit.fitting import build_distance, patches_tensor
@@ -232,7 +271,9 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         normals=nrm, theta=theta, fields={k: torch.cat(v) for k, v in fields.items()}, origin=geo["origin"],
         frame_size=geo["frame_size"], frame_scale=geo["frame_scale"], part_rotor=part_rotor,
         distance_name=str(name), distance=dist, records=list(seeds.records),
-        fit_distance=np.array([float(e.get("distance", np.nan)) for e in extra]))
+        fit_distance=np.array([float(e.get("distance", np.nan)) for e in extra]),
+        resample_sigma=torch.from_numpy(crop_resampling_sigma(geo["frame_scale"].double().numpy())).float()
+        if resampling else None)
 
 
 def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor | float]] | None = None, *,
@@ -260,6 +301,12 @@ def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor
     for eff, params in extension.items():
         for k, v in params.items():
             values[k] = torch.as_tensor(v, dtype=torch.float32).reshape(-1, 1).expand(n, 1)
+    if data.resample_sigma is not None:  # the crop's resampling blur, combined with a defocus candidate
+        if "defocus" not in effects:
+            effects = effects + ("defocus",)
+            values["defocus_sigma"] = torch.zeros(n, 1)
+        values["defocus_sigma"] = torch.sqrt(values["defocus_sigma"] ** 2
+                                             + data.resample_sigma.float().reshape(n, 1) ** 2)
     theta = CaptureParams(values, effects=effects, validate=False)
     extras: dict[str, torch.Tensor] = {"frame_scale": data.frame_scale}
     if data.part_rotor is not None:
@@ -352,6 +399,15 @@ def seed_metadata(data: DiagnosisData) -> dict[str, np.ndarray]:
     return {"radial_r2": (dx ** 2 + dy ** 2).numpy(), "frame_x": dx.numpy(), "frame_y": dy.numpy(),
             "background_brightness": data.background.double().mean((1, 2, 3)).numpy(),
             "object_size": size.numpy(), "inverse_size": (1.0 / size).numpy()}
+
+
+def seed_groups(data: DiagnosisData) -> np.ndarray | None:
+    """Group id per seed (its video), or None when the records do not say or every seed is its own group."""
+    vids = [r.get("video") for r in data.records] if data.records else []
+    if len(vids) != len(data) or any(v is None for v in vids):
+        return None
+    g = np.unique(np.asarray([str(v) for v in vids]), return_inverse=True)[1]
+    return g if len(np.unique(g)) < len(g) else None
 
 
 def _masked_mean(x: torch.Tensor, m: torch.Tensor) -> np.ndarray:
@@ -535,7 +591,8 @@ def structure_measures(data: DiagnosisData, syn: torch.Tensor, *, rng: np.random
 
 
 def parameter_dependence(values: dict[str, np.ndarray], meta: dict[str, np.ndarray], *,
-                         rng: np.random.Generator, alpha: float = 0.01, n_perm: int = 9999) -> list[dict[str, Any]]:
+                         rng: np.random.Generator, alpha: float = 0.01, n_perm: int = 9999,
+                         groups: np.ndarray | None = None) -> list[dict[str, Any]]:
     """Dependence of fitted per-seed parameters on seed metadata (an absorbed effect).
 
     Args:
@@ -543,6 +600,9 @@ def parameter_dependence(values: dict[str, np.ndarray], meta: dict[str, np.ndarr
         meta: ``{metadata: (N,)}`` (:func:`seed_metadata`).
         rng: generator of the permutation tests.
         alpha: family-wise level (Bonferroni over all pairs).
+        groups: group (video) of each seed: dependences measured within groups
+            (:func:`permutation_spearman`); metadata constant within every group
+            (e.g. background brightness of one scene) then carry no evidence.
 
     Returns:
         one dict per pair: ``parameter``, ``metadata``, ``rho``, ``p``, ``significant``.
@@ -557,7 +617,7 @@ def parameter_dependence(values: dict[str, np.ndarray], meta: dict[str, np.ndarr
     rows = []
     for pn, pv in values.items():
         for mn, mv in meta.items():
-            rho, p = permutation_spearman(mv, pv, rng, n_perm)
+            rho, p = permutation_spearman(mv, pv, rng, n_perm, groups=groups)
             rows.append({"parameter": pn, "metadata": mn, "rho": rho, "p": p})
     k = max(len(rows), 1)
     for r in rows:

@@ -132,22 +132,31 @@ class Renders:
     w_d: np.ndarray  # (G, N) re-solved albedo
 
 
+def given_values(data: DiagnosisData, given: dict[str, Setting] | None) -> dict[str, dict[str, Any]]:
+    """Accepted extensions ``{effect: camera-wide setting}`` as per-seed parameters (:func:`extension_values`)."""
+    out: dict[str, dict[str, Any]] = {}
+    for eff, setting in (given or {}).items():
+        out.update(extension_values(data, eff, setting))
+    return out
+
+
 @torch.no_grad()
-def base_render(data: DiagnosisData) -> tuple[torch.Tensor, torch.Tensor]:
-    """The baseline model's best synthetic images (fitted Θ, re-solved w_d) and that w_d."""
-    w = solve_albedo(data)
-    return render_with(data, None, w_d=w), w
+def base_render(data: DiagnosisData, given: dict[str, Setting] | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+    """The baseline model's best synthetic images (fitted Θ [+ accepted extensions], re-solved w_d) and that w_d."""
+    ext = given_values(data, given) or None
+    w = solve_albedo(data, ext)
+    return render_with(data, ext, w_d=w), w
 
 
 @torch.no_grad()
 def _grid_renders(data: DiagnosisData, effect: str, base: tuple[np.ndarray, np.ndarray],
-                  chunk: int = 128) -> Renders:
+                  chunk: int = 128, given: dict[str, Setting] | None = None) -> Renders:
     feats, pixs, ws = [], [], []
     for setting in CANDIDATE_GRIDS[effect]:
         f_all, p_all, w_all = [], [], []
         for i in range(0, len(data), chunk):
             sub = data.subset(np.arange(i, min(i + chunk, len(data))))
-            ext = extension_values(sub, effect, setting)
+            ext = {**given_values(sub, given), **extension_values(sub, effect, setting)}
             w = solve_albedo(sub, ext)
             syn = render_with(sub, ext, w_d=w)
             f_all.append(pairwise_distance(sub, syn))
@@ -187,7 +196,7 @@ def _one_sided(g: np.ndarray) -> tuple[float, float, float]:
 
 
 def screen_one(data: DiagnosisData, effect: str, folds: list[np.ndarray], base: tuple[np.ndarray, np.ndarray],
-               *, penalty: float = 0.005) -> dict[str, Any]:
+               *, penalty: float = 0.005, given: dict[str, Setting] | None = None) -> dict[str, Any]:
     """Held-out gain of extending the model with ``effect`` (both distance spaces).
 
     Returns:
@@ -197,7 +206,7 @@ def screen_one(data: DiagnosisData, effect: str, folds: list[np.ndarray], base: 
     """
     if effect not in CANDIDATE_GRIDS:
         raise ValueError(f"unknown candidate {effect!r}; candidates: {sorted(CANDIDATE_GRIDS)}")
-    r = _grid_renders(data, effect, base)
+    r = _grid_renders(data, effect, base, given=given)
     k = _n_params(effect)
     out: dict[str, Any] = {"effect": effect, "n_params": k}
     grid = CANDIDATE_GRIDS[effect]
@@ -235,16 +244,21 @@ def absorption_gain(data: DiagnosisData, effect: str, w_d: np.ndarray, folds: li
         ``sign_ok`` and ``gain`` (held-out R² of the dependence: the variance
         of the fitted parameter the effect explains).
     """
-    from synthaug.diagnose.residuals import permutation_spearman
+    from synthaug.diagnose.residuals import permutation_spearman, seed_groups, within_groups
 
     if effect not in ABSORPTION:
         return None
     param, meta_name, sign = ABSORPTION[effect]
     meta = seed_metadata(data)[meta_name]
     vals = w_d if param == "w_d" else data.theta.as_dict()[param][:, 0].double().numpy()
-    rho, p = permutation_spearman(meta, vals, rng)
+    groups = seed_groups(data)
+    rho, p = permutation_spearman(meta, vals, rng, groups=groups)
+    xm, ym = within_groups(meta, groups), within_groups(vals, groups)
+    ok = np.isfinite(xm) & np.isfinite(ym)
+    keep = np.cumsum(ok) - 1  # folds re-indexed onto the seeds that have a within-video value
+    f_ok = [keep[h[ok[h]]] for h in folds]
     return {"parameter": param, "metadata": meta_name, "rho": rho, "p": p, "sign_ok": bool(rho * sign > 0),
-            "gain": _cv_r2(meta, vals, folds)}
+            "within": "video" if groups is not None else None, "gain": _cv_r2(xm[ok], ym[ok], f_ok)}
 
 
 def _logistic_cv_accuracy(x: np.ndarray, y: np.ndarray, groups: np.ndarray, folds: list[np.ndarray],
@@ -289,8 +303,9 @@ def realism_accuracy(data: DiagnosisData, syn: torch.Tensor, folds: list[np.ndar
 
 
 def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = None, *, k: int = 5, seed: int = 0,
-                      alpha: float = 0.01, penalty: float = 0.005, min_gain: float = 0.05,
-                      progress: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
+                      alpha: float = 0.01, penalty: float = 0.005, min_gain: float = 0.02,
+                      progress: Callable[[str], None] | None = None, given: dict[str, Setting] | None = None,
+                      n_tests: int | None = None) -> list[dict[str, Any]]:
     """Screen candidate effects on held-out seeds; return them ranked, each with its evidence.
 
     Args:
@@ -301,7 +316,12 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         alpha: family-wise significance level (Bonferroni over candidates and channels).
         penalty: subtracted from each held-out relative gain per extra parameter.
         min_gain: a significant distance gain must also reach this relative size
-            (a real difference, not a statistically detectable sliver).
+            (a real difference, not a statistically detectable sliver), and the
+            other distance space must not get worse on held-out seeds.
+        given: extensions already accepted, ``{effect: setting}``: the base
+            model includes them and every candidate is screened on top of them
+            (the conditional gain of forward selection).
+        n_tests: the Bonferroni count (default: this call's tests).
 
     Returns:
         one dict per candidate, ranked (significant first, then by evidence):
@@ -317,22 +337,28 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         raise ValueError(f"unknown candidate(s) {bad}; candidates: {sorted(CANDIDATE_GRIDS)}")
     rng = np.random.default_rng(seed)
     folds = kfold(len(data), k, rng)
-    syn0, w0 = base_render(data)
+    syn0, w0 = base_render(data, given)
     base = (pairwise_distance(data, syn0), pixel_distance(data.real, syn0))
-    n_tests = max(len(names), 1) * 2 + sum(1 for c in names if c in ABSORPTION)
+    if n_tests is None:
+        n_tests = max(len(names), 1) * 2 + sum(1 for c in names if c in ABSORPTION)
     rows = []
     for name in names:
         if progress:
             progress(name)
-        sc = screen_one(data, name, folds, base, penalty=penalty)
+        sc = screen_one(data, name, folds, base, penalty=penalty, given=given)
         ab = absorption_gain(data, name, w0.numpy(), folds, rng)
         channels = []
-        for space in ("feature", "pixel"):
+        for space, other in (("feature", "pixel"), ("pixel", "feature")):
             s = sc[space]
             p_adj = min(1.0, s["p"] * n_tests)
             z = float(np.clip(stats.norm.isf(min(max(s["p"], 1e-300), 1.0)), -40.0, 40.0))
+            # ... and the other space must not get worse (unpenalised held-out gain >= 0): an "extension"
+            # that buys pixel distance by erasing detail the detector sees is not more realistic
+            other_ok = sc[other]["gain"] + penalty * sc["n_params"] >= 0.0
             channels.append({"channel": f"distance:{space}", "p_adjusted": p_adj, "z": z, "gain": s["gain"],
-                             "significant": p_adj < alpha and s["gain"] > 0 and s["raw_gain_all"] >= min_gain})
+                             "other_space_gain": sc[other]["gain"],
+                             "significant": bool(p_adj < alpha and s["gain"] > 0 and s["raw_gain_all"] >= min_gain
+                                                 and other_ok)})
         if ab is not None:
             p_adj = min(1.0, ab["p"] * n_tests)
             n = len(data)

@@ -354,8 +354,12 @@ class Sharpening(Effect):
 class Compression(Effect):
     """Block-based (JPEG) compression artefacts where the object is: ``B + Q(I) - Q(B)``.
 
-    The block grid is the frame's when the patch is at frame scale 1 with a
-    known origin (phase = origin mod 8), else the patch's own 8×8 grid.
+    With the patch's place in its frame (``origin`` and the ``frame_scale``
+    extra) the coding happens on the frame's 8×8 grid
+    (:func:`~synthaug.effects.camera_functional.jpeg_difference_on_frame_grid`:
+    the object resampled to frame resolution, coded, the error resampled
+    back); with an origin alone, at frame scale 1 (phase = origin mod 8);
+    else on the patch's own grid.
     Deterministic; not differentiable in the quality (quantisation steps are
     piecewise constant), gradients w.r.t. the image pass straight through.
     """
@@ -370,8 +374,14 @@ class Compression(Effect):
 
     def apply(self, state: RenderState, *, jpeg_quality: torch.Tensor) -> RenderState:
         img = _image(state, self.name)
-        phase = block_phase(state)
         bg = state.background
+        scale = state.extras.get("frame_scale")
+        if state.origin is not None and scale is not None:  # a resampled crop: code on the frame's grid
+            fs = torch.as_tensor(scale, dtype=torch.float64).reshape(-1).expand(state.batch_size)
+            org = torch.as_tensor(state.origin, dtype=torch.float64).reshape(-1, 2).expand(state.batch_size, 2)
+            return state.replace(image=Cx.jpeg_difference_on_frame_grid(img, bg, jpeg_quality, origin=org,
+                                                                        frame_scale=fs))
+        phase = block_phase(state)
         q_img = Cx.jpeg_quantize(img, jpeg_quality, phase=phase)
         q_bg = Cx.jpeg_quantize(bg, jpeg_quality, phase=phase)
         return state.replace(image=bg + (q_img - q_bg))

@@ -58,6 +58,7 @@ __all__ = [
     "lens_distortion",
     "shot_noise",
     "jpeg_table",
+    "jpeg_difference_on_frame_grid",
     "jpeg_quantize",
     "LUMA_WEIGHTS",
 ]
@@ -584,6 +585,85 @@ def jpeg_quantize(image: torch.Tensor, quality: torch.Tensor | float, *,
         idx = (ph == key).all(1).nonzero().flatten()
         out[idx] = _jpeg_blocks(image[idx], qual[idx], int(key[0]) % 8, int(key[1]) % 8)
     return out
+
+
+def jpeg_difference_on_frame_grid(image: torch.Tensor, background: torch.Tensor, quality: torch.Tensor | float, *,
+                                  origin: torch.Tensor, frame_scale: torch.Tensor | float) -> torch.Tensor:
+    """JPEG coding of a composite seen through a resampled crop: the coding error on the FRAME's 8×8 grid.
+
+    A seed patch is a resampled crop of a coded frame, so its blocks are the
+    frame's, not the patch's. Both images are resampled (bilinear) onto a
+    block-aligned canvas at frame resolution, coded there
+    (:func:`jpeg_quantize`), and the *difference of the coding errors*
+    ``(Q(W·I) - W·I) - (Q(W·B) - W·B)`` is resampled back and added to
+    ``image``: the background's own coding is already in B, and the object
+    keeps its resolution (only the error term is resampled).
+
+    Args:
+        image: (B, C, P, P) composite in [0, 1].
+        background: (B, C, P, P) its background.
+        quality: (B,) or (B, C) JPEG quality.
+        origin: (B, 2) frame (x, y) of each patch's top-left pixel edge.
+        frame_scale: (B,) frame pixels per patch pixel.
+
+    Shape:
+        (B, C, P, P) -> (B, C, P, P)
+
+    Example:
+        >>> b = torch.full((1, 1, 16, 16), 0.5); i = b.clone(); i[..., 4:12, 4:12] = 0.2
+        >>> out = jpeg_difference_on_frame_grid(i, b, 100.0, origin=torch.tensor([[3.0, 5.0]]),
+        ...                                     frame_scale=torch.tensor([1.3]))
+        >>> torch.equal(out, i)  # quality 100: off
+        True
+    """
+    _check_image(image)
+    if background.shape != image.shape:
+        raise ValueError(f"background must have the image's shape {tuple(image.shape)}, got {tuple(background.shape)}")
+    b, c, h, w = image.shape
+    if b == 0:
+        return image.clone()
+    dt = image.dtype
+    org = torch.as_tensor(origin, dtype=torch.float64).reshape(-1, 2).expand(b, 2)
+    fs = torch.as_tensor(frame_scale, dtype=torch.float64).reshape(-1).expand(b)
+    if not bool((fs > 0).all()):
+        raise ValueError("frame_scale must be > 0")
+    start = torch.floor(torch.floor(org) / 8.0) * 8.0  # (B, 2) block-aligned canvas corner (frame px)
+    extent = org + torch.stack([w * fs, h * fs], 1) - start
+    side = int(math.ceil(float(extent.max()) / 8.0 + 1.0)) * 8
+    j = torch.arange(side, dtype=torch.float64)
+    # canvas pixel j = frame pixel start + j = patch pixel (start + j + 0.5 - origin) / fs - 0.5
+    u = ((start[:, 0, None] + j[None] + 0.5 - org[:, 0, None]) / fs[:, None] - 0.5).to(dt)
+    v = ((start[:, 1, None] + j[None] + 0.5 - org[:, 1, None]) / fs[:, None] - 0.5).to(dt)
+    shape = (b, 1, side, side)
+    src_x = u[:, None, None, :].expand(shape)
+    src_y = v[:, None, :, None].expand(shape)
+
+    canvas = torch.zeros(b, c, side, side, dtype=dt)
+    wi = _sample_any(image, src_x, src_y, "border", canvas)
+    wb = _sample_any(background, src_x, src_y, "border", canvas)
+    q = _per_channel(quality, b, c, image, "jpeg_quality")
+    err = (jpeg_quantize(wi, q) - wi) - (jpeg_quantize(wb, q) - wb)
+    # back: patch pixel u sits at canvas pixel origin + (u + 0.5) * fs - 0.5 - start
+    pu = torch.arange(w, dtype=torch.float64)
+    pv = torch.arange(h, dtype=torch.float64)
+    bx = (org[:, 0, None] + (pu[None] + 0.5) * fs[:, None] - 0.5 - start[:, 0, None]).to(dt)
+    by = (org[:, 1, None] + (pv[None] + 0.5) * fs[:, None] - 0.5 - start[:, 1, None]).to(dt)
+    back = _sample_any(err, bx[:, None, None, :].expand(b, 1, h, w), by[:, None, :, None].expand(b, 1, h, w),
+                       "zeros", torch.zeros_like(image))
+    return image + back
+
+
+def _sample_any(image: torch.Tensor, src_x: torch.Tensor, src_y: torch.Tensor, padding: str,
+                like: torch.Tensor) -> torch.Tensor:
+    """Bilinear ``image`` (B, C, H, W) at pixel coordinates (B, 1, H', W') -> shaped like ``like`` (B, C, H', W')."""
+    b, c, h, w = image.shape
+    ho, wo = like.shape[-2:]
+    gx = (src_x + 0.5) * (2.0 / w) - 1.0
+    gy = (src_y + 0.5) * (2.0 / h) - 1.0
+    grid = torch.stack([gx, gy], -1).reshape(b, 1, ho, wo, 2).expand(b, c, ho, wo, 2).reshape(b * c, ho, wo, 2)
+    out = F.grid_sample(image.reshape(b * c, 1, h, w), grid, mode="bilinear", padding_mode=padding,
+                        align_corners=False)
+    return out.reshape(b, c, ho, wo)
 
 
 def _jpeg_blocks(image: torch.Tensor, quality: torch.Tensor, py: int, px: int) -> torch.Tensor:

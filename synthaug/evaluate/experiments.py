@@ -480,6 +480,7 @@ def synthetic_positives(
     effects: Sequence[str] | None = None,
     capture_sampling: str = "seed",
     batch: int = 2048,
+    seed_geometry: Mapping[str, Any] | None = None,
 ) -> Tensor:
     """``count`` synthetic object patches generated from a capture-parameter fit.
 
@@ -495,6 +496,8 @@ def synthetic_positives(
         effects: effects applied (None: all fitted ones); leaving one out is the ablation.
         capture_sampling: ``"seed"`` (the paper), ``"uniform"`` (Fig. 10) or ``"kde"``.
         batch: items built per ``__getitems__`` call.
+        seed_geometry: each seed's place in its frame, for position-aware camera effects
+            (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`); None: the patch is the frame.
 
     Returns:
         Float patches ``(count, 1, P, P)`` in [0, 1].
@@ -509,6 +512,7 @@ def synthetic_positives(
     ds = SyntheticObjectDataset(
         mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
         effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
+        seed_geometry=seed_geometry,
     )
     out = []
     for start in range(0, count, batch):
