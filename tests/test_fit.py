@@ -242,3 +242,117 @@ def test_fit_cli(tmp_path, capsys):
     assert rc == 0
     assert json.loads(capsys.readouterr().out)["seeds"] == 4
     assert main(["fit", "--seeds", str(tmp_path / "nothing"), "--out", str(tmp_path / "g.json")]) == 2
+
+
+# ------------------------------------------------------------ structured pose initialisation (init="grid")
+def _sym_err_deg(theta_a, theta_b, order=4):
+    """Rotation angle (deg) between two (α, β, γ), the minimum over ``order`` turns about the object's up axis."""
+    from scipy.spatial.transform import Rotation
+
+    ra = Rotation.from_euler("ZYX", [theta_a[2], theta_a[1], theta_a[0]])
+    rb = Rotation.from_euler("ZYX", [theta_b[2], theta_b[1], theta_b[0]])
+    return min(np.degrees((ra.inv() * rb * Rotation.from_euler("z", 2 * math.pi * k / order)).magnitude())
+               for k in range(order))
+
+
+def test_rotation_grid_covers_so3():
+    from scipy.spatial.transform import Rotation
+
+    from synthaug.fit.objective import rotation_grid
+
+    grid, spacing = rotation_grid(240)
+    assert 200 <= len(grid) <= 260 and np.all(np.abs(grid[:, 1]) <= math.pi / 2 + 1e-12)
+    g = Rotation.from_euler("ZYX", grid[:, ::-1])
+    rand = Rotation.random(300, random_state=0)
+    nearest = np.array([(g.inv() * r).magnitude().min() for r in rand])
+    # every rotation lies within one spacing of the grid (a uniform grid: ~0.75 spacing), and no big gaps
+    assert nearest.max() < spacing and np.median(nearest) < 0.6 * spacing
+    with pytest.raises(ValueError, match="n >= 8"):
+        rotation_grid(3)
+
+
+def test_grid_stage_alone_finds_a_grid_pose(measured, fit_cache):
+    """Target rendered at a grid rotation with everything else neutral: stage 1 alone must pick that pose."""
+    from synthaug.fit.fitting import neutral_u, pose_grid_starts
+    from synthaug.fit.objective import rotation_grid
+
+    _, bg, _, _ = measured
+    space = FitSpace.default(bounds={"sigma_n": (0.0, 0.1)}, scale_range=(0.25 * 0.7, 1.25 * 0.7))
+    grid, _ = rotation_grid(120)
+    pose = grid[37]  # an oblique view
+    render = RenderObjective(bg, bg, fit_cache, None, space, object_scale=0.7, noise_seed=2)
+    target = render.render(space.pose_to_u(pose[None], neutral_u(space, 0.7)))
+    obj = RenderObjective(target, bg, fit_cache, build_distance("eucl"), space, object_scale=0.7, noise_seed=2)
+    calls = []
+    counted = lambda u: (calls.append(len(np.atleast_2d(u))), obj(u))[1]  # noqa: E731
+    init = pose_grid_starts(counted, space, budget=120, object_scale=0.7, n_starts=3, grid_share=1.0, seed=0)
+    assert init["grid_size"] == len(grid) and init["n_evals"] == sum(calls) <= 120
+    assert init["fun"] == pytest.approx(0.0, abs=1e-9)
+    best = space.to_theta(init["starts"][:1])
+    found = [float(best.alpha), float(best.beta), float(best.gamma)]
+    assert _sym_err_deg(found, pose) < 1.0, (found, pose)
+    assert len(init["starts"]) == 3 and init["stds"].shape == (space.dim,)
+
+
+def test_grid_init_recovers_the_rotation_within_budget(measured, fit_cache):
+    """All of Θ free from no start: the grid init lands near the true rotation (up to the 4-fold symmetry)."""
+    x, bg, _, _ = measured
+    cfg = FitConfig(budget=800, fit_scale=False, init="grid")
+    res = fit_one(x, bg, fit_cache, build_distance("hog"), cfg, seed=5, object_scale=0.7)
+    st = res["stats"]
+    assert st["n_evals"] <= 800 and st["init"]["n_evals"] <= int(0.35 * 800) and st["init"]["grid_size"] > 100
+    assert all(b <= a for (_, a), (_, b) in zip(st["trace"], st["trace"][1:])) and st["trace"][-1][1] == res["distance"]
+    err = _sym_err_deg(res["theta"][:3], [THETA_STAR[k] for k in ("alpha", "beta", "gamma")])
+    assert err < 25.0, err
+    again = fit_one(x, bg, fit_cache, build_distance("hog"), cfg, seed=5, object_scale=0.7)
+    assert again["theta"] == res["theta"] and again["distance"] == res["distance"]
+
+
+def test_grid_init_options_and_fallbacks(measured, fit_cache):
+    x, bg, _, _ = measured
+    with pytest.raises(ValueError, match="unknown init"):
+        FitConfig(init="sobol")
+    with pytest.raises(ValueError, match="init_fraction"):
+        FitConfig(init="grid", init_fraction=1.0)
+    with pytest.raises(ValueError, match="init_starts"):
+        FitConfig(init_starts=0)
+    d = build_distance("hog")
+    # too small a budget for a grid: the uniform start, no grid record
+    tiny = fit_one(x, bg, fit_cache, d, FitConfig(budget=40, init="grid"), seed=1, object_scale=0.7)
+    assert "init" not in tiny["stats"] and tiny["stats"]["n_evals"] <= 40
+    # a given start wins over the grid
+    space = FitSpace.default(bounds={"sigma_n": (0, 0.1)})
+    x0 = space.from_theta(CaptureParams(THETA_STAR))[0]
+    res = fit_one(x, bg, fit_cache, d, FitConfig(budget=60, init="grid", fit_scale=False), seed=1,
+                  object_scale=0.7, x0=x0, space=space)
+    assert "init" not in res["stats"]
+    # rotations given (fixed in the space): nothing for a pose grid to do
+    fixed = FitSpace.default(fixed={k: THETA_STAR[k] for k in ("alpha", "beta", "gamma")})
+    res = fit_one(x, bg, fit_cache, d, FitConfig(budget=60, init="grid", fit_scale=False), seed=1,
+                  object_scale=0.7, space=fixed)
+    assert "init" not in res["stats"] and res["stats"]["n_evals"] <= 60
+    with pytest.raises(ValueError, match="starts must be"):
+        get_optimizer("cmaes").minimize(lambda u: np.zeros(len(u)), 3, starts=np.zeros((1, 2)), budget=50)
+    with pytest.raises(ValueError, match="rotation"):
+        FitSpace.default(fixed={"alpha": 0.0}).pose_to_u(np.zeros((1, 3)), np.full(10, 0.5))
+
+
+def test_cmaes_uses_given_starts():
+    """Starts near the optimum of a two-basin function: CMA-ES (no uniform look) stays in that basin."""
+    f = lambda u: np.minimum(((np.atleast_2d(u) - 0.2) ** 2).sum(1), ((np.atleast_2d(u) - 0.8) ** 2).sum(1) - 0.01)  # noqa: E731
+    near = get_optimizer("cmaes").minimize(f, 2, seed=0, budget=200, starts=np.array([[0.21, 0.19]]),
+                                           stds=np.array([0.02, 0.02]))
+    assert np.allclose(near.x, 0.2, atol=1e-2) and near.n_evals <= 200
+
+
+def test_fit_cli_init_grid(tmp_path, capsys):
+    from synthaug.cli import main
+
+    seeds = _seedset(tmp_path)
+    rc = main(["fit", "--seeds", str(seeds), "--out", str(tmp_path / "f.json"), "--budget", "120", "--no-progress",
+               "--distance", "eucl", "--step-deg", "30", "--sprite-size", "48", "--init", "grid"])
+    assert rc == 0
+    doc = json.loads((tmp_path / "f.json").read_text())
+    assert doc["metadata"]["config"]["init"] == "grid"
+    assert all(r["extra"]["optimizer"]["init"]["name"] == "grid" for r in doc["rows"])
+    capsys.readouterr()

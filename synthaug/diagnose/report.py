@@ -12,7 +12,9 @@ later findings are screened again on top of those before them, forward
 selection, so one effect's gain is not reported twice under two names), or
 ``"unexplained"`` when the residual has significant structure that no
 candidate explains, with that structure described. A clean case reports no
-finding.
+finding. After accepted findings, the residual of the extended model is
+measured again: structure the accepted effects do not produce is reported as
+a trailing ``"unexplained"`` finding.
 """
 
 from __future__ import annotations
@@ -215,15 +217,24 @@ def diagnose(
                          "residual_structure": [m["description"] for n_, m in structure.items()
                                                 if m["significant"] and row["effect"] in HINTS.get(n_, ())]},
         })
-    sig_struct = {n_: m for n_, m in structure.items() if m["significant"] and n_ != "background_bias"}
-    if not findings and sig_struct:
+    remaining = structure
+    if picked:  # the residual of the extended model: is there structure the accepted effects do not explain?
+        accepted = {r["effect"]: _setting(r) for r, _ in picked}
+        syn_acc = base_render(data, accepted)[0]
+        remaining = structure_measures(data, syn_acc, rng=np.random.default_rng(seed + 2), alpha=alpha)
+        explains = {h for e in accepted for h, cands in HINTS.items() if e in cands}
+        remaining = {n_: m for n_, m in remaining.items() if n_ not in explains}
+    sig_struct = {n_: m for n_, m in remaining.items() if m["significant"] and n_ != "background_bias"}
+    if sig_struct:
         findings.append({
             "effect": "unexplained", "significant": True,
             "structure": {n_: {"description": m["description"], "p": m["p"], "value": m["value"],
                                **{kk: m[kk] for kk in ("frequency", "period_px") if kk in m}}
                           for n_, m in sig_struct.items()},
-            "evidence": {"note": "the residual has significant structure, and no candidate's extension helps "
-                                 "on held-out seeds"},
+            "evidence": {"note": ("the residual has significant structure, and no candidate's extension helps "
+                                  "on held-out seeds") if not picked else
+                         (f"structure left in the residual after adding {', '.join(f['effect'] for f in findings)}, "
+                          "of a kind those effects do not produce")},
             "gains": {},
         })
     report = {

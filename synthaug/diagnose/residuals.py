@@ -22,7 +22,8 @@ block_8x8            residual jump across the frame's 8-px block grid vs
 motion_direction     residual gradient energy along vs across the fitted motion
                      direction α_m; t-test of the log ratio
 rows / columns       peak of the residual's row (column) spectrum over the
-                     background region's spectrum; t-test over seeds
+                     column (row) spectrum, in frame frequencies; t-test
+                     over the seeds that resolve it
 rotor_parts          mean residual on the rotor discs vs the body; t-test
 colour               per-channel bias (grayscale seed sets: not applicable)
 ===================  ==========================================================
@@ -564,16 +565,24 @@ def structure_measures(data: DiagnosisData, syn: torch.Tensor, *, rng: np.random
     spec_cols = _line_spectrum(res, wobj, -1) / w_n
     freqs = np.fft.rfftfreq(p)
     hi = np.nonzero(freqs >= 0.2)[0]
+    # a camera's periodic structure (fields, banding) is periodic in FRAME pixels: each seed's spectrum is
+    # put on a common grid of frame frequencies (patch frequency / frame scale) before the peak is sought
+    fs = data.frame_scale.double().numpy()
+    grid = np.round(np.arange(0.1, 0.5 + 1e-9, 0.0125), 4)
     for label, a, b, what in (("rows", spec_rows, spec_cols, "vertical (along image columns: row-to-row)"),
                               ("columns", spec_cols, spec_rows, "horizontal (column-to-column)")):
         lr = np.log((a[:, hi] + 1e-12) / (b[:, hi] + 1e-12))
-        j = int(np.nanargmax(np.nanmean(lr, 0)))
-        mean, t, pv = t_test(lr[:, j])
-        pv = min(1.0, pv * len(hi))  # the peak was chosen among the frequencies
-        f = float(freqs[hi[j]])
-        put(f"periodic_{label}", mean, pv, f"{what} periodic structure: peak at {f:.3f} cycles/px "
-            f"(period {1 / f:.1f} px), {math.exp(mean):.1f}x the power of the other direction",
-            frequency=f, period_px=float(1 / f))
+        lr_f = np.stack([np.interp(grid, freqs[hi] / fs[i], lr[i], left=np.nan, right=np.nan) for i in range(n)])
+        cnt = np.isfinite(lr_f).sum(0)
+        enough = cnt >= max(5, n // 4)
+        score = np.where(enough, np.nansum(lr_f, 0) / np.maximum(cnt, 1), -np.inf)
+        j = int(np.argmax(score))
+        mean, t, pv = t_test(lr_f[:, j])
+        pv = min(1.0, pv * int(enough.sum()))  # the peak was chosen among the frequencies
+        f = float(grid[j])
+        put(f"periodic_{label}", mean, pv, f"{what} periodic structure: peak at {f:.3f} cycles per frame px "
+            f"(period {1 / f:.1f} frame px), {math.exp(mean):.1f}x the power of the other direction",
+            frequency=f, period_px=float(1 / f), n_seeds=int(np.isfinite(lr_f[:, j]).sum()))
     if data.part_rotor is not None:
         rot = (data.part_rotor > 0.3) & obj
         body = obj & ~rot

@@ -252,7 +252,7 @@ def absorption_gain(data: DiagnosisData, effect: str, w_d: np.ndarray, folds: li
     meta = seed_metadata(data)[meta_name]
     vals = w_d if param == "w_d" else data.theta.as_dict()[param][:, 0].double().numpy()
     groups = seed_groups(data)
-    rho, p = permutation_spearman(meta, vals, rng, groups=groups)
+    rho, p = permutation_spearman(meta, vals, rng, groups=groups, n_perm=99_999)  # p floor 1e-5 (Bonferroni)
     xm, ym = within_groups(meta, groups), within_groups(vals, groups)
     ok = np.isfinite(xm) & np.isfinite(ym)
     keep = np.cumsum(ok) - 1  # folds re-indexed onto the seeds that have a within-video value
@@ -324,7 +324,8 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         n_tests: the Bonferroni count (default: this call's tests).
 
     Returns:
-        one dict per candidate, ranked (significant first, then by evidence):
+        one dict per candidate, ranked (significant distance gains by size, then significant absorbed
+        parameters, then the rest by evidence):
         ``effect``, ``significant``, ``channel`` (``"distance:feature"``,
         ``"distance:pixel"`` or ``"absorbed"``), ``score`` (z), ``p_adjusted``,
         ``gain`` (held-out), ``screen``, ``absorption``.
@@ -366,9 +367,20 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
             channels.append({"channel": "absorbed", "p_adjusted": p_adj, "z": z if ab["sign_ok"] else -z,
                              "gain": ab["gain"], "significant": p_adj < alpha and ab["sign_ok"] and ab["gain"] > 0})
         sig = [c for c in channels if c["significant"]]
-        best = max(sig or channels, key=lambda c: c["z"])
+        sig_dist = [c for c in sig if c["channel"] != "absorbed"]
+        best = max(sig_dist, key=lambda c: c["gain"]) if sig_dist else max(sig or channels, key=lambda c: c["z"])
         rows.append({"effect": name, "significant": bool(sig), "channel": best["channel"], "score": best["z"],
                      "p_adjusted": best["p_adjusted"], "gain": best["gain"], "channels": channels,
                      "screen": sc, "absorption": ab})
-    rows.sort(key=lambda r: (not r["significant"], -r["score"]))
+    rows.sort(key=_rank)
     return rows
+
+
+def _rank(row: dict[str, Any]) -> tuple[int, float]:
+    """Significant distance gains first, largest held-out gain first (what explains the most, not the
+    most precisely measured sliver); then absorbed-parameter findings; then the rest by evidence."""
+    if not row["significant"]:
+        return 2, -row["score"]
+    if row["channel"] == "absorbed":
+        return 1, -row["score"]
+    return 0, -row["gain"]

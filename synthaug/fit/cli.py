@@ -22,6 +22,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--budget", type=int, default=3500,
                         help="objective evaluations per seed (3500 ≈ 1.9 s on one core here)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--init", default=None, choices=["uniform", "grid"],
+                        help="start of the search: 'grid' = a rotation grid, then a short search of the other "
+                             "parameters at its best poses (counted in the budget); 'uniform' = CMA-ES's "
+                             "uniform look (the paper's random start; default: grid)")
     parser.add_argument("--object-scale", type=float, default=None,
                         help="mesh size / patch side (default: the seed set's object_fraction)")
     parser.add_argument("--effects", nargs="*", default=None, help="effects in Θ (default: the paper's four)")
@@ -39,7 +43,8 @@ def main(args: argparse.Namespace) -> int:
     try:
         cfg = FitConfig(distance=args.distance, optimizer=args.optimizer, budget=args.budget, seed=args.seed,
                         object_scale=args.object_scale, effects=tuple(args.effects) if args.effects else None,
-                        fit_scale=not args.no_fit_scale, step_deg=args.step_deg, sprite_size=args.sprite_size)
+                        fit_scale=not args.no_fit_scale, step_deg=args.step_deg, sprite_size=args.sprite_size,
+                        **({"init": args.init} if args.init else {}))
         out = fit_seedset(args.seeds, args.mesh, args.out, cfg, workers=args.workers, dask_address=args.dask,
                           progress=not args.no_progress)
     except (ValueError, FileNotFoundError) as e:

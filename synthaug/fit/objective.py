@@ -152,8 +152,64 @@ class FitSpace:
             u = np.concatenate([u, np.full((len(u), 1), 0.5)], axis=1)
         return u
 
+    def pose_to_u(self, poses: np.ndarray, base: np.ndarray) -> np.ndarray:
+        """Search coordinates with (α, β, γ) from ``poses`` (N, 3) and the rest from ``base`` (D,).
+
+        Raises:
+            ValueError: a rotation angle is not free in this space.
+        """
+        names = self.free_names()
+        missing = [k for k in ("alpha", "beta", "gamma") if k not in names]
+        if missing:
+            raise ValueError(f"the rotation {missing} is not free in this search space")
+        u = np.repeat(np.asarray(base, float)[None], len(poses), axis=0)
+        for j, k in enumerate(("alpha", "beta", "gamma")):
+            col = self.names.index(k)
+            lo, hi = self.low[col], self.high[col]
+            v = (np.asarray(poses, float)[:, j] - lo) / (hi - lo)
+            u[:, names.index(k)] = np.mod(v, 1.0) if self.periodic[col] else np.clip(v, 0.0, 1.0)
+        return u
+
     def free_names(self) -> list[str]:
         return [n for n, f in zip(self.names, self.free) if f] + (["object_scale"] if self.scale_range else [])
+
+
+def rotation_grid(n: int) -> tuple[np.ndarray, float]:
+    """About ``n`` rotations spread near-uniformly over SO(3), as (α, β, γ) (M, 3), and their spacing (rad).
+
+    View directions on a Fibonacci sphere (which side of the object faces the
+    camera: α, β) times equally spaced in-plane angles γ; the Haar measure is
+    uniform direction × uniform γ, and the two counts share one spacing s
+    (``4π/s²`` directions, ``2π/s`` angles, ``8π²/s³`` rotations in all).
+    Deterministic.
+
+    Example:
+        >>> g, s = rotation_grid(240)
+        >>> g.shape[1], 150 <= len(g) <= 300, round(float(np.degrees(s)))
+        (3, True, 40)
+    """
+    if n < 8:
+        raise ValueError(f"a rotation grid needs n >= 8 rotations, got {n}")
+    s = (8 * math.pi ** 2 / n) ** (1 / 3)
+    n_gamma = max(4, int(round(2 * math.pi / s)))
+    n_dir = max(2, int(round(n / n_gamma)))
+    i = np.arange(n_dir)
+    z = 1 - (2 * i + 1) / n_dir
+    r = np.sqrt(np.clip(1 - z ** 2, 0, 1))
+    phi = i * math.pi * (3 - math.sqrt(5))
+    dx, dy, dz = r * np.cos(phi), r * np.sin(phi), z
+    # the camera's axis in the object frame for R = Rz(γ) Ry(β) Rx(α) is (-sin β, sin α cos β, cos α cos β)
+    beta = -np.arcsin(np.clip(dx, -1, 1))
+    alpha = np.arctan2(dy, dz)
+    gamma = -math.pi + 2 * math.pi * np.arange(n_gamma) / n_gamma
+    grid = np.stack([np.repeat(alpha, n_gamma), np.repeat(beta, n_gamma), np.tile(gamma, n_dir)], axis=1)
+    return grid, s
+
+
+def rotation_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Geodesic angle (rad) between rotation matrices (..., 3, 3)."""
+    tr = np.einsum("...ij,...ij->...", a, b)  # trace(aᵀ b)
+    return np.arccos(np.clip((tr - 1) / 2, -1.0, 1.0))
 
 
 class RenderObjective:

@@ -69,7 +69,16 @@ class Optimizer(abc.ABC):
 
     @abc.abstractmethod
     def minimize(self, f: Objective, dim: int, *, x0: np.ndarray | None = None, seed: int = 0,
-                 budget: int = 1500) -> OptimResult: ...
+                 budget: int = 1500, starts: np.ndarray | None = None,
+                 stds: np.ndarray | None = None) -> OptimResult:
+        """Minimise ``f`` over [0, 1]^D within ``budget`` evaluations.
+
+        ``starts`` (K, D), best first, are start points chosen by the caller (a
+        structured initialisation, e.g. a pose grid): CMA-ES takes them as the
+        means of its first run and restarts instead of its uniform look, with
+        per-coordinate step sizes ``stds`` (D,) in [0, 1]-units; the other
+        optimisers start from ``starts[0]``.
+        """
 
 
 class CMAES(Optimizer):
@@ -102,7 +111,7 @@ class CMAES(Optimizer):
         self.share_budget, self.grow = share_budget, grow
         self.explore_dims = explore_dims
 
-    def minimize(self, f, dim, *, x0=None, seed=0, budget=1500):
+    def minimize(self, f, dim, *, x0=None, seed=0, budget=1500, starts=None, stds=None):
         import cma
 
         t0 = time.perf_counter()
@@ -110,8 +119,20 @@ class CMAES(Optimizer):
         rng = np.random.default_rng(seed)
         pop = self.popsize or max(12, 4 + int(3 * math.log(dim)))
         restarts = 0
-        starts: list[np.ndarray] = []
-        n_explore = int(self.explore * budget)
+        given = starts is not None
+        sigma0, cma_stds = self.sigma0, None
+        if given:
+            starts = [np.asarray(s, float) for s in np.atleast_2d(np.asarray(starts, float))]
+            if not starts or any(s.shape != (dim,) for s in starts):
+                raise ValueError(f"starts must be a non-empty (K, {dim}) array")
+            if stds is not None:
+                cma_stds = np.asarray(stds, float)
+                if cma_stds.shape != (dim,) or not np.all(cma_stds > 0):
+                    raise ValueError(f"stds must be ({dim},) positive step sizes")
+                sigma0 = 1.0
+        else:
+            starts = []
+        n_explore = 0 if given else int(self.explore * budget)
         if n_explore > 0:
             # a batched uniform look over the whole box first: the pose part of the
             # landscape is multimodal, and CMA-ES restarts from the best distinct points
@@ -127,15 +148,18 @@ class CMAES(Optimizer):
             vals = track(xs)
             starts = [xs[i] for i in np.argsort(vals)[: self.max_restarts + 1]]
         start = starts.pop(0) if starts else (np.full(dim, 0.5) if x0 is None else np.clip(np.asarray(x0, float), 0, 1))
-        while track.n < budget and restarts <= self.max_restarts:
+        max_restarts = max(self.max_restarts, len(starts) - 1) if given else self.max_restarts
+        while track.n < budget and restarts <= max_restarts:
             # share what is left between this run and the restarts still to come
-            runs_left = self.max_restarts + 1 - restarts
+            runs_left = max_restarts + 1 - restarts
             share = budget - track.n if (runs_left <= 1 or not self.share_budget) else max((budget - track.n) // runs_left, 4 * pop)
             opts = {"bounds": [0.0, 1.0], "seed": int(rng.integers(1, 2**31 - 1)), "popsize": pop, "verbose": -9,
                     "maxfevals": share, "tolfun": 1e-9, "tolx": 1e-7}
+            if cma_stds is not None:
+                opts["CMA_stds"] = list(cma_stds)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                es = cma.CMAEvolutionStrategy(start, self.sigma0, opts)
+                es = cma.CMAEvolutionStrategy(start, sigma0, opts)
                 while not es.stop() and track.n < budget:
                     xs = es.ask()
                     if track.n + len(xs) > budget:
@@ -154,9 +178,11 @@ class SimulatedAnnealing(Optimizer):
 
     name = "anneal"
 
-    def minimize(self, f, dim, *, x0=None, seed=0, budget=1500):
+    def minimize(self, f, dim, *, x0=None, seed=0, budget=1500, starts=None, stds=None):
         from scipy.optimize import dual_annealing
 
+        if starts is not None:
+            x0 = np.atleast_2d(np.asarray(starts, float))[0]
         t0 = time.perf_counter()
         track = _Tracker(f, budget)
 
@@ -174,10 +200,12 @@ class RandomSearch(Optimizer):
     def __init__(self, batch: int = 256) -> None:
         self.batch = batch
 
-    def minimize(self, f, dim, *, x0=None, seed=0, budget=1500):
+    def minimize(self, f, dim, *, x0=None, seed=0, budget=1500, starts=None, stds=None):
         t0 = time.perf_counter()
         track = _Tracker(f, budget)
         rng = np.random.default_rng(seed)
+        if starts is not None:
+            x0 = np.atleast_2d(np.asarray(starts, float))[0]
         if x0 is not None:
             track(np.asarray(x0, float)[None])
         while track.n < budget:
