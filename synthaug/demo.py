@@ -13,6 +13,10 @@
 5. **Evaluate** AP on the test videos, and write ``README.md`` (table),
    ``preview.png`` (real | background | synthetic), ``fitted_pairs.png`` (Fig. 8),
    ``joint_histograms.png`` (Fig. 4) and ``pr_*.png``.
+6. **Diagnose** (issue 6): measured data from the reference camera with one
+   camera effect hidden (``--hidden``, default rotor_blur), a normal fit, and
+   ``synthaug diagnose`` naming what the simulation misses (``diagnosis/``);
+   the same without the effect as the control (``diagnosis_clean/``).
 
 Everything is seeded; a rerun reproduces the numbers.
 """
@@ -40,6 +44,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--detector", default="hog", choices=["hog", "adaboost", "cnn"])
     parser.add_argument("--stride", type=int, default=3, help="score every k-th test frame")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--fit-init", default="grid", choices=["grid", "uniform"], help="how each fit starts")
+    parser.add_argument("--hidden", default="rotor_blur",
+                        help="camera effect hidden in the diagnosis step's measured data (issue 6); 'none' skips "
+                             "the step")
+    parser.add_argument("--diagnosis-seeds", type=int, default=60, help="seeds of the diagnosis step")
 
 
 class RenderedQuadcopter:
@@ -121,7 +130,7 @@ def main(args: argparse.Namespace) -> int:
 
     t = time.perf_counter()
     fit_path = out / "fit_hog.json"
-    fit_seedset(seed_dir, "quadcopter", fit_path, FitConfig(distance="hog", budget=args.budget, seed=args.seed),
+    fit_seedset(seed_dir, "quadcopter", fit_path, FitConfig(distance="hog", budget=args.budget, seed=args.seed, init=args.fit_init),
                 workers=2)
     timings["fit"] = time.perf_counter() - t
 
@@ -150,11 +159,44 @@ def main(args: argparse.Namespace) -> int:
                                     effects=None, seed=args.seed, step_deg=5.0))
     plot_fitted_pairs(seeds, {"hog": fit_path}, out / "fitted_pairs.png", n=8)
     plot_joint_histograms(fit_path, out / "joint_histograms.png")
+    diagnosis = None
+    if args.hidden != "none":
+        t = time.perf_counter()
+        diagnosis = (diagnose_hidden(out / "diagnosis", hidden=args.hidden, n_seeds=args.diagnosis_seeds,
+                                     budget=args.budget, seed=args.seed),
+                     diagnose_hidden(out / "diagnosis_clean", hidden=None, n_seeds=args.diagnosis_seeds,
+                                     budget=args.budget, seed=args.seed))
+        timings["diagnosis"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t0
-    _write_report(out, args, rows, timings, len(seeds), split)
-    print(json.dumps({"out": str(out), **{n: round(r.ap, 4) for n, _, r in rows},
-                      "seconds": round(timings["total"], 1)}))
+    _write_report(out, args, rows, timings, len(seeds), split, diagnosis)
+    summary = {"out": str(out), **{n: round(r.ap, 4) for n, _, r in rows}}
+    if diagnosis is not None:
+        summary["diagnosis"] = {"hidden": args.hidden, "findings": [f["effect"] for f in diagnosis[0]["findings"]],
+                                "clean_findings": [f["effect"] for f in diagnosis[1]["findings"]]}
+    print(json.dumps({**summary, "seconds": round(timings["total"], 1)}))
     return 0
+
+
+def diagnose_hidden(out: Path, *, hidden: str | None, n_seeds: int, budget: int, seed: int) -> dict[str, Any]:
+    """The diagnosis at work: measured data with ``hidden`` switched on, a normal fit, ``synthaug diagnose``.
+
+    The measured seed set comes from the reference camera
+    (:func:`~synthaug.diagnose.reference_camera.make_measured_seedset`: whole
+    frames through a richer camera, cut into seed patches like ingested ones);
+    the fit is ``synthaug fit``'s (CMA-ES from a random start, HOG distance,
+    no knowledge of the truth); the report lands in ``out/report.md``.
+    """
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+    from synthaug.diagnose.report import diagnose
+    from synthaug.fit.fitting import FitConfig, fit_seedset
+
+    seeds = make_measured_seedset(out / "seeds", n_seeds=n_seeds, hidden=[hidden] if hidden else None,
+                                  frame_size=(192, 256),
+                                  object_px=(20.0, 32.0), view_step_deg=10, sprite_size=64, seed=seed + 7,
+                                  paper_ranges={"w_d": (0.3, 0.45)})
+    cfg = FitConfig(distance="hog", budget=budget, seed=seed, step_deg=10, sprite_size=64)
+    fit_seedset(seeds, "quadcopter", out / "fit_hog.json", cfg, workers=2)
+    return diagnose(seeds, "quadcopter", out / "fit_hog.json", out_dir=out, k=5 if n_seeds >= 10 else 2)
 
 
 def _plot_pr(res: Any, path: Path, *, title: str) -> None:
@@ -177,7 +219,8 @@ def _plot_pr(res: Any, path: Path, *, title: str) -> None:
 
 
 def _write_report(out: Path, args: argparse.Namespace, rows: list, timings: dict[str, float], n_seeds: int,
-                  split: dict[str, list[str]]) -> None:
+                  split: dict[str, list[str]], diagnosis: tuple[dict[str, Any], dict[str, Any]] | None = None
+                  ) -> None:
     lines = [
         "# synthaug demo",
         "",
@@ -193,6 +236,20 @@ def _write_report(out: Path, args: argparse.Namespace, rows: list, timings: dict
         lines.append(f"| {name} | {n} | {res.ap:.3f} | {res.ap_iou03:.3f} | {res.max_recall:.3f} |")
     lines += ["", "Figures: `preview.png` (real | background | synthetic from the fit), `fitted_pairs.png`,",
               "`joint_histograms.png`, `pr_real.png`, `pr_ours.png`.", "",
-              "Timings (s): " + ", ".join(f"{k} {v:.0f}" for k, v in timings.items()), "",
+              ]
+    if diagnosis is not None:
+        found = [f["effect"] for f in diagnosis[0]["findings"]]
+        clean = [f["effect"] for f in diagnosis[1]["findings"]]
+        lines += ["## Diagnosis (what the simulation misses)", "",
+                  f"Measured data from the reference camera with **{args.hidden}** hidden "
+                  f"({diagnosis[0]['inputs']['n_seeds']} seeds), fitted by `synthaug fit` (no knowledge of the "
+                  "truth), then `synthaug diagnose`: ranked findings "
+                  + (", ".join(f"**{e}**" for e in found) if found else "**none significant**")
+                  + (" — the hidden effect is named first." if found[:1] == [args.hidden] else
+                     " — the hidden effect is NOT named first.")
+                  + " Full report: `diagnosis/report.md`.",
+                  "The same camera without the hidden effect (`diagnosis_clean/report.md`): "
+                  + (", ".join(f"**{e}**" for e in clean) if clean else "nothing significant") + ".", ""]
+    lines += ["Timings (s): " + ", ".join(f"{k} {v:.0f}" for k, v in timings.items()), "",
               f"Command: `synthaug demo --out {args.out}`", ""]
     (out / "README.md").write_text("\n".join(lines))
