@@ -79,6 +79,7 @@ def run_gain(
     stride_k: int = 15,
     detector: str = "hog",
     log: Callable[[str], None] = print,
+    extended_fit: str | Path | None = None,
 ) -> dict[str, Any]:
     """Base vs extended fit: test AP of ``detector`` trained on real + synthetic, per training seed.
 
@@ -95,6 +96,9 @@ def run_gain(
         cells: cell cache (default ``<out_dir>/cells.json``).
         seedsets, mesh, stride_k: data, mesh (default per class) and test frame stride (Table 1: 15).
         detector: detector family (Table 1's HOG by default).
+        extended_fit: compare ``fit`` with this already fitted file instead (e.g. a refit with a model
+            extension); ``report``, ``use_top_screened`` and ``effect`` are then not used (``report`` may
+            be None) and the cells are tagged with the effects it adds to ``fit``.
 
     Returns:
         the numbers written to ``gain.json``.
@@ -115,19 +119,29 @@ def run_gain(
         if not chosen.is_file():
             raise ValueError(f"no ratio given and no validation choice in {chosen}")
         ratio = float(json.loads(chosen.read_text())[detector])
+    seedset_dir = Path(seedsets) / f"{class_name}_{n_seeds}"
     chosen: Any = report
-    if effect is not None:
+    if extended_fit is not None:
+        ext_fit = Path(extended_fit)
+        if not ext_fit.is_file():
+            raise FileNotFoundError(f"no extended fit {ext_fit}")
+        eff_of = lambda f: list(json.loads(Path(f).read_text())["effects"])  # noqa: E731
+        added = [e for e in eff_of(ext_fit) if e not in eff_of(fit)]
+        ext = {"effect": "+".join(added) or ext_fit.stem, "setting": {}, "source": f"fitted file {ext_fit}",
+               "significant": None}
+        tag = "fit_" + ext["effect"]
+    elif effect is not None:
         rep = json.loads(Path(report).read_text())
         rows = [r for r in rep.get("screened", []) if r.get("effect") == effect]
         if not rows:
             raise ValueError(f"{effect!r} was not screened in {report}; screened: "
                              f"{[r.get('effect') for r in rep.get('screened', [])]}")
         chosen = rows[0]
-    ext = select_extension(chosen, use_top_screened=use_top_screened)
-    tag = _setting_tag(ext["effect"], ext["setting"])
-    ext_fit = out / "extended_fit.json"
-    seedset_dir = Path(seedsets) / f"{class_name}_{n_seeds}"
-    extend_fit(fit, seedset_dir, chosen, ext_fit, use_top_screened=use_top_screened)
+    if extended_fit is None:
+        ext = select_extension(chosen, use_top_screened=use_top_screened)
+        tag = _setting_tag(ext["effect"], ext["setting"])
+        ext_fit = out / "extended_fit.json"
+        extend_fit(fit, seedset_dir, chosen, ext_fit, use_top_screened=use_top_screened)
     log(f"extension: {ext} -> {ext_fit}")
 
     per_seed: dict[int, dict[str, Any]] = {}
@@ -172,11 +186,15 @@ def run_gain(
     return numbers
 
 
+def _significance(flag: bool | None) -> str:
+    return "not tested by the diagnosis" if flag is None else ("significant" if flag else "NOT significant")
+
+
 def _markdown(nb: dict[str, Any]) -> str:
     e = nb["extension"]
     lines = [f"## {nb['class']}: test AP (IoU 0.5), {nb['detector'].upper()} on real + synthetic "
              f"(r = {nb['ratio']:g}), base fit vs + {e['effect']} {e['setting']}", "",
-             f"Extension source: {e['source']} ({'significant' if e['significant'] else 'NOT significant'}); "
+             f"Extension source: {e['source']} ({_significance(e['significant'])}); "
              f"every {nb['stride_k']}th test frame.", "",
              "| training seed | base | extended | gain | base (IoU 0.3) | extended (IoU 0.3) |",
              "|---|---|---|---|---|---|"]
@@ -192,7 +210,7 @@ def _markdown(nb: dict[str, Any]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m synthaug.diagnose.gain", description=__doc__.split("\n\n")[0])
     p.add_argument("--class", dest="class_name", required=True, help="drone or airplane")
-    p.add_argument("--report", required=True, help="diagnosis report.json")
+    p.add_argument("--report", default=None, help="diagnosis report.json (required without --extended-fit)")
     p.add_argument("--fit", required=True, help="the base fit the diagnosis ran on")
     p.add_argument("--out", required=True, help="output folder (extended_fit.json, gain.json, gain.md, cells)")
     p.add_argument("--n-seeds", type=int, default=100)
@@ -206,7 +224,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--mesh", default=None)
     p.add_argument("--stride-k", type=int, default=15)
     p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--extended-fit", default=None,
+                   help="compare --fit with this fitted file (a refit with an extension) instead of extending --fit "
+                        "by a diagnosis finding; --report is then not needed")
     args = p.parse_args(argv)
+    if args.report is None and args.extended_fit is None:
+        print("gain: --report is required without --extended-fit", file=sys.stderr)
+        return 2
     if args.threads < 1:
         print(f"gain: --threads must be >= 1, got {args.threads}", file=sys.stderr)
         return 2
@@ -219,7 +243,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         nb = run_gain(args.class_name, args.report, args.fit, args.out, n_seeds=args.n_seeds,
                       training_seeds=args.training_seeds, ratio=args.ratio, use_top_screened=args.use_top_screened,
                       effect=args.effect, cells=args.cells, seedsets=args.seedsets, mesh=args.mesh,
-                      stride_k=args.stride_k, log=log)
+                      stride_k=args.stride_k, log=log, extended_fit=args.extended_fit)
     except (ValueError, FileNotFoundError) as e:
         print(f"gain: error: {e}", file=sys.stderr)
         return 2

@@ -120,6 +120,7 @@ def _ensure_builtin() -> None:
         _BUILTIN_LOADED = True
         import synthaug.effects.paper  # noqa: F401
         import synthaug.effects.camera  # noqa: F401  (the candidate camera effects of the diagnosis)
+        import synthaug.effects.material  # noqa: F401  (model extensions: object_texture)
 
 
 def get_effect(name: str) -> Effect:
