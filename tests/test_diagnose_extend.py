@@ -227,12 +227,14 @@ def test_seed_geometry_reaches_position_aware_effects_and_leaves_the_paper_effec
     idx = list(range(6))
     items = lambda ds: torch.stack([im for im, _ in ds.__getitems__(idx)])  # noqa: E731
     # the paper's effects ignore the geometry: Table 1's synthetic sets are unchanged by it
-    assert torch.equal(items(_dataset(seeds, fit, cache)), items(_dataset(seeds, fit, cache, seed_geometry=geo)))
+    assert torch.equal(items(_dataset(seeds, fit, cache, seed_geometry=None)),
+                       items(_dataset(seeds, fit, cache, seed_geometry=geo)))
 
     ext_path = extend_fit(fit, seeds, _finding("vignetting", {"vignette_k": 0.5}), tmp_path / "ext.json")
     with_geo = items(_dataset(seeds, ext_path, cache, seed_geometry=geo))
-    without = items(_dataset(seeds, ext_path, cache))
+    without = items(_dataset(seeds, ext_path, cache, seed_geometry=None))
     assert (with_geo - without).abs().max() > 1e-3  # the patch is no longer taken as the frame
+    assert torch.equal(items(_dataset(seeds, ext_path, cache)), with_geo)  # default "auto": a seed set's own
     theta_ext = CaptureParams.load(ext_path)
     seed_scales = torch.tensor([float(e["object_scale"]) for e in CaptureParams.load_with_extra(fit)[1]])
     ds = _dataset(seeds, ext_path, cache, seed_geometry=geo)
@@ -278,5 +280,7 @@ def test_seed_geometry_bad_input(seeds_and_fit):
         _dataset(seeds, fit, cache, seed_geometry={k: v for k, v in geo.items() if k != "frame_scale"})
     with pytest.raises(ValueError, match="must be > 0"):
         _dataset(seeds, fit, cache, seed_geometry={**geo, "frame_scale": -geo["frame_scale"]})
+    with pytest.raises(ValueError, match="'auto' or None"):
+        _dataset(seeds, fit, cache, seed_geometry="frame")
     with pytest.raises(ValueError, match="seed_geometry is for patch mode"):
         _dataset(seeds, fit, cache, seed_geometry=geo, mode="frame", object_size=(10.0, 20.0))

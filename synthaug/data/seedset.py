@@ -66,6 +66,7 @@ __all__ = [
     "crop_patch",
     "crop_geometry",
     "crop_resampling_sigma",
+    "seed_geometry",
     "atomic_write_bytes",
     "replace_dir",
 ]
@@ -180,6 +181,34 @@ def crop_resampling_sigma(frame_scale: Any) -> np.ndarray:
     if np.any(~np.isfinite(fs)) or np.any(fs <= 0):
         raise ValueError(f"frame_scale must be positive and finite, got {frame_scale}")
     return np.sqrt(np.where(fs > 1.0, 0.16, 0.0) + 1.0 / (6.0 * fs * fs))
+
+
+def seed_geometry(seeds: Any) -> dict[str, torch.Tensor]:
+    """Where each seed patch sits in its frame, for the position-aware effects.
+
+    Args:
+        seeds: a :class:`~synthaug.data.seedset.SeedSet` (or a path to one).
+
+    Returns:
+        ``origin`` (N, 2), ``frame_size`` (N, 2) (W, H), ``frame_scale`` (N,)
+        float32, as :func:`synthaug.effects.simulate` takes them
+        (``origin=``, ``frame_size=``, ``extras={"frame_scale": ...}``).
+    """
+    import torch
+
+    if isinstance(seeds, (str, os.PathLike)):
+        seeds = SeedSet.load(seeds)
+    crops = torch.as_tensor(np.asarray(seeds.crops, np.float64))
+    side = crops[:, 2]
+    origin = crops[:, :2] - side[:, None] / 2
+    fs = seeds.metadata.get("frame_size")
+    if fs is not None:
+        frame_size = torch.tensor([[float(fs[0]), float(fs[1])]], dtype=torch.float64).expand(len(seeds), 2)
+    else:
+        frame_size = torch.tensor([[float(s) for s in seeds.frame(i).shape[::-1]] for i in range(len(seeds))],
+                                  dtype=torch.float64).reshape(-1, 2)
+    return {"origin": origin.float(), "frame_size": frame_size.float().contiguous(),
+            "frame_scale": (side / seeds.patch_size).float()}
 
 
 def _u8_stack(arrs: Any, p: int, name: str) -> np.ndarray:

@@ -171,10 +171,11 @@ class SyntheticObjectDataset(Dataset):
             baseline). The background always comes from one seed.
         seed_geometry: patch mode: where each seed's background patch sits in its
             frame, ``{"origin": (N, 2), "frame_size": (N, 2), "frame_scale": (N,)}``
-            as :func:`synthaug.diagnose.reference_camera.seed_geometry` returns it,
-            passed to the position-aware camera effects (vignetting, chromatic
-            aberration, lens distortion, the JPEG block grid); None: the patch is
-            taken as the frame. The paper's four effects do not read it.
+            as :func:`synthaug.data.seedset.seed_geometry` returns it, passed to
+            the position-aware camera effects (vignetting, chromatic aberration,
+            lens distortion, the JPEG block grid). ``"auto"`` (default): the seed
+            set's own when ``backgrounds`` is a seed set, else None; None: the
+            patch is taken as the frame. The paper's four effects do not read it.
     """
 
     def __init__(
@@ -200,7 +201,7 @@ class SyntheticObjectDataset(Dataset):
         cache: Any = None,
         cache_options: Mapping[str, Any] | None = None,
         capture_sampling: Literal["seed", "kde", "uniform"] = "seed",
-        seed_geometry: Mapping[str, Any] | None = None,
+        seed_geometry: Mapping[str, Any] | Literal["auto"] | None = "auto",
     ) -> None:
         super().__init__()
         if mode not in ("patch", "frame"):
@@ -249,6 +250,15 @@ class SyntheticObjectDataset(Dataset):
         if capture_sampling not in ("seed", "kde", "uniform"):
             raise ValueError(f"capture_sampling must be 'seed', 'kde' or 'uniform', got {capture_sampling!r}")
         self.capture_sampling = capture_sampling
+        if isinstance(seed_geometry, str):
+            if seed_geometry != "auto":
+                raise ValueError(f"seed_geometry must be a mapping, 'auto' or None, got {seed_geometry!r}")
+            is_seedset = hasattr(backgrounds, "crops") and hasattr(backgrounds, "metadata")
+            seed_geometry = None
+            if is_seedset and self.mode == "patch":
+                from synthaug.data.seedset import seed_geometry as _geometry
+
+                seed_geometry = _geometry(backgrounds)
         self.seed_geometry = None if seed_geometry is None else self._check_geometry(seed_geometry, n_seeds)
         self._density = None
         if capture_sampling != "seed":

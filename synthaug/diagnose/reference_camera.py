@@ -60,6 +60,7 @@ import numpy as np
 import torch
 
 import synthaug.effects.camera  # noqa: F401  (registers the candidate effects)
+from synthaug.data.seedset import seed_geometry  # re-exported (it lives next to crop_patch)
 from synthaug.effects import camera_functional as Cx
 from synthaug.effects.camera import CAMERA_EFFECTS
 from synthaug.effects.functional import gaussian_blur_fft
@@ -673,34 +674,6 @@ def _truth_file(rows: list[dict[str, Any]], extra: list[dict[str, Any]], effects
 
 
 # ------------------------------------------------------------------ readers
-def seed_geometry(seeds: Any) -> dict[str, torch.Tensor]:
-    """Where each seed patch sits in its frame, for the position-aware effects.
-
-    Args:
-        seeds: a :class:`~synthaug.data.seedset.SeedSet` (or a path to one).
-
-    Returns:
-        ``origin`` (N, 2), ``frame_size`` (N, 2) (W, H), ``frame_scale`` (N,)
-        float32, as :func:`synthaug.effects.simulate` takes them
-        (``origin=``, ``frame_size=``, ``extras={"frame_scale": ...}``).
-    """
-    from synthaug.data.seedset import SeedSet
-
-    if isinstance(seeds, (str, os.PathLike)):
-        seeds = SeedSet.load(seeds)
-    crops = torch.as_tensor(np.asarray(seeds.crops, np.float64))
-    side = crops[:, 2]
-    origin = crops[:, :2] - side[:, None] / 2
-    fs = seeds.metadata.get("frame_size")
-    if fs is not None:
-        frame_size = torch.tensor([[float(fs[0]), float(fs[1])]], dtype=torch.float64).expand(len(seeds), 2)
-    else:
-        frame_size = torch.tensor([[float(s) for s in seeds.frame(i).shape[::-1]] for i in range(len(seeds))],
-                                  dtype=torch.float64).reshape(-1, 2)
-    return {"origin": origin.float(), "frame_size": frame_size.float().contiguous(),
-            "frame_scale": (side / seeds.patch_size).float()}
-
-
 def load_truth(path: str | os.PathLike) -> tuple[CaptureParams, list[dict[str, Any]], dict[str, Any]]:
     """The true Θ of a reference-camera seed set: ``(theta, per-seed extras, reference_camera header)``."""
     path = Path(path)

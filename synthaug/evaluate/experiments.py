@@ -480,7 +480,7 @@ def synthetic_positives(
     effects: Sequence[str] | None = None,
     capture_sampling: str = "seed",
     batch: int = 2048,
-    seed_geometry: Mapping[str, Any] | None = None,
+    seed_geometry: Mapping[str, Any] | str | None = "auto",
 ) -> Tensor:
     """``count`` synthetic object patches generated from a capture-parameter fit.
 
@@ -497,7 +497,8 @@ def synthetic_positives(
         capture_sampling: ``"seed"`` (the paper), ``"uniform"`` (Fig. 10) or ``"kde"``.
         batch: items built per ``__getitems__`` call.
         seed_geometry: each seed's place in its frame, for position-aware camera effects
-            (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`); None: the patch is the frame.
+            (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`; default ``"auto"``: the seed
+            set's); None: the patch is the frame.
 
     Returns:
         Float patches ``(count, 1, P, P)`` in [0, 1].
