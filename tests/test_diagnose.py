@@ -111,6 +111,28 @@ def test_within_video_spearman_removes_a_per_video_nuisance():
     assert np.mean(np.array(ps) < 0.05) < 0.15
 
 
+def test_feature_residual_map_matches_the_flat_hog_descriptor():
+    """The per-block HOG residual equals the norm over each block's slice of the flat descriptor (its documented
+    order: block row, block col, cells, orientations)."""
+    from types import SimpleNamespace
+
+    from synthaug.detectors.hog import hog
+    from synthaug.diagnose.residuals import feature_residual_map
+    from synthaug.distances import get_distance
+
+    g = torch.Generator().manual_seed(0)
+    real, syn = torch.rand(3, 1, 40, 40, generator=g), torch.rand(3, 1, 40, 40, generator=g)
+    dist = get_distance("hog")
+    data = SimpleNamespace(real=real, distance=dist, distance_name="hog")
+    out = feature_residual_map(data, syn)
+    hb = out["per_seed"].shape[-1]
+    flat = (hog(real, dist.config) - hog(syn, dist.config)).reshape(3, hb, hb, -1)
+    np.testing.assert_allclose(out["per_seed"], flat.norm(dim=-1).double().numpy(), rtol=1e-4, atol=1e-6)
+    assert out["cell_px"] == 8 and 0 <= out["share_centre"] <= 1
+    assert feature_residual_map(data, real)["mean"].max() == 0
+    assert feature_residual_map(SimpleNamespace(real=real, distance=dist, distance_name="eucl"), syn) is None
+
+
 def test_region_masks_match_scipy_morphology():
     from scipy import ndimage
 

@@ -57,6 +57,7 @@ __all__ = [
     "permutation_spearman",
     "within_groups",
     "seed_groups",
+    "feature_residual_map",
 ]
 
 
@@ -400,6 +401,34 @@ def seed_metadata(data: DiagnosisData) -> dict[str, np.ndarray]:
     return {"radial_r2": (dx ** 2 + dy ** 2).numpy(), "frame_x": dx.numpy(), "frame_y": dy.numpy(),
             "background_brightness": data.background.double().mean((1, 2, 3)).numpy(),
             "object_size": size.numpy(), "inverse_size": (1.0 / size).numpy()}
+
+
+@torch.no_grad()
+def feature_residual_map(data: DiagnosisData, syn: torch.Tensor) -> dict[str, Any] | None:
+    """Where the detector's features differ: the residual in feature space, per spatial feature cell.
+
+    For the HOG distance: the L2 norm of (block_real - block_syn) at every HOG block position
+    (:func:`synthaug.detectors.hog.block_features`), per seed, in the object-centred patch frame. Other
+    distances: None (their features are not laid out on the patch).
+
+    Returns:
+        ``{"mean": (Hb, Wb) mean over seeds, "per_seed": (N, Hb, Wb), "cell_px": block stride (px),
+        "share_centre": share of the squared residual in the central half of the blocks}``.
+    """
+    config = getattr(data.distance, "config", None)
+    if data.distance_name not in ("hog", "hog_smooth") or config is None:
+        return None
+    from synthaug.detectors.hog import block_features, cell_histograms
+
+    br = block_features(cell_histograms(data.real.float(), config), config)
+    bs = block_features(cell_histograms(syn.float(), config), config)
+    per = (br - bs).pow(2).sum(1).sqrt().double().numpy()  # (N, Hb, Wb)
+    hb, wb = per.shape[-2:]
+    centre = np.zeros((hb, wb), bool)
+    centre[hb // 4:hb - hb // 4, wb // 4:wb - wb // 4] = True
+    sq = (per ** 2).sum(0)
+    return {"mean": per.mean(0), "per_seed": per, "cell_px": int(config.cell_size),
+            "share_centre": float(sq[centre].sum() / max(sq.sum(), 1e-12))}
 
 
 def seed_groups(data: DiagnosisData) -> np.ndarray | None:
