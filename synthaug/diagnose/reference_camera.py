@@ -95,14 +95,14 @@ REALISTIC_STRENGTHS: dict[str, dict[str, Strength]] = {
     "defocus": {"defocus_sigma": 1.0},
     "compression": {"jpeg_quality": 40.0},
     "specular": {"specular_ks": (0.3, 0.6), "specular_shininess": 30.0},
-    "haze": {"haze_amount": (0.15, 0.4), "haze_airlight": 0.85},
+    "haze": {"haze_extinction_px": 10.0, "haze_airlight": 0.85},
     "chromatic_aberration": {"ca_shift": 2.0},
     "white_balance": {"wb_gain": 0.9},
     "sharpening": {"sharpen_amount": 1.0, "sharpen_sigma": 1.0},
     "lens_distortion": {"distortion_k1": -0.15},
     "rolling_shutter": {"rs_magnitude": (0.06, 0.15)},
     "rotor_blur": {"rotor_opacity": (0.15, 0.4)},
-    "exposure": {"exposure_gain": 0.85, "exposure_offset": 0.04},
+    "exposure": {"exposure_auto": 0.5, "exposure_offset": 0.04},
     "interlacing": {"interlace_shift": (1.0, 2.0)},
 }
 
@@ -114,14 +114,14 @@ REALISTIC_RANGES: dict[str, dict[str, tuple[float, float]]] = {
     "defocus": {"defocus_sigma": (0.7, 1.5)},
     "compression": {"jpeg_quality": (30.0, 60.0)},
     "specular": {"specular_ks": (0.2, 0.6), "specular_shininess": (10.0, 60.0)},
-    "haze": {"haze_amount": (0.1, 0.4), "haze_airlight": (0.7, 0.95)},
+    "haze": {"haze_amount": (0.1, 0.4), "haze_extinction_px": (5.0, 15.0), "haze_airlight": (0.7, 0.95)},
     "chromatic_aberration": {"ca_shift": (1.0, 3.0)},
     "white_balance": {"wb_gain": (0.8, 1.25)},
     "sharpening": {"sharpen_amount": (0.5, 1.5), "sharpen_sigma": (0.7, 1.5)},
     "lens_distortion": {"distortion_k1": (-0.2, 0.1)},
     "rolling_shutter": {"rs_magnitude": (0.05, 0.15)},
     "rotor_blur": {"rotor_opacity": (0.1, 0.5)},
-    "exposure": {"exposure_gain": (0.8, 1.3), "exposure_offset": (-0.05, 0.05)},
+    "exposure": {"exposure_gain": (0.8, 1.3), "exposure_auto": (0.3, 0.8), "exposure_offset": (-0.05, 0.05)},
     "interlacing": {"interlace_shift": (0.5, 2.5)},
 }
 
@@ -145,7 +145,13 @@ PAPER_RANGES: dict[str, tuple[float, float]] = {
     "sigma_n": (0.0, 0.03),
 }
 
-_REFERENCE_ONLY_PARAMS = {"rolling_shutter": ("rs_magnitude",), "interlacing": ("interlace_shift",)}
+# Settings the reference camera turns into the effect's own per seed (the physics behind them):
+# rs_magnitude -> rs_skew/rs_stretch along the seed's motion direction; haze_extinction_px -> haze_amount
+# = 1 - exp(-haze_extinction_px / object_px) (Koschmieder: a smaller object is farther, behind more air);
+# exposure_auto -> exposure_gain = (AE_TARGET / mean scene brightness) ** exposure_auto (auto-exposure).
+_REFERENCE_ONLY_PARAMS = {"rolling_shutter": ("rs_magnitude",), "interlacing": ("interlace_shift",),
+                          "haze": ("haze_extinction_px",), "exposure": ("exposure_auto",)}
+AE_TARGET = 0.5
 _FORMAT = "synthaug.reference_camera"
 _VERSION = 1
 
@@ -181,10 +187,13 @@ def resolve_hidden(
         allowed = set(REALISTIC_STRENGTHS[name])
         if name in CAMERA_EFFECTS:
             allowed |= {s.name for s in get_effect(name).params}
+        base = dict(REALISTIC_STRENGTHS[name])
         if name == "rolling_shutter" and ({"rs_skew", "rs_stretch"} & set(given)):
             base = {}  # explicit shear instead of a magnitude along the motion direction
-        else:
-            base = dict(REALISTIC_STRENGTHS[name])
+        if name == "haze" and "haze_amount" in given:
+            base.pop("haze_extinction_px", None)  # an explicit amount instead of one from the distance
+        if name == "exposure" and "exposure_gain" in given:
+            base.pop("exposure_auto", None)  # an explicit gain instead of auto-exposure
         bad = sorted(set(given) - allowed)
         if bad:
             raise ValueError(f"hidden[{name!r}]: unknown parameter(s) {bad}; known: {sorted(allowed)}")
@@ -216,7 +225,13 @@ def _check_strength(effect: str, name: str, v: Any) -> Strength:
     return x
 
 
+_REFERENCE_SPECS = {"haze_extinction_px": (0.0, 100.0), "exposure_auto": (0.0, 1.5), "rs_magnitude": (-1.0, 1.0)}
+
+
 def _check_in_spec(effect: str, name: str, x: float) -> None:
+    if name in _REFERENCE_SPECS and not _REFERENCE_SPECS[name][0] <= x <= _REFERENCE_SPECS[name][1]:
+        lo, hi = _REFERENCE_SPECS[name]
+        raise ValueError(f"hidden[{effect!r}][{name!r}] must be in [{lo}, {hi}], got {x}")
     if effect not in CAMERA_EFFECTS:
         return
     for s in get_effect(effect).params:
@@ -537,6 +552,12 @@ def make_measured_seedset(
             cov_body, _ = body_cache.layers(*pose, size=crop_side, object_scale=size_px / crop_side,
                                             dtype=torch.float64)
             rotor = (cov - cov_body).clamp(0.0, 1.0)
+        if "haze" in cam and "haze_extinction_px" in cam["haze"]:  # more air in front of a farther object
+            cam["haze"]["haze_amount"] = 1.0 - math.exp(-cam["haze"]["haze_extinction_px"] / size_px)
+        if "exposure" in cam and "exposure_auto" in cam["exposure"]:  # auto-exposure follows the scene
+            m = float(np.mean(scenes[i]))
+            cam["exposure"]["exposure_gain"] = float(np.clip((AE_TARGET / max(m, 1e-3)) ** cam["exposure"]
+                                                             ["exposure_auto"], 0.5, 2.0))
         if "rolling_shutter" in cam:
             rs = cam["rolling_shutter"]
             if "rs_magnitude" in rs:  # readout shear along this seed's motion
