@@ -227,7 +227,7 @@ def _write_report(out: Path, args: argparse.Namespace, rows: list, timings: dict
         f"Generated measured data: {args.videos} panning videos x {args.frames} frames (320x256), quadcopter "
         f"rendered with per-video capture parameters; train videos {split['train']}, test videos {split['test']}.",
         f"Seeds: {n_seeds} from the train videos; Θ fitted per seed in HOG space ({args.budget} evaluations).",
-        f"Detector: {args.detector}; AP at IoU >= 0.5 on every {args.stride}-th test frame.",
+        f"Detector: {args.detector}; AP at IoU >= 0.5 on one test frame in {args.stride}.",
         "",
         "| training positives | count | AP (IoU 0.5) | AP (IoU 0.3) | max recall |",
         "|---|---|---|---|---|",

@@ -14,9 +14,14 @@ Gain on held-out seeds: k-fold over seeds, φ chosen on the training folds
 ``g_i = (d_base,i - d_ext,i) / mean(d_base)`` measured with that φ. The
 penalty ``λ · (number of φ)`` is subtracted from every ``g_i``, then a
 one-sided t-test over seeds, Bonferroni-corrected over candidates and the
-two distance spaces (the detector's, pixels), decides significance. Both the
-detector's distance (e.g. HOG) and the pixel distance are screened: HOG is
-nearly blind to intensity effects, pixels to some shape effects.
+two distance spaces (the detector's, pixels), decides significance; a
+finding must also reach ``min_gain`` (2 %) and must not make the other space
+worse on held-out seeds. Both the detector's distance (e.g. HOG) and the
+pixel distance are screened: HOG is nearly blind to intensity effects, pixels
+to some shape effects. Every model, base and extended, includes the seed
+patches' known crop-resampling blur (:func:`~synthaug.data.seedset.crop_resampling_sigma`).
+With ``given`` (forward selection, :func:`synthaug.diagnose.report.diagnose`)
+accepted extensions are part of the base and candidates are screened on top.
 
 An effect the fitted parameters absorbed (vignetting into w_d, defocus into
 σ_s) has no distance gain — Θ_i already matches each seed — but shows as a
