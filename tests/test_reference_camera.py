@@ -224,6 +224,12 @@ def test_resolve_hidden_and_bad_inputs(tmp_path):
     assert resolve_hidden(["gamma"]) == {"gamma": REALISTIC_STRENGTHS["gamma"]}
     assert resolve_hidden({"haze": {"haze_amount": 0.2}}) == {"haze": {"haze_amount": 0.2, "haze_airlight": 0.85}}
     assert resolve_hidden(None) == {}
+    # a setting the reference camera derives (auto-exposure) is replaced by the effect's own explicit value
+    assert resolve_hidden({"exposure": {"exposure_gain": 0.9}}) == {"exposure": {"exposure_gain": 0.9,
+                                                                                  "exposure_offset": 0.04}}
+    assert resolve_hidden(["exposure"])["exposure"]["exposure_auto"] == 0.5
+    with pytest.raises(ValueError, match="exposure_auto"):
+        resolve_hidden({"exposure": {"exposure_auto": 3.0}})
     with pytest.raises(ValueError, match=r"unknown hidden effect\(s\) \['fog'\]"):
         resolve_hidden(["fog"])
     with pytest.raises(ValueError, match=r"hidden\['gamma'\]: unknown parameter\(s\) \['gamma'\]"):

@@ -145,12 +145,13 @@ PAPER_RANGES: dict[str, tuple[float, float]] = {
     "sigma_n": (0.0, 0.03),
 }
 
-# Settings the reference camera turns into the effect's own per seed (the physics behind them):
+# Settings the reference camera turns into the effect's own parameters per seed (the physics behind them);
+# giving those parameters explicitly replaces the setting:
 # rs_magnitude -> rs_skew/rs_stretch along the seed's motion direction; haze_extinction_px -> haze_amount
 # = 1 - exp(-haze_extinction_px / object_px) (Koschmieder: a smaller object is farther, behind more air);
 # exposure_auto -> exposure_gain = (AE_TARGET / mean scene brightness) ** exposure_auto (auto-exposure).
-_REFERENCE_ONLY_PARAMS = {"rolling_shutter": ("rs_magnitude",), "interlacing": ("interlace_shift",),
-                          "haze": ("haze_extinction_px",), "exposure": ("exposure_auto",)}
+_DERIVED_PARAMS = {"rs_magnitude": ("rs_skew", "rs_stretch"), "haze_extinction_px": ("haze_amount",),
+                   "exposure_auto": ("exposure_gain",)}
 AE_TARGET = 0.5
 _FORMAT = "synthaug.reference_camera"
 _VERSION = 1
@@ -187,13 +188,8 @@ def resolve_hidden(
         allowed = set(REALISTIC_STRENGTHS[name])
         if name in CAMERA_EFFECTS:
             allowed |= {s.name for s in get_effect(name).params}
-        base = dict(REALISTIC_STRENGTHS[name])
-        if name == "rolling_shutter" and ({"rs_skew", "rs_stretch"} & set(given)):
-            base = {}  # explicit shear instead of a magnitude along the motion direction
-        if name == "haze" and "haze_amount" in given:
-            base.pop("haze_extinction_px", None)  # an explicit amount instead of one from the distance
-        if name == "exposure" and "exposure_gain" in given:
-            base.pop("exposure_auto", None)  # an explicit gain instead of auto-exposure
+        base = {k: v for k, v in REALISTIC_STRENGTHS[name].items()
+                if not set(_DERIVED_PARAMS.get(k, ())) & set(given)}  # an explicit value replaces the physics
         bad = sorted(set(given) - allowed)
         if bad:
             raise ValueError(f"hidden[{name!r}]: unknown parameter(s) {bad}; known: {sorted(allowed)}")

@@ -101,9 +101,9 @@ def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha:
     Returns:
         (rows of the first round, [(accepted row, the extensions it was screened on top of)]).
     """
-    from synthaug.diagnose.screening import ABSORPTION, screen_candidates
+    from synthaug.diagnose.screening import n_screening_tests, screen_candidates
 
-    n_tests = max(len(order), 1) * 2 + sum(1 for c in order if c in ABSORPTION)
+    n_tests = n_screening_tests(order)
     rows = screen_candidates(data, order, k=k, seed=seed, alpha=alpha, progress=lambda c: say(f"  {c}"))
     first = rows
     accepted: dict[str, dict[str, float]] = {}

@@ -266,6 +266,11 @@ def absorption_gain(data: DiagnosisData, effect: str, w_d: np.ndarray, folds: li
             "within": "video" if groups is not None else None, "gain": _cv_r2(xm[ok], ym[ok], f_ok)}
 
 
+def n_screening_tests(names: Sequence[str]) -> int:
+    """The Bonferroni count of screening ``names``: two distance spaces each, plus the absorbed channels."""
+    return max(len(names), 1) * 2 + sum(1 for c in names if c in ABSORPTION)
+
+
 def _logistic_cv_accuracy(x: np.ndarray, y: np.ndarray, groups: np.ndarray, folds: list[np.ndarray],
                           l2: float = 1e-2) -> float:
     """k-fold (by seed) accuracy of an L2 logistic regression (LBFGS)."""
@@ -346,7 +351,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     syn0, w0 = base_render(data, given)
     base = (pairwise_distance(data, syn0), pixel_distance(data.real, syn0))
     if n_tests is None:
-        n_tests = max(len(names), 1) * 2 + sum(1 for c in names if c in ABSORPTION)
+        n_tests = n_screening_tests(names)
     rows = []
     for name in names:
         if progress:

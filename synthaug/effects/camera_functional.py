@@ -155,16 +155,21 @@ def frame_coordinates(
 
 
 def _sample(image: torch.Tensor, src_x: torch.Tensor, src_y: torch.Tensor, padding: str) -> torch.Tensor:
-    """Bilinear ``image`` at pixel coordinates (src_x, src_y) (B, C or 1, H, W), per channel."""
+    """Bilinear ``image`` (B, C, H, W) at pixel coordinates (src_x, src_y), per channel.
+
+    The coordinates broadcast to (B, C or 1, H', W'); the output is (B, C, H', W') (H', W' = H, W for a warp
+    of the image onto itself).
+    """
     b, c, h, w = image.shape
-    src_x = src_x.expand(b, c, h, w)
-    src_y = src_y.expand(b, c, h, w)
+    ho, wo = torch.broadcast_shapes(src_x.shape, src_y.shape)[-2:]
+    src_x = src_x.expand(b, c, ho, wo)
+    src_y = src_y.expand(b, c, ho, wo)
     gx = (src_x + 0.5) * (2.0 / w) - 1.0
     gy = (src_y + 0.5) * (2.0 / h) - 1.0
-    grid = torch.stack([gx, gy], -1).reshape(b * c, h, w, 2)
+    grid = torch.stack([gx, gy], -1).reshape(b * c, ho, wo, 2)
     out = F.grid_sample(image.reshape(b * c, 1, h, w), grid, mode="bilinear", padding_mode=padding,
                         align_corners=False)
-    return out.reshape(b, c, h, w)
+    return out.reshape(b, c, ho, wo)
 
 
 def _padding(border: str) -> str:
@@ -634,13 +639,8 @@ def jpeg_difference_on_frame_grid(image: torch.Tensor, background: torch.Tensor,
     # canvas pixel j = frame pixel start + j = patch pixel (start + j + 0.5 - origin) / fs - 0.5
     u = ((start[:, 0, None] + j[None] + 0.5 - org[:, 0, None]) / fs[:, None] - 0.5).to(dt)
     v = ((start[:, 1, None] + j[None] + 0.5 - org[:, 1, None]) / fs[:, None] - 0.5).to(dt)
-    shape = (b, 1, side, side)
-    src_x = u[:, None, None, :].expand(shape)
-    src_y = v[:, None, :, None].expand(shape)
-
-    canvas = torch.zeros(b, c, side, side, dtype=dt)
-    wi = _sample_any(image, src_x, src_y, "border", canvas)
-    wb = _sample_any(background, src_x, src_y, "border", canvas)
+    wi = _sample(image, u[:, None, None, :], v[:, None, :, None], "border")  # (B, C, side, side)
+    wb = _sample(background, u[:, None, None, :], v[:, None, :, None], "border")
     q = _per_channel(quality, b, c, image, "jpeg_quality")
     err = (jpeg_quantize(wi, q) - wi) - (jpeg_quantize(wb, q) - wb)
     # back: patch pixel u sits at canvas pixel origin + (u + 0.5) * fs - 0.5 - start
@@ -648,22 +648,8 @@ def jpeg_difference_on_frame_grid(image: torch.Tensor, background: torch.Tensor,
     pv = torch.arange(h, dtype=torch.float64)
     bx = (org[:, 0, None] + (pu[None] + 0.5) * fs[:, None] - 0.5 - start[:, 0, None]).to(dt)
     by = (org[:, 1, None] + (pv[None] + 0.5) * fs[:, None] - 0.5 - start[:, 1, None]).to(dt)
-    back = _sample_any(err, bx[:, None, None, :].expand(b, 1, h, w), by[:, None, :, None].expand(b, 1, h, w),
-                       "zeros", torch.zeros_like(image))
+    back = _sample(err, bx[:, None, None, :], by[:, None, :, None], "zeros")
     return image + back
-
-
-def _sample_any(image: torch.Tensor, src_x: torch.Tensor, src_y: torch.Tensor, padding: str,
-                like: torch.Tensor) -> torch.Tensor:
-    """Bilinear ``image`` (B, C, H, W) at pixel coordinates (B, 1, H', W') -> shaped like ``like`` (B, C, H', W')."""
-    b, c, h, w = image.shape
-    ho, wo = like.shape[-2:]
-    gx = (src_x + 0.5) * (2.0 / w) - 1.0
-    gy = (src_y + 0.5) * (2.0 / h) - 1.0
-    grid = torch.stack([gx, gy], -1).reshape(b, 1, ho, wo, 2).expand(b, c, ho, wo, 2).reshape(b * c, ho, wo, 2)
-    out = F.grid_sample(image.reshape(b * c, 1, h, w), grid, mode="bilinear", padding_mode=padding,
-                        align_corners=False)
-    return out.reshape(b, c, ho, wo)
 
 
 def _jpeg_blocks(image: torch.Tensor, quality: torch.Tensor, py: int, px: int) -> torch.Tensor:
