@@ -189,9 +189,6 @@ def test_every_candidate_has_a_grid():
 NOT_FOUND = {
     "gamma": "a tone curve on a dark object (intensities 0.1-0.45) is nearly affine there: the per-seed w_d "
              "absorbs the slope, the extension's held-out gain is 0.0 %",
-    "exposure": "auto-exposure (gain = (0.5 / scene mean) ** 0.5) plus a 0.04 offset: the gain is an albedo "
-                "change that w_d absorbs; its dependence on background brightness within videos (rho -0.37) "
-                "is not significant at 64 seeds (p_adj 0.09), the offset leaves < 1 % gain",
     "white_balance": "grayscale: a per-channel gain is a plain gain, absorbed by w_d (unidentifiable)",
     "shot_noise": "nothing significant: at 0.04*sqrt(I) the extra object noise is within the fitted sigma_n's "
                   "reach, and a noise model cannot lower a distance to one noisy realisation",

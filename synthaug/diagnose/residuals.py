@@ -186,6 +186,8 @@ class DiagnosisData:
     records: list[dict[str, Any]] = field(default_factory=list)
     fit_distance: np.ndarray | None = None
     resample_sigma: torch.Tensor | None = None  # (N,) patch px: the seed patches' crop resampling blur
+    object_px: torch.Tensor | None = None  # (N,) the fitted object's size in frame px (object scale x crop side)
+    frame_brightness: torch.Tensor | None = None  # (N,) mean of the whole frame (what auto-exposure meters)
 
     def __len__(self) -> int:
         return int(self.real.shape[0])
@@ -200,7 +202,8 @@ class DiagnosisData:
             part_rotor=take(self.part_rotor), distance_name=self.distance_name, distance=self.distance,
             records=[self.records[int(i)] for i in idx_t] if self.records else [],
             fit_distance=None if self.fit_distance is None else self.fit_distance[np.asarray(idx, np.int64)],
-            resample_sigma=take(self.resample_sigma))
+            resample_sigma=take(self.resample_sigma), object_px=take(self.object_px),
+            frame_brightness=take(self.frame_brightness))
 
 
 def _rotor_layers(cache_body: Any, theta: Any, size: int, scale: torch.Tensor, cov: torch.Tensor) -> torch.Tensor:
@@ -275,7 +278,24 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         distance_name=str(name), distance=dist, records=list(seeds.records),
         fit_distance=np.array([float(e.get("distance", np.nan)) for e in extra]),
         resample_sigma=torch.from_numpy(crop_resampling_sigma(geo["frame_scale"].double().numpy())).float()
-        if resampling else None)
+        if resampling else None,
+        object_px=(scale.double() * p * geo["frame_scale"].double()).float(),
+        frame_brightness=_frame_brightness(seeds))
+
+
+def _frame_brightness(seeds: Any) -> torch.Tensor | None:
+    """Mean intensity of each seed's whole frame in [0, 1], or None when the seed set has no frames."""
+    out = []
+    for i in range(len(seeds)):
+        try:
+            f = seeds.frame(i)
+        except (FileNotFoundError, OSError, KeyError, IndexError, ValueError):
+            return None
+        if f is None:
+            return None
+        f = np.asarray(f)
+        out.append(float(f.mean()) / (255.0 if f.dtype == np.uint8 else 1.0))
+    return torch.tensor(out, dtype=torch.float64)
 
 
 def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor | float]] | None = None, *,
@@ -389,7 +409,9 @@ def seed_metadata(data: DiagnosisData) -> dict[str, np.ndarray]:
         ``radial_r2`` (squared distance of the patch centre from the frame
         centre, 1 at the corners), ``frame_x``, ``frame_y`` (same, signed),
         ``background_brightness`` (mean of B_i), ``object_size`` (frame px per
-        patch px: the object's size in the frame), ``inverse_size``.
+        patch px: the object's size in the frame), ``inverse_size``, and
+        ``frame_brightness`` (mean of the whole frame: what a camera's
+        auto-exposure meters) when the seed set has its frames.
     """
     p = data.real.shape[-1]
     c = data.origin.double() + (p / 2.0) * data.frame_scale.double()[:, None]
@@ -398,9 +420,12 @@ def seed_metadata(data: DiagnosisData) -> dict[str, np.ndarray]:
     dx = (c[:, 0] - (fs[:, 0] - 1) / 2) / half_diag
     dy = (c[:, 1] - (fs[:, 1] - 1) / 2) / half_diag
     size = data.frame_scale.double()
-    return {"radial_r2": (dx ** 2 + dy ** 2).numpy(), "frame_x": dx.numpy(), "frame_y": dy.numpy(),
-            "background_brightness": data.background.double().mean((1, 2, 3)).numpy(),
-            "object_size": size.numpy(), "inverse_size": (1.0 / size).numpy()}
+    out = {"radial_r2": (dx ** 2 + dy ** 2).numpy(), "frame_x": dx.numpy(), "frame_y": dy.numpy(),
+           "background_brightness": data.background.double().mean((1, 2, 3)).numpy(),
+           "object_size": size.numpy(), "inverse_size": (1.0 / size).numpy()}
+    if data.frame_brightness is not None:
+        out["frame_brightness"] = data.frame_brightness.double().numpy()
+    return out
 
 
 @torch.no_grad()

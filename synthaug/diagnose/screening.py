@@ -61,7 +61,8 @@ Setting = dict[str, float]
 
 # Camera-wide settings tried per candidate (realistic spans, neutral excluded). Blur radii are in FRAME
 # pixels (a camera's), converted to each seed's patch pixels by its frame scale; the rolling shutter
-# takes a magnitude along each seed's fitted motion direction.
+# takes a magnitude along each seed's fitted motion direction; haze an extinction length in object frame px
+# (its amount 1 - exp(-extinction / object px) per seed: a smaller-looking object is farther away).
 CANDIDATE_GRIDS: dict[str, list[Setting]] = {
     "vignetting": [{"vignette_k": k} for k in (0.1, 0.2, 0.3, 0.4, 0.55)],
     "gamma": [{"gamma_g": g} for g in (0.6, 0.7, 0.8, 0.9, 1.12, 1.25, 1.4, 1.6)],
@@ -70,8 +71,8 @@ CANDIDATE_GRIDS: dict[str, list[Setting]] = {
     "compression": [{"jpeg_quality": q} for q in (20.0, 30.0, 40.0, 50.0, 65.0, 80.0)],
     "specular": [{"specular_ks": k, "specular_shininess": s} for k, s in
                  itertools.product((0.15, 0.3, 0.45, 0.6), (10.0, 30.0, 80.0))],
-    "haze": [{"haze_amount": h, "haze_airlight": a} for h, a in
-             itertools.product((0.1, 0.2, 0.3, 0.45), (0.6, 0.8, 0.95))],
+    "haze": [{"haze_extinction_px": e, "haze_airlight": a} for e, a in
+             itertools.product((3.0, 6.0, 10.0, 15.0, 25.0), (0.6, 0.8, 0.95))],
     "chromatic_aberration": [{"ca_shift": s} for s in (0.5, 1.0, 1.5, 2.0, 3.0)],
     "white_balance": [{"wb_gain": g} for g in (0.8, 0.9, 1.1, 1.25)],
     "sharpening": [{"sharpen_amount": a, "sharpen_sigma": s} for a, s in
@@ -88,6 +89,8 @@ ABSORPTION: dict[str, tuple[str, str, int]] = {
     "vignetting": ("w_d", "radial_r2", -1),
     "defocus": ("sigma_s", "object_size", -1),
     "sharpening": ("sigma_s", "object_size", +1),
+    # auto-exposure: the camera's gain follows the whole frame's brightness, the object's albedo with it
+    "exposure": ("w_d", "frame_brightness", -1),
 }
 
 
@@ -104,6 +107,9 @@ def extension_values(data: DiagnosisData, effect: str, setting: Setting) -> dict
     if effect == "sharpening":
         return {effect: {"sharpen_amount": s["sharpen_amount"],
                          "sharpen_sigma": (s["sharpen_sigma"] / fs).clamp(0.3, 3.0)}}
+    if effect == "haze":  # Koschmieder: the same object looks smaller when farther, behind more air
+        amount = 1.0 - torch.exp(-s["haze_extinction_px"] / data.object_px.double().clamp_min(1.0))
+        return {effect: {"haze_amount": amount.clamp(0.0, 0.95), "haze_airlight": s["haze_airlight"]}}
     if effect == "rolling_shutter":
         a = data.theta.alpha_m[:, 0].double()
         m = s["rs_magnitude"]
@@ -254,7 +260,9 @@ def absorption_gain(data: DiagnosisData, effect: str, w_d: np.ndarray, folds: li
     if effect not in ABSORPTION:
         return None
     param, meta_name, sign = ABSORPTION[effect]
-    meta = seed_metadata(data)[meta_name]
+    meta = seed_metadata(data).get(meta_name)
+    if meta is None:  # e.g. no whole frames in the seed set: no frame brightness
+        return None
     vals = w_d if param == "w_d" else data.theta.as_dict()[param][:, 0].double().numpy()
     groups = seed_groups(data)
     rho, p = permutation_spearman(meta, vals, rng, groups=groups, n_perm=99_999)  # p floor 1e-5 (Bonferroni)
