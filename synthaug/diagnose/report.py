@@ -78,6 +78,8 @@ def _jsonable(x: Any) -> Any:
 
 
 def _setting(row: dict[str, Any]) -> dict[str, float]:
+    if row["channel"] == "noise_level" and row.get("noise_setting"):
+        return row["noise_setting"]
     space = "feature" if row["channel"] == "distance:feature" else "pixel"
     return row["screen"][space]["setting"]
 
@@ -200,6 +202,15 @@ def diagnose(
     rows, picked = _forward_selection(data, order, k=k, seed=seed, alpha=alpha, max_effects=max_effects, say=say)
     folds = kfold(len(data), k, np.random.default_rng(seed + 1))
     acc_base = realism_accuracy(data, syn0, folds)
+    nlf = None
+    if data.noise_levels is not None:
+        from synthaug.diagnose.noise import noise_channel
+
+        nc = noise_channel(data.noise_levels, folds)
+        nlf = {k_: nc[k_] for k_ in ("slope", "t", "p", "n_seeds", "fitted_slope", "gain")}
+        nlf["note"] = ("log-log slope of the frames' noise variance vs brightness, off the object (0: read noise "
+                       "only, as the model's sigma_n assumes; > 0: shot noise; < 0: a compressive tone curve after "
+                       "the sensor); gain: held-out log-likelihood of the power-law NLF over a flat one, nats/px")
     findings: list[dict[str, Any]] = []
     ext_images = None
     for rank, (row, given) in enumerate(picked):
@@ -213,8 +224,11 @@ def diagnose(
             "p_adjusted": row["p_adjusted"], "setting": setting, "given": list(given),
             "gains": {"heldout_feature": sc["feature"]["gain"], "heldout_pixel": sc["pixel"]["gain"],
                       "absorbed_parameter_r2": None if row["absorption"] is None else row["absorption"]["gain"],
+                      "noise_loglik_per_px": None if row.get("noise") is None else row["noise"]["gain"],
                       "realism_accuracy_before": acc_base, "realism_accuracy_after": acc},
             "evidence": {"channels": row["channels"], "absorption": row["absorption"],
+                         "noise_level_function": None if row.get("noise") is None else {
+                             k_: row["noise"][k_] for k_ in ("slope", "t", "p", "n_seeds", "fitted_slope", "gain")},
                          "hinted_by_residuals": row["effect"] in hinted,
                          "residual_structure": [m["description"] for n_, m in structure.items()
                                                 if m["significant"] and row["effect"] in HINTS.get(n_, ())]},
@@ -258,6 +272,7 @@ def diagnose(
                     "object-centred patch: where the detector sees the difference"},
         "hinted_candidates": hinted,
         "parameter_dependence": [d for d in dependence if d["significant"]],
+        "noise_level_function": nlf,
         "realism": {"accuracy_base": acc_base,
                     "note": "k-fold accuracy of logistic regression on HOG, real vs fitted synthetic; 0.5 = "
                             "indistinguishable"},
@@ -359,6 +374,9 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                 f"setting {f['setting']}; held-out gain {100 * (g['heldout_feature'] or 0):.1f} % "
                 f"({inp['distance']}), {100 * (g['heldout_pixel'] or 0):.1f} % (pixels)"
                 + (f"; absorbed-parameter R² {g['absorbed_parameter_r2']:.2f}" if f["channel"] == "absorbed" else "")
+                + (f"; noise level function log-log slope {f['evidence']['noise_level_function']['slope']:+.2f} "
+                   f"(flat = read noise only), held-out likelihood gain {g['noise_loglik_per_px']:.4f} nats/px"
+                   if f["channel"] == "noise_level" else "")
                 + (f"; real-vs-synthetic accuracy {100 * g['realism_accuracy_before']:.0f} % → {100 * acc:.0f} %"
                    if acc is not None else "")
                 + (f"; gains measured on top of {', '.join(f['given'])}" if f.get("given") else ""))
@@ -372,6 +390,11 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
     if fr:
         lines += ["", f"Feature space (HOG): {100 * fr['share_centre']:.0f} % of the squared block residual lies in "
                   "the central blocks (the object); the map is the 4th panel of `residuals.png`."]
+    nlf = report.get("noise_level_function")
+    if nlf:
+        lines += ["", f"Camera noise, measured on the frames off the object ({nlf['n_seeds']} seeds): the noise "
+                  f"variance grows with brightness as I^{nlf['slope']:+.2f} (t = {nlf['t']:.1f}; 0 = read noise "
+                  "only, 1 = shot noise, < 0 = a compressive tone curve after the sensor)."]
     lines += ["", "## Fitted parameters vs seed metadata (significant only)", ""]
     deps = report["parameter_dependence"]
     lines += [f"- {d['parameter']} vs {d['metadata']}: Spearman ρ = {d['rho']:+.2f} (p = {d['p']:.2g})"

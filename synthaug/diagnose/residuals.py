@@ -188,6 +188,7 @@ class DiagnosisData:
     resample_sigma: torch.Tensor | None = None  # (N,) patch px: the seed patches' crop resampling blur
     object_px: torch.Tensor | None = None  # (N,) the fitted object's size in frame px (object scale x crop side)
     frame_brightness: torch.Tensor | None = None  # (N,) mean of the whole frame (what auto-exposure meters)
+    noise_levels: list[dict[str, np.ndarray]] | None = None  # per seed: its frame's noise level function
 
     def __len__(self) -> int:
         return int(self.real.shape[0])
@@ -203,7 +204,8 @@ class DiagnosisData:
             records=[self.records[int(i)] for i in idx_t] if self.records else [],
             fit_distance=None if self.fit_distance is None else self.fit_distance[np.asarray(idx, np.int64)],
             resample_sigma=take(self.resample_sigma), object_px=take(self.object_px),
-            frame_brightness=take(self.frame_brightness))
+            frame_brightness=take(self.frame_brightness),
+            noise_levels=None if self.noise_levels is None else [self.noise_levels[int(i)] for i in idx_t])
 
 
 def _rotor_layers(cache_body: Any, theta: Any, size: int, scale: torch.Tensor, cov: torch.Tensor) -> torch.Tensor:
@@ -234,6 +236,7 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
     import os
 
     from synthaug.data.seedset import SeedSet, crop_resampling_sigma
+    from synthaug.diagnose.noise import seed_noise_levels
     from synthaug.diagnose.reference_camera import seed_geometry
     from synthaug.effects.pipeline import sample_fields
     from synthaug.fit.fitting import build_distance, patches_tensor
@@ -280,7 +283,7 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         resample_sigma=torch.from_numpy(crop_resampling_sigma(geo["frame_scale"].double().numpy())).float()
         if resampling else None,
         object_px=(scale.double() * p * geo["frame_scale"].double()).float(),
-        frame_brightness=_frame_brightness(seeds))
+        frame_brightness=_frame_brightness(seeds), noise_levels=seed_noise_levels(seeds))
 
 
 def _frame_brightness(seeds: Any) -> torch.Tensor | None:

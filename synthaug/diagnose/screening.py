@@ -45,6 +45,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import torch
 
+from synthaug.diagnose.noise import NOISE_CANDIDATES, SLOPE_FLOOR, noise_channel
 from synthaug.diagnose.residuals import (
     DiagnosisData,
     pairwise_distance,
@@ -275,8 +276,35 @@ def absorption_gain(data: DiagnosisData, effect: str, w_d: np.ndarray, folds: li
 
 
 def n_screening_tests(names: Sequence[str]) -> int:
-    """The Bonferroni count of screening ``names``: two distance spaces each, plus the absorbed channels."""
-    return max(len(names), 1) * 2 + sum(1 for c in names if c in ABSORPTION)
+    """The Bonferroni count of screening ``names``: two distance spaces each, plus the absorbed and the
+    noise-level channels."""
+    return max(len(names), 1) * 2 + sum(1 for c in names if c in ABSORPTION) + sum(1 for c in names
+                                                                                   if c in NOISE_CANDIDATES)
+
+
+def noise_level_channel(effect: str, nc: dict[str, Any] | None, n_tests: int, alpha: float
+                        ) -> dict[str, Any] | None:
+    """The noise-level-function channel of ``effect`` (shot noise: the NLF rises with brightness; a
+    compressive tone curve: it falls), from :func:`synthaug.diagnose.noise.noise_channel`."""
+    from scipy import stats
+
+    if effect not in NOISE_CANDIDATES or nc is None or nc["n_seeds"] < 3:
+        return None
+    sign = NOISE_CANDIDATES[effect]
+    p_one = nc["p"] / 2 if nc["slope"] * sign > 0 else 1.0 - nc["p"] / 2
+    p_adj = min(1.0, p_one * n_tests)
+    z = float(np.clip(stats.norm.isf(min(max(p_one, 1e-300), 1.0)), -40.0, 40.0))
+    big = abs(nc["slope"]) >= SLOPE_FLOOR
+    return {"channel": "noise_level", "p_adjusted": p_adj, "z": z, "gain": nc["gain"], "slope": nc["slope"],
+            "significant": bool(p_adj < alpha and nc["slope"] * sign > 0 and big and nc["gain"] > 0)}
+
+
+def noise_setting(effect: str, nc: dict[str, Any]) -> Setting | None:
+    """The camera setting the NLF implies: a tone curve x^g with slope 2(g - 1)/g when read noise
+    dominates, so g = 2 / (2 - slope); None for effects it does not set."""
+    if effect == "gamma":
+        return {"gamma_g": float(np.clip(2.0 / (2.0 - min(nc["fitted_slope"], 1.5)), 0.4, 2.5))}
+    return None
 
 
 def _logistic_cv_accuracy(x: np.ndarray, y: np.ndarray, groups: np.ndarray, folds: list[np.ndarray],
@@ -345,8 +373,9 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         one dict per candidate, ranked (significant distance gains by size, then significant absorbed
         parameters, then the rest by evidence):
         ``effect``, ``significant``, ``channel`` (``"distance:feature"``,
-        ``"distance:pixel"`` or ``"absorbed"``), ``score`` (z), ``p_adjusted``,
-        ``gain`` (held-out), ``screen``, ``absorption``.
+        ``"distance:pixel"``, ``"absorbed"`` or ``"noise_level"``), ``score`` (z), ``p_adjusted``,
+        ``gain`` (held-out), ``screen``, ``absorption``, ``noise`` (the noise level function's
+        evidence, for its candidates), ``noise_setting``.
     """
     from scipy import stats
 
@@ -360,6 +389,9 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     base = (pairwise_distance(data, syn0), pixel_distance(data.real, syn0))
     if n_tests is None:
         n_tests = n_screening_tests(names)
+    nc = None  # the camera's noise level function (frames needed): one measurement for its candidates
+    if data.noise_levels is not None and any(c in NOISE_CANDIDATES for c in names):
+        nc = noise_channel(data.noise_levels, folds)
     rows = []
     for name in names:
         if progress:
@@ -384,12 +416,16 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
             z = abs(math.atanh(max(min(ab["rho"], 0.999999), -0.999999))) * math.sqrt(max(n - 3, 1))
             channels.append({"channel": "absorbed", "p_adjusted": p_adj, "z": z if ab["sign_ok"] else -z,
                              "gain": ab["gain"], "significant": p_adj < alpha and ab["sign_ok"] and ab["gain"] > 0})
+        nl = noise_level_channel(name, nc, n_tests, alpha)
+        if nl is not None:
+            channels.append(nl)
         sig = [c for c in channels if c["significant"]]
         sig_dist = [c for c in sig if c["channel"] != "absorbed"]
         best = max(sig_dist, key=lambda c: c["gain"]) if sig_dist else max(sig or channels, key=lambda c: c["z"])
         rows.append({"effect": name, "significant": bool(sig), "channel": best["channel"], "score": best["z"],
                      "p_adjusted": best["p_adjusted"], "gain": best["gain"], "channels": channels,
-                     "screen": sc, "absorption": ab})
+                     "screen": sc, "absorption": ab, "noise": nc if nl is not None else None,
+                     "noise_setting": noise_setting(name, nc) if nl is not None else None})
     rows.sort(key=_rank)
     return rows
 
@@ -399,6 +435,6 @@ def _rank(row: dict[str, Any]) -> tuple[int, float]:
     most precisely measured sliver); then absorbed-parameter findings; then the rest by evidence."""
     if not row["significant"]:
         return 2, -row["score"]
-    if row["channel"] == "absorbed":
+    if row["channel"] in ("absorbed", "noise_level"):
         return 1, -row["score"]
     return 0, -row["gain"]

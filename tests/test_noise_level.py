@@ -1,0 +1,98 @@
+"""The camera's noise level function (synthaug.diagnose.noise) against known noise models and scipy."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from synthaug.diagnose.noise import (
+    _heldout_loglik,
+    frame_noise_levels,
+    nlf_slope,
+    noise_channel,
+)
+
+
+def _scene(rng: np.random.Generator, h: int = 300, w: int = 400) -> np.ndarray:
+    """A smooth sky-like scene spanning 0.3-0.85."""
+    return np.tile(np.linspace(0.3, 0.85, w), (h, 1)) + 0.02 * np.sin(np.arange(h) / 15.0)[:, None]
+
+
+def test_binned_variance_recovers_a_known_noise_level_function():
+    rng = np.random.default_rng(0)
+    b = _scene(rng)
+    a_, b_ = 4e-5, 1.6e-3  # read + shot: var = a + b I
+    f = b + rng.normal(size=b.shape) * np.sqrt(a_ + b_ * b)
+    nlf = frame_noise_levels(f, b)
+    assert len(nlf["signal"]) >= 10
+    true = a_ + b_ * nlf["signal"]
+    # the high-pass (5x5 local mean removed) keeps 24/25 of white noise's variance
+    np.testing.assert_allclose(nlf["var"], true * 24 / 25, rtol=0.08)
+    # the log-log slope equals numpy's weighted line fit through the bins, and the model's local slope
+    x, y = np.log(nlf["signal"]), np.log(nlf["var"])
+    ref = np.polyfit(x, y, 1, w=np.sqrt(nlf["count"]))[0]
+    assert nlf_slope(nlf) == pytest.approx(ref, abs=0.02)
+    i_mid = float(np.exp(x.mean()))
+    assert nlf_slope(nlf) == pytest.approx(b_ * i_mid / (a_ + b_ * i_mid), abs=0.1)
+
+
+def test_a_tone_curve_after_read_noise_makes_the_nlf_fall_as_predicted():
+    rng = np.random.default_rng(1)
+    x = _scene(rng) ** (1 / 0.75)  # linear radiance
+    g, sd = 0.75, 0.004
+    f = np.clip(x + sd * rng.normal(size=x.shape), 1e-4, 1) ** g
+    b = x ** g
+    nlf = frame_noise_levels(f, b)
+    assert nlf_slope(nlf) == pytest.approx(2 * (g - 1) / g, abs=0.08)  # var ∝ f'(x)² = I^(2(g-1)/g)
+
+
+def test_textured_pixels_and_the_object_are_left_out():
+    rng = np.random.default_rng(2)
+    b = _scene(rng)
+    f = b + 0.01 * rng.normal(size=b.shape)
+    ex = np.zeros_like(b, bool)
+    ex[40:80, 50:90] = True
+    f[ex] = 0.0  # an "object" that is nothing like noise
+    b_tex = b.copy()
+    b_tex[150:190, 220:260] += 0.2 * (np.indices((40, 40)).sum(0) % 2)  # a checkerboard, misregistered in f
+    f[150:190, 221:261] += 0.2 * (np.indices((40, 40)).sum(0) % 2)
+    nlf = frame_noise_levels(f, b_tex, exclude=ex)
+    np.testing.assert_allclose(nlf["var"], 1e-4 * 24 / 25, rtol=0.12)
+    with pytest.raises(ValueError, match="same shape"):
+        frame_noise_levels(f, b[:10])
+
+
+def test_heldout_loglik_matches_scipy_on_the_samples():
+    from scipy import stats
+
+    rng = np.random.default_rng(3)
+    sig = np.array([0.3, 0.5, 0.7])
+    sd_true = np.sqrt(1e-3 * sig)
+    samples = [rng.normal(0, s, 4000) for s in sd_true]
+    nlf = {"signal": sig, "var": np.array([np.mean(x ** 2) for x in samples]), "count": np.array([4000] * 3)}
+    for slope in (0.0, 1.0):
+        shape = sig ** slope
+        level = float(np.mean(nlf["var"] / shape))
+        ref = np.mean(np.concatenate([stats.norm.logpdf(x, 0, math.sqrt(level * s)) for x, s in zip(samples, shape)]))
+        assert _heldout_loglik(nlf, slope) == pytest.approx(ref, rel=1e-9)
+    assert _heldout_loglik(nlf, 1.0) > _heldout_loglik(nlf, 0.0)  # the true model wins
+
+
+def test_noise_channel_reads_flat_noise_as_nothing():
+    from synthaug.diagnose.screening import kfold, noise_level_channel
+
+    rng = np.random.default_rng(4)
+    nlfs_flat, nlfs_shot = [], []
+    for i in range(16):
+        b = _scene(rng, 96, 128) * rng.uniform(0.8, 1.1)
+        nlfs_flat.append(frame_noise_levels(b + 0.006 * rng.normal(size=b.shape), b))
+        nlfs_shot.append(frame_noise_levels(b + rng.normal(size=b.shape) * np.sqrt(1e-3 * b), b))
+    folds = kfold(16, 4, rng)
+    flat, shot = noise_channel(nlfs_flat, folds), noise_channel(nlfs_shot, folds)
+    assert abs(flat["slope"]) < 0.1 and shot["slope"] > 0.8 and shot["gain"] > 0
+    assert not noise_level_channel("shot_noise", flat, 30, 0.01)["significant"]
+    assert noise_level_channel("shot_noise", shot, 30, 0.01)["significant"]
+    assert not noise_level_channel("gamma", shot, 30, 0.01)["significant"]  # wrong direction for a tone curve
+    assert noise_level_channel("vignetting", shot, 30, 0.01) is None
