@@ -56,11 +56,12 @@ def converged_fit(seeds_dir, out, *, budget: int = 250, step: float = 20.0, spri
     return out
 
 
-def _diagnose(tmp: Path, hidden, seed: int = 1) -> dict:
+def _diagnose(tmp: Path, hidden, seed: int = 1, n_seeds: int | None = None) -> dict:
     from synthaug.diagnose.reference_camera import make_measured_seedset
     from synthaug.diagnose.report import diagnose
 
-    seeds = make_measured_seedset(tmp / "seeds", hidden=hidden, seed=seed, **MEASURED)
+    seeds = make_measured_seedset(tmp / "seeds", hidden=hidden, seed=seed,
+                                  **{**MEASURED, **({"n_seeds": n_seeds} if n_seeds else {})})
     fit = converged_fit(seeds, tmp / "fit.json")
     return diagnose(seeds, "quadcopter", fit, out_dir=tmp / "out")
 
@@ -188,13 +189,16 @@ def test_every_candidate_has_a_grid():
 # — the cases the diagnosis does not name first and significant, each with the reason seen in its report:
 NOT_FOUND = {
     "white_balance": "grayscale: a per-channel gain is a plain gain, absorbed by w_d (unidentifiable)",
-    "haze": "haze grows with distance (1 - exp(-10 px / object px)); its gain is absorbed by w_d and the lost "
-            "contrast reads as 'defocus' (2.9 % pixel gain, named first). Absorption evidence fails too: even "
-            "without haze the fitted w_d falls with object size within videos (rho -0.57: small objects mix "
-            "with the bright sky), so object size cannot testify for haze",
     "chromatic_aberration": "grayscale: lateral CA is a radial blur of ~1 px, named 'defocus' (3.1 % pixel "
                             "gain); its own held-out HOG gain (2.7 %) is not significant at 64 seeds",
 }
+
+
+# Effects that need more seeds than MEASURED's 64 (measured): haze's held-out gain is heavy-tailed (w_d absorbs
+# its gain; the airlight offset shows only on seeds whose shading spans dark and bright): at 64 seeds it is
+# under-powered (2.9 % HOG / 3.5 % pixel gain, the true extinction chosen, p_adj 0.03, and 'defocus' is named);
+# at 128 seeds it is named first on data seeds 1 and 2 (5.2 % / 6.7 % pixel gain) and the clean set stays quiet.
+N_SEEDS = {"haze": 128}
 
 
 def _case(effect: str):
@@ -207,7 +211,7 @@ def _case(effect: str):
 
 @pytest.mark.parametrize("effect", [_case(e) for e in CANDIDATE_GRIDS])
 def test_a_hidden_effect_is_named_first_and_significant(tmp_path, effect):
-    report = _diagnose(tmp_path, [effect])
+    report = _diagnose(tmp_path, [effect], n_seeds=N_SEEDS.get(effect))
     assert report["findings"], f"nothing significant; screened: {report['screened'][:3]}"
     first = report["findings"][0]
     assert first["effect"] == effect, [f["effect"] for f in report["findings"]]
