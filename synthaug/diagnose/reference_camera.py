@@ -366,7 +366,7 @@ def _camera(img: torch.Tensor, cam: dict[str, dict[str, float]], noise: torch.Te
     if "exposure" in cam:
         img = Cx.exposure(img, one(cam["exposure"]["exposure_gain"]), one(cam["exposure"]["exposure_offset"]))
     if "white_balance" in cam:
-        img = Cx.white_balance(img, one(cam["white_balance"]["wb_gain"]))
+        img = Cx.white_balance(img, wb_gains(cam["white_balance"]["wb_gain"], img.shape[1], img.dtype))
     shot = cam.get("shot_noise", {}).get("shot_sigma", 0.0)
     std = torch.sqrt(read_noise ** 2 + shot ** 2 * img.clamp(0.0, 1.0))
     img = img + noise_factor * std * noise
@@ -379,16 +379,28 @@ def _camera(img: torch.Tensor, cam: dict[str, dict[str, float]], noise: torch.Te
     return img
 
 
+def wb_gains(g: float, channels: int, dtype: torch.dtype = torch.float64) -> torch.Tensor:
+    """White balance ``g`` as per-channel gains (1, C): gray ``g``; RGB ``(g, 1, 1/g)`` (a colour-temperature
+    shift: red up, blue down, green fixed)."""
+    if channels == 3:
+        return torch.tensor([[g, 1.0, 1.0 / g]], dtype=dtype)
+    return torch.tensor([float(g)], dtype=dtype)
+
+
 def _to_u8(img: torch.Tensor, cam: dict[str, dict[str, float]]) -> np.ndarray:
+    """8-bit (and JPEG) of a (1, C, H, W) image: (H, W) gray or (H, W, 3) RGB."""
     import cv2
 
-    u8 = np.clip(np.round(img[0, 0].numpy() * 255.0), 0, 255).astype(np.uint8)
+    u8 = np.clip(np.round(img[0].permute(1, 2, 0).numpy() * 255.0), 0, 255).astype(np.uint8)
+    u8 = u8[..., 0] if u8.shape[-1] == 1 else np.ascontiguousarray(u8)
     if "compression" in cam:
         q = int(round(cam["compression"]["jpeg_quality"]))
-        ok, buf = cv2.imencode(".jpg", u8, [cv2.IMWRITE_JPEG_QUALITY, q])
+        bgr = u8 if u8.ndim == 2 else cv2.cvtColor(u8, cv2.COLOR_RGB2BGR)
+        ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, q])
         if not ok:
             raise RuntimeError("JPEG encoding failed")
-        u8 = cv2.imdecode(buf, cv2.IMREAD_GRAYSCALE)
+        u8 = cv2.imdecode(buf, cv2.IMREAD_GRAYSCALE if u8.ndim == 2 else cv2.IMREAD_COLOR)
+        u8 = u8 if u8.ndim == 2 else cv2.cvtColor(u8, cv2.COLOR_BGR2RGB)
     return u8
 
 
@@ -435,6 +447,7 @@ def make_measured_seedset(
     per_video: Sequence[str] = ("w_d",),
     view_step_deg: float = 10.0,
     sprite_size: int = 64,
+    colour: bool = False,
 ) -> Path:
     """Write a measured seed set through the reference camera (see the module docstring).
 
@@ -469,6 +482,11 @@ def make_measured_seedset(
             orientation's shading is rendered); a camera effect that w_d
             absorbs then shows *within* a video.
         view_step_deg, sprite_size: the view cache of the real mesh.
+        colour: capture in RGB (a bluish sky per seed, a neutral grey object; the camera acts per
+            channel: chromatic aberration displaces red and blue in opposite directions, white
+            balance ``wb_gain`` g multiplies red by g and blue by 1/g). The seed set's patches and
+            frames are then the Rec. 601 luma of the RGB capture, and ``colour.npz`` holds the RGB
+            patches (``patches_rgb``, ``backgrounds_rgb``: (N, P, P, 3) uint8).
 
     Returns:
         the seed-set folder.
@@ -520,7 +538,13 @@ def make_measured_seedset(
                 raise ValueError(f"backgrounds[{i % len(backgrounds)}] has shape {b.shape}, expected {(h_f, w_f)}")
             scenes.append(b.astype(np.float64) / 255.0 if b.dtype == np.uint8 else b.astype(np.float64))
 
+    if colour:  # a bluish sky: the gray sky times a per-seed tint (red and green below blue)
+        for i in range(n_seeds):
+            t = np.random.default_rng([seed, i, 3]).uniform([0.78, 0.9, 1.0], [0.9, 0.97, 1.0])
+            scenes[i] = np.clip(scenes[i][None] * t[:, None, None], 0.0, 1.0)
     object_effects = [e for e in ("specular", "rotor_blur", "rolling_shutter") if e in settings]
+    rgb_patches: list[np.ndarray] = []
+    rgb_backgrounds: list[np.ndarray] = []
     patches, bg_patches, boxes, centres, crops, records, frames, bg_frames = [], [], [], [], [], [], [], []
     truth_rows: list[dict[str, Any]] = []
     truth_extra: list[dict[str, Any]] = []
@@ -577,7 +601,8 @@ def make_measured_seedset(
         frame_scale = side / patch_size
 
         # object physics on the crop, at frame scale (σ in frame px)
-        scene = torch.from_numpy(scenes[i])[None, None]
+        scene = torch.from_numpy(scenes[i])[None]
+        scene = scene[None] if scene.ndim == 3 else scene  # (1, C, H, W)
         bg_crop = scene[..., y0:y0 + crop_side, x0:x0 + crop_side]
         values: dict[str, Any] = {
             "w_d": paper["w_d"], "sigma_s": paper["sigma_s"] * frame_scale, "sigma_u": paper["sigma_u"] * frame_scale,
@@ -588,26 +613,39 @@ def make_measured_seedset(
         obj_names = ("material", "motion_blur") + tuple(object_effects)
         theta = CaptureParams(values, effects=PAPER_EFFECTS + tuple(object_effects), validate=False)
         extras = {} if rotor is None else {"part_rotor": rotor}
-        state = RenderState(object_color=Fx.diffuse_material(nrm, cov, torch.tensor([[0.5]], dtype=torch.float64)),
-                            coverage=cov, normals=nrm, background=bg_crop, extras=extras,
-                            fields={"noise": torch.randn(bg_crop.shape, generator=gen, dtype=torch.float64)})
-        state = apply_effects(state, theta.to(torch.float64), obj_names, clamp=False)
-        if "interlacing" in cam:
-            col, cv = _interlace(state.object_color, state.coverage, cam["interlacing"]["interlace_shift"],
-                                 paper["alpha_m"])
-            state = state.replace(object_color=col, coverage=cv)
-        state = apply_effects(state, theta.to(torch.float64), ("boundary_blur", "object_noise"), clamp=False)
+        obj_noise = torch.randn(bg_crop[:, :1].shape, generator=gen, dtype=torch.float64)
         frame_lin = scene.clone()
-        frame_lin[..., y0:y0 + crop_side, x0:x0 + crop_side] = state.image
+        for c in range(scene.shape[1]):  # a neutral object: the same layers over each channel's background
+            state = RenderState(object_color=Fx.diffuse_material(nrm, cov, torch.tensor([[0.5]], dtype=torch.float64)),
+                                coverage=cov, normals=nrm, background=bg_crop[:, c:c + 1], extras=extras,
+                                fields={"noise": obj_noise})
+            state = apply_effects(state, theta.to(torch.float64), obj_names, clamp=False)
+            if "interlacing" in cam:
+                col, cv = _interlace(state.object_color, state.coverage, cam["interlacing"]["interlace_shift"],
+                                     paper["alpha_m"])
+                state = state.replace(object_color=col, coverage=cv)
+            state = apply_effects(state, theta.to(torch.float64), ("boundary_blur", "object_noise"), clamp=False)
+            frame_lin[:, c:c + 1, y0:y0 + crop_side, x0:x0 + crop_side] = state.image
 
         # the whole-frame camera, on the frame and on the object-free background
         noise_f = torch.randn(scene.shape, generator=gen, dtype=torch.float64)
         noise_b = torch.randn(scene.shape, generator=gen, dtype=torch.float64)
         frame_u8 = _to_u8(_camera(frame_lin, cam, noise_f, 1.0, read_noise), cam)
         bg_u8 = _to_u8(_camera(scene, cam, noise_b, background_noise_factor, read_noise), cam)
+        if colour:  # the seed set's gray images are the capture's luma; the RGB patches are kept beside
+            import cv2
+
+            frame_rgb, bg_rgb = frame_u8, bg_u8
+            frame_u8 = cv2.cvtColor(frame_rgb, cv2.COLOR_RGB2GRAY)
+            bg_u8 = cv2.cvtColor(bg_rgb, cv2.COLOR_RGB2GRAY)
 
         patch, crop = crop_patch(frame_u8, box=box, patch_size=patch_size, object_fraction=object_fraction)
         bg_patch, _ = crop_patch(bg_u8, crop=crop, patch_size=patch_size)
+        if colour:
+            rgb_patches.append(np.stack([crop_patch(np.ascontiguousarray(frame_rgb[..., c]), crop=crop,
+                                                    patch_size=patch_size)[0] for c in range(3)], -1))
+            rgb_backgrounds.append(np.stack([crop_patch(np.ascontiguousarray(bg_rgb[..., c]), crop=crop,
+                                                        patch_size=patch_size)[0] for c in range(3)], -1))
         cx, cy = float(crop[0]), float(crop[1])
         origin = [cx - side / 2, cy - side / 2]
         render_c = (x0 + (crop_side - 1) / 2.0, y0 + (crop_side - 1) / 2.0)
@@ -647,7 +685,7 @@ def make_measured_seedset(
             "mesh_perturbation": mesh_perturbation, "seed": seed, "read_noise": read_noise,
             "background_noise_factor": background_noise_factor, "paper_ranges": ranges,
             "object_px": [lo_px, hi_px], "view_step_deg": view_step_deg, "sprite_size": sprite_size,
-            "per_video": list(per_video), "n_videos": n_videos,
+            "per_video": list(per_video), "n_videos": n_videos, "colour": bool(colour),
             "whole_frame": [e for e in settings if e in WHOLE_FRAME_EFFECTS],
             "object_only": [e for e in settings if e in OBJECT_ONLY_EFFECTS],
             "truth_file": "truth.json",
@@ -655,7 +693,18 @@ def make_measured_seedset(
     }
     return write_seedset(out_dir, patches=np.stack(patches), backgrounds=np.stack(bg_patches), boxes=boxes,
                          centres=centres, crops=crops, records=records, frames=frames, background_frames=bg_frames,
-                         metadata=meta, extra_files={"truth.json": truth_bytes})
+                         metadata=meta, extra_files={"truth.json": truth_bytes,
+                                                     **({"colour.npz": _npz_bytes(patches_rgb=np.stack(rgb_patches),
+                                                                                  backgrounds_rgb=np.stack(rgb_backgrounds))}
+                                                        if colour else {})})
+
+
+def _npz_bytes(**arrays: np.ndarray) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    return buf.getvalue()
 
 
 def _model_units(cam: dict[str, dict[str, float]], frame_scale: float) -> dict[str, dict[str, float]]:

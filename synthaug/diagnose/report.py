@@ -80,6 +80,8 @@ def _jsonable(x: Any) -> Any:
 def _setting(row: dict[str, Any]) -> dict[str, float]:
     if row["channel"] == "noise_level" and row.get("noise_setting"):
         return row["noise_setting"]
+    if row["channel"] == "distance:colour":
+        return row["screen"]["colour"]["setting"]
     space = "feature" if row["channel"] == "distance:feature" else "pixel"
     return row["screen"][space]["setting"]
 
@@ -225,6 +227,7 @@ def diagnose(
             "gains": {"heldout_feature": sc["feature"]["gain"], "heldout_pixel": sc["pixel"]["gain"],
                       "absorbed_parameter_r2": None if row["absorption"] is None else row["absorption"]["gain"],
                       "noise_loglik_per_px": None if row.get("noise") is None else row["noise"]["gain"],
+                      "heldout_colour": sc["colour"]["gain"] if "colour" in sc else None,
                       "realism_accuracy_before": acc_base, "realism_accuracy_after": acc},
             "evidence": {"channels": row["channels"], "absorption": row["absorption"],
                          "noise_level_function": None if row.get("noise") is None else {
@@ -374,6 +377,8 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                 f"setting {f['setting']}; held-out gain {100 * (g['heldout_feature'] or 0):.1f} % "
                 f"({inp['distance']}), {100 * (g['heldout_pixel'] or 0):.1f} % (pixels)"
                 + (f"; absorbed-parameter R² {g['absorbed_parameter_r2']:.2f}" if f["channel"] == "absorbed" else "")
+                + (f"; held-out chroma (R-G, B-G) gain {100 * g['heldout_colour']:.1f} %"
+                   if g.get("heldout_colour") is not None else "")
                 + (f"; noise level function log-log slope {f['evidence']['noise_level_function']['slope']:+.2f} "
                    f"(flat = read noise only), held-out likelihood gain {g['noise_loglik_per_px']:.4f} nats/px"
                    if f["channel"] == "noise_level" else "")
@@ -392,9 +397,10 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                   "the central blocks (the object); the map is the 4th panel of `residuals.png`."]
     nlf = report.get("noise_level_function")
     if nlf:
-        lines += ["", f"Camera noise, measured on the frames off the object ({nlf['n_seeds']} seeds): the noise "
-                  f"variance grows with brightness as I^{nlf['slope']:+.2f} (t = {nlf['t']:.1f}; 0 = read noise "
-                  "only, 1 = shot noise, < 0 = a compressive tone curve after the sensor)."]
+        lines += ["", f"Camera noise, measured on the frames off the object ({nlf['n_seeds']} seeds with a measurable "
+                  f"brightness range): mean log-log slope of the noise variance vs brightness {nlf['slope']:+.2f} "
+                  f"(t = {nlf['t']:.1f}, p = {nlf['p']:.2g}{'' if nlf['p'] < 0.01 else ': no evidence of a slope'}; "
+                  "0 = read noise only, 1 = shot noise, < 0 = a compressive tone curve after the sensor)."]
     lines += ["", "## Fitted parameters vs seed metadata (significant only)", ""]
     deps = report["parameter_dependence"]
     lines += [f"- {d['parameter']} vs {d['metadata']}: Spearman ρ = {d['rho']:+.2f} (p = {d['p']:.2g})"

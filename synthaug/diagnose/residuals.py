@@ -25,7 +25,9 @@ rows / columns       peak of the residual's row (column) spectrum over the
                      column (row) spectrum, in frame frequencies; t-test
                      over the seeds that resolve it
 rotor_parts          mean residual on the rotor discs vs the body; t-test
-colour               per-channel bias (grayscale seed sets: not applicable)
+colour               per-channel bias (grayscale seed sets: not applicable; RGB
+                     seed sets are screened in chroma by the colour channel of
+                     :mod:`synthaug.diagnose.screening`)
 ===================  ==========================================================
 
 Fitted parameters can silently absorb a missing effect, which shows as a
@@ -189,6 +191,8 @@ class DiagnosisData:
     object_px: torch.Tensor | None = None  # (N,) the fitted object's size in frame px (object scale x crop side)
     frame_brightness: torch.Tensor | None = None  # (N,) mean of the whole frame (what auto-exposure meters)
     noise_levels: list[dict[str, np.ndarray]] | None = None  # per seed: its frame's noise level function
+    real_rgb: torch.Tensor | None = None  # (N, 3, P, P) the RGB seed patches, when the seed set has them
+    background_rgb: torch.Tensor | None = None  # (N, 3, P, P)
 
     def __len__(self) -> int:
         return int(self.real.shape[0])
@@ -205,7 +209,8 @@ class DiagnosisData:
             fit_distance=None if self.fit_distance is None else self.fit_distance[np.asarray(idx, np.int64)],
             resample_sigma=take(self.resample_sigma), object_px=take(self.object_px),
             frame_brightness=take(self.frame_brightness),
-            noise_levels=None if self.noise_levels is None else [self.noise_levels[int(i)] for i in idx_t])
+            noise_levels=None if self.noise_levels is None else [self.noise_levels[int(i)] for i in idx_t],
+            real_rgb=take(self.real_rgb), background_rgb=take(self.background_rgb))
 
 
 def _rotor_layers(cache_body: Any, theta: Any, size: int, scale: torch.Tensor, cov: torch.Tensor) -> torch.Tensor:
@@ -283,7 +288,22 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         resample_sigma=torch.from_numpy(crop_resampling_sigma(geo["frame_scale"].double().numpy())).float()
         if resampling else None,
         object_px=(scale.double() * p * geo["frame_scale"].double()).float(),
-        frame_brightness=_frame_brightness(seeds), noise_levels=seed_noise_levels(seeds))
+        frame_brightness=_frame_brightness(seeds), noise_levels=seed_noise_levels(seeds),
+        **_colour_patches(seeds))
+
+
+def _colour_patches(seeds: Any) -> dict[str, torch.Tensor]:
+    """``real_rgb``/``background_rgb`` (N, 3, P, P) float32 from the seed set's ``colour.npz``, if it has one."""
+    path = seeds.path / "colour.npz"
+    if not path.exists():
+        return {}
+    with np.load(path) as z:
+        rgb, bg = z["patches_rgb"], z["backgrounds_rgb"]
+    if rgb.shape != (len(seeds), seeds.patch_size, seeds.patch_size, 3) or bg.shape != rgb.shape:
+        raise ValueError(f"{path}: expected (N, P, P, 3) = {(len(seeds), seeds.patch_size, seeds.patch_size, 3)} "
+                         f"RGB patches, got {rgb.shape} and {bg.shape}")
+    to_t = lambda a: torch.from_numpy(a).permute(0, 3, 1, 2).float() / 255.0  # noqa: E731
+    return {"real_rgb": to_t(rgb), "background_rgb": to_t(bg)}
 
 
 def _frame_brightness(seeds: Any) -> torch.Tensor | None:
@@ -339,6 +359,73 @@ def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor
     fields = {k: v for k, v in data.fields.items()}
     return simulate(data.coverage, data.normals, data.background, theta, fields=fields, origin=data.origin,
                     frame_size=data.frame_size, extras=extras, clamp=clamp)
+
+
+def _per_channel_values(v: Any, n: int, c: int) -> torch.Tensor:
+    """A parameter value as (N, C): scalar, (C,) / (1, C) camera-wide per channel, (N,) or (N, C) per seed."""
+    t = torch.as_tensor(v, dtype=torch.float32)
+    if t.ndim == 0:
+        return t.reshape(1, 1).expand(n, c)
+    if t.ndim == 2 and t.shape == (n, c):
+        return t
+    if t.numel() == c and (t.ndim == 1 and n != c or t.ndim == 2 and t.shape[0] == 1):
+        return t.reshape(1, c).expand(n, c)
+    return t.reshape(n, 1).expand(n, c)
+
+
+def render_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None, *,
+               w_d: torch.Tensor | None = None, clamp: bool = True) -> torch.Tensor:
+    """S(Θ_i ⊕ φ, B_i) in RGB: the fitted (gray) Θ on every channel of a neutral object over the RGB
+    background (:attr:`DiagnosisData.background_rgb`); extension values may be per channel ((3,) camera-wide).
+
+    Returns:
+        (N, 3, P, P).
+    """
+    from synthaug.effects.pipeline import simulate
+    from synthaug.params import CaptureParams
+
+    if data.background_rgb is None:
+        raise ValueError("this seed set has no RGB patches (colour.npz)")
+    extension = dict(extension or {})
+    n, c = len(data), 3
+    values = {k: v.float()[:, :1].expand(n, c) if v.ndim == 2 else v.float()
+              for k, v in data.theta.as_dict().items()}
+    if w_d is not None:
+        values["w_d"] = torch.as_tensor(w_d, dtype=torch.float32).reshape(n, 1).expand(n, c)
+    effects = tuple(data.theta.effects) + tuple(e for e in extension if e not in data.theta.effects)
+    for eff, params in extension.items():
+        for k, v in params.items():
+            values[k] = _per_channel_values(v, n, c)
+    if data.resample_sigma is not None:
+        if "defocus" not in effects:
+            effects = effects + ("defocus",)
+            values["defocus_sigma"] = torch.zeros(n, c)
+        values["defocus_sigma"] = torch.sqrt(values["defocus_sigma"] ** 2
+                                             + data.resample_sigma.float().reshape(n, 1) ** 2)
+    theta = CaptureParams(values, channels=c, effects=effects, validate=False)
+    extras: dict[str, torch.Tensor] = {"frame_scale": data.frame_scale}
+    if data.part_rotor is not None:
+        extras["part_rotor"] = data.part_rotor
+    fields = {k: v.expand(n, c, *v.shape[-2:]) for k, v in data.fields.items()}
+    return simulate(data.coverage, data.normals, data.background_rgb, theta, fields=fields, origin=data.origin,
+                    frame_size=data.frame_size, extras=extras, clamp=clamp)
+
+
+def solve_albedo_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None) -> torch.Tensor:
+    """Per-seed w_d of a neutral object, one value for all three channels (least squares over RGB)."""
+    a = render_rgb(data, extension, w_d=torch.full((len(data),), 0.2), clamp=False)
+    b = render_rgb(data, extension, w_d=torch.full((len(data),), 0.6), clamp=False)
+    slope = (b - a) / 0.4
+    num = ((data.real_rgb - a) * slope).flatten(1).sum(1)
+    den = (slope * slope).flatten(1).sum(1).clamp_min(1e-9)
+    return (0.2 + num / den).clamp(0.0, 1.0)
+
+
+def chroma_distance(real: torch.Tensor, syn: torch.Tensor) -> np.ndarray:
+    """Per-seed L2 of the chroma residual ``(R - G, B - G)``: blind to whatever acts alike on all channels
+    (blur, tone, haze on a neutral object), it sees colour fringes and colour casts."""
+    chroma = lambda x: torch.stack([x[:, 0] - x[:, 1], x[:, 2] - x[:, 1]], 1)  # noqa: E731
+    return (chroma(real) - chroma(syn)).flatten(1).norm(dim=1).double().numpy()
 
 
 def pairwise_distance(data: DiagnosisData, syn: torch.Tensor, real: torch.Tensor | None = None) -> np.ndarray:

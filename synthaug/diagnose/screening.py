@@ -28,7 +28,19 @@ An effect the fitted parameters absorbed (vignetting into w_d, defocus into
 dependence of the fitted value on seed metadata; its gain is the held-out
 (k-fold) variance of that parameter the effect explains. It matters: at
 generation the position and size are redrawn, so an absorbed effect comes
-out wrong in every synthetic sample.
+out wrong in every synthetic sample. Auto-exposure is found that way too: the
+re-solved w_d follows the brightness of the whole frame (what the camera
+meters), within videos.
+
+Two more channels do not rest on the fitted patches. The camera's noise level
+function, measured on the seed frames off the object
+(:mod:`synthaug.diagnose.noise`), testifies for ``shot_noise`` (rising with
+brightness) and ``gamma`` (falling: a compressive tone curve after the sensor);
+a pairwise distance cannot credit a noise model, and a tone curve on a dark
+object is nearly a gain that w_d absorbs. For seed sets with RGB patches, the
+chroma distance (R - G, B - G) of a neutral object screens
+``chromatic_aberration`` and ``white_balance``, which in gray are a radial blur
+and a plain gain.
 
 Finally a real-vs-synthetic classifier (logistic regression on HOG features,
 k-fold by seed; 50 % = indistinguishable) is scored before and after the
@@ -93,6 +105,42 @@ ABSORPTION: dict[str, tuple[str, str, int]] = {
     # auto-exposure: the camera's gain follows the whole frame's brightness, the object's albedo with it
     "exposure": ("w_d", "frame_brightness", -1),
 }
+
+
+# Candidates screened in colour (seed sets with RGB patches): the chroma residual (R - G, B - G) of a neutral
+# object sees their colour fringes / colour cast; in gray, CA is a radial blur and white balance a plain gain.
+COLOUR_CANDIDATES: tuple[str, ...] = ("chromatic_aberration", "white_balance")
+
+
+def colour_values(effect: str, setting: Setting) -> dict[str, dict[str, Any]]:
+    """A camera-wide setting as per-channel parameters: white balance g -> gains (g, 1, 1/g)."""
+    if effect == "white_balance":
+        g = float(setting["wb_gain"])
+        return {effect: {"wb_gain": torch.tensor([g, 1.0, 1.0 / g])}}
+    return {effect: dict(setting)}
+
+
+@torch.no_grad()
+def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], base: np.ndarray, *,
+                  penalty: float = 0.005, given: dict[str, Setting] | None = None) -> dict[str, Any] | None:
+    """Held-out gain of ``effect`` in the chroma distance (RGB seed sets only; None otherwise)."""
+    from synthaug.diagnose.residuals import chroma_distance, render_rgb, solve_albedo_rgb
+
+    if effect not in COLOUR_CANDIDATES or data.real_rgb is None:
+        return None
+    grid = CANDIDATE_GRIDS[effect]
+    ext_all = []
+    for setting in grid:
+        ext = {**given_values(data, given), **colour_values(effect, setting)}
+        w = solve_albedo_rgb(data, ext)
+        ext_all.append(chroma_distance(data.real_rgb, render_rgb(data, ext, w_d=w)))
+    e = np.stack(ext_all)
+    k = _n_params(effect)
+    gains, chosen = _cv_gain(base, e, folds, penalty * k)
+    m, t, p = _one_sided(gains)
+    best = int(np.argmin(e.mean(1)))
+    return {"gain": m, "t": t, "p": p, "settings_per_fold": [grid[c] for c in chosen], "setting": grid[best],
+            "raw_gain_all": float((base.mean() - e[best].mean()) / base.mean()), "per_seed_gain": gains.tolist()}
 
 
 def _n_params(effect: str) -> int:
@@ -276,10 +324,10 @@ def absorption_gain(data: DiagnosisData, effect: str, w_d: np.ndarray, folds: li
 
 
 def n_screening_tests(names: Sequence[str]) -> int:
-    """The Bonferroni count of screening ``names``: two distance spaces each, plus the absorbed and the
-    noise-level channels."""
-    return max(len(names), 1) * 2 + sum(1 for c in names if c in ABSORPTION) + sum(1 for c in names
-                                                                                   if c in NOISE_CANDIDATES)
+    """The Bonferroni count of screening ``names``: two distance spaces each, plus the absorbed, the
+    noise-level and the colour channels."""
+    return (max(len(names), 1) * 2 + sum(1 for c in names if c in ABSORPTION)
+            + sum(1 for c in names if c in NOISE_CANDIDATES) + sum(1 for c in names if c in COLOUR_CANDIDATES))
 
 
 def noise_level_channel(effect: str, nc: dict[str, Any] | None, n_tests: int, alpha: float
@@ -392,6 +440,12 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     nc = None  # the camera's noise level function (frames needed): one measurement for its candidates
     if data.noise_levels is not None and any(c in NOISE_CANDIDATES for c in names):
         nc = noise_channel(data.noise_levels, folds)
+    base_colour = None
+    if data.real_rgb is not None and any(c in COLOUR_CANDIDATES for c in names):
+        from synthaug.diagnose.residuals import chroma_distance, render_rgb, solve_albedo_rgb
+
+        gv = given_values(data, given) or None
+        base_colour = chroma_distance(data.real_rgb, render_rgb(data, gv, w_d=solve_albedo_rgb(data, gv)))
     rows = []
     for name in names:
         if progress:
@@ -419,6 +473,15 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         nl = noise_level_channel(name, nc, n_tests, alpha)
         if nl is not None:
             channels.append(nl)
+        col = None if base_colour is None else screen_colour(data, name, folds, base_colour, penalty=penalty,
+                                                            given=given)
+        if col is not None:
+            sc["colour"] = col
+            p_adj = min(1.0, col["p"] * n_tests)
+            channels.append({"channel": "distance:colour", "p_adjusted": p_adj,
+                             "z": float(np.clip(stats.norm.isf(min(max(col["p"], 1e-300), 1.0)), -40.0, 40.0)),
+                             "gain": col["gain"], "significant": bool(p_adj < alpha and col["gain"] > 0
+                                                                      and col["raw_gain_all"] >= min_gain)})
         sig = [c for c in channels if c["significant"]]
         sig_dist = [c for c in sig if c["channel"] != "absorbed"]
         best = max(sig_dist, key=lambda c: c["gain"]) if sig_dist else max(sig or channels, key=lambda c: c["z"])
