@@ -284,3 +284,22 @@ def test_seed_geometry_bad_input(seeds_and_fit):
         _dataset(seeds, fit, cache, seed_geometry="frame")
     with pytest.raises(ValueError, match="seed_geometry is for patch mode"):
         _dataset(seeds, fit, cache, seed_geometry=geo, mode="frame", object_size=(10.0, 20.0))
+
+
+def test_haze_and_white_balance_rows_follow_their_physics():
+    import math
+
+    from synthaug.diagnose.extend import extension_rows
+    from synthaug.params import CaptureParams
+
+    th = CaptureParams.default(2)
+    fs = torch.tensor([2.0, 4.0])
+    rows = extension_rows(th, fs, "haze", {"haze_extinction_px": 10.0, "haze_airlight": 0.8},
+                          object_px=torch.tensor([20.0, 40.0]))
+    assert rows["haze_amount"].tolist() == pytest.approx([1 - math.exp(-0.5), 1 - math.exp(-0.25)])
+    assert rows["haze_airlight"].tolist() == pytest.approx([0.8, 0.8])
+    with pytest.raises(ValueError, match="object_px"):
+        extension_rows(th, fs, "haze", {"haze_extinction_px": 10.0, "haze_airlight": 0.8})
+    # white balance (g, 1, 1/g) on a neutral object, in gray: its Rec. 601 luma gain
+    wb = extension_rows(th, fs, "white_balance", {"wb_gain": 0.9})["wb_gain"]
+    assert wb.tolist() == pytest.approx([0.299 * 0.9 + 0.587 + 0.114 / 0.9] * 2)

@@ -268,3 +268,47 @@ def test_cli(dataset, tmp_path, capsys):
     assert main(["ingest", "--videos", str(root / "videos"), "--labels", str(tmp_path / "nope"),
                  "--out", str(tmp_path / "y"), "--no-progress"]) == 2
     assert "label folder not found" in capsys.readouterr().err
+
+
+def test_colour_ingest_keeps_rgb_patches_with_the_colour_background(dataset, tmp_path):
+    """A colour video (the generated scene tinted per channel): the seed set carries RGB patches whose luma is the
+    gray patch (OpenCV's Rec. 601, to the crop's rounding) and whose background, filled by the same aligned median,
+    is the true tinted background where the object was; a gray ingest writes none."""
+    import cv2
+
+    root, truth = dataset
+    stem = "V_DRONE_001"
+    v = truth[stem]
+    tint = np.array([1.1, 1.0, 0.8])  # B, G, R as OpenCV writes
+    data = tmp_path / "data"
+    (data / "videos").mkdir(parents=True)
+    (data / "labels").mkdir()
+    shutil.copy(root / "labels" / f"{stem}.json", data / "labels" / f"{stem}.json")
+    h, w = v.frames.shape[1:]
+    writer = cv2.VideoWriter(str(data / "videos" / f"{stem}.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (w, h), True)
+    for f in v.frames:
+        writer.write(np.clip(f[..., None] * tint, 0, 255).astype(np.uint8))
+    writer.release()
+    report = _ingest(data, tmp_path / "out", seed_counts=(4,))
+    assert report["failed"] == {}
+    s = SeedSet.load(tmp_path / "out/seedsets/drone_4")
+    rgb, bg = s.colour()
+    assert rgb.shape == bg.shape == (4, 32, 32, 3)
+    luma = np.stack([cv2.cvtColor(x, cv2.COLOR_RGB2GRAY) for x in rgb]).astype(int)
+    assert np.abs(luma - s.patches.astype(int)).max() <= 2
+    for i, rec in enumerate(s.records):
+        t = rec["frame"]
+        true_bg = np.clip(v.backgrounds[t][..., None] * tint[::-1], 0, 255)  # RGB
+        ref = np.stack([crop_patch(np.ascontiguousarray(true_bg[..., c]).astype(np.uint8), crop=s.crops[i],
+                                   patch_size=32)[0] for c in range(3)], -1).astype(int)
+        err = np.abs(bg[i].astype(int) - ref).reshape(-1, 3).mean(0)
+        assert (err < (6 if rec["background_method"] != "inpaint" else 2 * rec["background_quality"] + 6)).all(), err
+        assert bg[i][..., 0].mean() < bg[i][..., 2].mean()  # blue above red: the tint survived
+    # subsets keep their colour; a gray ingest has none
+    s.save_subset(tmp_path / "sub", [2, 0])
+    sub = SeedSet.load(tmp_path / "sub")
+    assert np.array_equal(sub.colour()[0], rgb[[2, 0]]) and np.array_equal(sub.colour()[1], bg[[2, 0]])
+    from dataclasses import replace
+
+    _ingest(data, tmp_path / "gray", seed_counts=(4,), cfg=replace(CFG, colour=False))
+    assert SeedSet.load(tmp_path / "gray/seedsets/drone_4").colour() is None

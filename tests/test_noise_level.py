@@ -96,3 +96,14 @@ def test_noise_channel_reads_flat_noise_as_nothing():
     assert noise_level_channel("shot_noise", shot, 30, 0.01)["significant"]
     assert not noise_level_channel("gamma", shot, 30, 0.01)["significant"]  # wrong direction for a tone curve
     assert noise_level_channel("vignetting", shot, 30, 0.01) is None
+
+
+def test_a_background_that_is_the_frame_off_the_object_gives_no_levels():
+    # an ingested background replaces only the object region: frame - background is 0 elsewhere, no noise to see
+    rng = np.random.default_rng(5)
+    f = _scene(rng) + 0.01 * rng.normal(size=(300, 400))
+    b = f.copy()
+    ex = np.zeros_like(f, bool)
+    ex[100:140, 100:150] = True
+    b[ex] = 0.5
+    assert len(frame_noise_levels(f, b, exclude=ex)["signal"]) == 0

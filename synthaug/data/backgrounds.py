@@ -35,6 +35,7 @@ Example:
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -84,6 +85,11 @@ class BackgroundResult:
     n_tried: int = 0
     inpainted_fraction: float = 0.0
     details: dict[str, Any] = field(default_factory=dict)
+    background_rgb: np.ndarray | None = None  # uint8 (H, W, 3), when colour frames were given
+
+
+def _inpaint_rgb(image: np.ndarray, region: np.ndarray, **kwargs: Any) -> np.ndarray:
+    return np.stack([inpaint_region(np.ascontiguousarray(image[..., c]), region, **kwargs) for c in range(3)], -1)
 
 
 def _as_box_array(boxes: Any) -> np.ndarray:
@@ -374,6 +380,7 @@ def estimate_background(
     max_inpainted_fraction: float = 0.9,
     inpaint_radius: int = 5,
     inpaint_method: str = "pushpull",
+    colour_frames: np.ndarray | None = None,
 ) -> BackgroundResult:
     """Background of ``frames[index]``: aligned median of neighbours, inpainting where that fails.
 
@@ -399,6 +406,9 @@ def estimate_background(
             instead of mixing a few median pixels into a large inpainted hole.
         inpaint_radius: radius of the Telea inpainting.
         inpaint_method: see :func:`inpaint_region`.
+        colour_frames: the same frames in RGB ``(T, H, W, 3)``: the colour background is
+            made alongside (same neighbours, homographies, masks and fill; each channel's
+            own brightness offset), in ``background_rgb``.
 
     Returns:
         A :class:`BackgroundResult`.
@@ -418,9 +428,14 @@ def estimate_background(
         raise ValueError(f"min_samples must be >= 1, got {min_samples}")
     target = frames[index]
     h, w = target.shape
+    if colour_frames is not None and (colour_frames.shape != frames.shape + (3,) or colour_frames.dtype != np.uint8):
+        raise ValueError(f"colour_frames must be uint8 {frames.shape + (3,)}, got {colour_frames.dtype} "
+                         f"{colour_frames.shape}")
+    target_rgb = None if colour_frames is None else colour_frames[index]
     tboxes = _box_list(boxes[index])
     if len(tboxes) == 0:
-        return BackgroundResult(target.copy(), "none", 0.0, np.zeros((h, w), bool))
+        return BackgroundResult(target.copy(), "none", 0.0, np.zeros((h, w), bool),
+                                background_rgb=None if target_rgb is None else target_rgb.copy())
     region = object_mask((h, w), tboxes, margin_fraction=margin_fraction, min_margin=min_margin)
     ring_w = int(max(6, min_margin, margin_fraction * tboxes[:, 2:].max()))
     ring = _ring(region, ring_w)
@@ -432,6 +447,7 @@ def estimate_background(
     T = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1]], dtype=np.float64)
 
     samples: list[np.ndarray] = []
+    samples_rgb: list[np.ndarray] = []
     used: list[int] = []
     residuals: list[float] = []
     tried = 0
@@ -460,6 +476,12 @@ def estimate_background(
         if resid > max_residual:
             continue
         samples.append(warped + offset)
+        if target_rgb is not None:
+            wc = cv2.warpPerspective(colour_frames[j].astype(np.float32), M, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
+                                     borderMode=cv2.BORDER_CONSTANT, borderValue=(float("nan"),) * 3)
+            wc[~np.isfinite(warped)] = np.nan
+            t_rgb = target_rgb[y0:y1, x0:x1].astype(np.float32)
+            samples_rgb.append(wc + np.median(t_rgb[ring_ok] - wc[ring_ok], axis=0))  # each channel's offset
         used.append(int(off))
         residuals.append(resid)
         if len(samples) >= max_neighbours:
@@ -479,8 +501,6 @@ def estimate_background(
         finite = np.isfinite(stack)
         counts = finite.sum(axis=0)
         with np.errstate(all="ignore"):
-            import warnings
-
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 med = np.nanmedian(stack, axis=0)
@@ -497,6 +517,14 @@ def estimate_background(
             holes[y0:y1, x0:x1] = reg_roi & ~enough
             if holes.any():
                 composite = inpaint_region(composite, holes, radius=inpaint_radius, method=inpaint_method)
+            if target_rgb is not None:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    med_rgb = np.nanmedian(np.stack(samples_rgb), axis=0)
+                fill_rgb = target_rgb.copy()
+                fill_rgb[y0:y1, x0:x1][enough] = np.clip(np.rint(med_rgb[enough]), 0, 255).astype(np.uint8)
+                if holes.any():
+                    fill_rgb = _inpaint_rgb(fill_rgb, holes, radius=inpaint_radius, method=inpaint_method)
             # No leak test against the inpainted fill is made here: it fires on textured
             # scenes where inpainting is the worse estimate. The object cannot leak
             # because every neighbour's own (grown) object region is excluded, and a
@@ -506,11 +534,16 @@ def estimate_background(
             method = "median" if not holes.any() else "median+inpaint"
             quality = ring_resid
     background = fill if fill is not None else inpaint_region(target, region, radius=inpaint_radius, method=inpaint_method)
+    background_rgb = None
+    if target_rgb is not None:
+        background_rgb = fill_rgb if fill is not None else _inpaint_rgb(target_rgb, region, radius=inpaint_radius,
+                                                                         method=inpaint_method)
     in_box = object_mask((h, w), tboxes, margin_fraction=0, min_margin=0)
     details["object_contrast"] = round(float(np.mean(np.abs(background[in_box].astype(np.float32) - target[in_box]))), 3)
     return BackgroundResult(background=background, method=method, quality=float(quality), region=region,
                             n_aligned=len(samples) if method != "inpaint" else 0, n_tried=tried,
-                            inpainted_fraction=float(inpainted_fraction), details=details)
+                            inpainted_fraction=float(inpainted_fraction), details=details,
+                            background_rgb=background_rgb)
 
 
 def estimate_background_single(image: np.ndarray, boxes: Any, *, margin_fraction: float = 0.25,

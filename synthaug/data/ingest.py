@@ -64,6 +64,9 @@ class IngestConfig:
         max_background_error: seeds whose background quality figure (estimated
             fill error, gray levels) exceeds this are drawn into seed sets only
             after all better ones (of every video).
+        colour: also keep RGB seed patches and backgrounds (``colour.npz``, the same
+            crops; the background's colour fill uses the gray estimate's neighbours and
+            homographies), for the diagnosis' colour channel. Videos only.
     """
 
     patch_size: int = 40
@@ -79,6 +82,7 @@ class IngestConfig:
     max_residual: float = 8.0
     inpaint_method: str = "pushpull"
     max_background_error: float = 12.0
+    colour: bool = True
 
     def __post_init__(self) -> None:
         if self.patch_size < 8:
@@ -127,6 +131,14 @@ def _seed_entries(frame: np.ndarray, background: np.ndarray, box: np.ndarray, cf
     return patch, bg, crop
 
 
+def _crop_rgb(image: np.ndarray, crop: np.ndarray, patch_size: int) -> np.ndarray:
+    """The seed crop of an RGB frame, channel by channel (same sampling as the gray patch)."""
+    from synthaug.data.seedset import crop_patch
+
+    return np.stack([crop_patch(np.ascontiguousarray(image[..., c]), crop=crop, patch_size=patch_size)[0]
+                     for c in range(3)], -1)
+
+
 def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike) -> dict[str, Any]:
     """Ingest one video into the shard ``pool_dir/<stem>`` (see the module docstring).
 
@@ -143,7 +155,13 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
 
     t0 = time.perf_counter()
     known = None if cfg.classes is None else tuple(cfg.classes) + tuple(cfg.hard_negative_classes)
-    frames, labels, cleanup = read_video_with_labels(job.video_path, job.label_path, classes=known)
+    frames, labels, cleanup = read_video_with_labels(job.video_path, job.label_path, classes=known, colour=cfg.colour)
+    frames_rgb = None
+    if cfg.colour:  # the gray frames are the RGB frames' luma, exactly as a gray decode gives them
+        import cv2
+
+        frames_rgb = frames
+        frames = np.stack([cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) for f in frames_rgb])
     cls = labels.class_name
     h, w = frames.shape[1:]
     boxes = labels.boxes
@@ -151,6 +169,7 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
     meta = {"video": job.stem, "class": cls, "split": job.split}
     hard = cls in cfg.hard_negative_classes
     patches, bgs, crops, recs, full, full_bg, sel_boxes = [], [], [], [], [], [], []
+    patches_rgb, bgs_rgb = [], []
     methods: Counter[str] = Counter()
     if not hard and cfg.seeds_per_video > 0:
         eligible = [i for i, b in enumerate(boxes)
@@ -161,8 +180,12 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
             aligner = FrameAligner(frames, boxes)
             for i in pick:
                 res = estimate_background(frames, boxes, i, aligner=aligner, margin_fraction=cfg.margin_fraction,
-                                          max_residual=cfg.max_residual, inpaint_method=cfg.inpaint_method)
+                                          max_residual=cfg.max_residual, inpaint_method=cfg.inpaint_method,
+                                          colour_frames=frames_rgb)
                 patch, bg, crop = _seed_entries(frames[i], res.background, boxes[i], cfg)
+                if frames_rgb is not None:
+                    patches_rgb.append(_crop_rgb(frames_rgb[i], crop, cfg.patch_size))
+                    bgs_rgb.append(_crop_rgb(res.background_rgb, crop, cfg.patch_size))
                 patches.append(patch), bgs.append(bg), crops.append(crop), sel_boxes.append(boxes[i])
                 full.append(frames[i]), full_bg.append(res.background)
                 methods[res.method] += 1
@@ -190,7 +213,9 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
                   crops=np.array(crops, np.float32).reshape(-1, 3), records=recs, frames=full, background_frames=full_bg,
                   negatives=negs, negative_records=neg_recs,
                   metadata=_metadata(cfg, source={"video": str(job.video_path), "labels": str(job.label_path)},
-                                     shard=summary))
+                                     shard=summary),
+                  patches_rgb=np.array(patches_rgb, np.uint8).reshape(-1, p, p, 3) if cfg.colour else None,
+                  backgrounds_rgb=np.array(bgs_rgb, np.uint8).reshape(-1, p, p, 3) if cfg.colour else None)
     summary["seconds"] = round(time.perf_counter() - t0, 3)
     return summary
 

@@ -75,6 +75,7 @@ FORMAT_NAME = "synthaug.seedset"
 FORMAT_VERSION = 1
 HEADER = "seedset.json"
 ARRAYS = "arrays.npz"
+COLOUR = "colour.npz"  # optional RGB patches (patches_rgb, backgrounds_rgb)
 
 
 def replace_dir(tmp: Path, final: Path) -> None:
@@ -233,6 +234,8 @@ def write_seedset(
     negative_records: Sequence[Mapping[str, Any]] | None = None,
     metadata: Mapping[str, Any] | None = None,
     extra_files: Mapping[str, bytes] | None = None,
+    patches_rgb: Any = None,
+    backgrounds_rgb: Any = None,
 ) -> Path:
     """Write a seed set folder atomically (temporary sibling, then rename).
 
@@ -251,6 +254,9 @@ def write_seedset(
         negative_records: M dicts (default: empty dicts).
         metadata: header fields; must hold ``patch_size`` and ``object_fraction``.
         extra_files: more files to place in the folder (e.g. a contact sheet PNG).
+        patches_rgb, backgrounds_rgb: optional uint8 ``(N, P, P, 3)`` RGB versions of
+            ``patches`` / ``backgrounds`` (same crops), written to ``colour.npz``
+            (:meth:`SeedSet.colour`); the gray arrays stay the seed set's images.
 
     Returns:
         The final folder path.
@@ -273,6 +279,13 @@ def write_seedset(
                       ("crops", crops), ("frames", frames), ("background_frames", background_frames)):
         if len(arr) != n:
             raise ValueError(f"{name} must have one entry per record ({n}), got {len(arr)}")
+    if (patches_rgb is None) != (backgrounds_rgb is None):
+        raise ValueError("give both patches_rgb and backgrounds_rgb, or neither")
+    if patches_rgb is not None:
+        patches_rgb, backgrounds_rgb = np.asarray(patches_rgb), np.asarray(backgrounds_rgb)
+        for name, arr in (("patches_rgb", patches_rgb), ("backgrounds_rgb", backgrounds_rgb)):
+            if arr.dtype != np.uint8 or arr.shape != (n, p, p, 3):
+                raise ValueError(f"{name} must be uint8 {(n, p, p, 3)}, got {arr.dtype} {arr.shape}")
     neg_records = list(negative_records) if negative_records is not None else [{} for _ in range(len(negatives))]
     if len(neg_records) != len(negatives):
         raise ValueError(f"negative_records must have one entry per negative ({len(negatives)}), got {len(neg_records)}")
@@ -304,6 +317,9 @@ def write_seedset(
         with open(tmp / ARRAYS, "wb") as f:
             np.savez(f, patches=patches, backgrounds=backgrounds, boxes=boxes, centres=centres, crops=crops,
                      negatives=negatives)
+        if patches_rgb is not None:
+            with open(tmp / COLOUR, "wb") as f:
+                np.savez_compressed(f, patches_rgb=patches_rgb, backgrounds_rgb=backgrounds_rgb)
         for name, data in (extra_files or {}).items():
             (tmp / name).write_bytes(data)
         header = {"format": FORMAT_NAME, "version": FORMAT_VERSION, **meta, "patch_size": p,
@@ -420,6 +436,18 @@ class SeedSet:
     def background_frame_path(self, i: int) -> Path:
         return self.path / self.records[i]["background_file"]
 
+    def colour(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The RGB seed patches and backgrounds, uint8 ``(N, P, P, 3)`` each, or None (a gray seed set)."""
+        f = self.path / COLOUR
+        if not f.exists():
+            return None
+        with np.load(f) as z:
+            rgb, bg = z["patches_rgb"], z["backgrounds_rgb"]
+        want = (len(self), self.patch_size, self.patch_size, 3)
+        if rgb.shape != want or bg.shape != want:
+            raise ValueError(f"{f}: expected RGB patches {want}, got {rgb.shape} and {bg.shape}")
+        return rgb, bg
+
     def save_subset(self, path: str | os.PathLike, indices: Sequence[int], *,
                     negatives: bool | Sequence[int] = True, metadata: Mapping[str, Any] | None = None,
                     extra_files: Mapping[str, bytes] | None = None) -> Path:
@@ -447,6 +475,11 @@ class SeedSet:
                 raise ValueError(f"cannot concatenate seed sets with P/object_fraction "
                                  f"{s.patch_size}/{s.object_fraction} and {first.patch_size}/{first.object_fraction}")
         cols: dict[str, list[Any]] = {k: [] for k in ("patches", "backgrounds", "boxes", "centres", "crops")}
+        contributing = [(s, list(idx)) for s, idx, _ in parts if len(idx)]
+        colours = [s.colour() for s, _ in contributing]
+        rgb = None  # RGB patches travel along when every part that gives seeds has them
+        if colours and all(c is not None for c in colours):
+            rgb = tuple(np.concatenate([c[k][idx] for (_, idx), c in zip(contributing, colours)]) for k in (0, 1))
         records, frames, bgs, negs, neg_recs = [], [], [], [], []
         for s, idx, neg in parts:
             idx = list(idx)
@@ -466,7 +499,8 @@ class SeedSet:
                              boxes=cat["boxes"], centres=cat["centres"], crops=cat["crops"], records=records,
                              frames=frames, background_frames=bgs,
                              negatives=np.concatenate(negs).reshape(-1, p, p) if negs else (),
-                             negative_records=neg_recs, metadata=meta, extra_files=extra_files)
+                             negative_records=neg_recs, metadata=meta, extra_files=extra_files,
+                             patches_rgb=None if rgb is None else rgb[0], backgrounds_rgb=None if rgb is None else rgb[1])
 
     def __repr__(self) -> str:
         return (f"SeedSet({str(self.path)!r}, n={len(self)}, negatives={len(self.negatives)}, "

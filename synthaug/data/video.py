@@ -186,15 +186,17 @@ def read_labels(path: str | os.PathLike, *, classes: Sequence[str] | None = None
                        boxes=[_parse_box(b) for b in boxes])
 
 
-def read_video(path: str | os.PathLike, *, max_frames: int | None = None) -> np.ndarray:
-    """Decode a video with OpenCV into 8-bit grayscale frames.
+def read_video(path: str | os.PathLike, *, max_frames: int | None = None, colour: bool = False) -> np.ndarray:
+    """Decode a video with OpenCV into 8-bit grayscale (or RGB) frames.
 
     Args:
         path: the video file.
         max_frames: stop after this many frames (``None``: all).
+        colour: RGB frames ``(T, H, W, 3)`` (a gray video is replicated); their gray is
+            ``cv2.cvtColor(frame, COLOR_RGB2GRAY)``, identical to the default's.
 
     Returns:
-        uint8 array of shape ``(T, H, W)``.
+        uint8 array of shape ``(T, H, W)`` (or ``(T, H, W, 3)``).
 
     Raises:
         IngestInputError: the file is missing or no frame can be decoded.
@@ -213,7 +215,9 @@ def read_video(path: str | os.PathLike, *, max_frames: int | None = None) -> np.
             ok, frame = cap.read()
             if not ok or frame is None:
                 break
-            if frame.ndim == 3:
+            if colour:
+                frame = cv2.cvtColor(frame, cv2.COLOR_BGR2RGB if frame.ndim == 3 else cv2.COLOR_GRAY2RGB)
+            elif frame.ndim == 3:
                 frame = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
             frames.append(frame)
     finally:
@@ -263,18 +267,19 @@ def clip_boxes(
 
 def read_video_with_labels(
     video_path: str | os.PathLike, label_path: str | os.PathLike, *, classes: Sequence[str] | None = None,
+    colour: bool = False,
 ) -> tuple[np.ndarray, VideoLabels, BoxCleanup]:
     """Decode a video and its labels, aligned to the shorter of the two, boxes clipped.
 
     Returns:
-        ``(frames, labels, cleanup)``: uint8 ``(T, H, W)`` frames and labels with
-        exactly ``T`` boxes, ``T = min(frames decoded, labels read)``.
+        ``(frames, labels, cleanup)``: uint8 ``(T, H, W)`` frames (``(T, H, W, 3)`` RGB with
+        ``colour``) and labels with exactly ``T`` boxes, ``T = min(frames decoded, labels read)``.
 
     Raises:
         IngestInputError: as :func:`read_labels` and :func:`read_video`.
     """
     labels = read_labels(label_path, classes=classes)
-    frames = read_video(video_path)
+    frames = read_video(video_path, colour=colour)
     n = min(len(frames), len(labels.boxes))
     boxes, stats = clip_boxes(labels.boxes[:n], width=frames.shape[2], height=frames.shape[1])
     stats.frames_decoded, stats.labels_read, stats.frames_used = len(frames), len(labels.boxes), n

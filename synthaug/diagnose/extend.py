@@ -110,8 +110,8 @@ def select_extension(report_or_finding: ReportLike, *, use_top_screened: bool = 
             "significant": bool(item.get("significant", False)), "source": source}
 
 
-def extension_rows(theta: Any, frame_scale: torch.Tensor, effect: str, setting: Mapping[str, float]
-                   ) -> dict[str, torch.Tensor]:
+def extension_rows(theta: Any, frame_scale: torch.Tensor, effect: str, setting: Mapping[str, float],
+                   object_px: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
     """Per-seed parameters (patch units) of ``effect`` at the camera-wide ``setting``.
 
     Args:
@@ -119,6 +119,7 @@ def extension_rows(theta: Any, frame_scale: torch.Tensor, effect: str, setting: 
         frame_scale: (N,) frame px per patch px of each seed (crop side / patch side).
         effect: candidate name.
         setting: camera-wide setting, as the screening's grids hold it.
+        object_px: (N,) the object's size in frame px (haze's amount depends on it).
 
     Returns:
         ``{param: (N,) float64}`` for every parameter of the effect.
@@ -137,8 +138,12 @@ def extension_rows(theta: Any, frame_scale: torch.Tensor, effect: str, setting: 
         raise ValueError(f"frame_scale has {fs.shape[0]} values but the fit has {n} rows")
     if not bool(torch.isfinite(fs).all() and (fs > 0).all()):
         raise ValueError(f"frame_scale must be finite and > 0, got {fs.tolist()[:5]}...")
-    # extension_values reads only ``frame_scale`` and ``theta`` of a DiagnosisData
-    values = extension_values(SimpleNamespace(frame_scale=fs, theta=theta), effect, dict(setting))[effect]
+    if effect == "haze" and object_px is None:
+        raise ValueError("haze needs each seed's object size in frame px (object_px)")
+    # extension_values reads only ``frame_scale``, ``theta`` and ``object_px`` of a DiagnosisData
+    data = SimpleNamespace(frame_scale=fs, theta=theta,
+                           object_px=None if object_px is None else torch.as_tensor(object_px, dtype=torch.float64))
+    values = extension_values(data, effect, dict(setting))[effect]
     return {k: torch.as_tensor(v, dtype=torch.float64).reshape(-1).expand(n).clone() for k, v in values.items()}
 
 
@@ -183,7 +188,10 @@ def extend_fit(
         seeds = SeedSet.load(seeds)
     if len(seeds) != theta.batch_size:
         raise ValueError(f"{fit_path} has {theta.batch_size} rows but the seed set has {len(seeds)} seeds")
-    rows = extension_rows(theta, seed_geometry(seeds)["frame_scale"], effect, ext["setting"])
+    fs = seed_geometry(seeds)["frame_scale"].double()
+    scale = torch.tensor([float(e.get("object_scale", meta.get("object_scale", 0.7))) for e in extra],
+                         dtype=torch.float64)
+    rows = extension_rows(theta, fs, effect, ext["setting"], object_px=scale * seeds.patch_size * fs)
     clipped = 0
     specs = {s.name: s for s in get_effect(effect).params}
     for name, v in rows.items():

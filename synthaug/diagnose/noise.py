@@ -62,7 +62,9 @@ def frame_noise_levels(frame: np.ndarray, background: np.ndarray, *, exclude: np
 
     Args:
         frame, background: (H, W) in [0, 1] (or uint8).
-        exclude: (H, W) bool, pixels to leave out (the object and a margin).
+        exclude: (H, W) bool, pixels to leave out (the object and a margin). When more than half of
+            the other pixels of ``frame - background`` are exactly 0, the background frame is the frame
+            itself there (an ingested background replaces only the object region): no bins.
         n_bins: signal bins between the 1st and 99th percentile of the background.
         min_count: bins with fewer pixels are dropped.
         flat_quantile: keep the flattest share of pixels (background gradient below this quantile).
@@ -80,6 +82,10 @@ def frame_noise_levels(frame: np.ndarray, background: np.ndarray, *, exclude: np
     if f.shape != b.shape or f.ndim != 2:
         raise ValueError(f"frame and background must be (H, W) of the same shape, got {f.shape} and {b.shape}")
     r = f - b
+    if exclude is not None and np.mean(r[~np.asarray(exclude, bool)] == 0.0) > 0.5:
+        # the background frame IS the frame off the object (ingest fills only the object region): no
+        # independent second look at the scene, so no noise to measure
+        return _empty()
     r = r - _box_mean(r, 5)
     # texture anywhere in the 5x5 high-pass window counts (a misregistered edge leaks into its neighbours)
     grad = ndimage.maximum_filter(np.hypot(ndimage.sobel(b, 0), ndimage.sobel(b, 1)), size=5, mode="nearest")
@@ -89,12 +95,12 @@ def frame_noise_levels(frame: np.ndarray, background: np.ndarray, *, exclude: np
     if exclude is not None:
         keep &= ~np.asarray(exclude, bool)
     if keep.sum() < min_count:
-        return {"signal": np.zeros(0), "var": np.zeros(0), "count": np.zeros(0, np.int64)}
+        return _empty()
     keep &= grad <= np.quantile(grad[keep], flat_quantile)
     keep &= (b > 2.5 / 255) & (b < 252.5 / 255)  # clipped pixels carry no noise
     s, rv = b[keep], r[keep]
     if s.size < min_count:
-        return {"signal": np.zeros(0), "var": np.zeros(0), "count": np.zeros(0, np.int64)}
+        return _empty()
     edges = np.quantile(s, np.linspace(0.01, 0.99, n_bins + 1))
     sig, var, cnt = [], [], []
     for lo, hi in zip(edges[:-1], edges[1:]):
@@ -113,6 +119,10 @@ def frame_noise_levels(frame: np.ndarray, background: np.ndarray, *, exclude: np
         var.append(v)
         cnt.append(int(x.size))
     return {"signal": np.array(sig), "var": np.array(var), "count": np.array(cnt, np.int64)}
+
+
+def _empty() -> dict[str, np.ndarray]:
+    return {"signal": np.zeros(0), "var": np.zeros(0), "count": np.zeros(0, np.int64)}
 
 
 def _unit(x: np.ndarray) -> np.ndarray:
@@ -136,7 +146,8 @@ def nlf_slope(nlf: dict[str, np.ndarray], *, min_span: float = 0.15) -> float:
 
 
 def seed_noise_levels(seeds: Any, *, margin: float = 0.5, **kwargs: Any) -> list[dict[str, np.ndarray]] | None:
-    """The NLF of every seed's frame (object box grown by ``margin`` of its size left out); None without frames."""
+    """The NLF of every seed's frame (object box grown by ``margin`` of its size left out); None without frames
+    or when no frame has an independent background (see :func:`frame_noise_levels`)."""
     out = []
     for i in range(len(seeds)):
         try:
@@ -151,7 +162,7 @@ def seed_noise_levels(seeds: Any, *, margin: float = 0.5, **kwargs: Any) -> list
         x1, y1 = int(math.ceil(x + (1 + margin) * w)), int(math.ceil(y + (1 + margin) * h))
         ex[y0:y1, x0:x1] = True
         out.append(frame_noise_levels(f, b, exclude=ex, **kwargs))
-    return out
+    return out if any(len(n["signal"]) for n in out) else None
 
 
 def _fit_model(nlfs: Sequence[dict[str, np.ndarray]], kind: str) -> np.ndarray:

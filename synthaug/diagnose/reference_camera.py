@@ -693,18 +693,9 @@ def make_measured_seedset(
     }
     return write_seedset(out_dir, patches=np.stack(patches), backgrounds=np.stack(bg_patches), boxes=boxes,
                          centres=centres, crops=crops, records=records, frames=frames, background_frames=bg_frames,
-                         metadata=meta, extra_files={"truth.json": truth_bytes,
-                                                     **({"colour.npz": _npz_bytes(patches_rgb=np.stack(rgb_patches),
-                                                                                  backgrounds_rgb=np.stack(rgb_backgrounds))}
-                                                        if colour else {})})
-
-
-def _npz_bytes(**arrays: np.ndarray) -> bytes:
-    import io
-
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    return buf.getvalue()
+                         metadata=meta, extra_files={"truth.json": truth_bytes},
+                         patches_rgb=np.stack(rgb_patches) if colour else None,
+                         backgrounds_rgb=np.stack(rgb_backgrounds) if colour else None)
 
 
 def _model_units(cam: dict[str, dict[str, float]], frame_scale: float) -> dict[str, dict[str, float]]:

@@ -379,6 +379,8 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                 + (f"; absorbed-parameter R² {g['absorbed_parameter_r2']:.2f}" if f["channel"] == "absorbed" else "")
                 + (f"; held-out chroma (R-G, B-G) gain {100 * g['heldout_colour']:.1f} %"
                    if g.get("heldout_colour") is not None else "")
+                + ("; the colour channel assumes a neutral (grey) object: a coloured paint reads as white balance"
+                   if f["channel"] == "distance:colour" else "")
                 + (f"; noise level function log-log slope {f['evidence']['noise_level_function']['slope']:+.2f} "
                    f"(flat = read noise only), held-out likelihood gain {g['noise_loglik_per_px']:.4f} nats/px"
                    if f["channel"] == "noise_level" else "")
@@ -396,7 +398,11 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
         lines += ["", f"Feature space (HOG): {100 * fr['share_centre']:.0f} % of the squared block residual lies in "
                   "the central blocks (the object); the map is the 4th panel of `residuals.png`."]
     nlf = report.get("noise_level_function")
-    if nlf:
+    if not nlf:
+        lines += ["", "Camera noise: not measurable from these seed frames (no frame has a background frame that "
+                  "is an independent look at the scene off the object, e.g. an ingested background fills only the "
+                  "object region)."]
+    else:
         lines += ["", f"Camera noise, measured on the frames off the object ({nlf['n_seeds']} seeds with a measurable "
                   f"brightness range): mean log-log slope of the noise variance vs brightness {nlf['slope']:+.2f} "
                   f"(t = {nlf['t']:.1f}, p = {nlf['p']:.2g}{'' if nlf['p'] < 0.01 else ': no evidence of a slope'}; "

@@ -293,15 +293,11 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
 
 
 def _colour_patches(seeds: Any) -> dict[str, torch.Tensor]:
-    """``real_rgb``/``background_rgb`` (N, 3, P, P) float32 from the seed set's ``colour.npz``, if it has one."""
-    path = seeds.path / "colour.npz"
-    if not path.exists():
+    """``real_rgb``/``background_rgb`` (N, 3, P, P) float32 when the seed set has RGB patches."""
+    col = seeds.colour()
+    if col is None:
         return {}
-    with np.load(path) as z:
-        rgb, bg = z["patches_rgb"], z["backgrounds_rgb"]
-    if rgb.shape != (len(seeds), seeds.patch_size, seeds.patch_size, 3) or bg.shape != rgb.shape:
-        raise ValueError(f"{path}: expected (N, P, P, 3) = {(len(seeds), seeds.patch_size, seeds.patch_size, 3)} "
-                         f"RGB patches, got {rgb.shape} and {bg.shape}")
+    rgb, bg = col
     to_t = lambda a: torch.from_numpy(a).permute(0, 3, 1, 2).float() / 255.0  # noqa: E731
     return {"real_rgb": to_t(rgb), "background_rgb": to_t(bg)}
 

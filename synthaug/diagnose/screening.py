@@ -156,6 +156,11 @@ def extension_values(data: DiagnosisData, effect: str, setting: Setting) -> dict
     if effect == "sharpening":
         return {effect: {"sharpen_amount": s["sharpen_amount"],
                          "sharpen_sigma": (s["sharpen_sigma"] / fs).clamp(0.3, 3.0)}}
+    if effect == "white_balance":  # gains (g, 1, 1/g) on a neutral object, seen in gray: their Rec. 601 luma
+        from synthaug.effects.camera_functional import LUMA_WEIGHTS
+
+        g = float(s["wb_gain"])
+        return {effect: {"wb_gain": LUMA_WEIGHTS[0] * g + LUMA_WEIGHTS[1] + LUMA_WEIGHTS[2] / g}}
     if effect == "haze":  # Koschmieder: the same object looks smaller when farther, behind more air
         amount = 1.0 - torch.exp(-s["haze_extinction_px"] / data.object_px.double().clamp_min(1.0))
         return {effect: {"haze_amount": amount.clamp(0.0, 0.95), "haze_airlight": s["haze_airlight"]}}
