@@ -223,6 +223,15 @@ def test_no_hidden_effect_reports_nothing_significant(tmp_path):
 
 
 @pytest.mark.slow
+def test_haze_in_colour_is_found_at_64_seeds(tmp_path):
+    # in colour the airlight has the sky's colour: a hazed object takes on the sky's colour (aerial perspective),
+    # which the chroma residual sees at 64 seeds (measured: 32 % held-out chroma gain), where gray needs 128
+    report = _diagnose(tmp_path, ["haze"], colour=True)
+    assert [f["effect"] for f in report["findings"]][:1] == ["haze"], report["findings"]
+    assert report["findings"][0]["channel"] == "distance:colour" and report["findings"][0]["gains"]["heldout_colour"] > 0
+
+
+@pytest.mark.slow
 def test_no_hidden_effect_in_colour_reports_nothing_significant(tmp_path):
     # the colour channel's control: a neutral object over tinted skies, nothing hidden
     report = _diagnose(tmp_path, None, colour=True)

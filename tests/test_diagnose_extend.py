@@ -303,3 +303,30 @@ def test_haze_and_white_balance_rows_follow_their_physics():
     # white balance (g, 1, 1/g) on a neutral object, in gray: its Rec. 601 luma gain
     wb = extension_rows(th, fs, "white_balance", {"wb_gain": 0.9})["wb_gain"]
     assert wb.tolist() == pytest.approx([0.299 * 0.9 + 0.587 + 0.114 / 0.9] * 2)
+
+
+def test_with_the_mesh_w_d_is_re_solved_with_the_effect_as_screened(seeds_and_fit, tmp_path):
+    """Haze brightens the object toward the airlight: with the mesh, the extended fit's w_d is the fitted w_d times
+    the ratio of the least-squares w_d with and without haze (the screening's), found here by brute force."""
+    from synthaug.diagnose.residuals import load_diagnosis_data, pixel_distance, render_with
+
+    seeds, fit = seeds_and_fit
+    report = {"findings": [_finding("haze", {"haze_extinction_px": 3.0, "haze_airlight": 0.6})], "screened": []}
+    kept = CaptureParams.load_with_extra(extend_fit(fit, seeds, report, tmp_path / "kept.json"))[0]
+    out, _, meta = CaptureParams.load_with_extra(extend_fit(fit, seeds, report, tmp_path / "ext.json",
+                                                            mesh="quadcopter"))
+    assert meta["extension"]["w_d"].startswith("scaled")
+    torch.testing.assert_close(kept.w_d, CaptureParams.load_with_extra(fit)[0].w_d)
+    data = load_diagnosis_data(seeds, fit, "quadcopter")
+    ext = {"haze": {"haze_amount": out.haze_amount[:, 0], "haze_airlight": out.haze_airlight[:, 0]}}
+    grid = torch.linspace(0.0, 1.0, 401)
+
+    def best(e):
+        d = np.stack([pixel_distance(data.real, render_with(data, e, w_d=torch.full((4,), float(g)), clamp=False))
+                      for g in grid])
+        return grid[d.argmin(0)].numpy()
+
+    expected = kept.w_d[:, 0].numpy() * best(ext) / best(None)
+    assert (expected > 0.05).all()  # inside the range: no clamping in this check
+    np.testing.assert_allclose(out.w_d[:, 0].numpy(), expected, rtol=0.03)
+    assert (out.w_d[:, 0] < kept.w_d[:, 0]).all()  # the airlight's brightness no longer needs the paint's

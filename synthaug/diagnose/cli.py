@@ -47,7 +47,7 @@ def main(args: argparse.Namespace) -> int:
         from synthaug.diagnose.extend import extend_fit
 
         try:
-            extended = str(extend_fit(args.fit, args.seeds, report, args.extended_fit))
+            extended = str(extend_fit(args.fit, args.seeds, report, args.extended_fit, mesh=args.mesh))
         except ValueError as e:  # no candidate-effect finding: the report stands, no extension is written
             print(f"synthaug diagnose: --extended-fit not written: {e}", file=sys.stderr)
     print(json.dumps({"out": args.out, "significant": report["significant"],

@@ -53,8 +53,8 @@ def select_extension(report_or_finding: ReportLike, *, use_top_screened: bool = 
     Returns:
         ``{"effect", "setting", "space", "significant", "source"}``; ``space``
         is the distance space whose best setting is used (``"feature"`` when
-        the candidate's channel is the detector's distance, else ``"pixel"``,
-        as the report's extended samples do).
+        the candidate's channel is the detector's distance, ``"colour"`` for the
+        chroma channel, else ``"pixel"``, as the report's extended samples do).
 
     Raises:
         ValueError: no effect finding (and not ``use_top_screened``), an
@@ -94,7 +94,9 @@ def select_extension(report_or_finding: ReportLike, *, use_top_screened: bool = 
         raise ValueError("an 'unexplained' finding names no effect to add; pass a screened row instead")
     if effect not in CANDIDATE_GRIDS:
         raise ValueError(f"unknown effect {effect!r}; candidates: {sorted(CANDIDATE_GRIDS)}")
-    space = "feature" if item.get("channel") == "distance:feature" else "pixel"
+    space = {"distance:feature": "feature", "distance:colour": "colour"}.get(item.get("channel"), "pixel")
+    if space == "colour" and "setting" not in item and not item.get("setting_colour"):
+        space = "pixel"
     if "setting" in item:
         setting = item["setting"]
     elif f"setting_{space}" in item:  # a screened row of report.json
@@ -154,6 +156,7 @@ def extend_fit(
     out_path: str | os.PathLike,
     *,
     use_top_screened: bool = False,
+    mesh: Any = None,
 ) -> Path:
     """Write the fit extended by the accepted effect (a CaptureParams file, ``synthaug fit`` format).
 
@@ -164,6 +167,10 @@ def extend_fit(
             used —, a finding, or a screened row (see :func:`select_extension`).
         out_path: the file to write.
         use_top_screened: with a report without an effect finding, use the top-screened candidate.
+        mesh: the fit's mesh: each seed's fitted w_d is then scaled by the ratio of the least-squares
+            w_d with and without the effect (re-solved as the screening measures both models), so an
+            intensity effect (haze, exposure, a gain) does not add to a w_d fitted without it, and the
+            base fit's w_d is otherwise kept. None keeps the fitted w_d.
 
     Returns:
         ``out_path``. Its effects are the fit's plus the added one; its rows keep every fitted value and
@@ -200,9 +207,19 @@ def extend_fit(
         rows[name] = v.clamp(lo, hi)
     values = {k: v for k, v in theta.as_dict().items()}
     values.update({k: v.float() for k, v in rows.items()})
+    w_note = "kept from the base fit"
+    if mesh is not None:
+        from synthaug.diagnose.residuals import load_diagnosis_data, solve_albedo
+
+        data = load_diagnosis_data(seeds, fit_path, mesh)
+        w_ext, w_base = solve_albedo(data, {effect: dict(rows)}), solve_albedo(data)
+        ratio = torch.where(w_base > 1e-3, w_ext / w_base.clamp_min(1e-3), torch.ones_like(w_base))
+        values["w_d"] = (theta.w_d[:, :1].double() * ratio.double().reshape(-1, 1)).clamp(0.0, 1.0).float()
+        w_note = ("scaled per seed by w_d(extended) / w_d(base), both re-solved as screened: the fitted w_d "
+                  "changed only by what the effect changes")
     out_theta = CaptureParams(values, channels=theta.channels, effects=tuple(theta.effects) + (effect,))
     metadata = dict(meta)
-    metadata["extension"] = {**ext, "base_fit": str(fit_path), "clipped_values": clipped,
+    metadata["extension"] = {**ext, "base_fit": str(fit_path), "clipped_values": clipped, "w_d": w_note,
                              "units": "per-seed patch units (blur radii: frame px / frame_scale)"}
     out = Path(out_path)
     out.parent.mkdir(parents=True, exist_ok=True)

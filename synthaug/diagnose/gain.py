@@ -139,9 +139,9 @@ def run_gain(
         chosen = rows[0]
     if extended_fit is None:
         ext = select_extension(chosen, use_top_screened=use_top_screened)
-        tag = _setting_tag(ext["effect"], ext["setting"])
+        tag = _setting_tag(ext["effect"], ext["setting"]) + "_wdr"  # w_d scaled by the effect's re-solved ratio
         ext_fit = out / "extended_fit.json"
-        extend_fit(fit, seedset_dir, chosen, ext_fit, use_top_screened=use_top_screened)
+        extend_fit(fit, seedset_dir, chosen, ext_fit, use_top_screened=use_top_screened, mesh=mesh)
     log(f"extension: {ext} -> {ext_fit}")
 
     per_seed: dict[int, dict[str, Any]] = {}

@@ -349,11 +349,15 @@ def _blur_pad(sigma: float) -> int:
 
 
 def _camera(img: torch.Tensor, cam: dict[str, dict[str, float]], noise: torch.Tensor, noise_factor: float,
-            read_noise: float) -> torch.Tensor:
-    """The whole-frame camera on a (1, 1, H, W) float64 scene image, up to (not including) 8-bit/JPEG."""
+            read_noise: float, tint: np.ndarray | None = None) -> torch.Tensor:
+    """The whole-frame camera on a (1, C, H, W) float64 scene image, up to (not including) 8-bit/JPEG.
+    ``tint``: the colour of the scene's air (RGB, unit luma), the haze airlight's colour in RGB."""
     one = lambda v: torch.tensor([float(v)], dtype=img.dtype)  # noqa: E731
     if "haze" in cam:
-        img = Cx.haze(img, one(cam["haze"]["haze_amount"]), one(cam["haze"]["haze_airlight"]))
+        air = one(cam["haze"]["haze_airlight"])
+        if tint is not None and img.shape[1] == 3:
+            air = (air * torch.as_tensor(tint, dtype=img.dtype)).clamp(0.0, 1.0)[None]
+        img = Cx.haze(img, one(cam["haze"]["haze_amount"]), air)
     if "defocus" in cam:
         s = cam["defocus"]["defocus_sigma"]
         img = gaussian_blur_fft(img, one(s), pad=_blur_pad(s), border="replicate")
@@ -484,7 +488,8 @@ def make_measured_seedset(
         view_step_deg, sprite_size: the view cache of the real mesh.
         colour: capture in RGB (a bluish sky per seed, a neutral grey object; the camera acts per
             channel: chromatic aberration displaces red and blue in opposite directions, white
-            balance ``wb_gain`` g multiplies red by g and blue by 1/g). The seed set's patches and
+            balance ``wb_gain`` g multiplies red by g and blue by 1/g, haze's airlight has the
+            sky's colour). The seed set's patches and
             frames are then the Rec. 601 luma of the RGB capture, and ``colour.npz`` holds the RGB
             patches (``patches_rgb``, ``backgrounds_rgb``: (N, P, P, 3) uint8).
 
@@ -538,9 +543,11 @@ def make_measured_seedset(
                 raise ValueError(f"backgrounds[{i % len(backgrounds)}] has shape {b.shape}, expected {(h_f, w_f)}")
             scenes.append(b.astype(np.float64) / 255.0 if b.dtype == np.uint8 else b.astype(np.float64))
 
+    tints: list[np.ndarray | None] = [None] * n_seeds
     if colour:  # a bluish sky: the gray sky times a per-seed tint (red and green below blue)
         for i in range(n_seeds):
             t = np.random.default_rng([seed, i, 3]).uniform([0.78, 0.9, 1.0], [0.9, 0.97, 1.0])
+            tints[i] = t / float(np.dot(t, Cx.LUMA_WEIGHTS))  # unit luma: the colour of this scene's air
             scenes[i] = np.clip(scenes[i][None] * t[:, None, None], 0.0, 1.0)
     object_effects = [e for e in ("specular", "rotor_blur", "rolling_shutter") if e in settings]
     rgb_patches: list[np.ndarray] = []
@@ -630,8 +637,8 @@ def make_measured_seedset(
         # the whole-frame camera, on the frame and on the object-free background
         noise_f = torch.randn(scene.shape, generator=gen, dtype=torch.float64)
         noise_b = torch.randn(scene.shape, generator=gen, dtype=torch.float64)
-        frame_u8 = _to_u8(_camera(frame_lin, cam, noise_f, 1.0, read_noise), cam)
-        bg_u8 = _to_u8(_camera(scene, cam, noise_b, background_noise_factor, read_noise), cam)
+        frame_u8 = _to_u8(_camera(frame_lin, cam, noise_f, 1.0, read_noise, tint=tints[i]), cam)
+        bg_u8 = _to_u8(_camera(scene, cam, noise_b, background_noise_factor, read_noise, tint=tints[i]), cam)
         if colour:  # the seed set's gray images are the capture's luma; the RGB patches are kept beside
             import cv2
 

@@ -266,6 +266,8 @@ def diagnose(
         "screened": [{kk: r[kk] for kk in ("effect", "significant", "channel", "score", "p_adjusted", "gain")}
                      | {"setting_feature": r["screen"]["feature"]["setting"],
                         "setting_pixel": r["screen"]["pixel"]["setting"],
+                        "setting_colour": r["screen"]["colour"]["setting"] if "colour" in r["screen"] else None,
+                        "gain_colour": r["screen"]["colour"]["gain"] if "colour" in r["screen"] else None,
                         "gain_feature": r["screen"]["feature"]["gain"], "gain_pixel": r["screen"]["pixel"]["gain"],
                         "absorption": r["absorption"]} for r in rows],
         "residuals": structure,
@@ -412,11 +414,14 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
     lines += [f"- {d['parameter']} vs {d['metadata']}: Spearman ρ = {d['rho']:+.2f} (p = {d['p']:.2g})"
               for d in deps] or ["- none"]
     lines += ["", "## All candidates (held-out, penalised gains)", "",
-              "| effect | significant | channel | z | gain (feature) | gain (pixels) |", "|---|---|---|---|---|---|"]
+              "| effect | significant | channel | z | gain (feature) | gain (pixels) | gain (chroma) |",
+              "|---|---|---|---|---|---|---|"]
     for r in report["screened"]:
         z = r["score"] if r["score"] is not None else -math.inf
+        gc = r.get("gain_colour")
         lines.append(f"| {r['effect']} | {'yes' if r['significant'] else ''} | {r['channel']} | {z:.1f} | "
-                     f"{100 * (r['gain_feature'] or 0):.2f} % | {100 * (r['gain_pixel'] or 0):.2f} % |")
+                     f"{100 * (r['gain_feature'] or 0):.2f} % | {100 * (r['gain_pixel'] or 0):.2f} % | "
+                     + (f"{100 * gc:.2f} % |" if gc is not None else "|"))
     lines += ["", f"Real-vs-synthetic classifier accuracy (fitted model): "
               f"{100 * report['realism']['accuracy_base']:.0f} % (50 % = indistinguishable).", ""]
     for key, title in (("residuals", "Residual maps and intensity curve"), ("samples", "Samples: real / fitted / "

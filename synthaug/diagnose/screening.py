@@ -109,14 +109,25 @@ ABSORPTION: dict[str, tuple[str, str, int]] = {
 
 # Candidates screened in colour (seed sets with RGB patches): the chroma residual (R - G, B - G) of a neutral
 # object sees their colour fringes / colour cast; in gray, CA is a radial blur and white balance a plain gain.
-COLOUR_CANDIDATES: tuple[str, ...] = ("chromatic_aberration", "white_balance")
+# Haze is screened in colour too: its airlight has the sky's colour (aerial perspective: a far object takes
+# on the colour of the air in front of it).
+COLOUR_CANDIDATES: tuple[str, ...] = ("chromatic_aberration", "white_balance", "haze")
 
 
-def colour_values(effect: str, setting: Setting) -> dict[str, dict[str, Any]]:
-    """A camera-wide setting as per-channel parameters: white balance g -> gains (g, 1, 1/g)."""
+def colour_values(data: DiagnosisData, effect: str, setting: Setting) -> dict[str, dict[str, Any]]:
+    """A camera-wide setting as per-channel parameters: white balance g -> gains (g, 1, 1/g); haze's airlight
+    -> the airlight brightness times each seed's sky colour (its RGB background's mean over its luma)."""
     if effect == "white_balance":
         g = float(setting["wb_gain"])
         return {effect: {"wb_gain": torch.tensor([g, 1.0, 1.0 / g])}}
+    if effect == "haze":
+        from synthaug.effects.camera_functional import LUMA_WEIGHTS
+
+        out = extension_values(data, effect, setting)
+        sky = data.background_rgb.double().mean((2, 3))  # (N, 3)
+        tint = sky / (sky @ torch.tensor(LUMA_WEIGHTS, dtype=torch.float64)).clamp_min(1e-3)[:, None]
+        out[effect]["haze_airlight"] = (float(setting["haze_airlight"]) * tint).clamp(0.0, 1.0)
+        return out
     return {effect: dict(setting)}
 
 
@@ -131,7 +142,7 @@ def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], bas
     grid = CANDIDATE_GRIDS[effect]
     ext_all = []
     for setting in grid:
-        ext = {**given_values(data, given), **colour_values(effect, setting)}
+        ext = {**given_values(data, given), **colour_values(data, effect, setting)}
         w = solve_albedo_rgb(data, ext)
         ext_all.append(chroma_distance(data.real_rgb, render_rgb(data, ext, w_d=w)))
     e = np.stack(ext_all)
