@@ -303,7 +303,7 @@ def test_colour_seed_set_and_rgb_render_against_gray_references(tmp_path):
                    + ((real[:, 2] - real[:, 1]) - (y[:, 2] - y[:, 1]).numpy()) ** 2).reshape(6, -1).sum(1))
     np.testing.assert_allclose(chroma_distance(data.real_rgb, y), ref, rtol=1e-5)
     # white balance in colour: the candidate's gains act per channel on the object only
-    g = render_rgb(data, {"white_balance": {"wb_gain": torch.tensor([0.8, 1.0, 1.25])}}, w_d=torch.full((6,), 0.3))
+    g = render_rgb(data, {"white_balance": {"wb_gain": torch.tensor([[0.8, 1.0, 1.25]])}}, w_d=torch.full((6,), 0.3))
     base = render_rgb(data, {"white_balance": {"wb_gain": 1.0}}, w_d=torch.full((6,), 0.3))
     torch.testing.assert_close(g[:, 1], base[:, 1])
     obj = data.coverage[:, 0] > 0.99

@@ -318,81 +318,36 @@ def _frame_brightness(seeds: Any) -> torch.Tensor | None:
 
 
 def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor | float]] | None = None, *,
-                w_d: torch.Tensor | None = None, clamp: bool = True) -> torch.Tensor:
+                w_d: torch.Tensor | None = None, clamp: bool = True, rgb: bool = False) -> torch.Tensor:
     """S(Θ_i ⊕ φ, B_i) for every seed of ``data``: the fit's Θ extended by candidate effects.
 
     Args:
         data: the seeds and their fitted layers.
-        extension: ``{effect: {param: value}}``, a value a scalar (camera-wide)
-            or an (N,) tensor (per seed). Effects already in Θ are overridden.
+        extension: ``{effect: {param: value}}``, a value a scalar (camera-wide), an (N,) tensor (per
+            seed) or, with ``rgb``, a (1, 3) camera-wide or (N, 3) per-seed value per channel. Effects
+            already in Θ are overridden.
         w_d: (N,) albedo replacing the fitted w_d (the per-seed nuisance re-solve).
+        rgb: render over the RGB backgrounds (:attr:`DiagnosisData.background_rgb`): the fitted (gray)
+            Θ on every channel of a neutral object.
 
     Returns:
-        (N, 1, P, P) synthetic images.
+        (N, 1, P, P) synthetic images ((N, 3, P, P) with ``rgb``).
     """
     from synthaug.effects.pipeline import simulate
     from synthaug.params import CaptureParams
 
-    extension = dict(extension or {})
-    n = len(data)
-    values = {k: v.float() for k, v in data.theta.as_dict().items()}
-    if w_d is not None:
-        values["w_d"] = torch.as_tensor(w_d, dtype=torch.float32).reshape(n, 1)
-    effects = tuple(data.theta.effects) + tuple(e for e in extension if e not in data.theta.effects)
-    for eff, params in extension.items():
-        for k, v in params.items():
-            values[k] = torch.as_tensor(v, dtype=torch.float32).reshape(-1, 1).expand(n, 1)
-    if data.resample_sigma is not None:  # the crop's resampling blur, combined with a defocus candidate
-        if "defocus" not in effects:
-            effects = effects + ("defocus",)
-            values["defocus_sigma"] = torch.zeros(n, 1)
-        values["defocus_sigma"] = torch.sqrt(values["defocus_sigma"] ** 2
-                                             + data.resample_sigma.float().reshape(n, 1) ** 2)
-    theta = CaptureParams(values, effects=effects, validate=False)
-    extras: dict[str, torch.Tensor] = {"frame_scale": data.frame_scale}
-    if data.part_rotor is not None:
-        extras["part_rotor"] = data.part_rotor
-    fields = {k: v for k, v in data.fields.items()}
-    return simulate(data.coverage, data.normals, data.background, theta, fields=fields, origin=data.origin,
-                    frame_size=data.frame_size, extras=extras, clamp=clamp)
-
-
-def _per_channel_values(v: Any, n: int, c: int) -> torch.Tensor:
-    """A parameter value as (N, C): scalar, (C,) / (1, C) camera-wide per channel, (N,) or (N, C) per seed."""
-    t = torch.as_tensor(v, dtype=torch.float32)
-    if t.ndim == 0:
-        return t.reshape(1, 1).expand(n, c)
-    if t.ndim == 2 and t.shape == (n, c):
-        return t
-    if t.numel() == c and (t.ndim == 1 and n != c or t.ndim == 2 and t.shape[0] == 1):
-        return t.reshape(1, c).expand(n, c)
-    return t.reshape(n, 1).expand(n, c)
-
-
-def render_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None, *,
-               w_d: torch.Tensor | None = None, clamp: bool = True) -> torch.Tensor:
-    """S(Θ_i ⊕ φ, B_i) in RGB: the fitted (gray) Θ on every channel of a neutral object over the RGB
-    background (:attr:`DiagnosisData.background_rgb`); extension values may be per channel ((3,) camera-wide).
-
-    Returns:
-        (N, 3, P, P).
-    """
-    from synthaug.effects.pipeline import simulate
-    from synthaug.params import CaptureParams
-
-    if data.background_rgb is None:
+    if rgb and data.background_rgb is None:
         raise ValueError("this seed set has no RGB patches (colour.npz)")
     extension = dict(extension or {})
-    n, c = len(data), 3
-    values = {k: v.float()[:, :1].expand(n, c) if v.ndim == 2 else v.float()
-              for k, v in data.theta.as_dict().items()}
+    n, c = len(data), (3 if rgb else 1)
+    values = {k: v.float()[:, :1].expand(n, c) if v.ndim == 2 else v.float() for k, v in data.theta.as_dict().items()}
     if w_d is not None:
         values["w_d"] = torch.as_tensor(w_d, dtype=torch.float32).reshape(n, 1).expand(n, c)
     effects = tuple(data.theta.effects) + tuple(e for e in extension if e not in data.theta.effects)
     for eff, params in extension.items():
         for k, v in params.items():
             values[k] = _per_channel_values(v, n, c)
-    if data.resample_sigma is not None:
+    if data.resample_sigma is not None:  # the crop's resampling blur, combined with a defocus candidate
         if "defocus" not in effects:
             effects = effects + ("defocus",)
             values["defocus_sigma"] = torch.zeros(n, c)
@@ -403,18 +358,28 @@ def render_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None 
     if data.part_rotor is not None:
         extras["part_rotor"] = data.part_rotor
     fields = {k: v.expand(n, c, *v.shape[-2:]) for k, v in data.fields.items()}
-    return simulate(data.coverage, data.normals, data.background_rgb, theta, fields=fields, origin=data.origin,
+    background = data.background_rgb if rgb else data.background
+    return simulate(data.coverage, data.normals, background, theta, fields=fields, origin=data.origin,
                     frame_size=data.frame_size, extras=extras, clamp=clamp)
+
+
+def _per_channel_values(v: Any, n: int, c: int) -> torch.Tensor:
+    """A parameter value as (N, C): a scalar or (N,) for every channel; (1, C) or (N, C) per channel."""
+    t = torch.as_tensor(v, dtype=torch.float32)
+    if t.ndim == 2 and t.shape[1] == c and t.shape[0] in (1, n):
+        return t.expand(n, c)
+    return t.reshape(-1, 1).expand(n, c)
+
+
+def render_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None, *,
+               w_d: torch.Tensor | None = None, clamp: bool = True) -> torch.Tensor:
+    """:func:`render_with` over the RGB backgrounds: (N, 3, P, P)."""
+    return render_with(data, extension, w_d=w_d, clamp=clamp, rgb=True)
 
 
 def solve_albedo_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None) -> torch.Tensor:
     """Per-seed w_d of a neutral object, one value for all three channels (least squares over RGB)."""
-    a = render_rgb(data, extension, w_d=torch.full((len(data),), 0.2), clamp=False)
-    b = render_rgb(data, extension, w_d=torch.full((len(data),), 0.6), clamp=False)
-    slope = (b - a) / 0.4
-    num = ((data.real_rgb - a) * slope).flatten(1).sum(1)
-    den = (slope * slope).flatten(1).sum(1).clamp_min(1e-9)
-    return (0.2 + num / den).clamp(0.0, 1.0)
+    return solve_albedo(data, extension, rgb=True)
 
 
 def chroma_distance(real: torch.Tensor, syn: torch.Tensor) -> np.ndarray:
@@ -440,17 +405,18 @@ def pixel_distance(real: torch.Tensor, syn: torch.Tensor) -> np.ndarray:
 
 
 def solve_albedo(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None,
-                 *, lo: float = 0.0, hi: float = 1.0) -> torch.Tensor:
+                 *, lo: float = 0.0, hi: float = 1.0, rgb: bool = False) -> torch.Tensor:
     """Per-seed w_d minimising the pixel L2, by a linear fit between two renders.
 
     The image is affine in w_d for the paper's effects (material → blurs →
     overlay), so two renders give the exact least-squares w_d; with a
-    nonlinear extension it is the secant solution.
+    nonlinear extension it is the secant solution. With ``rgb``: one w_d for the three channels
+    of a neutral object, least squares over RGB.
     """
-    a = render_with(data, extension, w_d=torch.full((len(data),), 0.2), clamp=False)
-    b = render_with(data, extension, w_d=torch.full((len(data),), 0.6), clamp=False)
+    a = render_with(data, extension, w_d=torch.full((len(data),), 0.2), clamp=False, rgb=rgb)
+    b = render_with(data, extension, w_d=torch.full((len(data),), 0.6), clamp=False, rgb=rgb)
     slope = (b - a) / 0.4
-    num = ((data.real - a) * slope).flatten(1).sum(1)
+    num = (((data.real_rgb if rgb else data.real) - a) * slope).flatten(1).sum(1)
     den = (slope * slope).flatten(1).sum(1).clamp_min(1e-9)
     return (0.2 + num / den).clamp(lo, hi)
 

@@ -119,7 +119,7 @@ def colour_values(data: DiagnosisData, effect: str, setting: Setting) -> dict[st
     -> the airlight brightness times each seed's sky colour (its RGB background's mean over its luma)."""
     if effect == "white_balance":
         g = float(setting["wb_gain"])
-        return {effect: {"wb_gain": torch.tensor([g, 1.0, 1.0 / g])}}
+        return {effect: {"wb_gain": torch.tensor([[g, 1.0, 1.0 / g]])}}
     if effect == "haze":
         from synthaug.effects.camera_functional import LUMA_WEIGHTS
 
