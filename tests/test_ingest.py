@@ -312,3 +312,26 @@ def test_colour_ingest_keeps_rgb_patches_with_the_colour_background(dataset, tmp
 
     _ingest(data, tmp_path / "gray", seed_counts=(4,), cfg=replace(CFG, colour=False))
     assert SeedSet.load(tmp_path / "gray/seedsets/drone_4").colour() is None
+
+
+def test_each_seed_keeps_an_aligned_neighbour_frame_for_the_noise_level_function(dataset, tmp_path):
+    """The seed's second look at the scene: a neighbouring frame and the homography onto the seed's frame; warped,
+    it matches the seed's frame off both objects to the codec's error (the truth: the generated pan)."""
+    from synthaug.diagnose.noise import aligned_neighbour, seed_noise_levels
+
+    root, truth = dataset
+    _ingest(root, tmp_path / "out", seed_counts=(6,))
+    s = SeedSet.load(tmp_path / "out/seedsets/drone_6")
+    for i, rec in enumerate(s.records):
+        nb = rec["neighbour"]
+        assert 1 <= abs(nb["offset"]) <= 2
+        v = truth[rec["video"]]
+        assert np.abs(s.neighbour_frame(i).astype(int) - v.frames[rec["frame"] + nb["offset"]]).mean() < 2
+        warped, out = aligned_neighbour(s.frame(i), s.neighbour_frame(i), nb["homography"], nb["box"])
+        out |= object_mask(out.shape, s.boxes[i], margin_fraction=0.5, min_margin=0)
+        err = np.abs(warped[~out] * 255 - s.frame(i)[~out])
+        assert np.median(err) < 2.0, np.median(err)
+    assert seed_noise_levels(s) is not None  # measurable through the neighbours (the backgrounds are not)
+    s.save_subset(tmp_path / "sub", [1])
+    assert SeedSet.load(tmp_path / "sub").records[0]["neighbour"] == s.records[1]["neighbour"]
+    assert np.array_equal(SeedSet.load(tmp_path / "sub").neighbour_frame(0), s.neighbour_frame(1))

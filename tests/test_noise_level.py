@@ -107,3 +107,24 @@ def test_a_background_that_is_the_frame_off_the_object_gives_no_levels():
     ex[100:140, 100:150] = True
     b[ex] = 0.5
     assert len(frame_noise_levels(f, b, exclude=ex)["signal"]) == 0
+
+
+def test_an_aligned_neighbour_frame_gives_the_nlf_of_both_frames():
+    """Ingested video: the second look is the next frame, aligned by a homography (here a 3-px pan): the
+    difference holds both frames' noise, var = 2 (a + b I); its object (box) and the warp's border are left out."""
+    from synthaug.diagnose.noise import aligned_neighbour
+
+    rng = np.random.default_rng(6)
+    h, w = 300, 400
+    wide = np.tile(np.linspace(0.3, 0.85, w + 3), (h, 1))
+    sd = lambda x: np.sqrt(4e-5 + 1.6e-3 * x)  # noqa: E731
+    f = wide[:, :w] + rng.normal(size=(h, w)) * sd(wide[:, :w])
+    nb = wide[:, 3:] + rng.normal(size=(h, w)) * sd(wide[:, 3:])  # nb[y, x] = scene[y, x + 3]
+    nb[100:130, 200:240] = 0.05  # the neighbour's object
+    H = [[1.0, 0.0, 3.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]  # nb pixel (x, y) -> f pixel (x + 3, y)
+    warped, out = aligned_neighbour(f, nb, H, box=(200, 100, 40, 30), margin=0.0)
+    assert out[:, :3].all() and not out[:, 3:].all()
+    assert out[100:130, 203:243].all() and not out[100:130, 250:].any()
+    np.testing.assert_allclose(warped[~out], wide[:, :w][~out], atol=0.2)
+    nlf = frame_noise_levels(f, warped, exclude=out)
+    np.testing.assert_allclose(nlf["var"], 2 * (4e-5 + 1.6e-3 * nlf["signal"]) * 24 / 25, rtol=0.08)

@@ -131,6 +131,22 @@ def _seed_entries(frame: np.ndarray, background: np.ndarray, box: np.ndarray, cf
     return patch, bg, crop
 
 
+def _noise_neighbour(aligner: Any, boxes: Sequence[Any], index: int, offsets: Sequence[int]) -> dict[str, Any] | None:
+    """The nearest frame aligned onto ``frames[index]`` (±1, ±2, then the background's neighbours): a second
+    look at the scene, for the camera's noise level function. ``{"frame", "offset", "homography", "box"}``."""
+    n = len(boxes)
+    for off in [1, -1, 2, -2] + sorted(set(int(o) for o in offsets), key=lambda o: (abs(o), o)):
+        j = index + off
+        if off == 0 or not 0 <= j < n:
+            continue
+        H = aligner.homography(j, index)
+        if H is not None:
+            b = boxes[j]
+            return {"frame": j, "offset": off, "homography": np.asarray(H, np.float64).round(8).tolist(),
+                    "box": None if b is None else [round(float(v), 2) for v in np.asarray(b).reshape(-1)[:4]]}
+    return None
+
+
 def _crop_rgb(image: np.ndarray, crop: np.ndarray, patch_size: int) -> np.ndarray:
     """The seed crop of an RGB frame, channel by channel (same sampling as the gray patch)."""
     from synthaug.data.seedset import crop_patch
@@ -169,7 +185,7 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
     meta = {"video": job.stem, "class": cls, "split": job.split}
     hard = cls in cfg.hard_negative_classes
     patches, bgs, crops, recs, full, full_bg, sel_boxes = [], [], [], [], [], [], []
-    patches_rgb, bgs_rgb = [], []
+    patches_rgb, bgs_rgb, neighbours = [], [], []
     methods: Counter[str] = Counter()
     if not hard and cfg.seeds_per_video > 0:
         eligible = [i for i, b in enumerate(boxes)
@@ -189,7 +205,10 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
                 patches.append(patch), bgs.append(bg), crops.append(crop), sel_boxes.append(boxes[i])
                 full.append(frames[i]), full_bg.append(res.background)
                 methods[res.method] += 1
+                nb = _noise_neighbour(aligner, boxes, i, res.details.get("offsets_used", []))
+                neighbours.append(None if nb is None else frames[nb["frame"]])
                 recs.append({**meta, "frame": i, "background_method": res.method,
+                             **({} if nb is None else {"neighbour": nb}),
                              "background_quality": round(float(res.quality), 3), "n_aligned": res.n_aligned,
                              "inpainted_fraction": round(res.inpainted_fraction, 3),
                              "object_contrast": res.details.get("object_contrast"),
@@ -215,7 +234,8 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
                   metadata=_metadata(cfg, source={"video": str(job.video_path), "labels": str(job.label_path)},
                                      shard=summary),
                   patches_rgb=np.array(patches_rgb, np.uint8).reshape(-1, p, p, 3) if cfg.colour else None,
-                  backgrounds_rgb=np.array(bgs_rgb, np.uint8).reshape(-1, p, p, 3) if cfg.colour else None)
+                  backgrounds_rgb=np.array(bgs_rgb, np.uint8).reshape(-1, p, p, 3) if cfg.colour else None,
+                  neighbour_frames=neighbours)
     summary["seconds"] = round(time.perf_counter() - t0, 3)
     return summary
 

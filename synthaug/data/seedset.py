@@ -236,6 +236,7 @@ def write_seedset(
     extra_files: Mapping[str, bytes] | None = None,
     patches_rgb: Any = None,
     backgrounds_rgb: Any = None,
+    neighbour_frames: Sequence[np.ndarray | os.PathLike | str | None] | None = None,
 ) -> Path:
     """Write a seed set folder atomically (temporary sibling, then rename).
 
@@ -257,6 +258,10 @@ def write_seedset(
         patches_rgb, backgrounds_rgb: optional uint8 ``(N, P, P, 3)`` RGB versions of
             ``patches`` / ``backgrounds`` (same crops), written to ``colour.npz``
             (:meth:`SeedSet.colour`); the gray arrays stay the seed set's images.
+        neighbour_frames: optional, per seed, a second frame of the same scene (e.g. the
+            next frame of the video; None where there is none), written as
+            ``frames/NNNNN_neighbour.png`` (:meth:`SeedSet.neighbour_frame`); the record
+            says how it maps onto the seed's frame (``neighbour``: ``homography``, ``box``).
 
     Returns:
         The final folder path.
@@ -275,8 +280,10 @@ def write_seedset(
     boxes = np.asarray(boxes, np.float32).reshape(-1, 4)
     centres = np.asarray(centres, np.float32).reshape(-1, 2)
     crops = np.asarray(crops, np.float32).reshape(-1, 3)
+    neighbours = list(neighbour_frames) if neighbour_frames is not None else [None] * n
     for name, arr in (("patches", patches), ("backgrounds", backgrounds), ("boxes", boxes), ("centres", centres),
-                      ("crops", crops), ("frames", frames), ("background_frames", background_frames)):
+                      ("crops", crops), ("frames", frames), ("background_frames", background_frames),
+                      ("neighbour_frames", neighbours)):
         if len(arr) != n:
             raise ValueError(f"{name} must have one entry per record ({n}), got {len(arr)}")
     if (patches_rgb is None) != (backgrounds_rgb is None):
@@ -297,8 +304,13 @@ def write_seedset(
         recs = []
         for i, rec in enumerate(records):
             rec = dict(rec)
-            for key, src in (("frame_file", frames[i]), ("background_file", background_frames[i])):
-                name = f"frames/{i:05d}_{'frame' if key == 'frame_file' else 'background'}.png"
+            for key, src, suffix in (("frame_file", frames[i], "frame"),
+                                     ("background_file", background_frames[i], "background"),
+                                     ("neighbour_file", neighbours[i], "neighbour")):
+                if src is None and key == "neighbour_file":
+                    rec.pop(key, None)
+                    continue
+                name = f"frames/{i:05d}_{suffix}.png"
                 dst = tmp / name
                 if isinstance(src, np.ndarray):
                     if src.dtype != np.uint8 or src.ndim != 2:
@@ -430,6 +442,15 @@ class SeedSet:
         """Full-frame background of seed ``i`` (object removed), uint8 ``(H, W)``."""
         return self._png(i, "background_file")
 
+    def neighbour_frame(self, i: int) -> np.ndarray | None:
+        """A second frame of seed ``i``'s scene, uint8 ``(H, W)`` (record ``neighbour``: its homography onto
+        the seed's frame and its object box), or None when the seed set has none."""
+        return self._png(i, "neighbour_file") if "neighbour_file" in self.records[i] else None
+
+    def neighbour_frame_path(self, i: int) -> Path | None:
+        f = self.records[i].get("neighbour_file")
+        return None if f is None else self.path / f
+
     def frame_path(self, i: int) -> Path:
         return self.path / self.records[i]["frame_file"]
 
@@ -480,7 +501,7 @@ class SeedSet:
         rgb = None  # RGB patches travel along when every part that gives seeds has them
         if colours and all(c is not None for c in colours):
             rgb = tuple(np.concatenate([c[k][idx] for (_, idx), c in zip(contributing, colours)]) for k in (0, 1))
-        records, frames, bgs, negs, neg_recs = [], [], [], [], []
+        records, frames, bgs, nbs, negs, neg_recs = [], [], [], [], [], []
         for s, idx, neg in parts:
             idx = list(idx)
             for k in cols:
@@ -488,6 +509,7 @@ class SeedSet:
             records += [s.records[i] for i in idx]
             frames += [s.frame_path(i) for i in idx]
             bgs += [s.background_frame_path(i) for i in idx]
+            nbs += [s.neighbour_frame_path(i) for i in idx]
             nidx = list(range(len(s.negatives))) if neg is True else ([] if neg is False else list(neg))
             negs.append(s.negatives[nidx])
             neg_recs += [s.negative_records[i] for i in nidx]
@@ -500,7 +522,8 @@ class SeedSet:
                              frames=frames, background_frames=bgs,
                              negatives=np.concatenate(negs).reshape(-1, p, p) if negs else (),
                              negative_records=neg_recs, metadata=meta, extra_files=extra_files,
-                             patches_rgb=None if rgb is None else rgb[0], backgrounds_rgb=None if rgb is None else rgb[1])
+                             patches_rgb=None if rgb is None else rgb[0], backgrounds_rgb=None if rgb is None else rgb[1],
+                             neighbour_frames=nbs if any(x is not None for x in nbs) else None)
 
     def __repr__(self) -> str:
         return (f"SeedSet({str(self.path)!r}, n={len(self)}, negatives={len(self.negatives)}, "

@@ -40,7 +40,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["frame_noise_levels", "nlf_slope", "seed_noise_levels", "noise_channel", "NOISE_CANDIDATES"]
+__all__ = ["frame_noise_levels", "nlf_slope", "seed_noise_levels", "aligned_neighbour", "noise_channel",
+           "NOISE_CANDIDATES"]
 
 # Candidates the noise level function can testify for, with the sign of the log-log slope they produce.
 NOISE_CANDIDATES: dict[str, int] = {"shot_noise": +1, "gamma": -1}
@@ -62,9 +63,10 @@ def frame_noise_levels(frame: np.ndarray, background: np.ndarray, *, exclude: np
 
     Args:
         frame, background: (H, W) in [0, 1] (or uint8).
-        exclude: (H, W) bool, pixels to leave out (the object and a margin). When more than half of
-            the other pixels of ``frame - background`` are exactly 0, the background frame is the frame
-            itself there (an ingested background replaces only the object region): no bins.
+        exclude: (H, W) bool, pixels to leave out (the object and a margin), with the 5x5
+            high-pass window around them. When more than 90 % of the other pixels of
+            ``frame - background`` are exactly 0, the background frame is the frame itself there
+            (an ingested background replaces only the object region): no bins.
         n_bins: signal bins between the 1st and 99th percentile of the background.
         min_count: bins with fewer pixels are dropped.
         flat_quantile: keep the flattest share of pixels (background gradient below this quantile).
@@ -82,23 +84,25 @@ def frame_noise_levels(frame: np.ndarray, background: np.ndarray, *, exclude: np
     if f.shape != b.shape or f.ndim != 2:
         raise ValueError(f"frame and background must be (H, W) of the same shape, got {f.shape} and {b.shape}")
     r = f - b
-    if exclude is not None and np.mean(r[~np.asarray(exclude, bool)] == 0.0) > 0.5:
+    if exclude is not None and np.mean(r[~np.asarray(exclude, bool)] == 0.0) > 0.9:
         # the background frame IS the frame off the object (ingest fills only the object region): no
         # independent second look at the scene, so no noise to measure
         return _empty()
     r = r - _box_mean(r, 5)
     # texture anywhere in the 5x5 high-pass window counts (a misregistered edge leaks into its neighbours)
-    grad = ndimage.maximum_filter(np.hypot(ndimage.sobel(b, 0), ndimage.sobel(b, 1)), size=5, mode="nearest")
+    # (measured on the smoothed background: the scene's texture, not the noise of a noisy second look)
+    bs = ndimage.gaussian_filter(b, 1.5)
+    grad = ndimage.maximum_filter(np.hypot(ndimage.sobel(bs, 0), ndimage.sobel(bs, 1)), size=5, mode="nearest")
     keep = np.ones_like(b, bool)
     keep[:3, :] = keep[-3:, :] = False
     keep[:, :3] = keep[:, -3:] = False
-    if exclude is not None:
-        keep &= ~np.asarray(exclude, bool)
+    if exclude is not None:  # and the high-pass window around it (r there is not this frame's noise)
+        keep &= ~ndimage.binary_dilation(np.asarray(exclude, bool), np.ones((5, 5), bool))
     if keep.sum() < min_count:
         return _empty()
     keep &= grad <= np.quantile(grad[keep], flat_quantile)
     keep &= (b > 2.5 / 255) & (b < 252.5 / 255)  # clipped pixels carry no noise
-    s, rv = b[keep], r[keep]
+    s, rv = bs[keep], r[keep]  # binned by the smoothed signal: binning by a noisy one selects on its noise
     if s.size < min_count:
         return _empty()
     edges = np.quantile(s, np.linspace(0.01, 0.99, n_bins + 1))
@@ -145,23 +149,54 @@ def nlf_slope(nlf: dict[str, np.ndarray], *, min_span: float = 0.15) -> float:
                  / max(np.average((x - xm) ** 2, weights=w), 1e-12))
 
 
+def _box_mask(shape: tuple[int, int], box: Sequence[float], margin: float) -> np.ndarray:
+    ex = np.zeros(shape, bool)
+    x, y, w, h = (float(v) for v in box)
+    x0, y0 = int(max(0, math.floor(x - margin * w))), int(max(0, math.floor(y - margin * h)))
+    x1, y1 = int(math.ceil(x + (1 + margin) * w)), int(math.ceil(y + (1 + margin) * h))
+    ex[y0:y1, x0:x1] = True
+    return ex
+
+
+def aligned_neighbour(frame: np.ndarray, neighbour: np.ndarray, homography: Sequence[Sequence[float]],
+                      box: Sequence[float] | None, margin: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """A neighbour frame warped onto ``frame`` (bilinear) and the pixels to leave out: outside the warp, and the
+    neighbour's object (its ``box``, grown by ``margin``, warped)."""
+    import cv2
+
+    h, w = frame.shape[:2]
+    H = np.asarray(homography, np.float64)
+    warped = cv2.warpPerspective(_unit(neighbour).astype(np.float32), H, (w, h), flags=cv2.INTER_LINEAR,
+                                 borderMode=cv2.BORDER_CONSTANT, borderValue=float("nan"))
+    out = ~np.isfinite(warped)
+    if box is not None:
+        m = _box_mask(neighbour.shape[:2], box, margin).astype(np.uint8)
+        out |= cv2.warpPerspective(m, H, (w, h), flags=cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
+                                   borderValue=0) > 0
+    return np.where(out, _unit(frame), warped).astype(np.float64), out
+
+
 def seed_noise_levels(seeds: Any, *, margin: float = 0.5, **kwargs: Any) -> list[dict[str, np.ndarray]] | None:
-    """The NLF of every seed's frame (object box grown by ``margin`` of its size left out); None without frames
-    or when no frame has an independent background (see :func:`frame_noise_levels`)."""
+    """The NLF of every seed's frame (object box grown by ``margin`` of its size left out), against its
+    background frame when that is an independent look at the scene (a reference camera's), else against
+    its aligned neighbour frame (ingested video: :meth:`~synthaug.data.seedset.SeedSet.neighbour_frame`).
+    None without frames or when no seed has a second look (see :func:`frame_noise_levels`)."""
     out = []
     for i in range(len(seeds)):
         try:
             f, b = seeds.frame(i), seeds.background_frame(i)
+            nb = seeds.neighbour_frame(i) if hasattr(seeds, "neighbour_frame") else None
         except (FileNotFoundError, OSError, KeyError, IndexError, ValueError):
             return None
         if f is None or b is None:
             return None
-        ex = np.zeros(np.asarray(f).shape[:2], bool)
-        x, y, w, h = (float(v) for v in seeds.boxes[i])
-        x0, y0 = int(max(0, math.floor(x - margin * w))), int(max(0, math.floor(y - margin * h)))
-        x1, y1 = int(math.ceil(x + (1 + margin) * w)), int(math.ceil(y + (1 + margin) * h))
-        ex[y0:y1, x0:x1] = True
-        out.append(frame_noise_levels(f, b, exclude=ex, **kwargs))
+        ex = _box_mask(np.asarray(f).shape[:2], seeds.boxes[i], margin)
+        levels = frame_noise_levels(f, b, exclude=ex, **kwargs)
+        if not len(levels["signal"]) and nb is not None:
+            info = seeds.records[i].get("neighbour", {})
+            warped, out_nb = aligned_neighbour(f, nb, info["homography"], info.get("box"), margin)
+            levels = frame_noise_levels(f, warped, exclude=ex | out_nb, **kwargs)
+        out.append(levels)
     return out if any(len(n["signal"]) for n in out) else None
 
 
