@@ -128,3 +128,13 @@ def test_an_aligned_neighbour_frame_gives_the_nlf_of_both_frames():
     np.testing.assert_allclose(warped[~out], wide[:, :w][~out], atol=0.2)
     nlf = frame_noise_levels(f, warped, exclude=out)
     np.testing.assert_allclose(nlf["var"], 2 * (4e-5 + 1.6e-3 * nlf["signal"]) * 24 / 25, rtol=0.08)
+
+
+def test_a_codec_copy_is_not_noise():
+    # two looks that differ only by sparse +-1 grey levels (a codec copied the block): no noise to measure
+    rng = np.random.default_rng(7)
+    b = np.round(_scene(rng) * 255) / 255
+    f = b + (rng.random(b.shape) < 0.02) * rng.choice([-1, 1], size=b.shape) / 255
+    assert len(frame_noise_levels(f, b)["signal"]) == 0
+    g = b + rng.normal(size=b.shape) * 1.0 / 255  # one grey level of real noise: measured
+    assert len(frame_noise_levels(np.round(g * 255) / 255, b)["signal"]) >= 10

@@ -44,6 +44,10 @@ __all__ = ["IngestConfig", "VideoJob", "process_video", "process_images", "inges
            "assemble_seed_sets", "select_spread"]
 
 
+# What a shard holds: 1 gray patches and frames; 2 + RGB patches (colour.npz) and each seed's aligned neighbour frame.
+SHARD_VERSION = 2
+
+
 @dataclass(frozen=True)
 class IngestConfig:
     """Options of an ingest run (their fingerprint decides whether a shard is reused).
@@ -96,7 +100,9 @@ class IngestConfig:
             raise ValueError(f"inpaint_method must be pushpull, telea or ns, got {self.inpaint_method!r}")
 
     def fingerprint(self) -> str:
-        return hashlib.sha1(json.dumps(asdict(self), sort_keys=True).encode()).hexdigest()[:16]
+        # the shard layout's version too: shards written by older code lack what newer code reads
+        key = {**asdict(self), "shard_version": SHARD_VERSION}
+        return hashlib.sha1(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]
 
 
 @dataclass

@@ -47,6 +47,9 @@ __all__ = ["frame_noise_levels", "nlf_slope", "seed_noise_levels", "aligned_neig
 NOISE_CANDIDATES: dict[str, int] = {"shot_noise": +1, "gamma": -1}
 # Smallest |log-log slope| that counts: the noise std changes by >= 10 % over a doubling of brightness.
 SLOPE_FLOOR = 2 * math.log2(1.1)
+# A difference of two independently rounded 8-bit frames has sd >= sqrt(2/12) = 0.41 grey levels; below 0.3 the two
+# looks are not independent (a video codec copied the block), and the bin measures the codec, not the camera.
+MIN_NOISE_SD = 0.3 / 255
 # Variance of a standard normal truncated to ±4: the rejection's bias, undone.
 _CLIPPED_VAR_4SD = 1.0 - 8.0 * math.exp(-8.0) / math.sqrt(2.0 * math.pi) / math.erf(4.0 / math.sqrt(2.0))
 
@@ -75,7 +78,8 @@ def frame_noise_levels(frame: np.ndarray, background: np.ndarray, *, exclude: np
         ``{"signal": (K,) mean background per bin, "var": (K,) noise variance, "count": (K,)}``;
         the variance of the high-passed difference within ±4 robust σ (MAD) of its median, corrected
         for that truncation (robust to the occasional misregistered edge); bins whose noise would
-        clip at black or white are dropped.
+        clip at black or white, or whose noise is below :data:`MIN_NOISE_SD` (a codec's copy of the
+        block, not a second exposure), are dropped.
     """
     from scipy import ndimage
 
@@ -118,6 +122,8 @@ def frame_noise_levels(frame: np.ndarray, background: np.ndarray, *, exclude: np
         v = float(np.mean((x - x.mean()) ** 2) / _CLIPPED_VAR_4SD)
         lvl = float(s[m].mean())
         if lvl - 3.0 * math.sqrt(v) < 0.0 or lvl + 3.0 * math.sqrt(v) > 1.0:  # noise clipped at black/white
+            continue
+        if math.sqrt(v) < MIN_NOISE_SD:  # below 8-bit rounding of two independent frames: a codec's copy
             continue
         sig.append(lvl)
         var.append(v)

@@ -401,9 +401,9 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                   "the central blocks (the object); the map is the 4th panel of `residuals.png`."]
     nlf = report.get("noise_level_function")
     if not nlf:
-        lines += ["", "Camera noise: not measurable from these seed frames (no frame has a background frame that "
-                  "is an independent look at the scene off the object, e.g. an ingested background fills only the "
-                  "object region)."]
+        lines += ["", "Camera noise: not measurable from these seed frames (no second, independent look at the scene "
+                  "off the object with noise above 0.3 grey levels: an ingested background fills only the object "
+                  "region, and a video codec copies static blocks from frame to frame)."]
     else:
         lines += ["", f"Camera noise, measured on the frames off the object ({nlf['n_seeds']} seeds with a measurable "
                   f"brightness range): mean log-log slope of the noise variance vs brightness {nlf['slope']:+.2f} "
