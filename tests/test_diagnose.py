@@ -308,3 +308,11 @@ def test_colour_seed_set_and_rgb_render_against_gray_references(tmp_path):
     torch.testing.assert_close(g[:, 1], base[:, 1])
     obj = data.coverage[:, 0] > 0.99
     assert (g[:, 0][obj] < base[:, 0][obj]).all() and (g[:, 2][obj] > base[:, 2][obj]).all()
+    # an accepted white balance is applied per channel when later candidates are screened in colour, and as its
+    # luma gain in gray
+    from synthaug.diagnose.screening import given_values
+
+    wb = {"white_balance": {"wb_gain": 0.8}}
+    torch.testing.assert_close(given_values(data, wb, rgb=True)["white_balance"]["wb_gain"],
+                               torch.tensor([[0.8, 1.0, 1.25]]))
+    assert given_values(data, wb)["white_balance"]["wb_gain"] == pytest.approx(0.299 * 0.8 + 0.587 + 0.114 / 0.8)

@@ -40,7 +40,7 @@ a pairwise distance cannot credit a noise model, and a tone curve on a dark
 object is nearly a gain that w_d absorbs. For seed sets with RGB patches, the
 chroma distance (R - G, B - G) of a neutral object screens
 ``chromatic_aberration`` and ``white_balance``, which in gray are a radial blur
-and a plain gain.
+and a plain gain, and ``haze``, whose airlight has the sky's colour.
 
 Finally a real-vs-synthetic classifier (logistic regression on HOG features,
 k-fold by seed; 50 % = indistinguishable) is scored before and after the
@@ -142,7 +142,7 @@ def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], bas
     grid = CANDIDATE_GRIDS[effect]
     ext_all = []
     for setting in grid:
-        ext = {**given_values(data, given), **colour_values(data, effect, setting)}
+        ext = {**given_values(data, given, rgb=True), **colour_values(data, effect, setting)}
         w = solve_albedo_rgb(data, ext)
         ext_all.append(chroma_distance(data.real_rgb, render_rgb(data, ext, w_d=w)))
     e = np.stack(ext_all)
@@ -208,11 +208,14 @@ class Renders:
     w_d: np.ndarray  # (G, N) re-solved albedo
 
 
-def given_values(data: DiagnosisData, given: dict[str, Setting] | None) -> dict[str, dict[str, Any]]:
-    """Accepted extensions ``{effect: camera-wide setting}`` as per-seed parameters (:func:`extension_values`)."""
+def given_values(data: DiagnosisData, given: dict[str, Setting] | None, *, rgb: bool = False
+                 ) -> dict[str, dict[str, Any]]:
+    """Accepted extensions ``{effect: camera-wide setting}`` as per-seed parameters (:func:`extension_values`;
+    with ``rgb``, per channel where the effect has colour: :func:`colour_values`)."""
     out: dict[str, dict[str, Any]] = {}
     for eff, setting in (given or {}).items():
-        out.update(extension_values(data, eff, setting))
+        out.update(colour_values(data, eff, setting) if rgb and eff in COLOUR_CANDIDATES
+                   else extension_values(data, eff, setting))
     return out
 
 
@@ -460,7 +463,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     if data.real_rgb is not None and any(c in COLOUR_CANDIDATES for c in names):
         from synthaug.diagnose.residuals import chroma_distance, render_rgb, solve_albedo_rgb
 
-        gv = given_values(data, given) or None
+        gv = given_values(data, given, rgb=True) or None
         base_colour = chroma_distance(data.real_rgb, render_rgb(data, gv, w_d=solve_albedo_rgb(data, gv)))
     rows = []
     for name in names:
