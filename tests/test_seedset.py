@@ -58,6 +58,16 @@ def test_object_is_centred_and_scaled():
     assert abs((w * xx).sum() / w.sum() - 19.5) < 0.05 and abs((w * yy).sum() / w.sum() - 19.5) < 0.05
 
 
+@pytest.mark.parametrize("crop", [(20.3, 14.8, 11.0), (20.3, 14.8, 37.0)])  # up- and downscaling
+def test_crop_of_an_rgb_frame_is_the_crop_of_each_channel(crop):
+    rgb = np.random.default_rng(3).integers(0, 255, (30, 40, 3), dtype=np.uint8)
+    patch, _ = crop_patch(rgb, crop=crop, patch_size=16)
+    ref = np.stack([crop_patch(np.ascontiguousarray(rgb[..., c]), crop=crop, patch_size=16)[0] for c in range(3)], -1)
+    assert patch.shape == (16, 16, 3) and np.array_equal(patch, ref)
+    with pytest.raises(ValueError, match="RGB"):
+        crop_patch(rgb[..., :2], crop=crop)
+
+
 def test_crop_geometry_errors():
     with pytest.raises(ValueError, match="positive size"):
         crop_geometry((0, 0, 0, 5))

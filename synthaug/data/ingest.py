@@ -153,14 +153,6 @@ def _noise_neighbour(aligner: Any, boxes: Sequence[Any], index: int, offsets: Se
     return None
 
 
-def _crop_rgb(image: np.ndarray, crop: np.ndarray, patch_size: int) -> np.ndarray:
-    """The seed crop of an RGB frame, channel by channel (same sampling as the gray patch)."""
-    from synthaug.data.seedset import crop_patch
-
-    return np.stack([crop_patch(np.ascontiguousarray(image[..., c]), crop=crop, patch_size=patch_size)[0]
-                     for c in range(3)], -1)
-
-
 def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike) -> dict[str, Any]:
     """Ingest one video into the shard ``pool_dir/<stem>`` (see the module docstring).
 
@@ -172,7 +164,7 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
     """
     from synthaug.data.backgrounds import FrameAligner, estimate_background
     from synthaug.data.negatives import hard_negatives, sample_negatives
-    from synthaug.data.seedset import write_seedset
+    from synthaug.data.seedset import crop_patch, write_seedset
     from synthaug.data.video import read_video_with_labels
 
     t0 = time.perf_counter()
@@ -206,8 +198,8 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
                                           colour_frames=frames_rgb)
                 patch, bg, crop = _seed_entries(frames[i], res.background, boxes[i], cfg)
                 if frames_rgb is not None:
-                    patches_rgb.append(_crop_rgb(frames_rgb[i], crop, cfg.patch_size))
-                    bgs_rgb.append(_crop_rgb(res.background_rgb, crop, cfg.patch_size))
+                    patches_rgb.append(crop_patch(frames_rgb[i], crop=crop, patch_size=cfg.patch_size)[0])
+                    bgs_rgb.append(crop_patch(res.background_rgb, crop=crop, patch_size=cfg.patch_size)[0])
                 patches.append(patch), bgs.append(bg), crops.append(crop), sel_boxes.append(boxes[i])
                 full.append(frames[i]), full_bg.append(res.background)
                 methods[res.method] += 1

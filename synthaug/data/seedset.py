@@ -121,7 +121,7 @@ def crop_patch(
     anti-aliased (Gaussian pre-blur of sigma ``0.4 / s`` for a scale ``s < 1``).
 
     Args:
-        image: uint8 ``(H, W)`` frame.
+        image: uint8 ``(H, W)`` frame, or ``(H, W, 3)`` (every channel cut the same way).
         box: xywh object box (gives the crop through :func:`crop_geometry`), or
         crop: ``[c_x, c_y, side]`` directly (e.g. the crop of a seed, to cut
             the same region out of its background frame).
@@ -129,7 +129,7 @@ def crop_patch(
         object_fraction: see :func:`crop_geometry`.
 
     Returns:
-        ``(patch, crop)``: uint8 ``(P, P)`` and float32 ``[c_x, c_y, side]``.
+        ``(patch, crop)``: uint8 ``(P, P)`` (``(P, P, 3)``) and float32 ``[c_x, c_y, side]``.
     """
     import cv2
 
@@ -137,8 +137,8 @@ def crop_patch(
         raise ValueError("give exactly one of box= and crop=")
     if patch_size < 2:
         raise ValueError(f"patch_size must be >= 2, got {patch_size}")
-    if image.ndim != 2:
-        raise ValueError(f"image must be grayscale (H, W), got shape {image.shape}")
+    if not (image.ndim == 2 or image.ndim == 3 and image.shape[2] == 3):
+        raise ValueError(f"image must be grayscale (H, W) or RGB (H, W, 3), got shape {image.shape}")
     c = crop_geometry(box, patch_size=patch_size, object_fraction=object_fraction) if box is not None \
         else np.asarray(crop, dtype=np.float32)
     cx, cy, side = (float(v) for v in c)

@@ -649,10 +649,8 @@ def make_measured_seedset(
         patch, crop = crop_patch(frame_u8, box=box, patch_size=patch_size, object_fraction=object_fraction)
         bg_patch, _ = crop_patch(bg_u8, crop=crop, patch_size=patch_size)
         if colour:
-            rgb_patches.append(np.stack([crop_patch(np.ascontiguousarray(frame_rgb[..., c]), crop=crop,
-                                                    patch_size=patch_size)[0] for c in range(3)], -1))
-            rgb_backgrounds.append(np.stack([crop_patch(np.ascontiguousarray(bg_rgb[..., c]), crop=crop,
-                                                        patch_size=patch_size)[0] for c in range(3)], -1))
+            rgb_patches.append(crop_patch(frame_rgb, crop=crop, patch_size=patch_size)[0])
+            rgb_backgrounds.append(crop_patch(bg_rgb, crop=crop, patch_size=patch_size)[0])
         cx, cy = float(crop[0]), float(crop[1])
         origin = [cx - side / 2, cy - side / 2]
         render_c = (x0 + (crop_side - 1) / 2.0, y0 + (crop_side - 1) / 2.0)
