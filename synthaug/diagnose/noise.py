@@ -182,15 +182,18 @@ def aligned_neighbour(frame: np.ndarray, neighbour: np.ndarray, homography: Sequ
     return np.where(out, _unit(frame), warped).astype(np.float64), out
 
 
-def seed_noise_levels(seeds: Any, *, margin: float = 0.5, **kwargs: Any) -> list[dict[str, np.ndarray]] | None:
+def seed_noise_levels(seeds: Any, *, margin: float = 0.5, frames: Sequence[np.ndarray] | None = None,
+                      **kwargs: Any) -> list[dict[str, np.ndarray]] | None:
     """The NLF of every seed's frame (object box grown by ``margin`` of its size left out), against its
     background frame when that is an independent look at the scene (a reference camera's), else against
     its aligned neighbour frame (ingested video: :meth:`~synthaug.data.seedset.SeedSet.neighbour_frame`).
-    None without frames or when no seed has a second look (see :func:`frame_noise_levels`)."""
+    None without frames or when no seed has a second look (see :func:`frame_noise_levels`). ``frames``: the
+    seeds' frames when already read."""
     out = []
     for i in range(len(seeds)):
         try:
-            f, b = seeds.frame(i), seeds.background_frame(i)
+            f = seeds.frame(i) if frames is None else frames[i]
+            b = seeds.background_frame(i)
             nb = seeds.neighbour_frame(i) if hasattr(seeds, "neighbour_frame") else None
         except (FileNotFoundError, OSError, KeyError, IndexError, ValueError):
             return None

@@ -277,6 +277,7 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         for k, v in f.items():
             fields.setdefault(k, []).append(v)
     geo = seed_geometry(seeds)
+    frames = _read_frames(seeds)  # the whole frames: what auto-exposure meters, and the noise level function
     dist = build_distance(distance, seeds) if isinstance(distance, str) else distance
     name = distance if isinstance(distance, str) else getattr(distance, "name", type(distance).__name__)
     return DiagnosisData(
@@ -288,7 +289,9 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         resample_sigma=torch.from_numpy(crop_resampling_sigma(geo["frame_scale"].double().numpy())).float()
         if resampling else None,
         object_px=(scale.double() * p * geo["frame_scale"].double()).float(),
-        frame_brightness=_frame_brightness(seeds), noise_levels=seed_noise_levels(seeds),
+        frame_brightness=None if frames is None else torch.tensor([float(f.mean()) / 255.0 for f in frames],
+                                                                  dtype=torch.float64),
+        noise_levels=None if frames is None else seed_noise_levels(seeds, frames=frames),
         **_colour_patches(seeds))
 
 
@@ -302,19 +305,12 @@ def _colour_patches(seeds: Any) -> dict[str, torch.Tensor]:
     return {"real_rgb": to_t(rgb), "background_rgb": to_t(bg)}
 
 
-def _frame_brightness(seeds: Any) -> torch.Tensor | None:
-    """Mean intensity of each seed's whole frame in [0, 1], or None when the seed set has no frames."""
-    out = []
-    for i in range(len(seeds)):
-        try:
-            f = seeds.frame(i)
-        except (FileNotFoundError, OSError, KeyError, IndexError, ValueError):
-            return None
-        if f is None:
-            return None
-        f = np.asarray(f)
-        out.append(float(f.mean()) / (255.0 if f.dtype == np.uint8 else 1.0))
-    return torch.tensor(out, dtype=torch.float64)
+def _read_frames(seeds: Any) -> list[np.ndarray] | None:
+    """Every seed's whole frame (uint8), read once; None when the seed set has no frames."""
+    try:
+        return [np.asarray(seeds.frame(i)) for i in range(len(seeds))]
+    except (FileNotFoundError, OSError, KeyError, IndexError, ValueError):
+        return None
 
 
 def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor | float]] | None = None, *,

@@ -349,18 +349,23 @@ def n_screening_tests(names: Sequence[str]) -> int:
             + sum(1 for c in names if c in NOISE_CANDIDATES) + sum(1 for c in names if c in COLOUR_CANDIDATES))
 
 
+def _z(p: float) -> float:
+    """The normal score of a one-sided p-value (clipped to ±40)."""
+    from scipy import stats
+
+    return float(np.clip(stats.norm.isf(min(max(p, 1e-300), 1.0)), -40.0, 40.0))
+
+
 def noise_level_channel(effect: str, nc: dict[str, Any] | None, n_tests: int, alpha: float
                         ) -> dict[str, Any] | None:
     """The noise-level-function channel of ``effect`` (shot noise: the NLF rises with brightness; a
     compressive tone curve: it falls), from :func:`synthaug.diagnose.noise.noise_channel`."""
-    from scipy import stats
-
     if effect not in NOISE_CANDIDATES or nc is None or nc["n_seeds"] < 3:
         return None
     sign = NOISE_CANDIDATES[effect]
     p_one = nc["p"] / 2 if nc["slope"] * sign > 0 else 1.0 - nc["p"] / 2
     p_adj = min(1.0, p_one * n_tests)
-    z = float(np.clip(stats.norm.isf(min(max(p_one, 1e-300), 1.0)), -40.0, 40.0))
+    z = _z(p_one)
     big = abs(nc["slope"]) >= SLOPE_FLOOR
     return {"channel": "noise_level", "p_adjusted": p_adj, "z": z, "gain": nc["gain"], "slope": nc["slope"],
             "significant": bool(p_adj < alpha and nc["slope"] * sign > 0 and big and nc["gain"] > 0)}
@@ -444,8 +449,6 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         ``gain`` (held-out), ``screen``, ``absorption``, ``noise`` (the noise level function's
         evidence, for its candidates), ``noise_setting``.
     """
-    from scipy import stats
-
     names = list(CANDIDATE_GRIDS) if candidates is None else list(candidates)
     bad = [c for c in names if c not in CANDIDATE_GRIDS]
     if bad:
@@ -475,7 +478,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         for space, other in (("feature", "pixel"), ("pixel", "feature")):
             s = sc[space]
             p_adj = min(1.0, s["p"] * n_tests)
-            z = float(np.clip(stats.norm.isf(min(max(s["p"], 1e-300), 1.0)), -40.0, 40.0))
+            z = _z(s["p"])
             # ... and the other space must not get worse (unpenalised held-out gain >= 0): an "extension"
             # that buys pixel distance by erasing detail the detector sees is not more realistic
             other_ok = sc[other]["gain"] + penalty * sc["n_params"] >= 0.0
@@ -498,7 +501,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
             sc["colour"] = col
             p_adj = min(1.0, col["p"] * n_tests)
             channels.append({"channel": "distance:colour", "p_adjusted": p_adj,
-                             "z": float(np.clip(stats.norm.isf(min(max(col["p"], 1e-300), 1.0)), -40.0, 40.0)),
+                             "z": _z(col["p"]),
                              "gain": col["gain"], "significant": bool(p_adj < alpha and col["gain"] > 0
                                                                       and col["raw_gain_all"] >= min_gain)})
         sig = [c for c in channels if c["significant"]]
