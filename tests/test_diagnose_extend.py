@@ -140,13 +140,24 @@ def _dataset(seeds, params, cache, **kw):
                                   negative_fraction=0.0, seed=5, cache=cache, **kw)
 
 
+def _item_draw(ds, k: int):
+    """Item ``k``'s draws by hand (dataset seed 5, epoch 0, 4 seeds): its generator after the uniform draws,
+    the seed it uses and its pose."""
+    from synthaug.data.synthetic import item_generator
+    from synthaug.params import POSE_NAMES
+
+    g = item_generator(5, 0, k)
+    u = torch.rand(10, generator=g, dtype=torch.float64).tolist()
+    pose = {n: torch.tensor([lo + (hi - lo) * u[2 + j]]) for j, n in enumerate(POSE_NAMES)
+            for lo, hi in [ds.pose_ranges[n]]}
+    return g, min(int(u[0] * 4), 3), pose
+
+
 @pytest.mark.parametrize("effect, setting", [("defocus", {"defocus_sigma": 1.0}),
                                              ("shot_noise", {"shot_sigma": 0.05})])
 def test_generator_applies_exactly_the_added_effect(seeds_and_fit, tmp_path, effect, setting):
     """Items of the extended fit = simulate(same layers, base Θ + the effect); ablating it gives the base items."""
-    from synthaug.data.synthetic import item_generator
     from synthaug.effects import simulate
-    from synthaug.params import POSE_NAMES
     from synthaug.render.cache import ViewCache
 
     seeds, fit = seeds_and_fit
@@ -164,11 +175,7 @@ def test_generator_applies_exactly_the_added_effect(seeds_and_fit, tmp_path, eff
     theta_ext = CaptureParams.load(ext_path)
     seed_scales = torch.tensor([float(e["object_scale"]) for e in CaptureParams.load_with_extra(fit)[1]])
     for k in idx:
-        g = item_generator(5, 0, k)
-        u = torch.rand(10, generator=g, dtype=torch.float64).tolist()
-        s = min(int(u[0] * 4), 3)
-        pose = {n: torch.tensor([lo + (hi - lo) * u[2 + j]]) for j, n in enumerate(POSE_NAMES)
-                for lo, hi in [ext_ds.pose_ranges[n]]}
+        g, s, pose = _item_draw(ext_ds, k)
         fields = {}
         for name in ("object_noise", effect):  # the random effects in registry order
             from synthaug.effects.registry import get_effect
@@ -213,12 +220,10 @@ def test_cli_writes_the_extended_fit_from_the_first_finding(seeds_and_fit, tmp_p
 
 def test_seed_geometry_reaches_position_aware_effects_and_leaves_the_paper_effects_alone(seeds_and_fit, tmp_path):
     """With ``seed_geometry`` a vignetted item is darkened by its SEED's place in the frame (by hand: 1 - k r²)."""
-    from synthaug.data.synthetic import item_generator
     from synthaug.diagnose.reference_camera import seed_geometry
     from synthaug.effects import functional as Fx
     from synthaug.effects.pipeline import apply_effects
     from synthaug.effects.registry import RenderState, get_effect
-    from synthaug.params import POSE_NAMES
     from synthaug.render.cache import ViewCache
 
     seeds, fit = seeds_and_fit
@@ -239,11 +244,7 @@ def test_seed_geometry_reaches_position_aware_effects_and_leaves_the_paper_effec
     seed_scales = torch.tensor([float(e["object_scale"]) for e in CaptureParams.load_with_extra(fit)[1]])
     ds = _dataset(seeds, ext_path, cache, seed_geometry=geo)
     for k in idx:
-        g = item_generator(5, 0, k)
-        u = torch.rand(10, generator=g, dtype=torch.float64).tolist()
-        s = min(int(u[0] * 4), 3)
-        pose = {n: torch.tensor([lo + (hi - lo) * u[2 + j]]) for j, n in enumerate(POSE_NAMES)
-                for lo, hi in [ds.pose_ranges[n]]}
+        g, s, pose = _item_draw(ds, k)
         fields = get_effect("object_noise").sample_fields((1, 1, 40, 40), g)
         cov, nrm = cache.layers(pose["alpha"], pose["beta"], pose["gamma"], pose["t_x"], pose["t_y"], size=40,
                                 object_scale=seed_scales[[s]])
