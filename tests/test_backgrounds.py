@@ -146,3 +146,9 @@ def test_bad_boxes_and_frames():
         estimate_background(np.zeros((2, 8, 8), np.uint8), [None], 0)
     with pytest.raises(ValueError, match="inpaint method"):
         inpaint_region(np.zeros((8, 8), np.uint8), np.ones((8, 8), bool), method="magic")
+
+
+def test_colour_frames_must_match_the_gray_frames():
+    frames = np.zeros((3, 20, 30), np.uint8)
+    with pytest.raises(ValueError, match="colour_frames must be uint8"):
+        estimate_background(frames, [None, [5, 5, 4, 4], None], 1, colour_frames=np.zeros((3, 20, 30), np.uint8))

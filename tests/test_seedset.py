@@ -191,3 +191,22 @@ def test_crop_resampling_sigma_matches_the_measured_blur_of_crop_patch(frame_sca
     assert np.mean(var) - blob == pytest.approx(extra, rel=0.1)
     with pytest.raises(ValueError, match="positive"):
         crop_resampling_sigma([1.0, 0.0])
+
+
+def test_rgb_patches_bad_input(tmp_path):
+    _write(tmp_path / "s")
+    s = SeedSet.load(tmp_path / "s")
+    assert s.colour() is None
+    good = np.zeros((3, 16, 16, 3), np.uint8)
+    args = dict(patches=s.patches, backgrounds=s.backgrounds, boxes=s.boxes, centres=s.centres, crops=s.crops,
+                records=s.records, frames=[s.frame_path(i) for i in range(3)],
+                background_frames=[s.background_frame_path(i) for i in range(3)],
+                metadata={"patch_size": 16, "object_fraction": 0.7})
+    with pytest.raises(ValueError, match="both patches_rgb and backgrounds_rgb"):
+        write_seedset(tmp_path / "a", patches_rgb=good, **args)
+    with pytest.raises(ValueError, match=r"patches_rgb must be uint8 \(3, 16, 16, 3\)"):
+        write_seedset(tmp_path / "b", patches_rgb=good[:2], backgrounds_rgb=good, **args)
+    write_seedset(tmp_path / "c", patches_rgb=good, backgrounds_rgb=good, **args)
+    np.savez(tmp_path / "c" / "colour.npz", patches_rgb=good[:1], backgrounds_rgb=good[:1])  # a stale file
+    with pytest.raises(ValueError, match="expected RGB patches"):
+        SeedSet.load(tmp_path / "c").colour()
