@@ -8,9 +8,14 @@ ones, the rest synthetic, so a shuffling sampler mixes them at the chosen
 ``synthetic_per_real`` ratio.
 
 Every item is a pure function of ``(seed, epoch, index)``: the same bytes with
-any ``num_workers`` and across runs. Call :meth:`set_epoch` each epoch for new
-poses. The dataset implements ``__getitems__``, so a DataLoader builds a whole
-batch in one vectorised call (the speed comes from there).
+any ``num_workers`` and across runs. New poses every epoch, the PyTorch way: an
+:class:`EpochSampler` yields ``(epoch, index)`` pairs, so the epoch reaches the
+DataLoader workers even when they are persistent (or under a
+``DistributedSampler``, which it wraps); Lightning calls its ``set_epoch``.
+:meth:`set_epoch` on the dataset itself still works for plain integer indices
+when workers are not persistent. The dataset implements ``__getitems__``, so a
+DataLoader builds a whole batch in one vectorised call (the speed comes from
+there).
 
 Items are ``(image, target)``:
 
@@ -18,9 +23,17 @@ Items are ``(image, target)``:
   1 object / 0 background, "synthetic": bool (), "seed_index": int64 (),
   "theta": float32 (len Θ,)}`` (real items get ``seed_index = -1`` and a NaN
   Θ so that the default collate works on mixed batches);
-- frame mode: image (C, H, W); target ``{"boxes": float32 (N, 4) XYXY,
-  "labels": int64 (N,), ...}`` as torchvision's detection models expect. Use
-  :func:`collate_detection` as ``collate_fn``.
+- frame mode: image ``tv_tensors.Image`` (C, H, W); target ``{"boxes":
+  tv_tensors.BoundingBoxes (N, 4) float32 XYXY with canvas_size (H, W),
+  "labels": int64 (N,), ...}`` as torchvision's detection models and
+  ``transforms.v2`` expect (a flip or crop moves the boxes with the image).
+  Use :func:`collate_detection` as ``collate_fn``.
+
+Real items come out in the same format as synthetic ones whatever the user's
+dataset returns (uint8 or float arrays, (H, W), (H, W, C) or (C, H, W), an int
+label or a target dict), and ``transforms`` (any callable on ``(image,
+target)``, e.g. a ``transforms.v2.Compose``) is applied to both alike, with
+its random draws seeded from ``(seed, epoch, index)``.
 
 Example:
     >>> import numpy as np, torch
@@ -39,13 +52,14 @@ from typing import Any, Literal
 
 import numpy as np
 import torch
-from torch.utils.data import Dataset
+from torch.utils.data import Dataset, Sampler
+from torchvision import tv_tensors
 
 from synthaug.effects.pipeline import simulate
 from synthaug.effects.registry import ordered
 from synthaug.params import POSE_NAMES, POSE_SPECS, CaptureParams, fitted_object_scales
 
-__all__ = ["SyntheticObjectDataset", "collate_detection", "item_generator"]
+__all__ = ["SyntheticObjectDataset", "EpochSampler", "collate_detection", "item_generator"]
 
 Mode = Literal["patch", "frame"]
 
@@ -72,6 +86,73 @@ def item_seed(seed: int, epoch: int, index: int) -> int:
 def item_generator(seed: int, epoch: int, index: int) -> torch.Generator:
     """The generator of one item: a pure function of (seed, epoch, index)."""
     return torch.Generator().manual_seed(item_seed(seed, epoch, index))
+
+
+class EpochSampler(Sampler):
+    """Yields ``(epoch, index)`` pairs: the epoch travels with each index to the worker.
+
+    A ``DataLoader`` with ``persistent_workers=True`` keeps copies of the
+    dataset in its workers, so :meth:`SyntheticObjectDataset.set_epoch` on the
+    main-process dataset never reaches them. The sampler lives in the main
+    process and its ``set_epoch`` (called by Lightning's loops and by
+    ``DistributedSampler`` users) changes the indices themselves.
+
+    Args:
+        source: the dataset (or its length) to draw indices over, or any
+            sampler of integer indices to wrap (e.g. a ``DistributedSampler``;
+            its ``set_epoch`` is called too).
+        shuffle: a fresh permutation every epoch (own sampling only), drawn
+            from ``torch.Generator().manual_seed(item_seed(seed, epoch, -1))``.
+        seed: seeds the permutations.
+
+    Example:
+        >>> s = EpochSampler(4)
+        >>> s.set_epoch(2)
+        >>> list(s)
+        [(2, 0), (2, 1), (2, 2), (2, 3)]
+        >>> s = EpochSampler(5, shuffle=True, seed=1)
+        >>> sorted(i for _, i in s) == [0, 1, 2, 3, 4]
+        True
+    """
+
+    def __init__(self, source: Any, *, shuffle: bool = False, seed: int = 0) -> None:
+        if isinstance(source, Sampler) or (not isinstance(source, int) and not hasattr(source, "__getitem__")
+                                           and hasattr(source, "__iter__")):
+            if shuffle:
+                raise ValueError("shuffle=True is for EpochSampler's own sampling; the wrapped sampler decides "
+                                 "its own order")
+            self.sampler: Any = source
+            self.n = None
+        else:
+            n = int(source) if isinstance(source, int) else len(source)
+            if n < 0:
+                raise ValueError(f"EpochSampler needs a length >= 0, got {n}")
+            self.sampler = None
+            self.n = n
+        self.shuffle = bool(shuffle)
+        self.seed = int(seed)
+        self.epoch = 0
+
+    def set_epoch(self, epoch: int) -> None:
+        """The epoch that the next iteration carries (and the wrapped sampler's)."""
+        self.epoch = int(epoch)
+        if self.sampler is not None and hasattr(self.sampler, "set_epoch"):
+            self.sampler.set_epoch(epoch)
+
+    def __len__(self) -> int:
+        return len(self.sampler) if self.sampler is not None else self.n  # type: ignore[arg-type]
+
+    def __iter__(self):
+        epoch = self.epoch
+        if self.sampler is not None:
+            order = (int(i) for i in self.sampler)
+        elif self.shuffle:
+            g = torch.Generator().manual_seed(item_seed(self.seed, epoch, -1))
+            order = iter(torch.randperm(self.n, generator=g).tolist())
+        else:
+            order = iter(range(self.n))
+        for i in order:
+            yield (epoch, i)
 
 
 def collate_detection(batch: Sequence[tuple[Any, Any]]) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
@@ -176,6 +257,12 @@ class SyntheticObjectDataset(Dataset):
             lens distortion, the JPEG block grid). ``"auto"`` (default): the seed
             set's own when ``backgrounds`` is a seed set, else None; None: the
             patch is taken as the frame. The paper's four effects do not read it.
+        transforms: a callable ``(image, target) -> (image, target)`` applied to
+            every item, real and synthetic alike, as torchvision datasets take
+            one (e.g. ``transforms.v2.Compose([...])``: frame-mode boxes are
+            ``tv_tensors.BoundingBoxes`` and move with the image). Its random
+            draws (torch's global generator) are seeded per item from
+            ``(seed, epoch, index)``, so items stay reproducible.
     """
 
     def __init__(
@@ -202,8 +289,12 @@ class SyntheticObjectDataset(Dataset):
         cache_options: Mapping[str, Any] | None = None,
         capture_sampling: Literal["seed", "kde", "uniform"] = "seed",
         seed_geometry: Mapping[str, Any] | Literal["auto"] | None = "auto",
+        transforms: Any = None,
     ) -> None:
         super().__init__()
+        if transforms is not None and not callable(transforms):
+            raise ValueError(f"transforms must be a callable on (image, target), got {type(transforms).__name__}")
+        self.transforms = transforms
         if mode not in ("patch", "frame"):
             raise ValueError(f"mode must be 'patch' or 'frame', got {mode!r}")
         if render not in ("cache", "exact"):
@@ -383,46 +474,86 @@ class SyntheticObjectDataset(Dataset):
     def __getitem__(self, index: int) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
         return self.__getitems__([index])[0]
 
-    def __getitems__(self, indices: Sequence[int]) -> list[tuple[torch.Tensor, dict[str, torch.Tensor]]]:
+    def __getitems__(self, indices: Sequence[Any]) -> list[tuple[torch.Tensor, dict[str, torch.Tensor]]]:
+        """Items of a batch; each index is an int (the dataset's epoch) or an ``(epoch, index)`` pair."""
         n = len(self)
-        idx = []
+        idx: list[tuple[int, int]] = []
         for i in indices:
-            i = int(i)
+            if isinstance(i, (tuple, list)):
+                if len(i) != 2:
+                    raise IndexError(f"an index is an int or an (epoch, index) pair, got {i!r}")
+                epoch, i = int(i[0]), int(i[1])
+            else:
+                epoch, i = self.epoch, int(i)
             if i < 0:
                 i += n
             if not 0 <= i < n:
                 raise IndexError(f"index {i} out of range for a dataset of length {n}")
-            idx.append(i)
+            idx.append((epoch, i))
         out: list[Any] = [None] * len(idx)
-        syn = [(k, i) for k, i in enumerate(idx) if i >= self.n_real]
-        for k, i in enumerate(idx):
+        syn = [(k, e, i) for k, (e, i) in enumerate(idx) if i >= self.n_real]
+        for k, (e, i) in enumerate(idx):
             if i < self.n_real:
                 out[k] = self._real_item(i)
         if syn:
-            items = self._synthetic_items([i for _, i in syn])
-            for (k, _), item in zip(syn, items):
+            items = self._synthetic_items([i for _, _, i in syn], [e for _, e, _ in syn])
+            for (k, _, _), item in zip(syn, items):
                 out[k] = item
+        if self.transforms is not None:
+            out = [self._transform(item, e, i) for item, (e, i) in zip(out, idx)]
         return out
 
-    def _real_item(self, i: int) -> tuple[Any, dict[str, Any]]:
+    def _transform(self, item: tuple[Any, Any], epoch: int, index: int) -> tuple[Any, Any]:
+        """``transforms(image, target)`` with torch's random draws seeded from (seed, epoch, index)."""
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(item_seed(self.seed ^ 0x7F4A7C15, epoch, index) & ((1 << 63) - 1))
+            out = self.transforms(*item)
+        if not isinstance(out, (tuple, list)) or len(out) != 2:
+            raise ValueError(f"transforms must return (image, target), got {type(out).__name__}")
+        return out[0], out[1]
+
+    def _real_item(self, i: int) -> tuple[torch.Tensor, dict[str, Any]]:
+        """Item ``i`` of the user's dataset in the synthetic items' format (image dtype, shape, target keys)."""
         item = self.real[i]  # type: ignore[index]
         if not isinstance(item, (tuple, list)) or len(item) != 2:
             raise ValueError(f"real dataset items must be (image, target) pairs; item {i} is {type(item).__name__}")
         image, target = item
+        where = f"real[{i}]"
+        img = _to_float_image(image, self.channels, where)
+        h, w = img.shape[-2:]
         if isinstance(target, Mapping):
             t = dict(target)
         else:
-            t = {"labels": torch.as_tensor(target, dtype=torch.int64)}
+            t = {"labels": target}
+        if self.mode == "patch":
+            if (h, w) != (self.patch_size, self.patch_size):
+                raise ValueError(f"{where}: image is {h}x{w} but patch_size is {self.patch_size} (real and synthetic "
+                                 f"patches must have one size to be batched together)")
+            label = torch.as_tensor(t.get("labels", self.label))
+            if label.numel() != 1:
+                raise ValueError(f"{where}: a patch's label must be one class id, got shape {tuple(label.shape)}")
+            t["labels"] = label.reshape(()).to(torch.int64)
+        else:
+            if "boxes" not in t:
+                raise ValueError(f"{where}: frame mode needs a target dict with 'boxes' (N, 4) XYXY pixels")
+            boxes = torch.as_tensor(t["boxes"], dtype=torch.float32).reshape(-1, 4)
+            t["boxes"] = tv_tensors.BoundingBoxes(boxes, format="XYXY", canvas_size=(h, w))
+            labels = t.get("labels")
+            t["labels"] = (torch.full((len(boxes),), self.label, dtype=torch.int64) if labels is None
+                           else torch.as_tensor(labels, dtype=torch.int64).reshape(-1))
+            if len(t["labels"]) != len(boxes):
+                raise ValueError(f"{where}: {len(boxes)} boxes but {len(t['labels'])} labels")
+            img = tv_tensors.Image(img)
         t.setdefault("synthetic", torch.tensor(False))
         t.setdefault("seed_index", torch.tensor(-1, dtype=torch.int64))
         t.setdefault("theta", torch.full((len(CaptureParams.vector_names(channels=self.channels,
                                                                         effects=self.params.effects)),), float("nan")))
-        return image, t
+        return img, t
 
     # -------------------------------------------------------- synthesis
-    def _draw(self, index: int) -> dict[str, Any]:
+    def _draw(self, index: int, epoch: int) -> dict[str, Any]:
         """All random draws of one item, from its own generator (one uniform vector + fields)."""
-        g = item_generator(self.seed, self.epoch, index)
+        g = item_generator(self.seed, epoch, index)
         u = torch.rand(10, generator=g, dtype=torch.float64).tolist()
         n_seeds = len(self.backgrounds)
         seed_index = min(int(u[0] * n_seeds), n_seeds - 1)
@@ -461,8 +592,10 @@ class SyntheticObjectDataset(Dataset):
             nrms.append(n)
         return torch.cat(covs), torch.cat(nrms)
 
-    def _synthetic_items(self, indices: list[int]) -> list[tuple[torch.Tensor, dict[str, torch.Tensor]]]:
-        draws = [self._draw(i) for i in indices]
+    def _synthetic_items(self, indices: list[int], epochs: list[int] | None = None,
+                         ) -> list[tuple[torch.Tensor, dict[str, torch.Tensor]]]:
+        epochs = [self.epoch] * len(indices) if epochs is None else epochs
+        draws = [self._draw(i, e) for i, e in zip(indices, epochs)]
         crop = self.patch_size if self.mode == "patch" else self._crop_size()
         seeds = torch.tensor([d["seed_index"] for d in draws])
         theta_rows = self.params[seeds]
@@ -518,14 +651,14 @@ class SyntheticObjectDataset(Dataset):
             else:
                 frame = self.backgrounds[d["seed_index"]].clone()
                 if d["negative"]:
-                    target["boxes"] = torch.zeros((0, 4), dtype=torch.float32)
-                    target["labels"] = torch.zeros((0,), dtype=torch.int64)
+                    boxes = torch.zeros((0, 4), dtype=torch.float32)
                 else:
                     x0, y0 = d["crop_xy"]
                     frame[:, y0:y0 + crop, x0:x0 + crop] = images[k]
-                    target["boxes"] = _box_from_coverage(cov[k, 0], x0, y0)
-                    target["labels"] = torch.full((len(target["boxes"]),), self.label, dtype=torch.int64)
-                out.append((frame, target))
+                    boxes = _box_from_coverage(cov[k, 0], x0, y0)
+                target["boxes"] = tv_tensors.BoundingBoxes(boxes, format="XYXY", canvas_size=tuple(frame.shape[-2:]))
+                target["labels"] = torch.full((len(boxes),), self.label, dtype=torch.int64)
+                out.append((tv_tensors.Image(frame), target))
         return out
 
     def _pose_in_range(self, pose: dict[str, torch.Tensor]) -> bool:
