@@ -20,6 +20,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "experiment": ("synthaug.evaluate.experiments_cli", "the paper's experiments and the baselines on real videos"),
     "detect": ("synthaug.detectors.cli", "checkpoint + video/images -> per-frame detections JSON"),
     "evaluate": ("synthaug.evaluate.cli", "detections + labels -> precision-recall PNG and AP"),
+    "export": ("synthaug.data.export", "synthetic frames (+ real seeds) as a COCO or YOLO dataset for other trainers"),
 }
 
 
