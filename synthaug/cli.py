@@ -1,6 +1,8 @@
 """The ``synthaug`` command line: one subcommand per module, imported lazily.
 
 Each subcommand module exposes ``add_arguments(parser)`` and ``main(args) -> int``.
+``synthaug --help`` imports none of them; ``synthaug COMMAND ...`` imports only
+that command's module. Every option's help ends with its default.
 """
 
 from __future__ import annotations
@@ -24,12 +26,29 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="synthaug", description=__doc__.splitlines()[0])
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Every option's default appended to its help (``(default: X)``), except flags and options whose default
+    is "not given" (None); descriptions kept as written."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        if action.default is None or action.default is False or action.nargs == 0:
+            return action.help
+        return super()._get_help_string(action)
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser; with ``command``, that subcommand's options are added (its module imported), the others
+    are listed by name and one-line help only."""
+    parser = argparse.ArgumentParser(prog="synthaug", formatter_class=_HelpFormatter,
+                                     description="synthaug: synthetic training images for object detectors, "
+                                                 "realistic in the detector's eyes (Rozantsev et al., CVIU 2015)",
+                                     epilog="`synthaug COMMAND --help` lists a command's options with their defaults.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module, help_) in SUBCOMMANDS.items():
-        p = sub.add_parser(name, help=help_, description=help_)
+        p = sub.add_parser(name, help=help_, description=help_, formatter_class=_HelpFormatter)
         p.set_defaults(_module=module)
+        if name != command:
+            continue
         try:
             mod = importlib.import_module(module)
         except ModuleNotFoundError as e:
@@ -41,8 +60,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _command(argv: list[str]) -> str | None:
+    """The subcommand named in ``argv`` (the first argument that is one), if any."""
+    for a in argv:
+        if a in SUBCOMMANDS:
+            return a
+        if not a.startswith("-"):
+            return None
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command(argv))
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()

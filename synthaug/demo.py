@@ -41,9 +41,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seeds", type=int, default=25, help="seed images drawn from the train videos")
     parser.add_argument("--budget", type=int, default=800, help="fit evaluations per seed")
     parser.add_argument("--ratio", type=float, default=20, help="synthetic patches per real seed")
-    parser.add_argument("--detector", default="hog", choices=["hog", "adaboost", "cnn"])
+    parser.add_argument("--detector", default="hog", choices=["hog", "adaboost", "cnn"],
+                        help="detector trained on real seeds only and on real + synthetic")
     parser.add_argument("--stride", type=int, default=3, help="score every k-th test frame")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="seeds everything: videos, fits, training")
     parser.add_argument("--fit-init", default="grid", choices=["grid", "uniform"], help="how each fit starts")
     parser.add_argument("--hidden", default="rotor_blur",
                         help="camera effect hidden in the diagnosis step's measured data (issue 6); 'none' skips "

@@ -282,7 +282,7 @@ def test_api_errors(seeds_dir, small_cache, tmp_path):
 
 
 def test_every_option_has_a_help_text_with_its_default():
-    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    sub = next(a for a in build_parser("export")._actions if a.dest == "command")
     parser = sub.choices["export"]
     opts = [a for a in parser._actions if a.option_strings and a.dest != "help"]
     assert {"--format", "--seeds", "--params", "--mesh", "--count", "--out", "--include-real", "--seed",

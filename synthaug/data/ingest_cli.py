@@ -42,8 +42,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--object-fraction", type=float, default=0.7,
                         help="the box's longest side spans this fraction of the patch (default 0.7)")
     parser.add_argument("--per-video", type=int, default=8, help="seed candidates per video (default 8)")
-    parser.add_argument("--negatives-per-video", type=int, default=16)
-    parser.add_argument("--hard-negatives-per-video", type=int, default=16)
+    parser.add_argument("--negatives-per-video", type=int, default=16,
+                        help="random object-free background crops kept per train video")
+    parser.add_argument("--hard-negatives-per-video", type=int, default=16,
+                        help="object-free crops near the object (clutter next to it) kept per train video")
     parser.add_argument("--inpaint", default="pushpull", choices=["pushpull", "telea", "ns"],
                         help="fill used where aligned frames cannot serve (default pushpull)")
     parser.add_argument("--seed", type=int, default=0, help="base random seed")

@@ -25,12 +25,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--params", default=None, help="capture-parameter file (one row per seed)")
     parser.add_argument("--n", type=int, default=48, help="samples (without --seeds) or seeds shown (with)")
     parser.add_argument("--per-seed", type=int, default=4, help="synthetic samples per real seed (with --seeds)")
-    parser.add_argument("--mode", choices=["patch", "frame"], default="patch")
+    parser.add_argument("--mode", choices=["patch", "frame"], default="patch",
+                        help="patches (classifier input) or whole frames with the object composited")
     parser.add_argument("--size", type=int, default=40, help="patch side")
     parser.add_argument("--zoom", type=int, default=3, help="nearest-neighbour upscaling of each tile")
     parser.add_argument("--effects", nargs="*", default=None, help="effects to apply (default: all)")
     parser.add_argument("--step-deg", type=float, default=5.0, help="view-cache grid step (degrees)")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="dataset seed (poses, noise)")
 
 
 def _tile_grid(tiles: list[np.ndarray], cols: int, pad: int = 2, zoom: int = 1) -> np.ndarray:

@@ -22,10 +22,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, help="output folder (report.json, report.md, plots)")
     parser.add_argument("--candidates", nargs="*", default=None, help="candidate effects (default: all 14)")
     parser.add_argument("--folds", type=int, default=5, help="cross-validation folds over seeds")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="seeds folds, permutations and renders")
     parser.add_argument("--alpha", type=float, default=0.01, help="family-wise significance level")
-    parser.add_argument("--no-plots", action="store_true")
-    parser.add_argument("--quiet", action="store_true")
+    parser.add_argument("--no-plots", action="store_true", help="write report.json/report.md without the PNG figures")
+    parser.add_argument("--quiet", action="store_true", help="print nothing but the final JSON summary")
     parser.add_argument("--extended-fit", default=None, metavar="PATH",
                         help="also write the fit extended by the first finding's effect (per-seed patch units); "
                              "nothing is written when there is no candidate-effect finding")

@@ -18,10 +18,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mesh", default="quadcopter", help="mesh file or built-in name")
     parser.add_argument("--distance", default="hog", help="eucl, hog, wl_random, wl_learned, cnn (or a *_smooth)")
     parser.add_argument("--out", required=True, help="output capture-parameter JSON")
-    parser.add_argument("--optimizer", default="cmaes", choices=["cmaes", "anneal", "random"])
+    parser.add_argument("--optimizer", default="cmaes", choices=["cmaes", "anneal", "random"],
+                        help="search: CMA-ES, the paper's simulated annealing, or random search")
     parser.add_argument("--budget", type=int, default=3500,
                         help="objective evaluations per seed (3500 ≈ 1.9 s on one core here)")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="seeds the search of every seed image")
     parser.add_argument("--init", default=None, choices=["uniform", "grid"],
                         help="start of the search: 'grid' = a rotation grid, then a short search of the other "
                              "parameters at its best poses (counted in the budget); 'uniform' = CMA-ES's "
@@ -34,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--sprite-size", type=int, default=96, help="view-cache sprite side (px)")
     parser.add_argument("--workers", type=int, default=1, help="local processes")
     parser.add_argument("--dask", default=None, help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
-    parser.add_argument("--no-progress", action="store_true")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def main(args: argparse.Namespace) -> int:
