@@ -27,8 +27,10 @@ def main() -> None:
     p.add_argument("--kind", default="cnn")
     args = p.parse_args()
     torch.set_num_threads(1)
+    from torchvision.ops import box_convert, box_iou
+
     from synthaug.detectors.sliding import DEFAULT_SCALES, detect_multiscale, geometric_scales
-    from synthaug.evaluate.ap import evaluate_detections, iou_xywh
+    from synthaug.evaluate.ap import evaluate_detections
     from synthaug.evaluate.experiments import ExperimentContext, train_detector
 
     ctx = ExperimentContext(out_dir=Path("/tmp/diag"), val_stride_k=args.val_stride_k, max_val_videos=args.max_val_videos, log=lambda m: None)
@@ -47,7 +49,8 @@ def main() -> None:
                 dets.append(dd)
                 gts.append(g)
                 if g is not None:
-                    best.append(float(iou_xywh(g, dd[:, :4]).max()) if len(dd) else 0.0)
+                    gt_xyxy = box_convert(torch.as_tensor(np.asarray(g, dtype=np.float64).reshape(-1, 4)), "xywh", "xyxy")
+                    best.append(float(box_iou(gt_xyxy, box_convert(torch.from_numpy(dd[:, :4]), "xywh", "xyxy")).max()) if len(dd) else 0.0)
         best = np.array(best)
         out[name] = {"ap_iou0.5": evaluate_detections(dets, gts, 0.5).ap, "ap_iou0.3": evaluate_detections(dets, gts, 0.3).ap,
                      "top10_best_iou>=0.5": float((best >= 0.5).mean()), "top10_best_iou>=0.3": float((best >= 0.3).mean()),

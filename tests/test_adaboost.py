@@ -143,12 +143,14 @@ def test_cascade_is_a_lower_bound_and_keeps_positives(trained: AdaBoostDetector)
 
 
 def test_detect_multiscale_finds_toy_objects(trained: AdaBoostDetector) -> None:
-    from synthaug.detectors.sliding import box_iou, detect_multiscale, xywh_to_xyxy
+    from torchvision.ops import box_convert, box_iou
+
+    from synthaug.detectors.sliding import detect_multiscale
 
     frame, boxes = toy_frame(200, 240, n_objects=3, seed=11)
     dets = detect_multiscale(trained, frame, scales=(1.0,), score_threshold=0.0, nms_iou=0.3)
     assert len(dets) >= 3
-    iou = box_iou(xywh_to_xyxy(boxes), xywh_to_xyxy(dets[:, :4]))
+    iou = box_iou(box_convert(boxes, "xywh", "xyxy"), box_convert(dets[:, :4], "xywh", "xyxy"))
     assert (iou.max(1).values >= 0.5).all()
 
 

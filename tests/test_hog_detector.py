@@ -7,6 +7,7 @@ import math
 import pytest
 import torch
 import torch.nn.functional as F
+from torchvision.ops import box_convert, box_iou
 
 from synthaug.detectors.base import (
     PatchDetector,
@@ -20,7 +21,6 @@ from synthaug.detectors.base import (
 from synthaug.detectors.hog import DEFAULT_HOG, dense_block_map
 from synthaug.detectors.hog_dpm import HOGDetector, kmeans, train_linear_svm
 from synthaug.detectors.sliding import detect_multiscale
-from synthaug.evaluate.ap import iou_xywh
 
 
 def _background(h: int, w: int, g: torch.Generator) -> torch.Tensor:
@@ -142,7 +142,7 @@ def test_detects_objects_in_a_frame(trained: HOGDetector) -> None:
     assert dets.shape[1] == 5 and dets.shape[0] >= 2
     assert torch.all(dets[:-1, 4] >= dets[1:, 4])
     gt = torch.tensor([[cx - s / 2, cy - s / 2, s, s] for cx, cy, s, _ in truths])
-    iou = torch.from_numpy(iou_xywh(dets[:2, :4].numpy(), gt.numpy()))
+    iou = box_iou(box_convert(dets[:2, :4], "xywh", "xyxy"), box_convert(gt, "xywh", "xyxy"))
     assert (iou.amax(1) >= 0.5).all(), f"top-2 detections {dets[:2].tolist()} vs truths {gt.tolist()}"
     assert dets[0, 4] > 0 and dets[1, 4] > 0
 

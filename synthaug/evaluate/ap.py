@@ -5,8 +5,11 @@ decreasing score; each, in turn, is compared with the ground-truth boxes of
 its own frame; it is a true positive if the box it overlaps most has
 IoU ≥ ``iou_threshold`` (0.5) and has not been claimed by a higher-scoring
 detection, otherwise a false positive (a duplicate of a found object is a
-false positive). Precision and recall are evaluated at every distinct score
-(detections with equal scores enter together), and
+false positive). Boxes arrive ``[x, y, w, h]`` (the format of the detection
+and label files) and are converted once to ``[x1, y1, x2, y2]``; the IoU is
+:func:`torchvision.ops.box_iou`, the one detection's NMS uses. Precision and
+recall are evaluated at every distinct score (detections with equal scores
+enter together), and
 
 - ``ap`` — the paper's AveP, ``∫ p(r) dr`` of the raw step curve:
   ``Σ_k (r_k - r_{k-1}) p_k`` over distinct scores (scikit-learn's
@@ -35,6 +38,8 @@ from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
+import torch
+from torchvision.ops import box_convert, box_iou
 
 
 @dataclass
@@ -90,22 +95,21 @@ def _json_float(x: float) -> float | None:
     return None if math.isnan(x) else float(x)
 
 
-def iou_xywh(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Pairwise IoU of ``[x, y, w, h]`` boxes, ``(K, 4) x (M, 4) -> (K, M)``.
+def _iou_xywh_as_xyxy(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Pairwise IoU, ``(K, 4) x (M, 4) -> (K, M)`` float64, of ``[x, y, w, h]`` boxes.
+
+    The input edge of the evaluation: the boxes become XYXY
+    (:func:`torchvision.ops.box_convert`) and the IoU is
+    :func:`torchvision.ops.box_iou`, the one of detection, in float64. A pair
+    of empty boxes (0/0) has IoU 0.
 
     Example:
-        >>> iou_xywh(np.array([[0, 0, 2, 2]]), np.array([[1, 0, 2, 2], [5, 5, 1, 1]])).round(4)
+        >>> _iou_xywh_as_xyxy(np.array([[0, 0, 2, 2]]), np.array([[1, 0, 2, 2], [5, 5, 1, 1]])).round(4)
         array([[0.3333, 0.    ]])
     """
-    a = np.asarray(a, dtype=np.float64).reshape(-1, 4)
-    b = np.asarray(b, dtype=np.float64).reshape(-1, 4)
-    x1 = np.maximum(a[:, None, 0], b[None, :, 0])
-    y1 = np.maximum(a[:, None, 1], b[None, :, 1])
-    x2 = np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
-    y2 = np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
-    inter = np.clip(x2 - x1, 0, None) * np.clip(y2 - y1, 0, None)
-    union = (a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None, :] - inter
-    return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
+    a_t = box_convert(torch.as_tensor(np.asarray(a, dtype=np.float64).reshape(-1, 4)), "xywh", "xyxy")
+    b_t = box_convert(torch.as_tensor(np.asarray(b, dtype=np.float64).reshape(-1, 4)), "xywh", "xyxy")
+    return torch.nan_to_num(box_iou(a_t, b_t), nan=0.0).numpy()
 
 
 def match_detections(
@@ -129,8 +133,7 @@ def match_detections(
         raise ValueError(f"iou_threshold must be in (0, 1], got {iou_threshold}")
     frames = min(len(detections), len(ground_truth))
     entries: list[tuple[float, int, int]] = []  # (score, frame, row)
-    dets: dict[int, np.ndarray] = {}
-    gts: dict[int, np.ndarray] = {}
+    ious: dict[int, np.ndarray] = {}  # per frame: (K, G) IoU of its detections with its objects
     n_gt = 0
     n_frames = 0
     for f in range(frames):
@@ -139,20 +142,19 @@ def match_detections(
         n_frames += 1
         d = np.asarray(detections[f], dtype=np.float64).reshape(-1, 5)
         g = np.zeros((0, 4)) if ground_truth[f] is None else np.asarray(ground_truth[f], dtype=np.float64).reshape(-1, 4)
-        dets[f], gts[f] = d, g
+        ious[f] = _iou_xywh_as_xyxy(d[:, :4], g)
         n_gt += g.shape[0]
         entries.extend((float(d[k, 4]), f, k) for k in range(d.shape[0]))
     entries.sort(key=lambda e: -e[0])  # sort is stable: frame order on ties
-    claimed = {f: np.zeros(g.shape[0], dtype=bool) for f, g in gts.items()}
+    claimed = {f: np.zeros(iou.shape[1], dtype=bool) for f, iou in ious.items()}
     scores = np.array([e[0] for e in entries], dtype=np.float64)
     is_tp = np.zeros(len(entries), dtype=bool)
     for i, (_, f, k) in enumerate(entries):
-        g = gts[f]
-        if g.shape[0] == 0:
+        row = ious[f][k]
+        if row.size == 0:
             continue
-        ious = iou_xywh(dets[f][k : k + 1, :4], g)[0]
-        j = int(np.argmax(ious))
-        if ious[j] >= iou_threshold and not claimed[f][j]:
+        j = int(np.argmax(row))
+        if row[j] >= iou_threshold and not claimed[f][j]:
             claimed[f][j] = True
             is_tp[i] = True
     return scores, is_tp, n_gt, n_frames
