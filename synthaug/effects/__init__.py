@@ -17,9 +17,10 @@ from synthaug.effects.registry import (
     list_effects,
     register_effect,
 )
+from synthaug.effects.transform import CaptureEffects
 
 __all__ = [
     "PAPER_EFFECTS", "Effect", "RenderState", "get_effect", "list_effects", "register_effect",
-    "apply_effects", "sample_fields", "simulate",
+    "apply_effects", "sample_fields", "simulate", "CaptureEffects",
     "boundary_blur", "composite", "diffuse_material", "gaussian_blur_fft", "motion_blur", "object_noise",
 ]
