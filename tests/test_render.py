@@ -3,6 +3,8 @@
 import math
 import struct
 
+import os
+
 import numpy as np
 import pytest
 import torch
@@ -106,6 +108,33 @@ def test_cache_round_trips_through_disk(tmp_path):
     b = ViewCache.build("quadcopter", step_deg=45, sprite_size=16, cache_dir=tmp_path)  # loaded, memory-mapped
     assert torch.equal(a.coverage, b.coverage) and torch.equal(a.normals, b.normals)
     assert len(list((tmp_path / "views").iterdir())) == 1
+
+
+def test_cache_folder_is_bounded_least_recently_used_first(tmp_path, monkeypatch):
+    from synthaug.render.cache import prune_cache
+
+    monkeypatch.setenv("SYNTHAUG_CACHE_MAX_MB", "100")
+    ViewCache.build("quadcopter", step_deg=45, sprite_size=16, cache_dir=tmp_path)
+    ViewCache.build("quadcopter", step_deg=45, sprite_size=20, cache_dir=tmp_path)
+    entries = sorted((tmp_path / "views").iterdir())
+    sizes = {d.name: sum(f.stat().st_size for f in d.iterdir()) for d in entries}
+    assert len(entries) == 2  # both fit in 100 MB
+    old, new = sorted(entries, key=lambda d: (d / "meta.json").stat().st_mtime)
+    # loading the older entry makes it the most recently used: the other one goes first
+    os.utime(old / "meta.json", (1, 1))
+    os.utime(new / "meta.json", (2, 2))
+    ViewCache.build("quadcopter", step_deg=45, sprite_size=16, cache_dir=tmp_path)  # a load touches it
+    limit = max(sizes.values())
+    assert prune_cache(tmp_path, limit) == [tmp_path / "views" / [n for n in sizes if "px20" in n][0]]
+    assert [d.name for d in (tmp_path / "views").iterdir()] == [n for n in sizes if "px16" in n]
+    assert prune_cache(tmp_path, 0, keep=tmp_path / "views" / [n for n in sizes if "px16" in n][0]) == []
+    monkeypatch.setenv("SYNTHAUG_CACHE_MAX_MB", "0")  # a new entry is kept, every older one removed
+    ViewCache.build("quadcopter", step_deg=45, sprite_size=24, cache_dir=tmp_path)
+    assert [d.name for d in (tmp_path / "views").iterdir()][0].endswith("px24_sc0.5_ss2")
+    assert len(list((tmp_path / "views").iterdir())) == 1
+    monkeypatch.setenv("SYNTHAUG_CACHE_MAX_MB", "lots")
+    with pytest.raises(ValueError, match="SYNTHAUG_CACHE_MAX_MB must be a number"):
+        ViewCache.build("quadcopter", step_deg=45, sprite_size=28, cache_dir=tmp_path)
 
 
 def test_builtin_quadcopter_is_unit_size_and_coarse():

@@ -12,9 +12,12 @@ The only approximations are the (α, β) quantisation (at most half a grid
 step) and bilinear resampling; :func:`approximation_error` measures both
 against exact renders (``benchmarks/bench_render.py`` reports it).
 
-Sprites are cached on disk (``$SYNTHAUG_CACHE`` or ``~/.cache/synthaug``),
-keyed by the mesh geometry and grid, and memory-mapped, so DataLoader workers
-share one copy. Building uses :class:`~synthaug.render.server.Renderer`, so the
+Sprites are cached on disk (``$SYNTHAUG_CACHE`` or ``~/.cache/synthaug``,
+folder ``views/``), keyed by the mesh geometry and grid, and memory-mapped, so
+DataLoader workers share one copy. One entry is ~100 MB at the defaults (5°
+grid, 96 px: 2,664 views × 4 bytes × 96²). The folder is bounded: after each
+new entry the least recently used ones are removed until the total is at most
+``$SYNTHAUG_CACHE_MAX_MB`` (default 1024 MB; the newest entry is always kept). Building uses :class:`~synthaug.render.server.Renderer`, so the
 calling process never holds a GL context (fork-safe).
 """
 
@@ -36,10 +39,57 @@ from synthaug.render.mesh import load_mesh, mesh_fingerprint
 from synthaug.render.pose import rotation_matrices
 
 CACHE_VERSION = 1
+DEFAULT_CACHE_MAX_MB = 1024
 
 
 def default_cache_dir() -> Path:
+    """``$SYNTHAUG_CACHE``, else ``~/.cache/synthaug``."""
     return Path(os.environ.get("SYNTHAUG_CACHE", Path.home() / ".cache" / "synthaug"))
+
+
+def cache_limit_bytes() -> int:
+    """The bound of the view cache folder: ``$SYNTHAUG_CACHE_MAX_MB`` (default 1024) megabytes."""
+    raw = os.environ.get("SYNTHAUG_CACHE_MAX_MB", str(DEFAULT_CACHE_MAX_MB))
+    try:
+        mb = float(raw)
+    except ValueError:
+        raise ValueError(f"SYNTHAUG_CACHE_MAX_MB must be a number of megabytes, got {raw!r}") from None
+    if not mb >= 0:
+        raise ValueError(f"SYNTHAUG_CACHE_MAX_MB must be >= 0, got {raw!r}")
+    return int(mb * 2**20)
+
+
+def _entry_bytes(folder: Path) -> int:
+    return sum(f.stat().st_size for f in folder.iterdir() if f.is_file())
+
+
+def prune_cache(root: str | os.PathLike, max_bytes: int, *, keep: str | os.PathLike | None = None) -> list[Path]:
+    """Remove the least recently used view-cache entries under ``root/views`` until they total ``<= max_bytes``.
+
+    "Used" is the mtime of an entry's ``meta.json`` (touched on every load).
+    ``keep`` (an entry folder) is never removed. Processes that memory-mapped a
+    removed entry keep reading it (POSIX unlink semantics). Returns the removed folders.
+    """
+    views = Path(root) / "views"
+    if not views.is_dir():
+        return []
+    entries = []
+    for d in views.iterdir():
+        meta = d / "meta.json"
+        if d.is_dir() and not d.name.startswith(".") and meta.exists():
+            entries.append((meta.stat().st_mtime, d, _entry_bytes(d)))
+    total = sum(b for _, _, b in entries)
+    removed = []
+    keep_path = None if keep is None else Path(keep).resolve()
+    for _, d, size in sorted(entries, key=lambda e: e[0]):
+        if total <= max_bytes:
+            break
+        if keep_path is not None and d.resolve() == keep_path:
+            continue
+        shutil.rmtree(d, ignore_errors=True)
+        total -= size
+        removed.append(d)
+    return removed
 
 
 class ViewCache:
@@ -140,6 +190,7 @@ class ViewCache:
         cache = cls(cov, nrm, alphas, betas, sprite_scale, fp)
         if root is not None:
             cache._save(root / "views" / key)
+            prune_cache(root, cache_limit_bytes(), keep=root / "views" / key)
         return cache
 
     def _save(self, folder: Path) -> None:
@@ -165,6 +216,10 @@ class ViewCache:
         meta = json.loads((folder / "meta.json").read_text())
         if meta.get("version") != CACHE_VERSION:
             raise ValueError("cache version mismatch")
+        try:
+            os.utime(folder / "meta.json")  # "recently used", for prune_cache
+        except OSError:
+            pass  # a read-only cache is fine
         import warnings
 
         with warnings.catch_warnings():
