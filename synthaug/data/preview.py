@@ -34,8 +34,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="dataset seed (poses, noise)")
 
 
-def _tile_grid(tiles: list[np.ndarray], cols: int, pad: int = 2, zoom: int = 1) -> np.ndarray:
-    """uint8 (H, W) tiles of equal size -> one grid image, white separators."""
+def tile_grid(tiles: list[np.ndarray], cols: int, pad: int = 2, zoom: int = 1, *,
+              col_labels: list[str] | None = None, row_labels: list[str] | None = None) -> np.ndarray:
+    """uint8 (H, W) tiles of equal size -> one grid image, white separators, optional column/row headers.
+
+    Example:
+        >>> g = tile_grid([np.zeros((4, 4), np.uint8)] * 3, cols=2)
+        >>> g.shape
+        (12, 12)
+    """
     h, w = tiles[0].shape
     rows = math.ceil(len(tiles) / cols)
     grid = np.full((rows * (h * zoom + pad) + pad, cols * (w * zoom + pad) + pad), 255, np.uint8)
@@ -44,7 +51,23 @@ def _tile_grid(tiles: list[np.ndarray], cols: int, pad: int = 2, zoom: int = 1) 
         t = np.kron(t, np.ones((zoom, zoom), np.uint8)) if zoom > 1 else t
         y, x = pad + r * (h * zoom + pad), pad + c * (w * zoom + pad)
         grid[y:y + h * zoom, x:x + w * zoom] = t
-    return grid
+    if not col_labels and not row_labels:
+        return grid
+    from PIL import Image, ImageDraw, ImageFont
+
+    font = ImageFont.load_default()
+    top = 14 if col_labels else 0
+    left = (6 * max(len(s) for s in row_labels) + 6) if row_labels else 0
+    canvas = Image.new("L", (grid.shape[1] + left, grid.shape[0] + top), 255)
+    canvas.paste(Image.fromarray(grid), (left, top))
+    draw = ImageDraw.Draw(canvas)
+    for c, text in enumerate(col_labels or []):
+        x = left + pad + c * (w * zoom + pad) + (w * zoom) // 2
+        draw.text((x, top // 2), text, fill=0, font=font, anchor="mm")
+    for r, text in enumerate(row_labels or []):
+        y = top + pad + r * (h * zoom + pad) + (h * zoom) // 2
+        draw.text((2, y), text, fill=0, font=font, anchor="lm")
+    return np.asarray(canvas)
 
 
 def _u8(img: torch.Tensor) -> np.ndarray:
@@ -76,7 +99,8 @@ def main(args: argparse.Namespace) -> int:
                                     negative_fraction=0.0, effects=args.effects, seed=args.seed, cache=cache)
         tiles = [_u8(img) for img, _ in ds.__getitems__(list(range(len(ds))))]
         cols = 8 if args.mode == "patch" else 2
-        grid = _tile_grid(tiles, cols, zoom=args.zoom if args.mode == "patch" else 1)
+        grid = tile_grid(tiles, cols, zoom=args.zoom if args.mode == "patch" else 1,
+                         col_labels=["synthetic"] * cols)
         info = {"samples": len(tiles), "mode": args.mode}
     else:
         from synthaug.data.seedset import SeedSet
@@ -102,7 +126,9 @@ def main(args: argparse.Namespace) -> int:
             tiles.append(seeds.patches[k])
             tiles.append(seeds.backgrounds[k])
             tiles += [_u8(img) for img, _ in ds.__getitems__(list(range(args.per_seed)))]
-        grid = _tile_grid(tiles, 2 + args.per_seed, zoom=args.zoom)
+        grid = tile_grid(tiles, 2 + args.per_seed, zoom=args.zoom,
+                         col_labels=["real", "background"] + [f"synthetic {j + 1}" for j in range(args.per_seed)],
+                         row_labels=[f"seed {k}" for k in range(n)])
         info = {"seeds": n, "columns": ["real", "background"] + ["synthetic"] * args.per_seed}
     out.parent.mkdir(parents=True, exist_ok=True)
     Image.fromarray(grid).save(out)

@@ -43,10 +43,10 @@ def render_fitted(seeds: Any, fit_path: Any, mesh: Any = "quadcopter", *, indice
 
 def pairs_grid(real: torch.Tensor, syn: torch.Tensor, *, zoom: int = 2, cols: int = 4) -> np.ndarray:
     """uint8 grid of (real | synthetic) pairs."""
-    from synthaug.data.preview import _tile_grid
+    from synthaug.data.preview import tile_grid
 
     tiles = []
     for r, s in zip(real, syn):
         pair = torch.cat([r[0], s[0]], dim=1)
         tiles.append(np.round(pair.clamp(0, 1).numpy() * 255).astype(np.uint8))
-    return _tile_grid(tiles, cols, zoom=zoom)
+    return tile_grid(tiles, cols, zoom=zoom)
