@@ -15,8 +15,9 @@ def test_preview_writes_a_grid(tmp_path, capsys):
     info = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert info["samples"] == 8
     img = np.asarray(Image.open(out))
-    # 8 tiles of 40x40 at zoom 2 in one row of 8 columns
-    assert img.shape == (2 + 80 + 2, 8 * 82 + 2)
+    # a 14-px header row of column names, then 8 tiles of 40x40 at zoom 2 in one row of 8 columns
+    assert img.shape == (14 + 2 + 80 + 2, 8 * 82 + 2)
+    assert (img[:14] < 128).any()  # the header has text
 
 
 def test_preview_real_beside_synthetic(tmp_path, capsys):
@@ -35,9 +36,11 @@ def test_preview_real_beside_synthetic(tmp_path, capsys):
     assert main(["preview", "--out", str(out), "--seeds", str(tmp_path / "seeds"), "--per-seed", "2",
                  "--zoom", "1", "--step-deg", "30"]) == 0
     img = np.asarray(Image.open(out))
-    assert img.shape == (3 * 42 + 2, 4 * 42 + 2)
+    top, left = 14, 6 * len("seed 0") + 6  # column headers above, row labels on the left
+    assert img.shape == (top + 3 * 42 + 2, left + 4 * 42 + 2)
+    assert (img[:top, left:] < 128).any() and (img[top:, :left] < 128).any()
     # first column is the real patch, untouched
-    np.testing.assert_array_equal(img[2:42, 2:42], patches[0])
+    np.testing.assert_array_equal(img[top + 2:top + 42, left + 2:left + 42], patches[0])
 
 
 def test_bench_render_prints_json(capsys):
