@@ -147,3 +147,61 @@ def test_fast_max_pool_matches_torch(size: tuple[int, int]) -> None:
     xr = x.clone().requires_grad_(True)
     _max_pool2(xr).sum().backward()
     assert xr.grad.sum().item() == pytest.approx(2 * 3 * (size[0] // 2) * (size[1] // 2))
+
+
+def test_one_training_loop_for_experiments_and_distance(monkeypatch) -> None:
+    """train_detector("cnn") and train_patch_cnn both train PatchDetectorModule under lightning.Trainer."""
+    from synthaug.detectors.lightning_module import PatchDetectorModule, fit_patch_detector
+    from synthaug.evaluate.experiments import TrainOptions, train_detector
+
+    steps = []
+    original = PatchDetectorModule.training_step
+
+    def spy(self, batch, batch_idx):
+        steps.append(len(batch[1]))
+        return original(self, batch, batch_idx)
+
+    monkeypatch.setattr(PatchDetectorModule, "training_step", spy)
+    pos, neg = toy_patches(30, 50, seed=1)
+    options = TrainOptions(cnn_epochs=2, cnn_batch_size=32)
+    det = train_detector("cnn", pos, neg, 4, box_in_window=(5, 5, 30, 30), options=options)
+    # 2 passes over the 80 patches = 1 epoch of the flip-doubled set, batches of 32: 5 steps
+    assert isinstance(det, CNNDetector) and det.box_in_window == (5.0, 5.0, 30.0, 30.0)
+    assert steps == [32] * 5 and not det.net.training
+    # the same seed gives the same weights: the experiments' detector is the module trained directly
+    module = fit_patch_detector(pos, neg, epochs=2, batch_size=32, seed=4)
+    again = train_detector("cnn", pos, neg, 4, options=options)
+    weights = [m.state_dict().values() for m in (det.net, module.net, again.net)]
+    for a, b, c in zip(*weights):
+        assert torch.equal(a, b) and torch.equal(a, c)
+    other = train_detector("cnn", pos, neg, 5, options=options)
+    assert not torch.equal(other.net.conv1.weight, det.net.conv1.weight)
+    # train_patch_cnn (the d_CNN distance, benchmarks) is the same loop
+    steps.clear()
+    net = train_patch_cnn(pos, neg, epochs=2, batch_size=32, seed=4)
+    assert len(steps) == 5 and torch.equal(net.conv1.weight, det.net.conv1.weight)
+    # an odd number of passes stops inside the second epoch: 3 x 80 / 32 -> 8 steps
+    steps.clear()
+    train_patch_cnn(pos, neg, epochs=3, batch_size=32, seed=4)
+    assert len(steps) == 8
+    # no global RNG is drawn from: training leaves torch's default generator where it was
+    state = torch.get_rng_state()
+    train_patch_cnn(pos, neg, epochs=1, batch_size=32, seed=4)
+    assert torch.equal(state, torch.get_rng_state())
+
+
+def test_fit_patch_detector_validation_and_errors() -> None:
+    from synthaug.detectors.lightning_module import PatchDataModule, fit_patch_detector
+
+    pos, neg = toy_patches(20, 40, seed=0)
+    module = fit_patch_detector(pos, neg, epochs=2, batch_size=16, val_fraction=0.25)
+    assert {"val_loss", "val_acc", "train_loss"} <= set(module.trainer.callback_metrics)
+    dm = PatchDataModule.from_tensors(pos, neg, val_fraction=0.25, batch_size=16)
+    dm.setup("fit")
+    assert len(dm.val_set) == 15 and len(dm.train_set) == 2 * 45 and dm.negative_positive_ratio == 2.0
+    with pytest.raises(ValueError, match="non-empty"):
+        fit_patch_detector(pos[:0], neg)
+    with pytest.raises(ValueError, match="epochs"):
+        fit_patch_detector(pos, neg, epochs=0)
+    with pytest.raises(ValueError, match="one size"):
+        PatchDataModule.from_tensors(pos, neg[..., :32, :32])

@@ -1,7 +1,9 @@
-"""``python train/fit.py --config configs/cnn_tiny.yaml``: resolved config, checkpoints, exported detector."""
+"""``python train/fit.py --config configs/<name>.yaml``: data module by class_path, resolved config, checkpoints,
+exported detector."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import subprocess
 import sys
@@ -26,12 +28,136 @@ def run_fit(tmp_path: Path, *extra: str, timeout: int = 240, subcommand: tuple[s
     return runs[0]
 
 
+def fit_main(tmp_path: Path, config: str, *extra: str):
+    """``train/fit.py``'s ``main([...])`` in this process, logs under ``tmp_path``; returns the LightningCLI."""
+    spec = importlib.util.spec_from_file_location("synthaug_train_fit", REPO / "train" / "fit.py")
+    fit = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fit)
+    return fit.main(["--config", str(REPO / "configs" / config), "--trainer.default_root_dir", str(tmp_path),
+                     "--trainer.logger.init_args.save_dir", str(tmp_path), *extra])
+
+
+@pytest.fixture
+def _global_seed_env(monkeypatch):
+    # LightningCLI's seed_everything exports PL_GLOBAL_SEED; keep it out of the other tests
+    monkeypatch.setenv("PL_GLOBAL_SEED", "0")
+    monkeypatch.setenv("PL_SEED_WORKERS", "0")
+
+
+def _check_run(cli, tmp_path: Path, class_path: str) -> dict:
+    from synthaug.detectors.base import load_detector
+    from synthaug.detectors.cnn import CNNDetector
+
+    run = Path(cli.trainer.log_dir)
+    assert run.parent == tmp_path / "lightning_logs"
+    cfg = yaml.safe_load((run / "config.yaml").read_text())
+    assert cfg["data"]["class_path"] == class_path
+    det = load_detector(run / "detector.pt")
+    assert isinstance(det, CNNDetector)
+    x = torch.rand(3, 1, 40, 40, generator=torch.Generator().manual_seed(0))
+    torch.testing.assert_close(det.score_patches(x), cli.model.to_detector().score_patches(x))
+    return cfg
+
+
+@pytest.mark.usefixtures("_global_seed_env")
+def test_real_only_config_in_process(tmp_path: Path) -> None:
+    from synthaug.detectors.lightning_module import PatchDataModule
+
+    cli = fit_main(tmp_path, "cnn_tiny.yaml", "--trainer.max_epochs", "1", "--trainer.limit_train_batches", "3",
+                   "--data.init_args.generated_positives", "80", "--data.init_args.generated_negatives", "80")
+    assert type(cli.datamodule) is PatchDataModule and cli.trainer.global_step == 3
+    cfg = _check_run(cli, tmp_path, "synthaug.detectors.lightning_module.PatchDataModule")
+    assert cfg["data"]["init_args"]["generated_positives"] == 80
+
+
+@pytest.mark.usefixtures("_global_seed_env")
+def test_synthetic_config_in_process(tmp_path: Path) -> None:
+    from test_refit import tiny_seedset
+
+    from synthaug.fit.refit import SyntheticEpochs, SyntheticPatchDataModule
+
+    seeds = tiny_seedset(tmp_path)
+    cli = fit_main(tmp_path, "cnn_tiny_synthetic.yaml", "--data.init_args.seed_dir", str(seeds),
+                   "--data.init_args.params", "null", "--trainer.max_epochs", "1",
+                   "--trainer.limit_train_batches", "3", "--trainer.limit_val_batches", "2")
+    dm = cli.datamodule
+    assert isinstance(dm, SyntheticPatchDataModule) and dm.synthetic is not None and len(dm.synthetic) == 5 * 6
+    assert cli.trainer.global_step == 3
+    assert sum(isinstance(c, SyntheticEpochs) for c in cli.trainer.callbacks) == 1  # from the YAML, not doubled
+    cfg = _check_run(cli, tmp_path, "synthaug.fit.refit.SyntheticPatchDataModule")
+    assert cfg["data"]["init_args"]["seed_dir"] == str(seeds) and cfg["data"]["init_args"]["step_deg"] == 30.0
+    assert [c["class_path"] for c in cfg["trainer"]["callbacks"]] == ["synthaug.fit.refit.SyntheticEpochs"]
+
+
+@pytest.mark.usefixtures("_global_seed_env")
+def test_refit_callback_from_the_command_line(tmp_path: Path) -> None:
+    """CNNDistanceRefit added to the tiny synthetic config by class_path: Θ refitted after epoch 0 into the run."""
+    from test_refit import tiny_seedset
+
+    from synthaug.fit.refit import CNNDistanceRefit
+
+    seeds = tiny_seedset(tmp_path)
+    cli = fit_main(tmp_path, "cnn_tiny_synthetic.yaml", "--data.init_args.seed_dir", str(seeds),
+                   "--data.init_args.params", "null", "--trainer.max_epochs", "2",
+                   "--trainer.limit_train_batches", "2", "--trainer.limit_val_batches", "1",
+                   "--trainer.callbacks+=synthaug.fit.refit.CNNDistanceRefit", "--trainer.callbacks.budget", "30")
+    (refit,) = [c for c in cli.trainer.callbacks if isinstance(c, CNNDistanceRefit)]
+    assert refit.budget == 30 and [h["epoch"] for h in refit.history] == [0]
+    assert Path(refit.history[0]["file"]) == Path(cli.trainer.log_dir) / "refit" / "epoch_000.json"
+    cfg = _check_run(cli, tmp_path, "synthaug.fit.refit.SyntheticPatchDataModule")
+    assert [c["class_path"] for c in cfg["trainer"]["callbacks"]] == ["synthaug.fit.refit.SyntheticEpochs",
+                                                                       "synthaug.fit.refit.CNNDistanceRefit"]
+
+
+@pytest.mark.usefixtures("_global_seed_env")
+def test_synthetic_data_without_epoch_callback_gets_one(tmp_path: Path) -> None:
+    """A config that picks the synthetic data module by class_path alone still renders new poses every epoch."""
+    from test_refit import tiny_seedset
+
+    from synthaug.fit.refit import SyntheticEpochs
+
+    seeds = tiny_seedset(tmp_path)
+    cli = fit_main(tmp_path, "cnn_tiny.yaml", "--data", "synthaug.fit.refit.SyntheticPatchDataModule",
+                   "--data.init_args.seed_dir", str(seeds), "--data.init_args.synthetic_per_real", "2",
+                   "--data.init_args.step_deg", "30", "--data.init_args.sprite_size", "48",
+                   "--trainer.max_epochs", "2", "--trainer.limit_train_batches", "1",
+                   "--trainer.limit_val_batches", "1")
+    assert sum(isinstance(c, SyntheticEpochs) for c in cli.trainer.callbacks) == 1
+    assert cli.datamodule.synthetic.epoch == 1
+
+
+@pytest.mark.usefixtures("_global_seed_env")
+def test_drone_configs_instantiate(tmp_path: Path) -> None:
+    """The real-data configs name existing classes and arguments (instantiated, not run: no data needed)."""
+    spec = importlib.util.spec_from_file_location("synthaug_train_fit", REPO / "train" / "fit.py")
+    fit = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fit)
+    from synthaug.detectors.lightning_module import PatchDataModule, PatchDetectorModule
+    from synthaug.fit.refit import CNNDistanceRefit, SyntheticEpochs, SyntheticPatchDataModule
+
+    expect = {"cnn_drone.yaml": (PatchDataModule, []),
+              "cnn_drone_synthetic.yaml": (SyntheticPatchDataModule, [SyntheticEpochs]),
+              "cnn_drone_refit.yaml": (SyntheticPatchDataModule, [SyntheticEpochs, CNNDistanceRefit])}
+    for name, (data_class, callbacks) in expect.items():
+        cli = fit.PatchCLI(PatchDetectorModule, PatchDataModule, subclass_mode_data=True, run=False,
+                           args=["--config", str(REPO / "configs" / name), "--trainer.default_root_dir", str(tmp_path),
+                                 "--trainer.logger.init_args.save_dir", str(tmp_path)])
+        assert type(cli.datamodule) is data_class, name
+        assert cli.datamodule.seed_dir == "data/halmstad/seedsets/drone_100"
+        ours = [type(c) for c in cli.trainer.callbacks if type(c).__module__.startswith("synthaug")]
+        assert ours == callbacks, name
+    refit = next(c for c in cli.trainer.callbacks if isinstance(c, CNNDistanceRefit))
+    assert (refit.every_n_epochs, refit.budget) == (2, 300)
+    assert cli.datamodule.params == "fits/drone_100_hog.json" and cli.datamodule.synthetic_per_real == 20
+
+
 @pytest.mark.slow
 def test_fit_tiny_config(tmp_path: Path) -> None:
     run = run_fit(tmp_path)
     # the resolved configuration is saved with the run
     cfg = yaml.safe_load((run / "config.yaml").read_text())
-    assert cfg["model"]["channels"] == [8, 16, 32, 64] and cfg["data"]["generated_positives"] == 150
+    assert cfg["data"]["class_path"] == "synthaug.detectors.lightning_module.PatchDataModule"
+    assert cfg["model"]["channels"] == [8, 16, 32, 64] and cfg["data"]["init_args"]["generated_positives"] == 150
     assert cfg["trainer"]["max_epochs"] == 2 and "lr" in cfg["model"]
     # the Lightning checkpoint loads with weights_only=True and holds plain hyper-parameters
     (ckpt,) = run.glob("checkpoints/*.ckpt")

@@ -1,6 +1,7 @@
 """Synthetic patches in Lightning training and the d_CNN refit callback."""
 
 import json
+from collections import Counter
 
 import lightning as L
 import numpy as np
@@ -14,7 +15,8 @@ from synthaug.fit.refit import CNNDistanceRefit, SyntheticEpochs, SyntheticPatch
 from synthaug.params import CaptureParams
 
 
-def _seeds(tmp_path, n=6):
+def tiny_seedset(tmp_path, n=6):
+    """A 6-seed set of 40x40 sky patches with a dark bar (+ 12 negatives), written under ``tmp_path/seeds``."""
     bgs = sky_backgrounds(n, (40, 40), seed=0)
     patches = bgs.copy()
     patches[:, 16:24, 10:30] = 30
@@ -25,6 +27,9 @@ def _seeds(tmp_path, n=6):
                   background_frames=list(frames), negatives=sky_backgrounds(12, (40, 40), seed=2),
                   metadata={"patch_size": 40, "object_fraction": 0.7})
     return path
+
+
+_seeds = tiny_seedset
 
 
 def test_datamodule_mixes_synthetic_patches(tmp_path):
@@ -57,3 +62,43 @@ def test_refit_callback_updates_the_synthetic_stream(tmp_path):
     assert doc["metadata"]["config"]["distance"] == "cnn" and len(doc["rows"]) == 6
     torch.testing.assert_close(dm.synthetic.params.to_vector(), CaptureParams.load(out).to_vector())
     assert dm.synthetic.seed_scales is not None
+
+
+class _Recorder(PatchDetectorModule):
+    """Keeps every training batch's patches, per epoch."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.seen: dict[int, list[torch.Tensor]] = {}
+
+    def training_step(self, batch, batch_idx):
+        self.seen.setdefault(self.current_epoch, []).append(batch[0].detach().clone())
+        return super().training_step(batch, batch_idx)
+
+
+def _keys(batches):
+    # one key per item, independent of the shuffle order
+    return sorted(round(float(v), 3) for v in torch.cat(batches).flatten(1).sum(1))
+
+
+@pytest.mark.parametrize("workers", [0, 2])
+def test_new_synthetic_poses_every_epoch(tmp_path, workers):
+    """The DataLoader workers see the epoch that SyntheticEpochs sets (they are re-created every epoch)."""
+    dm = SyntheticPatchDataModule(str(tiny_seedset(tmp_path)), synthetic_per_real=3, step_deg=30, sprite_size=48,
+                                  val_fraction=0.0, batch_size=16, num_workers=workers)
+    model = _Recorder(channels=(4, 8, 8, 8))
+    trainer = L.Trainer(max_epochs=3, accelerator="cpu", logger=False, enable_checkpointing=False,
+                        enable_progress_bar=False, enable_model_summary=False, default_root_dir=tmp_path,
+                        callbacks=[SyntheticEpochs()])
+    trainer.fit(model, datamodule=dm)
+    k = [_keys(model.seen[e]) for e in range(3)]
+    n_real, n_syn = 2 * (6 + 12 + 6), 18
+    assert all(len(ki) == n_real + n_syn for ki in k)
+    for a, b in ((0, 1), (1, 2)):
+        common = sum((Counter(k[a]) & Counter(k[b])).values())
+        assert n_real <= common < n_real + n_syn // 2, (a, b, common)  # the real items repeat, the synthetic ones not
+    assert dm.train_dataloader().persistent_workers is False
+    # and an epoch's items are a function of the epoch: the stream replays epoch 1 exactly
+    dm.synthetic.set_epoch(1)
+    replay = [dm.train_set[i][0] for i in range(len(dm.train_set))]
+    assert _keys([torch.stack(replay)]) == k[1]

@@ -61,8 +61,8 @@ class PatchCNN(nn.Module):
     Args:
         channels: output channels of layers 1-4 ``(c1, c2, c3, c4)``.
         window: patch side; must survive the three exact 2x poolings (40 does).
-        generator: seeds the weight initialisation (PyTorch's default init
-            otherwise, which uses the global RNG).
+        generator: seeds the weight initialisation; the global RNG is then
+            left untouched (PyTorch's default init from the global RNG otherwise).
 
     Shape:
         - forward input: (B, 1, window, window) -> output (B,) logits
@@ -88,11 +88,13 @@ class PatchCNN(nn.Module):
         self.channels = channels
         self.window = int(window)
         c1, c2, c3, c4 = channels
-        self.conv1 = nn.Conv2d(1, c1, 5, stride=2)
-        self.conv2 = nn.Conv2d(c1, c2, 3)
-        self.conv3 = nn.Conv2d(c2, c3, 3)
-        self.fc = nn.Conv2d(c3, c4, s)
-        self.out = nn.Conv2d(c4, 1, 1)
+        # with a generator, the default init's draws (overwritten below) must not move the global RNG
+        with torch.random.fork_rng(devices=[], enabled=generator is not None):
+            self.conv1 = nn.Conv2d(1, c1, 5, stride=2)
+            self.conv2 = nn.Conv2d(c1, c2, 3)
+            self.conv3 = nn.Conv2d(c2, c3, 3)
+            self.fc = nn.Conv2d(c3, c4, s)
+            self.out = nn.Conv2d(c4, 1, 1)
         if generator is not None:
             for m in self.modules():
                 if isinstance(m, nn.Conv2d):
@@ -195,51 +197,33 @@ def train_patch_cnn(
     weight_decay: float = 1e-4,
     seed: int = 0,
 ) -> PatchCNN:
-    """Train a :class:`PatchCNN` quickly with plain PyTorch (no Lightning).
+    """Train a :class:`PatchCNN` on patches in memory; returns the bare network.
 
-    For the d_CNN distance, which needs "a CNN trained on the real seeds only";
-    the full training (logging, checkpoints, DDP) is
-    :class:`synthaug.detectors.lightning_module.PatchDetectorModule`.
-    Positives and negatives are balanced by the loss weight; horizontal flips
-    augment both classes.
+    A thin wrapper over :func:`synthaug.detectors.lightning_module.fit_patch_detector`
+    (the :class:`~synthaug.detectors.lightning_module.PatchDetectorModule` under a
+    quiet CPU ``lightning.Trainer``), so the code base has one training loop:
+    for the d_CNN distance ("a CNN trained on the real seed images only") and
+    the benchmarks. Classes are balanced by the loss weight; mirrored copies
+    of every patch are the augmentation.
 
     Args:
         positives: object patches ``(P, 1, S, S)`` in [0, 1].
         negatives: background patches ``(N, 1, S, S)``.
         channels: network width, see :class:`PatchCNN`.
-        epochs: passes over the data.
+        epochs: passes over the data (each patch mirrored or not).
         batch_size: mini-batch size.
         lr: Adam learning rate.
         weight_decay: Adam weight decay.
-        seed: seeds initialisation, shuffling and flips.
+        seed: seeds initialisation and shuffling.
 
     Returns:
         The trained network, in eval mode.
     """
-    if positives.dim() != 4 or negatives.dim() != 4 or len(positives) == 0 or len(negatives) == 0:
-        raise ValueError(f"positives and negatives must be non-empty (N, 1, S, S), got "
-                         f"{tuple(positives.shape)} and {tuple(negatives.shape)}")
-    if epochs < 1:
-        raise ValueError(f"epochs must be >= 1, got {epochs}")
-    g = torch.Generator().manual_seed(seed)
-    window = int(positives.shape[-1])
-    net = PatchCNN(channels, window=window, generator=g)
-    x = torch.cat([positives, negatives]).float()
-    y = torch.cat([torch.ones(len(positives)), torch.zeros(len(negatives))])
-    pos_weight = torch.tensor(len(negatives) / len(positives))
-    opt = torch.optim.Adam(net.parameters(), lr=lr, weight_decay=weight_decay)
-    net.train()
-    for _ in range(epochs):
-        perm = torch.randperm(len(x), generator=g)
-        for idx in perm.split(batch_size):
-            xb = x[idx]
-            flip = torch.rand(len(idx), generator=g) < 0.5
-            xb = torch.where(flip[:, None, None, None], xb.flip(-1), xb)
-            loss = nn.functional.binary_cross_entropy_with_logits(net(xb), y[idx], pos_weight=pos_weight)
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-    return net.eval()
+    from synthaug.detectors.lightning_module import fit_patch_detector
+
+    module = fit_patch_detector(positives, negatives, channels=channels, epochs=epochs, batch_size=batch_size, lr=lr,
+                                weight_decay=weight_decay, seed=seed)
+    return module.to_detector().net
 
 
 def load_patch_cnn(path: str | Path) -> PatchCNN:

@@ -4,8 +4,14 @@ The typed ``__init__`` signatures are the configuration schema of
 ``python train/fit.py --config configs/<name>.yaml`` (LightningCLI). Data come
 from a seed-set folder (``SeedSet.load(dir).patches`` as positives,
 ``.negatives`` and optionally ``.backgrounds`` as negatives), from generated
-toy patches (:mod:`synthaug.detectors.toy`, for tests and tiny runs), and/or
-from any user ``Dataset`` of ``(patch (1, S, S) float, label float)`` items.
+toy patches (:mod:`synthaug.detectors.toy`, for tests and tiny runs), from
+tensors in memory (:meth:`PatchDataModule.from_tensors`), and/or from any user
+``Dataset`` of ``(patch (1, S, S) float, label float)`` items.
+
+:func:`fit_patch_detector` is the one training loop of the patch CNN for code
+that holds tensors (the experiments' ``train_detector("cnn")``, the d_CNN
+distance through :func:`~synthaug.detectors.cnn.train_patch_cnn`): the same
+module and data module under a quiet CPU ``lightning.Trainer``.
 
 Items are pure functions of ``(seed, index)`` (the horizontal-flip augmentation
 is the odd half of the index range), so the worker count never changes the
@@ -23,8 +29,9 @@ Example:
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import lightning as L
 import torch
@@ -34,7 +41,7 @@ from torch.utils.data import ConcatDataset, DataLoader, Dataset
 from synthaug.detectors.base import save_detector
 from synthaug.detectors.cnn import CNNDetector, PatchCNN, load_patch_cnn
 
-__all__ = ["PatchDetectorModule", "PatchDataModule", "PatchDataset", "export_detector"]
+__all__ = ["PatchDetectorModule", "PatchDataModule", "PatchDataset", "fit_patch_detector", "export_detector"]
 
 
 class PatchDetectorModule(L.LightningModule):
@@ -105,7 +112,7 @@ class PatchDetectorModule(L.LightningModule):
 
     def to_detector(self) -> CNNDetector:
         """A copy of the network as a ``save_detector``-able :class:`CNNDetector` (kind "cnn")."""
-        net = PatchCNN(self.net.channels, window=self.net.window)
+        net = PatchCNN(self.net.channels, window=self.net.window, generator=torch.Generator())  # weights replaced
         net.load_state_dict({k: v.detach().cpu() for k, v in self.net.state_dict().items()})
         return CNNDetector(net)
 
@@ -160,8 +167,10 @@ class PatchDataModule(L.LightningDataModule):
         batch_size: mini-batch size.
         num_workers: DataLoader workers.
         flip: mirrored copies as augmentation.
-        seed: seeds the split and the generated patches.
+        seed: seeds the split, the shuffling and the generated patches.
     """
+
+    _tensors: tuple[Tensor, Tensor] | None = None  # set by from_tensors before __init__ runs
 
     def __init__(
         self,
@@ -183,7 +192,7 @@ class PatchDataModule(L.LightningDataModule):
             raise ValueError(f"batch_size must be >= 1, got {batch_size}")
         if generated_positives < 0 or generated_negatives < 0:
             raise ValueError(f"generated counts must be >= 0, got {generated_positives}, {generated_negatives}")
-        if seed_dir is None and generated_positives == 0 and extra_dataset is None:
+        if seed_dir is None and generated_positives == 0 and extra_dataset is None and self._tensors is None:
             raise ValueError("PatchDataModule has no data: give seed_dir, generated_positives/negatives or extra_dataset")
         self.seed_dir = seed_dir
         self.backgrounds_as_negatives = backgrounds_as_negatives
@@ -199,10 +208,43 @@ class PatchDataModule(L.LightningDataModule):
         self.train_set: Dataset | None = None
         self.val_set: Dataset | None = None
 
+    @classmethod
+    def from_tensors(cls, positives: Tensor, negatives: Tensor, **kwargs: Any) -> "PatchDataModule":
+        """A data module over patches in memory (plus whatever ``kwargs`` add).
+
+        The tensors go through the same split, flip doubling and class balance
+        as seed-set patches. Not a configuration entry (tensors are no YAML).
+
+        Args:
+            positives: object patches ``(P, 1, S, S)``, float in [0, 1] (or uint8).
+            negatives: background patches ``(N, 1, S, S)``.
+            **kwargs: :class:`PatchDataModule` arguments (``val_fraction``,
+                ``batch_size``, ``seed``...).
+
+        Example:
+            >>> dm = PatchDataModule.from_tensors(torch.rand(3, 1, 40, 40), torch.rand(5, 1, 40, 40), val_fraction=0.0)
+            >>> dm.setup("fit"); len(dm.train_set), dm.negative_positive_ratio
+            (16, 1.6666666666666667)
+        """
+        pos, neg = _u8_to_float(positives), _u8_to_float(negatives)
+        if pos.dim() != 4 or neg.dim() != 4 or pos.shape[1] != 1 or pos.shape[1:] != neg.shape[1:]:
+            raise ValueError(f"positives and negatives must be (N, 1, S, S) patches of one size, got "
+                             f"{tuple(pos.shape)} and {tuple(neg.shape)}")
+        if len(pos) == 0 and len(neg) == 0:
+            raise ValueError("from_tensors needs at least one patch")
+        dm = cls.__new__(cls)
+        dm._tensors = (pos, neg)  # before __init__: its no-data check counts them
+        dm.__init__(**kwargs)
+        return dm
+
     def load_patches(self) -> tuple[Tensor, Tensor]:
-        """All positives and negatives (seed set + generated), float ``(N, 1, S, S)``."""
+        """All positives and negatives (tensors + seed set + generated), float ``(N, 1, S, S)``."""
         pos: list[Tensor] = []
         neg: list[Tensor] = []
+        if self._tensors is not None:
+            for parts, x in zip((pos, neg), self._tensors):
+                if len(x):
+                    parts.append(x)
         if self.seed_dir is not None:
             from synthaug.data.seedset import SeedSet
 
@@ -248,7 +290,8 @@ class PatchDataModule(L.LightningDataModule):
         self.val_set = ConcatDataset(val_parts) if val_parts else None
 
     def train_dataloader(self) -> DataLoader:
-        # the shuffle order is drawn from an explicit generator (Lightning's DDP sampler re-seeds it per epoch)
+        # the shuffle order is drawn from an explicit generator (Lightning's DDP sampler re-seeds it per epoch);
+        # fixed patches: the workers may live across epochs
         return DataLoader(self.train_set, batch_size=self.batch_size, shuffle=True, num_workers=self.num_workers,
                           generator=torch.Generator().manual_seed(self.seed), persistent_workers=self.num_workers > 0)
 
@@ -256,6 +299,80 @@ class PatchDataModule(L.LightningDataModule):
         if self.val_set is None:
             return []
         return DataLoader(self.val_set, batch_size=self.batch_size, shuffle=False, num_workers=self.num_workers)
+
+
+def fit_patch_detector(
+    positives: Tensor,
+    negatives: Tensor,
+    *,
+    channels: Sequence[int] = (8, 16, 32, 64),
+    epochs: int = 15,
+    batch_size: int = 64,
+    lr: float = 3e-3,
+    weight_decay: float = 1e-4,
+    seed: int = 0,
+    val_fraction: float = 0.0,
+) -> PatchDetectorModule:
+    """Train a :class:`PatchDetectorModule` on patches in memory: the CNN's one training loop.
+
+    ``lightning.Trainer`` on CPU, one device, no logger, no checkpoints, no
+    progress bar; the data is :meth:`PatchDataModule.from_tensors` (the
+    horizontal-flip doubling is the augmentation; the classes are balanced
+    by the loss weight N/P). Deterministic given ``seed``: it seeds the
+    weight initialisation and the shuffling (no global RNG is used or changed).
+
+    ``epochs`` counts passes over the patches, as a loop with random flips
+    would: training stops after ``ceil(epochs * n / batch_size)`` steps, i.e.
+    ``epochs / 2`` epochs of the flip-doubled set (each patch is seen
+    ``epochs`` times, in one orientation or the other).
+
+    Args:
+        positives: object patches ``(P, 1, S, S)`` in [0, 1].
+        negatives: background patches ``(N, 1, S, S)``.
+        channels: network width, see :class:`~synthaug.detectors.cnn.PatchCNN`.
+        epochs: passes over the training patches (see above).
+        batch_size: mini-batch size.
+        lr: Adam learning rate.
+        weight_decay: Adam weight decay.
+        seed: seeds initialisation, split and shuffling.
+        val_fraction: patches held out for a validation loss/accuracy each
+            epoch (logged only; 0: none).
+
+    Returns:
+        The trained module (``.net`` in eval mode; ``.to_detector()`` for a detector).
+    """
+    import logging
+    import warnings
+
+    if positives.dim() != 4 or negatives.dim() != 4 or len(positives) == 0 or len(negatives) == 0:
+        raise ValueError(f"positives and negatives must be non-empty (N, 1, S, S), got "
+                         f"{tuple(positives.shape)} and {tuple(negatives.shape)}")
+    if epochs < 1:
+        raise ValueError(f"epochs must be >= 1, got {epochs}")
+    dm = PatchDataModule.from_tensors(positives, negatives, val_fraction=val_fraction, batch_size=batch_size,
+                                      seed=seed)
+    dm.setup("fit")
+    n_train = len(dm.train_set) // 2  # the set holds every patch and its mirror image
+    max_steps = math.ceil(epochs * n_train / batch_size)
+    module = PatchDetectorModule(tuple(int(c) for c in channels), window=int(positives.shape[-1]), lr=lr,
+                                 weight_decay=weight_decay, init_seed=seed)
+    rank_zero = logging.getLogger("lightning.pytorch.utilities.rank_zero")
+    level = rank_zero.level
+    rank_zero.setLevel(logging.WARNING)  # no "GPU available: ..." banner per call
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*does not have many workers.*")
+            warnings.filterwarnings("ignore", message=".*GPU available but not used.*")
+            warnings.filterwarnings("ignore", message=".*LeafSpec.*")  # lightning vs torch 2.14 pytree, harmless
+            trainer = L.Trainer(accelerator="cpu", devices=1, max_epochs=math.ceil(epochs / 2), max_steps=max_steps,
+                                logger=False, enable_checkpointing=False, enable_progress_bar=False,
+                                enable_model_summary=False, num_sanity_val_steps=0, log_every_n_steps=1_000_000,
+                                limit_val_batches=None if val_fraction > 0 else 0)
+            trainer.fit(module, datamodule=dm)
+    finally:
+        rank_zero.setLevel(level)
+    module.net.eval()
+    return module
 
 
 def export_detector(checkpoint: str | Path, out: str | Path) -> Path:

@@ -5,7 +5,8 @@
 CNN_i^n the i-th neuron of layer n of a :class:`~synthaug.detectors.cnn.PatchCNN`
 "trained on the real seed images only". The network is given directly, loaded
 from a checkpoint (``save_detector`` file or Lightning ``.ckpt``), or trained
-here on seed positives/negatives with :func:`~synthaug.detectors.cnn.train_patch_cnn`.
+here on seed positives/negatives with :func:`~synthaug.detectors.cnn.train_patch_cnn`
+(the project's one CNN training loop: ``PatchDetectorModule`` under ``lightning.Trainer``).
 
 Differentiable in the synthetic image (ReLU / max-pool subgradients); the
 network's own parameters are frozen. With a single real image (the fitting

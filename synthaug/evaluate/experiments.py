@@ -90,7 +90,8 @@ class TrainOptions:
             ignored) are scanned for hard negatives.
         ada_rounds: boosting rounds T.
         ada_candidates: random Levi-Weiss candidates (of the exhaustive grid).
-        cnn_epochs: passes over the training patches.
+        cnn_epochs: passes over the training patches (each mirrored or not;
+            ``PatchDetectorModule`` under ``lightning.Trainer``).
         cnn_batch_size: mini-batch size.
         cnn_max_steps: the number of epochs is reduced so that training takes
             at most about this many optimiser steps (large synthetic sets).
@@ -173,13 +174,14 @@ def train_detector(
 
         det = train_adaboost(positives, negatives, n_rounds=options.ada_rounds, candidates=options.ada_candidates, seed=seed)
     else:
-        from synthaug.detectors.cnn import CNNDetector, train_patch_cnn
+        # the one CNN training loop: PatchDetectorModule + PatchDataModule.from_tensors under a CPU lightning.Trainer
+        from synthaug.detectors.lightning_module import fit_patch_detector
 
         n = positives.shape[0] + negatives.shape[0]
         steps_per_epoch = max(1, math.ceil(n / options.cnn_batch_size))
         epochs = max(1, min(options.cnn_epochs, options.cnn_max_steps // steps_per_epoch))
-        net = train_patch_cnn(positives, negatives, epochs=epochs, batch_size=options.cnn_batch_size, seed=seed)
-        det = CNNDetector(net)
+        module = fit_patch_detector(positives, negatives, epochs=epochs, batch_size=options.cnn_batch_size, seed=seed)
+        det = module.to_detector()
     det.box_in_window = None if box_in_window is None else tuple(float(v) for v in box_in_window)
     return det
 

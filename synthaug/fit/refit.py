@@ -12,8 +12,23 @@
   images follow the network as it learns (issue 5, item 4). Each refit is
   written to ``<log_dir>/refit/epoch_NNN.json``.
 
-Both are used from Python (``train/refit_experiment.py``); ``train/fit.py``'s
-LightningCLI is not yet in subclass mode, so a YAML config cannot select them.
+- :class:`SyntheticEpochs`: the callback that gives the synthetic stream new
+  poses and noise every epoch (``set_epoch``).
+
+From YAML (``python train/fit.py --config ...``, LightningCLI in subclass mode
+for ``data:``)::
+
+    data:
+      class_path: synthaug.fit.refit.SyntheticPatchDataModule
+      init_args: {seed_dir: ..., params: fit.json, synthetic_per_real: 20}
+    trainer:
+      callbacks:
+        - class_path: synthaug.fit.refit.SyntheticEpochs
+        - class_path: synthaug.fit.refit.CNNDistanceRefit   # only for the refit
+          init_args: {every_n_epochs: 2, budget: 300}
+
+(``train/fit.py`` adds ``SyntheticEpochs`` itself when a synthetic data module
+is configured without it.) From Python: ``train/refit_experiment.py``.
 """
 
 from __future__ import annotations
@@ -103,9 +118,13 @@ class SyntheticPatchDataModule(PatchDataModule):
         self.train_set = ConcatDataset([*self.train_set.datasets, SyntheticPatches(self.synthetic)])
 
     def train_dataloader(self) -> DataLoader:
-        # not persistent: a refit of the capture parameters reaches the workers at the next epoch
+        # persistent_workers=False on purpose: the workers hold copies of the dataset, so the epoch that
+        # SyntheticEpochs sets (new poses) and the Θ of a CNNDistanceRefit reach them only because Lightning
+        # re-creates them for every epoch (iter() runs after on_train_epoch_start from epoch 1 on).
+        # TODO(issue 14): an epoch-carrying sampler (synthaug.data.synthetic.EpochSampler) lifts this.
         return DataLoader(self.train_set, batch_size=self.batch_size, shuffle=True, num_workers=self.num_workers,
-                          generator=torch.Generator().manual_seed(self.seed + 7919 * self._epoch()))
+                          generator=torch.Generator().manual_seed(self.seed + 7919 * self._epoch()),
+                          persistent_workers=False)
 
     def _epoch(self) -> int:
         trainer = getattr(self, "trainer", None)
