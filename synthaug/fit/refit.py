@@ -121,7 +121,8 @@ class SyntheticPatchDataModule(PatchDataModule):
         # persistent_workers=False on purpose: the workers hold copies of the dataset, so the epoch that
         # SyntheticEpochs sets (new poses) and the Θ of a CNNDistanceRefit reach them only because Lightning
         # re-creates them for every epoch (iter() runs after on_train_epoch_start from epoch 1 on).
-        # TODO(issue 14): an epoch-carrying sampler (synthaug.data.synthetic.EpochSampler) lifts this.
+        # Workers must be re-created anyway when CNNDistanceRefit swaps Θ, and the stream sits inside a
+        # ConcatDataset (integer indices), so EpochSampler (which carries the epoch in the index) is not used here.
         return DataLoader(self.train_set, batch_size=self.batch_size, shuffle=True, num_workers=self.num_workers,
                           generator=torch.Generator().manual_seed(self.seed + 7919 * self._epoch()),
                           persistent_workers=False)
