@@ -20,6 +20,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "fit": ("synthaug.fit.cli", "seed set + mesh + distance -> fitted capture parameters per seed"),
     "diagnose": ("synthaug.diagnose.cli", "seed set + mesh + fit -> what the simulation gets wrong, ranked findings"),
     "experiment": ("synthaug.evaluate.experiments_cli", "the paper's experiments and the baselines on real videos"),
+    "train": ("synthaug.detectors.train_cli", "videos + labels (+ a fit) -> a trained detector file for `synthaug detect`"),
     "detect": ("synthaug.detectors.cli", "checkpoint + video/images -> per-frame detections JSON"),
     "evaluate": ("synthaug.evaluate.cli", "detections + labels -> precision-recall PNG and AP"),
     "export": ("synthaug.data.export", "synthetic frames (+ real seeds) as a COCO or YOLO dataset for other trainers"),

@@ -47,6 +47,21 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+# Detector training lives beside the detectors (synthaug.detectors.training); these names stay importable from here.
+from synthaug.detectors.training import (  # noqa: F401
+    DETECTORS,
+    DetectorKind,
+    TrainOptions,
+    _as_float_patches,
+    _check_kind,
+    frames_training_set,
+    mining_frames,
+    negative_pool,
+    real_positives,
+    synthetic_positives,
+    train_detector,
+)
+
 __all__ = [
     "DETECTORS",
     "PAPER_DISTANCE",
@@ -71,119 +86,9 @@ __all__ = [
     "table2_detector_distance",
 ]
 
-DetectorKind = Literal["hog", "adaboost", "cnn"]
-DETECTORS: tuple[str, ...] = ("hog", "adaboost", "cnn")
 PAPER_DISTANCE: dict[str, str] = {"hog": "hog", "adaboost": "wl_learned", "cnn": "cnn"}
 """The distance the paper pairs with each detector (d_HOG, d_WL^L, d_CNN)."""
 DISTANCES: tuple[str, ...] = ("eucl", "hog", "wl_random", "wl_learned", "cnn")
-
-
-# --------------------------------------------------------------------------- training
-@dataclass(frozen=True)
-class TrainOptions:
-    """Training budgets of the three families (kept small: CPU-only, shared machine).
-
-    Attributes:
-        hog_components: root filters of the HOG mixture (the paper's DPM: 3-5).
-        hog_mining_rounds: hard-negative mining rounds over the mining frames.
-        hog_mining_frames: at most this many frames (with their object boxes
-            ignored) are scanned for hard negatives.
-        ada_rounds: boosting rounds T.
-        ada_candidates: random Levi-Weiss candidates (of the exhaustive grid).
-        cnn_epochs: passes over the training patches (each mirrored or not;
-            ``PatchDetectorModule`` under ``lightning.Trainer``).
-        cnn_batch_size: mini-batch size.
-        cnn_max_steps: the number of epochs is reduced so that training takes
-            at most about this many optimiser steps (large synthetic sets).
-    """
-
-    hog_components: int = 3
-    hog_mining_rounds: int = 2
-    hog_mining_frames: int = 40
-    ada_rounds: int = 100
-    ada_candidates: int = 2000
-    cnn_epochs: int = 12
-    cnn_batch_size: int = 128
-    cnn_max_steps: int = 1200
-
-
-def _check_kind(kind: str) -> None:
-    if kind not in DETECTORS:
-        raise ValueError(f"unknown detector kind {kind!r}; choose from {list(DETECTORS)}")
-
-
-def train_detector(
-    kind: str,
-    positives: Tensor,
-    negatives: Tensor,
-    seed: int = 0,
-    *,
-    box_in_window: Sequence[float] | None = None,
-    mining_frames: Sequence[Tensor] = (),
-    mining_boxes: Sequence[Tensor | None] | None = None,
-    options: TrainOptions = TrainOptions(),
-) -> Any:
-    """Train one detector family on positive and negative patches.
-
-    Args:
-        kind: ``"hog"`` (HOG root-filter mixture with hard-negative mining),
-            ``"adaboost"`` (Levi-Weiss stumps) or ``"cnn"`` (PatchCNN).
-        positives: object patches, float in [0, 1].
-        negatives: background patches, float in [0, 1].
-        seed: seeds every random choice of the training.
-        box_in_window: object box inside a window (``[x, y, w, h]``, window
-            pixels) reported by sliding-window detection; None = whole window.
-        mining_frames: HOG only: full grayscale frames ``(H, W)`` in [0, 1]
-            scanned for hard negatives.
-        mining_boxes: HOG only: per mining frame, ``(G, 4)`` object boxes never mined.
-        options: training budgets.
-
-    Returns:
-        A :class:`~synthaug.detectors.base.PatchDetector`.
-
-    Shape:
-        - positives: (P, 1, 40, 40), negatives: (N, 1, 40, 40)
-    """
-    from synthaug.detectors.base import check_patches
-
-    _check_kind(kind)
-    if not isinstance(positives, Tensor) or positives.dim() != 4 or positives.shape[0] == 0:
-        raise ValueError(f"positives must be a non-empty (P, 1, S, S) float tensor, got {getattr(positives, 'shape', positives)}")
-    if not isinstance(negatives, Tensor) or negatives.dim() != 4 or negatives.shape[0] == 0:
-        raise ValueError(f"negatives must be a non-empty (N, 1, S, S) float tensor, got {getattr(negatives, 'shape', negatives)}")
-    window = int(positives.shape[-1])
-    positives = check_patches(positives, window)
-    negatives = check_patches(negatives, window)
-    if kind == "hog":
-        from synthaug.detectors.hog_dpm import HOGDetector
-
-        frames = list(mining_frames)[: options.hog_mining_frames]
-        boxes = None if mining_boxes is None else list(mining_boxes)[: len(frames)]
-        det = HOGDetector.fit(
-            positives,
-            negatives,
-            background_images=frames,
-            ignore_boxes=boxes,
-            components=options.hog_components,
-            mining_rounds=options.hog_mining_rounds,
-            window=window,
-            generator=torch.Generator().manual_seed(seed),
-        )
-    elif kind == "adaboost":
-        from synthaug.detectors.adaboost import train_adaboost
-
-        det = train_adaboost(positives, negatives, n_rounds=options.ada_rounds, candidates=options.ada_candidates, seed=seed)
-    else:
-        # the one CNN training loop: PatchDetectorModule + PatchDataModule.from_tensors under a CPU lightning.Trainer
-        from synthaug.detectors.lightning_module import fit_patch_detector
-
-        n = positives.shape[0] + negatives.shape[0]
-        steps_per_epoch = max(1, math.ceil(n / options.cnn_batch_size))
-        epochs = max(1, min(options.cnn_epochs, options.cnn_max_steps // steps_per_epoch))
-        module = fit_patch_detector(positives, negatives, epochs=epochs, batch_size=options.cnn_batch_size, seed=seed)
-        det = module.to_detector()
-    det.box_in_window = None if box_in_window is None else tuple(float(v) for v in box_in_window)
-    return det
 
 
 # --------------------------------------------------------------------------- evaluation
@@ -386,20 +291,6 @@ def evaluate_on_videos(
 
 
 # --------------------------------------------------------------------------- positive sets
-def _as_float_patches(x: Any) -> Tensor:
-    t = torch.as_tensor(np.asarray(x)) if not isinstance(x, Tensor) else x
-    if t.dtype == torch.uint8:
-        t = t.float() / 255.0
-    if t.dim() == 3:
-        t = t[:, None]
-    return t.float().contiguous()
-
-
-def real_positives(seedset: Any) -> Tensor:
-    """The seed set's real object patches as float ``(N, 1, P, P)`` in [0, 1]."""
-    return _as_float_patches(seedset.patches)
-
-
 def perturb_patches(
     patches: Tensor,
     copies: int,
@@ -470,150 +361,6 @@ def perturbed_positives(seedset: Any, copies: int, *, seed: int = 0) -> Tensor:
     """Real patches plus ``copies`` perturbed versions of each (the Table 1 baseline)."""
     real = real_positives(seedset)
     return torch.cat([real, perturb_patches(real, copies, generator=torch.Generator().manual_seed(seed))])
-
-
-def synthetic_positives(
-    seedset: Any,
-    mesh: Any,
-    fit_file: str | Path,
-    count: int,
-    *,
-    seed: int = 0,
-    effects: Sequence[str] | None = None,
-    capture_sampling: str = "seed",
-    batch: int = 2048,
-    seed_geometry: Mapping[str, Any] | str | None = "auto",
-) -> Tensor:
-    """``count`` synthetic object patches generated from a capture-parameter fit.
-
-    Each patch keeps one seed's fitted capture parameters and background and
-    draws a random pose (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`).
-
-    Args:
-        seedset: the seed set the fit was made on (backgrounds).
-        mesh: mesh path or built-in name.
-        fit_file: ``synthaug fit`` output.
-        count: number of patches.
-        seed: the dataset's base seed.
-        effects: effects applied (None: all fitted ones); leaving one out is the ablation.
-        capture_sampling: ``"seed"`` (the paper), ``"uniform"`` (Fig. 10) or ``"kde"``.
-        batch: items built per ``__getitems__`` call.
-        seed_geometry: each seed's place in its frame, for position-aware camera effects
-            (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`; default ``"auto"``: the seed
-            set's); None: the patch is the frame.
-
-    Returns:
-        Float patches ``(count, 1, P, P)`` in [0, 1].
-    """
-    from synthaug.data.synthetic import SyntheticObjectDataset
-
-    if count < 0:
-        raise ValueError(f"count must be >= 0, got {count}")
-    p = int(seedset.patches.shape[-1])
-    if count == 0:
-        return torch.zeros(0, 1, p, p)
-    ds = SyntheticObjectDataset(
-        mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
-        effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
-        seed_geometry=seed_geometry,
-    )
-    out = []
-    for start in range(0, count, batch):
-        items = ds.__getitems__(list(range(start, min(count, start + batch))))
-        out.append(torch.stack([img for img, _ in items]))
-    return torch.cat(out).float().clamp(0, 1)
-
-
-def negative_pool(seedset: Any, extra: int = 3000, *, seed: int = 0) -> Tensor:
-    """The seed set's negatives plus ``extra`` object-free crops of its seed frames.
-
-    Crops use the seeds' crop sides (the same scale normalisation as the
-    positives) and never touch the labelled box (grown by a margin).
-    """
-    from synthaug.data.negatives import sample_negatives
-
-    neg = [np.asarray(seedset.negatives, np.uint8)]
-    if extra > 0:
-        n = len(seedset)
-        frames = np.stack([seedset.frame(i) for i in range(n)])
-        boxes = [np.asarray(seedset.boxes[i], np.float64) for i in range(n)]
-        more, _ = sample_negatives(frames, boxes, extra, sides=[float(s) for s in seedset.crops[:, 2]],
-                                   rng=np.random.default_rng(seed), patch_size=int(seedset.patches.shape[-1]))
-        neg.append(more)
-    return _as_float_patches(np.concatenate(neg))
-
-
-def mining_frames(seedset: Any, limit: int = 40) -> tuple[list[Tensor], list[Tensor]]:
-    """Up to ``limit`` seed frames (float ``(H, W)``) and their boxes, for HOG hard-negative mining."""
-    n = min(limit, len(seedset))
-    pick = np.unique(np.linspace(0, len(seedset) - 1, n).round().astype(int))
-    frames = [torch.from_numpy(seedset.frame(int(i))).float() / 255.0 for i in pick]
-    boxes = [torch.as_tensor(seedset.boxes[int(i)], dtype=torch.float32).reshape(1, 4) for i in pick]
-    return frames, boxes
-
-
-def frames_training_set(
-    videos: Sequence[str],
-    videos_dir: str | Path,
-    labels_dir: str | Path,
-    *,
-    frame_step: int = 1,
-    negatives_per_video: int = 60,
-    mining_frames_per_video: int = 1,
-    patch_size: int = 40,
-    object_fraction: float = 0.7,
-    seed: int = 0,
-) -> dict[str, Any]:
-    """Positives from every ``frame_step``-th labelled frame of the training videos (the "plenty of real data" reference).
-
-    Args:
-        videos: training video stems.
-        videos_dir, labels_dir: the shared-format folders.
-        frame_step: 1 = every labelled frame.
-        negatives_per_video: object-free crops drawn per video (seed crop sides).
-        mining_frames_per_video: frames kept (with their boxes) for HOG mining.
-        patch_size, object_fraction: the seed sets' patch geometry.
-        seed: seeds the negative sampling.
-
-    Returns:
-        ``{"positives": (P,1,S,S), "negatives": (N,1,S,S), "boxes": (P,4) frame boxes,
-        "mining_frames": [...], "mining_boxes": [...]}``.
-    """
-    from synthaug.data.negatives import sample_negatives
-    from synthaug.data.seedset import crop_geometry, crop_patch
-    from synthaug.data.video import read_video_with_labels
-
-    rng = np.random.default_rng(seed)
-    videos_dir, labels_dir = Path(videos_dir), Path(labels_dir)
-    pos, neg, boxes_all, mf, mb = [], [], [], [], []
-    for stem in videos:
-        video_file = next((videos_dir / f"{stem}{s}" for s in (".mp4", ".avi", ".mov", ".mkv") if (videos_dir / f"{stem}{s}").is_file()), None)
-        if video_file is None:
-            raise ValueError(f"no video file for {stem!r} in {videos_dir}")
-        frames, labels, _ = read_video_with_labels(video_file, labels_dir / f"{stem}.json")
-        labelled = [i for i, b in enumerate(labels.boxes) if b is not None]
-        sides = []
-        for i in labelled[::frame_step]:
-            box = np.asarray(labels.boxes[i], np.float64).reshape(-1, 4)[0]
-            patch, _ = crop_patch(frames[i], box=box, patch_size=patch_size, object_fraction=object_fraction)
-            pos.append(patch)
-            boxes_all.append(box)
-            sides.append(float(crop_geometry(box, patch_size=patch_size, object_fraction=object_fraction)[2]))
-        if sides and negatives_per_video > 0:
-            n, _ = sample_negatives(frames, labels.boxes, negatives_per_video, sides=sides, rng=rng, patch_size=patch_size)
-            neg.append(n)
-        for i in labelled[:: max(1, len(labelled) // max(mining_frames_per_video, 1))][:mining_frames_per_video]:
-            mf.append(torch.from_numpy(frames[i]).float() / 255.0)
-            mb.append(torch.as_tensor(labels.boxes[i], dtype=torch.float32).reshape(-1, 4))
-    if not pos:
-        raise ValueError(f"no labelled frame in videos {list(videos)[:5]}...")
-    return {
-        "positives": _as_float_patches(np.stack(pos)),
-        "negatives": _as_float_patches(np.concatenate(neg)) if neg else torch.zeros(0, 1, patch_size, patch_size),
-        "boxes": torch.as_tensor(np.stack(boxes_all), dtype=torch.float32),
-        "mining_frames": mf,
-        "mining_boxes": mb,
-    }
 
 
 # --------------------------------------------------------------------------- context and cells

@@ -1,0 +1,139 @@
+"""``synthaug train``: videos + labels (+ a fit) -> a trained detector file for ``synthaug detect``.
+
+Usage::
+
+    synthaug train --detector hog --class drone --videos ../shared/data/halmstad/videos \\
+        --labels ../shared/data/halmstad/labels --split configs/splits/halmstad.json \\
+        --seed-counts 100 --out runs/hog_drone.pt
+    synthaug detect --checkpoint runs/hog_drone.pt --video V_DRONE_042.mp4 --frame-stride 5 --out dets.json
+
+Any folder in the shared label format works (``videos/<stem>.mp4`` + ``labels/<stem>.json``,
+any stems, any numbering). Without ``--split`` the videos of the class are split *by video*
+into train / validation (80 / 20, seeded by ``--seed``); the split, the options, the mining
+log (negatives added and validation false positives per round) and the synthaug version are
+written beside the checkpoint as ``<out>.json``. ``--seed-counts N`` draws N seed frames from
+the training videos exactly as ``synthaug ingest`` does (into ``<out>.work/``, reused by a
+rerun); ``--all-frames`` uses every labelled training frame. The training itself is
+:func:`synthaug.detectors.training.train_from_videos`, the code path of the experiments.
+
+Bad inputs exit with status 2 and a message naming the option.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["add_arguments", "main"]
+
+_DETECTORS = ("hog", "adaboost", "cnn")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--detector", required=True, help=f"detector family: {' | '.join(_DETECTORS)}")
+    parser.add_argument("--class", dest="class_name", required=True, help="class to detect (the label files' 'class', e.g. drone)")
+    parser.add_argument("--videos", type=Path, required=True, help="folder of videos <stem>.mp4 (any stems, any numbering)")
+    parser.add_argument("--labels", type=Path, required=True, help="folder of per-video label JSON files (shared format)")
+    parser.add_argument("--out", type=Path, required=True, help="detector file to write (.pt); metadata goes to the same name with .json")
+    parser.add_argument("--split", type=Path, help="video split JSON (configs/splits/halmstad.json format); default: split by video "
+                                                   "from --seed, see --val-fraction")
+    pos = parser.add_mutually_exclusive_group()
+    pos.add_argument("--seed-counts", type=int, default=None,
+                     help="real seed frames drawn from the training videos the way `synthaug ingest` draws them (default 100)")
+    pos.add_argument("--all-frames", action="store_true", help="every labelled frame of the training videos (see --frame-step)")
+    pos.add_argument("--seedset", type=Path, help="use this seed set (`synthaug ingest` output) instead of drawing seeds")
+    parser.add_argument("--frame-step", type=int, default=1, help="with --all-frames: every K-th labelled frame")
+    parser.add_argument("--params", type=Path, help="`synthaug fit` output made on the seed set: adds synthetic positives")
+    parser.add_argument("--mesh", help="mesh of the synthetic object (default: the fit's mesh, else the built-in quadcopter)")
+    parser.add_argument("--synthetic-ratio", type=float, default=None,
+                        help="synthetic patches per real seed with --params (default 10 when --params is given, else 0)")
+    parser.add_argument("--seed", type=int, default=0, help="training seed: initialisation, negative sampling, the automatic split")
+    parser.add_argument("--ingest-seed", type=int, default=0, help="`synthaug ingest --seed` of the seed draw (shards are reused per value)")
+    parser.add_argument("--val-fraction", type=float, default=0.2, help="share of the class's videos kept for validation without --split")
+    parser.add_argument("--negative-classes", nargs="*", default=["bird"],
+                        help="classes whose videos never show the class: mined whole for hard negatives")
+    parser.add_argument("--mining-rounds", type=int, default=3, help="hard-negative mining rounds at most (0: none)")
+    parser.add_argument("--mining-stride", type=int, default=30, help="mine every K-th frame of every training video")
+    parser.add_argument("--mining-per-frame", type=int, default=5, help="false positives kept per mined frame")
+    parser.add_argument("--val-stride", type=int, default=30, help="validation false positives counted on every K-th validation frame")
+    parser.add_argument("--scales", type=float, nargs="+", default=None,
+                        help="pyramid of mining and validation (default: synthaug.detectors.sliding.DEFAULT_SCALES)")
+    parser.add_argument("--hog-components", type=int, default=3, help="HOG mixture components")
+    parser.add_argument("--hog-mining-rounds", type=int, default=2, help="HOG's own cache-mining rounds per training")
+    parser.add_argument("--ada-rounds", type=int, default=100, help="AdaBoost boosting rounds")
+    parser.add_argument("--ada-candidates", type=int, default=2000, help="AdaBoost weak-learner candidates")
+    parser.add_argument("--cnn-epochs", type=int, default=12, help="CNN passes over the patches")
+    parser.add_argument("--cnn-max-steps", type=int, default=1200, help="cap on CNN optimiser steps")
+    parser.add_argument("--extra-negatives", type=int, default=3000, help="object-free crops of the seed frames added to the seed set's negatives")
+    parser.add_argument("--work", type=Path, help="ingest folder for --seed-counts (default: <out>.work)")
+    parser.add_argument("--workers", type=int, default=2, help="ingest worker processes")
+    parser.add_argument("--threads", type=int, default=None, help="torch intra-op threads (default: torch's)")
+    parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+
+def _err(message: str) -> int:
+    print(f"synthaug train: error: {message}", file=sys.stderr)
+    return 2
+
+
+def main(args: argparse.Namespace) -> int:
+    if args.detector not in _DETECTORS:
+        return _err(f"--detector: unknown detector {args.detector!r}; choose from {list(_DETECTORS)}")
+    for opt, value, low in (("--frame-step", args.frame_step, 1), ("--mining-stride", args.mining_stride, 1),
+                            ("--mining-per-frame", args.mining_per_frame, 1), ("--val-stride", args.val_stride, 1),
+                            ("--mining-rounds", args.mining_rounds, 0), ("--workers", args.workers, 1)):
+        if value < low:
+            return _err(f"{opt}: must be >= {low}, got {value}")
+    if args.seed_counts is not None and args.seed_counts < 1:
+        return _err(f"--seed-counts: must be >= 1, got {args.seed_counts}")
+    if args.threads is not None and args.threads < 1:
+        return _err(f"--threads: must be >= 1, got {args.threads}")
+    if args.synthetic_ratio is not None and args.params is None:
+        return _err("--synthetic-ratio: synthetic positives need a fit: give --params FIT.json")
+    ratio = args.synthetic_ratio if args.synthetic_ratio is not None else (10.0 if args.params is not None else 0.0)
+
+    import torch
+
+    from synthaug.detectors.training import TrainingInputError, TrainOptions, train_from_videos
+
+    if args.threads is not None:
+        torch.set_num_threads(args.threads)
+    try:
+        options = TrainOptions(hog_components=args.hog_components, hog_mining_rounds=args.hog_mining_rounds,
+                               ada_rounds=args.ada_rounds, ada_candidates=args.ada_candidates, cnn_epochs=args.cnn_epochs,
+                               cnn_max_steps=args.cnn_max_steps, mining_rounds=args.mining_rounds,
+                               mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
+                               val_stride=args.val_stride, scales=None if args.scales is None else tuple(args.scales))
+    except ValueError as e:
+        return _err(str(e))
+
+    def log(msg: str) -> None:
+        if not args.quiet:
+            print(f"[{time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
+
+    try:
+        det, meta = train_from_videos(
+            args.detector, args.class_name, args.videos, args.labels, out=args.out, split=args.split, seed=args.seed,
+            seed_count=100 if args.seed_counts is None else args.seed_counts, all_frames=args.all_frames,
+            frame_step=args.frame_step, seedset=args.seedset, params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
+            options=options, work_dir=args.work, ingest_seed=args.ingest_seed, ingest_workers=args.workers,
+            negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
+            extra_negatives=args.extra_negatives, log=log, command=["synthaug", "train", *sys.argv[2:]] if sys.argv[1:2] == ["train"] else None,
+        )
+    except TrainingInputError as e:
+        return _err(str(e))
+    except (ValueError, FileNotFoundError) as e:
+        return _err(str(e))
+    rounds = meta["mining"]["rounds"]
+    summary = {"out": str(args.out), "metadata": str(args.out.with_suffix(".json")), "detector": args.detector,
+               "class": args.class_name, "train_videos": len(meta["split"]["train"]), "val_videos": len(meta["split"]["val"]),
+               "positives": meta["positives"]["count"] + (meta["synthetic"]["count"] if meta["synthetic"] else 0),
+               "negatives": meta["negatives"]["final"],
+               "mining": [{"round": r["round"], "added": r["added"], "val_fp": None if r["val"] is None else r["val"]["fp"]}
+                          for r in rounds],
+               "chosen_round": meta["mining"]["chosen_round"], "seconds": meta["seconds"]["total"]}
+    print(json.dumps(summary))
+    return 0
