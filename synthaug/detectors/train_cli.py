@@ -121,7 +121,8 @@ def main(args: argparse.Namespace) -> int:
             frame_step=args.frame_step, seedset=args.seedset, params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed, ingest_workers=args.workers,
             negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
-            extra_negatives=args.extra_negatives, log=log, command=["synthaug", "train", *sys.argv[2:]] if sys.argv[1:2] == ["train"] else None,
+            extra_negatives=args.extra_negatives, log=log,
+            command={k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if not k.startswith("_")},
         )
     except TrainingInputError as e:
         return _err(str(e))

@@ -1193,7 +1193,7 @@ def train_from_videos(
     split_block: int = 1,
     extra_negatives: int = 3000,
     log: Callable[[str], None] | None = None,
-    command: Sequence[str] | None = None,
+    command: Any = None,
 ) -> tuple[Any, dict[str, Any]]:
     """Videos + labels (+ a fit) -> a trained detector: what ``synthaug train`` runs.
 
@@ -1231,7 +1231,7 @@ def train_from_videos(
         val_fraction, split_block: the automatic split.
         extra_negatives: object-free crops of the seed frames added to the seed set's negatives.
         log: progress printer.
-        command: the command line, recorded in the metadata.
+        command: the command line (or its parsed options), recorded in the metadata.
 
     Returns:
         ``(detector, metadata)``.
@@ -1352,7 +1352,7 @@ def train_from_videos(
         "box_in_window": [float(v) for v in box_in_window],
         "options": asdict(options), "mining": res.log,
         "seconds": {"data": round(t_data, 1), "training": round(t_train, 1), "total": round(time.perf_counter() - t_start, 1)},
-        "command": list(command) if command is not None else None,
+        "command": command,
         "checkpoint": None if out is None else str(out),
     }
     if not sp["val"]:

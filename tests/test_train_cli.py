@@ -1,0 +1,182 @@
+"""`synthaug train` end to end on a folder of generated videos (non-contiguous numbering), then `synthaug detect`."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+import torch
+
+from synthaug.cli import main as cli_main
+
+DRONES = ["V_DRONE_003", "V_DRONE_010", "V_DRONE_027"]
+# small budgets: tiny frames, one pyramid level pair, every 3rd frame mined and validated
+FAST = ["--scales", "1.0", "0.8", "--mining-stride", "3", "--val-stride", "3", "--mining-rounds", "2", "--hog-components", "2",
+        "--extra-negatives", "300", "--workers", "1", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def ws(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    from synthaug.data.synthvideo import make_panning_video
+
+    root = tmp_path_factory.mktemp("train_cli")
+    for i, stem in enumerate(DRONES):
+        make_panning_video(root, n_frames=12, size=(160, 128), seed=i, name=stem)
+    make_panning_video(root, n_frames=12, size=(160, 128), seed=7, name="V_BIRD_002", class_name="bird")
+    return {"root": root, "videos": root / "videos", "labels": root / "labels"}
+
+
+def _train(ws: dict[str, Path], out: Path, *extra: str) -> int:
+    return cli_main(["train", "--class", "drone", "--videos", str(ws["videos"]), "--labels", str(ws["labels"]),
+                     "--out", str(out), *FAST, *extra])
+
+
+@pytest.fixture(scope="module")
+def trained(ws: dict[str, Path]) -> dict[str, Any]:
+    out = ws["root"] / "runs" / "hog.pt"
+    rc = _train(ws, out, "--detector", "hog", "--seed-counts", "8", "--seed", "0")
+    assert rc == 0
+    return {"out": out, "meta": json.loads(out.with_suffix(".json").read_text())}
+
+
+def test_train_then_detect_end_to_end(ws: dict[str, Path], trained: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
+    from synthaug.detectors.base import load_detector
+
+    det = load_detector(trained["out"])
+    assert det.kind == "hog" and det.box_in_window is not None
+    val_video = trained["meta"]["split"]["val"][0]
+    dets = ws["root"] / "dets.json"
+    capsys.readouterr()
+    rc = cli_main(["detect", "--checkpoint", str(trained["out"]), "--video", str(ws["videos"] / f"{val_video}.mp4"),
+                   "--out", str(dets), "--frame-stride", "5", "--scales", "1.0", "0.8", "--quiet"])
+    assert rc == 0
+    payload = json.loads(dets.read_text())
+    assert payload["detector"] == "hog" and len(payload["detections"]) == 12
+    assert [d is None for d in payload["detections"]] == [i % 5 != 0 for i in range(12)]
+    assert all(1 <= len(d) <= 10 for d in payload["detections"] if d is not None)
+    # the object is found (8 seeds, tiny frames): one of the 3 best boxes of every processed frame overlaps it
+    boxes = json.loads((ws["labels"] / f"{val_video}.json").read_text())["boxes"]
+    for i in (0, 5, 10):
+        gx, gy, gw, gh = boxes[i]
+        assert any(min(x + w, gx + gw) > max(x, gx) and min(y + h, gy + gh) > max(y, gy)
+                   for x, y, w, h, _ in payload["detections"][i][:3]), i
+
+
+def test_metadata_split_by_video_deterministic(ws: dict[str, Path], trained: dict[str, Any]) -> None:
+    import synthaug
+
+    meta = trained["meta"]
+    sp = meta["split"]
+    assert meta["format"] == "synthaug.trained_detector" and meta["synthaug_version"] == synthaug.__version__
+    assert meta["detector"] == "hog" and meta["class"] == "drone" and meta["seed"] == 0
+    assert sp["source"] == "auto" and sp["seed"] == 0 and sp["fractions"] == {"train": 0.8, "val": 0.2}
+    assert sorted(sp["train"] + sp["val"]) == DRONES and not set(sp["train"]) & set(sp["val"])
+    assert len(sp["val"]) == 1 and sp["negative_train"] == ["V_BIRD_002"]
+    assert meta["positives"]["mode"] == "seeds" and meta["positives"]["count"] == 8
+    assert meta["options"]["mining_stride"] == 3 and meta["options"]["scales"] == [1.0, 0.8]
+    rounds = meta["mining"]["rounds"]
+    assert rounds[0]["added"] == 0 and all(r["added"] > 0 for r in rounds[1:]) and len(rounds) >= 2
+    assert all(isinstance(r["val"]["fp"], int) for r in rounds if r["val"] is not None)
+    assert meta["negatives"]["final"] == rounds[meta["mining"]["chosen_round"]]["negatives"]
+    assert meta["command"]["detector"] == "hog" and meta["command"]["seed_counts"] == 8
+    # the same command again: the same split and the same detector (ingest shards reused)
+    again = ws["root"] / "runs" / "hog_again.pt"
+    assert _train(ws, again, "--detector", "hog", "--seed-counts", "8", "--seed", "0", "--work", str(trained["out"]) + ".work") == 0
+    meta2 = json.loads(again.with_suffix(".json").read_text())
+    assert meta2["split"] == sp and meta2["mining"]["rounds"][0]["val"] == rounds[0]["val"]
+    a, b = torch.load(trained["out"], weights_only=True), torch.load(again, weights_only=True)
+    assert torch.equal(a["state"]["weights"], b["state"]["weights"])
+
+
+def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], trained: dict[str, Any]) -> None:
+    out = ws["root"] / "runs" / "ada.pt"
+    assert _train(ws, out, "--detector", "adaboost", "--all-frames", "--frame-step", "2", "--ada-rounds", "10",
+                  "--ada-candidates", "200", "--mining-rounds", "1") == 0
+    meta = json.loads(out.with_suffix(".json").read_text())
+    assert meta["positives"] == {"mode": "all_frames", "frame_step": 2, "count": 12}  # 2 training videos x 12 frames / 2
+    assert meta["mining"]["rounds"][1]["added"] > 0
+    out = ws["root"] / "runs" / "cnn.pt"
+    seedset = trained["meta"]["positives"]["seedset"]
+    assert _train(ws, out, "--detector", "cnn", "--seedset", seedset, "--cnn-epochs", "2", "--mining-rounds", "0") == 0
+    meta = json.loads(out.with_suffix(".json").read_text())
+    assert meta["positives"]["mode"] == "seedset" and [r["round"] for r in meta["mining"]["rounds"]] == [0]
+    from synthaug.detectors.base import load_detector
+
+    assert load_detector(out).kind == "cnn"
+
+
+def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> None:
+    """--params adds ratio x seeds synthetic patches made on the seed set (the generator itself is tested elsewhere)."""
+    import synthaug.detectors.training as training
+    from synthaug.params import CaptureParams
+
+    calls = []
+
+    def fake(seedset: Any, mesh: Any, fit_file: Any, count: int, *, seed: int = 0, **_: Any) -> torch.Tensor:
+        calls.append((len(seedset), str(mesh), count, seed))
+        return torch.rand(count, 1, 40, 40, generator=torch.Generator().manual_seed(seed))
+
+    monkeypatch.setattr(training, "synthetic_positives", fake)
+    fit = ws["root"] / "fit8.json"
+    CaptureParams.sample(8, generator=torch.Generator().manual_seed(0)).save(fit)
+    out = ws["root"] / "runs" / "hog_syn.pt"
+    seedset = trained["meta"]["positives"]["seedset"]
+    assert _train(ws, out, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
+                  "--mining-rounds", "0") == 0
+    meta = json.loads(out.with_suffix(".json").read_text())
+    assert calls == [(8, "quadcopter", 24, 2)]
+    assert meta["synthetic"] == {"params": str(fit), "mesh": "quadcopter", "ratio": 3.0, "count": 24}
+
+
+@pytest.mark.parametrize(
+    "case, option",
+    [
+        ("no_videos", "--videos"),
+        ("no_labels", "--labels"),
+        ("no_class", "--class"),
+        ("bad_detector", "--detector"),
+        ("too_many_seeds", "--seed-counts"),
+        ("params_rows", "--params"),
+        ("ratio_without_params", "--synthetic-ratio"),
+        ("params_with_all_frames", "--params"),
+    ],
+)
+def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str], case: str, option: str) -> None:
+    from synthaug.params import CaptureParams
+
+    fit3 = tmp_path / "fit3.json"
+    CaptureParams.sample(3, generator=torch.Generator().manual_seed(0)).save(fit3)
+    base = {"--detector": "hog", "--class": "drone", "--videos": str(ws["videos"]), "--labels": str(ws["labels"])}
+    extra: list[str] = ["--seed-counts", "8", "--work", str(trained["out"]) + ".work"]
+    if case == "no_videos":
+        base["--videos"] = str(tmp_path / "nowhere")
+    elif case == "no_labels":
+        base["--labels"] = str(tmp_path / "nowhere")
+    elif case == "no_class":
+        base["--class"] = "cat"
+    elif case == "bad_detector":
+        base["--detector"] = "svm"
+    elif case == "too_many_seeds":
+        extra = ["--seed-counts", "1000"]
+    elif case == "params_rows":
+        extra += ["--params", str(fit3)]
+    elif case == "ratio_without_params":
+        extra += ["--synthetic-ratio", "5"]
+    elif case == "params_with_all_frames":
+        extra = ["--all-frames", "--params", str(fit3)]
+    out = tmp_path / "det.pt"
+    argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
+    capsys.readouterr()
+    assert cli_main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("synthaug train: error: ") and option in err, err
+    assert not out.exists()
+    if case == "params_rows":
+        assert "3 rows" in err and "8 seeds" in err
+    if case == "too_many_seeds":
+        assert "1000" in err and "24 labelled frames" in err
+    if case == "no_class":
+        assert "'cat'" in err and "drone" in err

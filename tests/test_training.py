@@ -1,0 +1,243 @@
+"""Detector training with hard-negative mining at scale (synthaug.detectors.training), on generated data only."""
+
+from __future__ import annotations
+
+import inspect
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import torch
+import torch.nn.functional as F
+
+from synthaug.detectors.base import PatchDetector
+from synthaug.detectors.training import (
+    MiningFrame,
+    TrainOptions,
+    TrainingInputError,
+    VideoFrames,
+    discover_videos,
+    mine_hard_negatives,
+    split_by_video,
+    train_with_mining,
+    validation_false_positives,
+)
+
+GREY = 200
+
+
+class Darkness(PatchDetector):
+    """Scores a window by its darkness (1 - mean); windows whose darkest pixel is at a forbidden level score 2 lower.
+
+    ``fit(negatives)`` forbids the darkest-pixel level (tenths) of every dark negative: once the black
+    distractors of the mining frames are negatives, every window touching a black square is suppressed.
+    """
+
+    kind = "darkness_training_test"
+
+    def __init__(self, forbidden: set[int] | None = None) -> None:
+        self.window, self.stride = 40, 4
+        self.forbidden = set(forbidden or ())
+
+    @staticmethod
+    def level(patches: torch.Tensor) -> torch.Tensor:
+        return (patches.amin((1, 2, 3)) * 10).floor().long()
+
+    @classmethod
+    def fit(cls, positives: torch.Tensor, negatives: torch.Tensor) -> "Darkness":
+        dark = negatives[(1 - negatives.mean((1, 2, 3))) > 0.5]
+        return cls({int(v) for v in cls.level(dark).tolist()})
+
+    def score_patches(self, patches: torch.Tensor) -> torch.Tensor:
+        s = 1 - patches.mean((1, 2, 3))
+        if self.forbidden:
+            bad = torch.tensor([int(v) in self.forbidden for v in self.level(patches).tolist()])
+            s = s - 2.0 * bad.float()
+        return s
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"forbidden": sorted(self.forbidden)}
+
+    @classmethod
+    def from_state_dict(cls, state: dict[str, Any]) -> "Darkness":
+        return cls(set(state["forbidden"]))
+
+
+def _frame(squares: list[tuple[int, int, int]], h: int = 120, w: int = 160) -> np.ndarray:
+    f = np.full((h, w), GREY, np.uint8)
+    for x, y, v in squares:
+        f[y:y + 40, x:x + 40] = v
+    return f
+
+
+# ----------------------------------------------------------------- mining: what is mined
+def test_mined_negatives_are_true_background_and_exact_windows() -> None:
+    """The object (the darkest thing in each frame) is never mined; each patch is the window the detector scored."""
+    rng = np.random.default_rng(0)
+    frames, boxes = [], []
+    for i in range(6):
+        ox, oy = int(rng.integers(0, 30)) * 4, int(rng.integers(0, 18)) * 4
+        f = _frame([(ox, oy, 0)])  # the labelled object: black, the best window of the frame
+        f = np.clip(f.astype(int) + rng.integers(-30, 30, f.shape), 0, 255).astype(np.uint8)
+        f[oy:oy + 40, ox:ox + 40] = 0
+        frames.append(MiningFrame(f, np.array([[ox + 6.0, oy + 6.0, 28.0, 28.0]]), "V_X_001", i))
+        boxes.append(np.array([[ox + 6.0, oy + 6.0, 28.0, 28.0]]))
+    frames.append(MiningFrame(_frame([(60, 40, 0)]), None, "V_BIRD_001", 0))  # a negative-class frame: nothing masked
+    scales = (1.0, 0.8)
+    mined = mine_hard_negatives(Darkness(), iter(frames), scales=scales, per_frame=4, margin=0.25)
+    assert mined.frames_scanned == 7
+    assert 0 < len(mined) <= 7 * 4
+    assert mined.scores.tolist() == sorted(mined.scores.tolist(), reverse=True)
+    from synthaug.data.backgrounds import grow_boxes
+
+    for (video, index), box in zip(mined.sources, mined.boxes.tolist()):
+        if video == "V_BIRD_001":
+            continue
+        for gx, gy, gw, gh in grow_boxes(boxes[index], margin_fraction=0.25, min_margin=4.0):
+            assert not (box[0] < gx + gw and box[2] > gx and box[1] < gy + gh and box[3] > gy), (index, box)
+    per_frame = {}
+    for s in mined.sources:
+        per_frame[s] = per_frame.get(s, 0) + 1
+    assert max(per_frame.values()) <= 4
+    # the negative-class frame gives its black square (nothing masked there), and it scores highest
+    assert mined.sources[0] == ("V_BIRD_001", 0) and mined.boxes[0].tolist() == [60.0, 40.0, 100.0, 80.0]
+    # every patch is the detector's window: rescoring gives the mined score
+    np.testing.assert_allclose(Darkness().score_patches(mined.patches).numpy(), mined.scores.numpy(), atol=1e-5)
+    # scale-1 windows equal the frame crop exactly
+    for p, (video, index), box in zip(mined.patches, mined.sources, mined.boxes.tolist()):
+        if abs(box[2] - box[0] - 40) < 1e-4:
+            x, y = int(round(box[0])), int(round(box[1]))
+            img = frames[-1].image if video == "V_BIRD_001" else frames[index].image
+            np.testing.assert_allclose(p[0].numpy(), img[y:y + 40, x:x + 40] / 255.0, atol=1e-6)
+    # mined windows are excluded next time; a global cap keeps the best
+    again = mine_hard_negatives(Darkness(), frames, scales=scales, per_frame=4, exclude=set(mined.keys))
+    assert not set(again.keys) & set(mined.keys)
+    capped = mine_hard_negatives(Darkness(), frames, scales=scales, per_frame=4, max_negatives=5)
+    assert len(capped) == 5 and torch.equal(capped.scores, mined.scores[:5])
+
+
+def test_video_frames_stream_by_video_every_kth_labelled_frame(tmp_path: Path) -> None:
+    from synthaug.data.synthvideo import make_panning_video
+
+    make_panning_video(tmp_path, n_frames=9, size=(96, 80), seed=0, name="V_DRONE_004")
+    make_panning_video(tmp_path, n_frames=5, size=(96, 80), seed=1, name="V_BIRD_009", class_name="bird")
+    lab = tmp_path / "labels" / "V_DRONE_004.json"
+    doc = json.loads(lab.read_text())
+    doc["boxes"][3] = None  # not drawn in frame 3: not a mining frame (the object may be in view)
+    lab.write_text(json.dumps(doc))
+    src = VideoFrames(tmp_path / "videos", tmp_path / "labels", positive=["V_DRONE_004"], negative=["V_BIRD_009"], stride=3)
+    assert inspect.isgenerator(iter(src))  # streamed, never a list of frames
+    got = [(f.video, f.index, f.boxes is None) for f in src]
+    assert got == [("V_DRONE_004", 0, False), ("V_DRONE_004", 6, False), ("V_BIRD_009", 0, True), ("V_BIRD_009", 3, True)]
+    assert src.planned_frames() == 4
+    val = VideoFrames(tmp_path / "videos", tmp_path / "labels", positive=["V_DRONE_004"], stride=3, null_frames=True)
+    assert [(f.index, f.boxes is None) for f in val] == [(0, False), (3, True), (6, False)]
+    first = next(iter(src))
+    np.testing.assert_allclose(first.boxes[0], doc["boxes"][0])
+
+
+# ----------------------------------------------------------------- validation count and the stopping rule
+def test_validation_false_positives_hand_counted() -> None:
+    # 2 frames: object (value 100) + black distractor; one object-free frame with a distractor
+    frames = [MiningFrame(_frame([(0, 0, 100), (100, 60, 0)]), np.array([[0.0, 0.0, 40.0, 40.0]])),
+              MiningFrame(_frame([(60, 0, 100), (0, 80, 0)]), np.array([[60.0, 0.0, 40.0, 40.0]])),
+              MiningFrame(_frame([(40, 40, 0)]), None)]
+    r = validation_false_positives(Darkness(), frames, scales=[1.0], top_k=1)
+    # top-1 per frame is each frame's distractor: 3 FPs, no object found
+    assert r == {"fp": 3, "recall_reached": False, "threshold": None, "max_recall": 0.0, "tp": 0, "detections": 3,
+                 "frames": 3, "objects": 2}
+    r = validation_false_positives(Darkness(), frames, scales=[1.0], top_k=2)
+    # by score: the 3 distractors (1.0), then the objects: recall 1/2 is reached at the 4th detection with 3 FPs above
+    assert r["fp"] == 3 and r["recall_reached"] and r["max_recall"] == 1.0 and r["tp"] == 2
+    r = validation_false_positives(Darkness({0}), frames, scales=[1.0], top_k=2)  # distractors suppressed
+    assert r["fp"] == 0 and r["threshold"] == pytest.approx(1 - 100 / 255, abs=1e-5)
+
+
+def test_mining_rounds_stop_when_validation_fp_stops_falling() -> None:
+    """Round 1 mines the black distractors -> validation FPs fall to 0; round 2 mines grey sky -> no fall -> stop, keep round 1."""
+    mining = [MiningFrame(_frame([(4 * i, 8, 100), (80, 60, 0)]), np.array([[4.0 * i, 8.0, 40.0, 40.0]]), "V_M_001", i)
+              for i in range(4)]
+    val = [MiningFrame(_frame([(8, 72, 100), (100, 4, 0)]), np.array([[8.0, 72.0, 40.0, 40.0]]), "V_V_001", i) for i in range(3)]
+    val.append(MiningFrame(_frame([(60, 40, 0)]), None, "V_V_001", 3))
+    grey = torch.full((20, 1, 40, 40), GREY / 255.0)
+    pos = torch.full((5, 1, 40, 40), 100 / 255.0)
+    fits = []
+
+    def fit(p: torch.Tensor, n: torch.Tensor) -> Darkness:
+        fits.append(n.shape[0])
+        return Darkness.fit(p, n)
+
+    opts = TrainOptions(mining_rounds=6, mining_per_frame=3, scales=(1.0,), val_top_k=3)
+    res = train_with_mining("toy", pos, grey, 0, box_in_window=(0, 0, 40, 40), options=opts, mining_source=mining,
+                            val_frames=val, fit=fit)
+    rounds = res.log["rounds"]
+    assert [r["round"] for r in rounds] == [0, 1, 2]
+    assert [r["val"]["fp"] for r in rounds] == [4, 0, 0]  # the 4 distractors outrank the objects, then none
+    assert [r["added"] for r in rounds] == [0, 12, 12]  # 3 per frame, 4 frames; round 2 never repeats round 1
+    assert [r["negatives"] for r in rounds] == [20, 32, 44] and fits == [20, 32, 44]
+    assert res.log["chosen_round"] == 1 and "stopped falling" in res.log["stop_reason"]
+    assert res.negatives.shape[0] == 32 and res.detector.forbidden == {0}
+    assert res.detector.box_in_window == (0.0, 0.0, 40.0, 40.0)
+    # without validation frames every round runs
+    res = train_with_mining("toy", pos, grey, 0, options=TrainOptions(mining_rounds=2, mining_per_frame=3, scales=(1.0,)),
+                            mining_source=mining, fit=fit)
+    assert [r["round"] for r in res.log["rounds"]] == [0, 1, 2] and res.log["chosen_round"] == 2
+
+
+# ----------------------------------------------------------------- the three families on generated videos
+@pytest.fixture(scope="module")
+def videos(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from synthaug.data.synthvideo import make_panning_video
+
+    root = tmp_path_factory.mktemp("train_videos")
+    for i, stem in enumerate(["V_DRONE_003", "V_DRONE_010", "V_DRONE_027", "V_DRONE_031"]):
+        make_panning_video(root, n_frames=10, size=(160, 128), seed=i, name=stem)
+    make_panning_video(root, n_frames=10, size=(160, 128), seed=9, name="V_BIRD_002", class_name="bird")
+    (root / "labels" / "notes.json").write_text(json.dumps({"not": "a label file"}))
+    return root
+
+
+@pytest.mark.parametrize("kind", ["hog", "adaboost", "cnn"])
+def test_every_family_mines_and_logs(videos: Path, kind: str) -> None:
+    from synthaug.detectors.training import frames_training_set
+
+    d = frames_training_set(["V_DRONE_003", "V_DRONE_010"], videos / "videos", videos / "labels", frame_step=2,
+                            negatives_per_video=40)
+    opts = TrainOptions(hog_components=1, hog_mining_rounds=0, ada_rounds=10, ada_candidates=200, cnn_epochs=2,
+                        mining_rounds=1, mining_stride=3, mining_per_frame=4, scales=(1.0, 0.8), val_stride=3)
+    src = VideoFrames(videos / "videos", videos / "labels", positive=["V_DRONE_003", "V_DRONE_010"], negative=["V_BIRD_002"], stride=3)
+    val = VideoFrames(videos / "videos", videos / "labels", positive=["V_DRONE_027"], stride=3, null_frames=True)
+    res = train_with_mining(kind, d["positives"], d["negatives"], 0, box_in_window=(6, 6, 28, 28), options=opts,
+                            mining_source=src, val_frames=val)
+    r0, r1 = res.log["rounds"]
+    assert r1["added"] > 0 and r1["frames_scanned"] == 12 and r1["negatives"] == r0["negatives"] + r1["added"]
+    assert r0["val"]["frames"] == 4 and r0["val"]["objects"] == 4 and isinstance(r1["val"]["fp"], int)
+    assert res.detector.kind == kind and res.detector.box_in_window == (6.0, 6.0, 28.0, 28.0)
+    assert res.log["chosen_round"] == (1 if r1["val"]["fp"] < r0["val"]["fp"] else 0)
+
+
+# ----------------------------------------------------------------- split by video
+def test_split_by_video_deterministic_any_numbering(videos: Path, tmp_path: Path) -> None:
+    vs = discover_videos(videos / "videos", videos / "labels")
+    assert vs.classes == {"V_BIRD_002": "bird", "V_DRONE_003": "drone", "V_DRONE_010": "drone", "V_DRONE_027": "drone",
+                          "V_DRONE_031": "drone"}
+    a = split_by_video(vs, "drone", seed=3)
+    assert a == split_by_video(vs, "drone", seed=3)
+    assert a["source"] == "auto" and len(a["train"]) == 3 and len(a["val"]) == 1
+    assert set(a["train"]) | set(a["val"]) == {s for s, c in vs.classes.items() if c == "drone"}
+    assert not set(a["train"]) & set(a["val"]) and a["negative_train"] + a["negative_val"] == ["V_BIRD_002"]
+    vals = {tuple(split_by_video(vs, "drone", seed=s)["val"]) for s in range(8)}
+    assert len(vals) > 1  # the seed moves the split
+    split = {"format": "synthaug.video_split", "version": 1, "classes": dict(vs.classes),
+             "train": ["V_DRONE_003", "V_DRONE_031", "V_DRONE_099"], "val": ["V_DRONE_010"], "test": ["V_DRONE_027"],
+             "hard_negatives": {"train": ["V_BIRD_002"], "val": [], "test": []}}
+    (tmp_path / "split.json").write_text(json.dumps(split))
+    b = split_by_video(vs, "drone", split=tmp_path / "split.json")
+    assert (b["train"], b["val"], b["negative_train"]) == (["V_DRONE_003", "V_DRONE_031"], ["V_DRONE_010"], ["V_BIRD_002"])
+    with pytest.raises(TrainingInputError, match="--class.*'cat'") as e:
+        split_by_video(vs, "cat")
+    assert e.value.option == "--class"
+    with pytest.raises(TrainingInputError, match="--split"):
+        split_by_video(vs, "drone", split=tmp_path / "missing.json")
