@@ -10,7 +10,6 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
-import torch.nn.functional as F
 
 from synthaug.detectors.base import PatchDetector
 from synthaug.detectors.training import (

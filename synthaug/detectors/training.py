@@ -59,10 +59,8 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import sys
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Literal, Mapping, NamedTuple, Sequence
 
@@ -557,6 +555,8 @@ def mine_hard_negatives(
         n_frames += 1
         cand, sc = candidate_boxes(detector, image, scales=scales, score_threshold=score_threshold,
                                    pre_nms_top_k=pre_nms_top_k, box_in_window=whole)
+        finite = torch.isfinite(sc)
+        cand, sc = cand[finite], sc[finite]
         if cand.shape[0] == 0:
             continue
         if item.boxes is not None and np.asarray(item.boxes).size:
@@ -567,8 +567,8 @@ def mine_hard_negatives(
         # the levels as candidate_boxes made them: (resized level, its true x/y scale)
         levels: dict[int, tuple[Tensor, float, float]] = {}
         sides = []
-        for li, s in enumerate(scales):
-            lh, lw = max(1, round(image.shape[-2] * s)), max(1, round(image.shape[-1] * s))
+        for s in scales:  # a level's window side in frame pixels (resize_image's rounding of the level width)
+            lw = max(1, round(image.shape[-1] * s))
             sides.append(window / (lw / image.shape[-1]))
         side_t = torch.tensor(sides)
         order = nms(cand, sc, nms_iou)

@@ -52,7 +52,6 @@ from synthaug.detectors.training import (  # noqa: F401
     DETECTORS,
     DetectorKind,
     TrainOptions,
-    _as_float_patches,
     _check_kind,
     frames_training_set,
     mining_frames,
