@@ -41,7 +41,7 @@ def tile_grid(tiles: list[np.ndarray], cols: int, pad: int = 2, zoom: int = 1, *
     Example:
         >>> g = tile_grid([np.zeros((4, 4), np.uint8)] * 3, cols=2)
         >>> g.shape
-        (12, 12)
+        (14, 14)
     """
     h, w = tiles[0].shape
     rows = math.ceil(len(tiles) / cols)
