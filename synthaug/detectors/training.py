@@ -117,7 +117,10 @@ class TrainOptions:
             at most about this many optimiser steps (large synthetic sets).
         mining_rounds: rounds of :func:`train_with_mining` (mine, add, retrain) at most;
             used only when a mining source is given; 0 = no mining.
-        mining_stride: every k-th frame of every mining video is scanned.
+        mining_stride: every k-th frame of every mining video is scanned. Measured at 30 on the 56 halmstad
+            drone training videos + 32 bird videos (894 frames, 640x512, 1 torch thread, shared 2-core box):
+            one round (scan + retrain + validation on 219 frames) HOG 71 s (scan 53 s), CNN 89 s (58 s),
+            AdaBoost 238 s (171 s); 4 470 negatives added per round; peak memory 1.4-2.1 GB.
         mining_per_frame: false positives kept per frame (the best after NMS).
         mining_max_per_round: at most this many new negatives per round (the highest-scoring).
         mining_margin: labelled boxes grow by ``max(4 px, margin x longest side)`` on each side
