@@ -18,11 +18,10 @@ from synthaug.evaluate.experiments import (
     TrainOptions,
     _plot,
     _write_report,
-    evaluate_on_videos,
-    load_eval_set,
     perturb_patches,
     train_detector,
 )
+from synthaug.evaluate.videos import detect_on_eval_set, evaluate_on_videos, load_eval_set
 
 
 class DarknessDetector(PatchDetector):
@@ -127,6 +126,27 @@ def test_evaluate_on_videos_hand_computed_ap() -> None:
     # adds the frame-1 object (score 0.765) as 3rd: (1/2, 1/2), (2/3, 1) -> AP = 0.25 + 0.5 * 2/3
     assert res2.ap == pytest.approx(0.25 + 0.5 * 2 / 3)
     assert res2.per_video["v"] == pytest.approx(res2.ap)
+
+
+def test_detect_on_eval_set_per_video_per_frame() -> None:
+    """Detections per video and per frame, (K, 5) XYWH+score; evaluate_on_videos scores exactly these."""
+    from synthaug.evaluate.ap import evaluate_detections
+
+    f0, f1, f2 = _frame([(40, 40, 20)]), _frame([(80, 40, 60), (0, 80, 0)]), _frame([])
+    es = EvalSet(stems=["a", "b"], frames=[np.stack([f0, f1]), f2[None]], frame_indices=[[0, 1], [0]],
+                 boxes=[[np.array([[40.0, 40, 40, 40]]), np.array([[80.0, 40, 40, 40]])], [None]], stride_k=1)
+    dets = detect_on_eval_set(DarknessDetector(), es, scales=(1.0,), max_detections=2)
+    assert [len(v) for v in dets] == [2, 1]
+    for d in (x for v in dets for x in v):
+        assert d.dtype == np.float64 and d.ndim == 2 and d.shape[1] == 5 and d.shape[0] <= 2
+    top = dets[0][0][np.argmax(dets[0][0][:, 4])]
+    np.testing.assert_allclose(top[:4], [40, 40, 40, 40])
+    assert top[4] == pytest.approx(1 - 20 / 255, abs=1e-5)
+    one = detect_on_eval_set(DarknessDetector(), es, scales=(1.0,), max_detections=1)
+    assert all(len(d) == 1 for v in one for d in v)
+    res = evaluate_on_videos(DarknessDetector(), es, scales=(1.0,), max_detections=2)
+    flat = [d for v in dets for d in v]
+    assert res.ap == pytest.approx(float(evaluate_detections(flat, [b for bs in es.boxes for b in bs], 0.5).ap))
 
 
 def test_load_eval_set_matches_direct_decode(tmp_path: Path) -> None:

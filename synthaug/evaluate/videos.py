@@ -1,0 +1,237 @@
+"""Labelled test/validation frames decoded once, detection on them, and frame-level AP.
+
+An :class:`EvalSet` is every k-th frame of some labelled videos (uint8 grayscale,
+decoded by :func:`synthaug.data.video.read_video`) with their boxes;
+:func:`detect_on_eval_set` runs multi-scale sliding-window detection on every
+frame (the detections a protocol runner feeds to
+:func:`synthaug.evaluate.protocol.match_videos`), and :func:`evaluate_on_videos`
+pools them into one PR curve (:class:`EvalResult`).
+
+Example:
+    >>> es = EvalSet(["v"], [np.zeros((2, 8, 8), np.uint8)], [[0, 5]], [[None, np.array([[1.0, 1, 4, 4]])]], 5)
+    >>> es.n_frames, es.n_objects
+    (2, 1)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import torch
+
+from synthaug.data.video import VIDEO_EXTENSIONS, read_video
+from synthaug.detectors.sliding import DEFAULT_SCALES, detect_multiscale
+from synthaug.evaluate.ap import evaluate_detections
+from synthaug.evaluate.cli import load_labels
+
+__all__ = ["EvalSet", "EvalResult", "load_eval_set", "detect_on_eval_set", "evaluate_on_videos"]
+
+
+@dataclass
+class EvalSet:
+    """Every k-th frame of some labelled videos, decoded once (uint8 grayscale).
+
+    Attributes:
+        stems: video stems.
+        frames: per video, uint8 ``(T_k, H, W)`` frames.
+        frame_indices: per video, the source index of each kept frame.
+        boxes: per video, per kept frame, ``(G, 4)`` ``[x, y, w, h]`` or None.
+        stride_k: frame stride.
+    """
+
+    stems: list[str]
+    frames: list[np.ndarray]
+    frame_indices: list[list[int]]
+    boxes: list[list[np.ndarray | None]]
+    stride_k: int
+
+    @property
+    def n_frames(self) -> int:
+        return sum(len(f) for f in self.frames)
+
+    @property
+    def n_objects(self) -> int:
+        return sum(sum(0 if b is None else len(b) for b in bs) for bs in self.boxes)
+
+
+def load_eval_set(
+    videos: Sequence[str],
+    videos_dir: str | Path,
+    labels_dir: str | Path,
+    *,
+    stride_k: int = 10,
+    max_videos: int | None = None,
+) -> EvalSet:
+    """Decode every ``stride_k``-th frame of labelled videos and their boxes.
+
+    Frames are decoded by :func:`synthaug.data.video.read_video` (up to the
+    number of label entries) and every ``stride_k``-th one is kept.
+
+    Args:
+        videos: video stems (e.g. a split's test list), in the order to use.
+        videos_dir: folder of ``<stem>.mp4`` (or another of
+            :data:`synthaug.data.video.VIDEO_EXTENSIONS`).
+        labels_dir: folder of ``<stem>.json`` label files (shared format).
+        stride_k: keep frames ``0, k, 2k, ...`` (only frames with a label entry).
+        max_videos: use only the first this-many videos (evenly spaced over the list).
+
+    Returns:
+        The :class:`EvalSet`.
+
+    Raises:
+        ValueError: bad stride, no video, a missing video or label file, an
+            undecodable video.
+    """
+    if stride_k < 1:
+        raise ValueError(f"stride_k must be >= 1, got {stride_k}")
+    videos = list(videos)
+    if not videos:
+        raise ValueError("videos is empty")
+    if max_videos is not None:
+        if max_videos < 1:
+            raise ValueError(f"max_videos must be >= 1, got {max_videos}")
+        if max_videos < len(videos):
+            pick = np.linspace(0, len(videos) - 1, max_videos).round().astype(int)
+            videos = [videos[i] for i in sorted(set(pick.tolist()))]
+    videos_dir, labels_dir = Path(videos_dir), Path(labels_dir)
+    out = EvalSet([], [], [], [], stride_k)
+    for stem in videos:
+        label_file = labels_dir / f"{stem}.json"
+        if not label_file.is_file():
+            raise ValueError(f"no label file {label_file} for video {stem!r}")
+        video_file = next((videos_dir / f"{stem}{s}" for s in VIDEO_EXTENSIONS if (videos_dir / f"{stem}{s}").is_file()), None)
+        if video_file is None:
+            raise ValueError(f"no video file for {stem!r} in {videos_dir}")
+        _, gts = load_labels(label_file)
+        if not gts:
+            raise ValueError(f"no frame decoded from {video_file}: {label_file} has no entry")
+        decoded = read_video(video_file, max_frames=len(gts))
+        idx = list(range(0, len(decoded), stride_k))
+        out.stems.append(stem)
+        out.frames.append(np.ascontiguousarray(decoded[::stride_k]))
+        out.frame_indices.append(idx)
+        out.boxes.append([gts[j] for j in idx])
+    return out
+
+
+@dataclass
+class EvalResult:
+    """AP of a detector on an :class:`EvalSet`.
+
+    Attributes:
+        ap: AP at IoU >= 0.5 (``∫ p(r) dr``, the paper's measure).
+        ap_iou03: AP at IoU >= 0.3 (looser localisation; diagnostic).
+        ap_envelope: VOC "all points" AP at IoU 0.5.
+        max_recall: recall at the lowest score kept.
+        n_frames, n_objects: evaluated frames and labelled objects.
+        frames_per_second: detection speed (the detection's wall clock).
+        per_video: stem -> AP at IoU 0.5.
+        precision, recall: the IoU-0.5 curve, subsampled to at most 200 points.
+    """
+
+    ap: float
+    ap_iou03: float
+    ap_envelope: float
+    max_recall: float
+    n_frames: int
+    n_objects: int
+    frames_per_second: float
+    per_video: dict[str, float | None] = field(default_factory=dict)
+    precision: list[float] = field(default_factory=list)
+    recall: list[float] = field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def _nan_to_none(x: float) -> float | None:
+    return None if x is None or (isinstance(x, float) and math.isnan(x)) else float(x)
+
+
+@torch.no_grad()
+def detect_on_eval_set(
+    detector: Any,
+    eval_set: EvalSet,
+    *,
+    scales: Sequence[float] | None = None,
+    box_in_window: Sequence[float] | None = None,
+    nms_iou: float = 0.3,
+    max_detections: int = 10,
+) -> list[list[np.ndarray]]:
+    """Multi-scale sliding-window detection on every frame of ``eval_set``.
+
+    Args:
+        detector: a :class:`~synthaug.detectors.base.PatchDetector`.
+        eval_set: frames and boxes (:func:`load_eval_set`).
+        scales: pyramid factors (default :data:`synthaug.detectors.sliding.DEFAULT_SCALES`).
+        box_in_window: object box inside a window (default: the detector's).
+        nms_iou: NMS overlap threshold.
+        max_detections: boxes kept per frame.
+
+    Returns:
+        Per video, per kept frame, float64 ``(K, 5)`` detections ``[x, y, w, h, score]``.
+    """
+    scales = list(DEFAULT_SCALES if scales is None else scales)
+    out: list[list[np.ndarray]] = []
+    for frames in eval_set.frames:
+        dets_v = []
+        for frame in frames:
+            image = torch.from_numpy(frame).float().div_(255.0)
+            d = detect_multiscale(detector, image, scales=scales, nms_iou=nms_iou, max_detections=max_detections, box_in_window=box_in_window)
+            dets_v.append(d.numpy().astype(np.float64))
+        out.append(dets_v)
+    return out
+
+
+def evaluate_on_videos(
+    detector: Any,
+    eval_set: EvalSet,
+    *,
+    scales: Sequence[float] | None = None,
+    box_in_window: Sequence[float] | None = None,
+    nms_iou: float = 0.3,
+    max_detections: int = 10,
+    iou: float = 0.5,
+) -> EvalResult:
+    """Run multi-scale sliding-window detection on every frame of ``eval_set`` and compute AP.
+
+    Args:
+        detector: a :class:`~synthaug.detectors.base.PatchDetector`.
+        eval_set: frames and boxes (:func:`load_eval_set`).
+        scales, box_in_window, nms_iou, max_detections: as :func:`detect_on_eval_set`.
+        iou: matching IoU of the main AP (0.5, the paper's).
+
+    Returns:
+        An :class:`EvalResult` (all videos pooled into one PR curve).
+    """
+    t0 = time.perf_counter()
+    dets = detect_on_eval_set(detector, eval_set, scales=scales, box_in_window=box_in_window, nms_iou=nms_iou,
+                              max_detections=max_detections)
+    seconds = time.perf_counter() - t0
+    dets_all: list[np.ndarray] = []
+    gts_all: list[np.ndarray | None] = []
+    per_video: dict[str, float | None] = {}
+    for stem, dets_v, boxes in zip(eval_set.stems, dets, eval_set.boxes):
+        per_video[stem] = _nan_to_none(evaluate_detections(dets_v, boxes, iou).ap)
+        dets_all.extend(dets_v)
+        gts_all.extend(boxes)
+    res = evaluate_detections(dets_all, gts_all, iou)
+    res03 = evaluate_detections(dets_all, gts_all, 0.3)
+    keep = np.unique(np.linspace(0, max(res.recall.size - 1, 0), min(200, res.recall.size)).round().astype(int)) if res.recall.size else np.zeros(0, int)
+    return EvalResult(
+        ap=float(np.nan_to_num(res.ap)),
+        ap_iou03=float(np.nan_to_num(res03.ap)),
+        ap_envelope=float(np.nan_to_num(res.ap_envelope)),
+        max_recall=float(res.recall.max()) if res.recall.size else 0.0,
+        n_frames=res.n_frames,
+        n_objects=res.n_ground_truth,
+        frames_per_second=len(dets_all) / seconds if seconds > 0 else 0.0,
+        per_video=per_video,
+        precision=[round(float(v), 4) for v in res.precision[keep]],
+        recall=[round(float(v), 4) for v in res.recall[keep]],
+    )
