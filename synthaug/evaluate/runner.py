@@ -1,0 +1,358 @@
+"""Run training conditions under the evaluation protocol, one cached cell per (condition, seed).
+
+A *condition* is a detector family and a training set (``real 100 seeds``,
+``all training frames``, ``100 seeds + 20x synthetic``...). For each training
+seed of the protocol (``min_training_seeds``; the seed drives the seed draw of
+``synthaug ingest``, the negatives and the initialisation), the detector is
+trained by :func:`synthaug.detectors.training.train_from_videos` — the code
+path of ``synthaug train`` — and scored on the protocol's test frames (and,
+optionally, the scale check and the patch protocol). Each (condition, seed) is
+one cell of a :class:`~synthaug.evaluate.cells.CellCache`, keyed by the
+protocol's fingerprint, the condition, the seed, the training budgets, the
+pyramid scales and :data:`TRAINING_VERSION`; several processes may run the
+same experiment at once (each cell is computed once).
+
+Results are :class:`~synthaug.evaluate.protocol.ProtocolResult`: bootstrap CIs
+over test videos, paired differences between conditions (same seeds, same
+resamples), AP by object size. The learning curve (issue 15, item 7) is
+:func:`learning_curve`::
+
+    python -m synthaug.evaluate.runner learning-curve --class drone --detectors hog cnn \\
+        --seed-counts 12 100 --all-frames --out results/learning_curve/drone
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from synthaug.detectors.training import TrainOptions, train_from_videos
+from synthaug.evaluate.cells import CellCache
+from synthaug.evaluate.protocol import (
+    Protocol,
+    ProtocolResult,
+    load_protocol,
+    match_videos,
+    patch_eval_set,
+    report_table,
+    scale_eval_set,
+    score_patch_set,
+    split_videos,
+)
+from synthaug.evaluate.videos import detect_on_eval_set, load_eval_set
+
+__all__ = ["TRAINING_VERSION", "Condition", "DataPaths", "ProtocolRunner", "learning_curve", "main"]
+
+TRAINING_VERSION = 3
+"""Bumped whenever the training code changes what a cell would hold (2: the CNN trains through
+``PatchDetectorModule``; 3: hard-negative mining over all training videos for every family)."""
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One training condition.
+
+    Attributes:
+        name: label in tables (``"hog / 100 seeds"``).
+        kind: ``"hog"``, ``"adaboost"`` or ``"cnn"``.
+        seed_count: real seeds drawn as ``synthaug ingest`` draws them (None with ``all_frames``).
+        all_frames: every ``frame_step``-th labelled frame of the training videos.
+        frame_step: see ``all_frames``.
+        params, synthetic_ratio, mesh: synthetic positives from a fit (``synthaug fit`` output).
+    """
+
+    name: str
+    kind: str
+    seed_count: int | None = 100
+    all_frames: bool = False
+    frame_step: int = 3
+    params: str | None = None
+    synthetic_ratio: float = 0.0
+    mesh: str | None = None
+
+    def identity(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        d.pop("name")
+        if self.all_frames:
+            d["seed_count"] = None
+        else:
+            d["frame_step"] = None
+        return d
+
+
+@dataclass(frozen=True)
+class DataPaths:
+    """The shared-format folders and the split (any folder of videos in that format)."""
+
+    videos_dir: str = "../shared/data/halmstad/videos"
+    labels_dir: str = "../shared/data/halmstad/labels"
+    split_file: str | None = "configs/splits/halmstad.json"
+    work_dir: str = "data/runs"
+
+
+@dataclass
+class ProtocolRunner:
+    """Trains and scores conditions for one class under one protocol.
+
+    Args:
+        protocol: the protocol (:func:`~synthaug.evaluate.protocol.load_protocol`).
+        class_name: the class to detect.
+        paths: data folders and the split.
+        cache: the cell cache.
+        options: training budgets (part of every cell's key).
+        scales: pyramid factors of detection (None: the detectors' default; part of the key).
+        scale_check: also score the protocol's ``scale_check`` factors.
+        patches: also score the paper's patch protocol.
+        max_test_videos: use only the first this-many test videos (smoke runs; part of the key).
+        log: progress printer.
+    """
+
+    protocol: Protocol
+    class_name: str = "drone"
+    paths: DataPaths = field(default_factory=DataPaths)
+    cache: CellCache | None = None
+    options: TrainOptions = field(default_factory=TrainOptions)
+    scales: tuple[float, ...] | None = None
+    scale_check: bool = True
+    patches: bool = True
+    max_test_videos: int | None = None
+    log: Callable[[str], None] = print
+
+    def __post_init__(self) -> None:
+        if self.cache is None:
+            self.cache = CellCache(Path(self.paths.work_dir) / "cells")
+        self._eval: dict[float, Any] = {}
+        self._patches: Any = None
+
+    # data ---------------------------------------------------------------------------------------
+    def test_videos(self) -> list[str]:
+        stems = split_videos(self.protocol, self.protocol.test.split, split_file=self.paths.split_file,
+                             class_name=self.class_name)
+        return stems[: self.max_test_videos] if self.max_test_videos else stems
+
+    def scales_scored(self) -> tuple[float, ...]:
+        return (1.0, *self.protocol.scale_check) if self.scale_check else (1.0,)
+
+    def eval_set(self, scale: float = 1.0) -> Any:
+        if 1.0 not in self._eval:
+            t0 = time.perf_counter()
+            self._eval[1.0] = load_eval_set(self.test_videos(), self.paths.videos_dir, self.paths.labels_dir,
+                                            stride_k=self.protocol.test.frame_stride)
+            es = self._eval[1.0]
+            self.log(f"[test] {len(es.stems)} videos, {es.n_frames} frames (every {es.stride_k}th), "
+                     f"{es.n_objects} objects, decoded in {time.perf_counter() - t0:.0f} s")
+        if scale not in self._eval:
+            self._eval[scale] = scale_eval_set(self._eval[1.0], scale)
+        return self._eval[scale]
+
+    def patch_set(self) -> Any:
+        if self._patches is None:
+            self._patches = patch_eval_set(self.paths.videos_dir, self.paths.labels_dir, self.protocol.test.split,
+                                           self.protocol, videos=self.test_videos(), split_file=self.paths.split_file,
+                                           class_name=self.class_name)
+        return self._patches
+
+    # cells --------------------------------------------------------------------------------------
+    def identity(self, condition: Condition, seed: int) -> dict[str, Any]:
+        return {"what": "protocol_cell", "protocol": self.protocol.fingerprint(), "class": self.class_name,
+                "condition": condition.identity(), "seed": int(seed), "options": dataclasses.asdict(self.options),
+                "scales": None if self.scales is None else list(self.scales), "scored_scales": list(self.scales_scored()),
+                "patches": self.patches, "max_test_videos": self.max_test_videos,
+                "split_file": self.paths.split_file, "training_version": TRAINING_VERSION}
+
+    def _train_and_score(self, condition: Condition, seed: int) -> dict[str, Any]:
+        t0 = time.perf_counter()
+        options = self.options if self.scales is None else dataclasses.replace(self.options, scales=tuple(self.scales))
+        det, meta = train_from_videos(
+            condition.kind, self.class_name, self.paths.videos_dir, self.paths.labels_dir,
+            split=self.paths.split_file, seed=seed, seed_count=condition.seed_count, all_frames=condition.all_frames,
+            frame_step=condition.frame_step, params=condition.params, mesh=condition.mesh,
+            synthetic_ratio=condition.synthetic_ratio, options=options,
+            work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
+            log=lambda m: self.log(f"    {m}"))
+        t_train = time.perf_counter() - t0
+        out: dict[str, Any] = {"train_s": round(t_train, 1), "train": _json_safe(meta), "scales": {}}
+        for s in self.scales_scored():
+            es = self.eval_set(s)
+            t1 = time.perf_counter()
+            dets = detect_on_eval_set(det, es, scales=self.scales, nms_iou=self.protocol.detection.nms_iou,
+                                      max_detections=self.protocol.detection.max_detections)
+            t_det = time.perf_counter() - t1
+            res = ProtocolResult(condition.name, self.protocol, scale=s)
+            pats = score_patch_set(det, self.patch_set()) if (self.patches and s == 1.0) else ()
+            res.add_seed(seed, videos=match_videos(es.stems, dets, es.boxes, self.protocol), patches=pats,
+                         meta={"detect_s": round(t_det, 1), "fps": round(es.n_frames / max(t_det, 1e-9), 2),
+                               "positives": (meta.get("positives") or {}).get("count")})
+            out["scales"][repr(float(s))] = res.to_json()
+            self.log(f"  {condition.name} seed {seed} x{s:g}: AP@{self.protocol.main_iou:g} {res.mean_ap():.3f} "
+                     f"(detect {t_det:.0f} s, {es.n_frames / max(t_det, 1e-9):.1f} fps)")
+        out["total_s"] = round(time.perf_counter() - t0, 1)
+        return out
+
+    def run(self, condition: Condition, seeds: Sequence[int] | None = None) -> dict[float, ProtocolResult]:
+        """The condition's results per scored scale, all seeds combined (cells reused when cached)."""
+        seeds = list(range(self.protocol.min_training_seeds)) if seeds is None else [int(s) for s in seeds]
+        per_scale: dict[float, list[ProtocolResult]] = {}
+        for seed in seeds:
+            t0 = time.perf_counter()
+            cell = self.cache.get_or_compute(self.identity(condition, seed),  # type: ignore[union-attr]
+                                             lambda: self._train_and_score(condition, seed))
+            if cell is None:
+                self.log(f"  {condition.name} seed {seed}: not in the cache (read-only)")
+                continue
+            if time.perf_counter() - t0 > 1.0:
+                self.log(f"  {condition.name} seed {seed}: cell done in {cell.get('total_s', 0):.0f} s")
+            for s, doc in cell["scales"].items():
+                per_scale.setdefault(float(s), []).append(ProtocolResult.from_json(doc))
+        out = {}
+        for s, parts in per_scale.items():
+            res = ProtocolResult.combine(parts, condition=condition.name)
+            res.meta.update({"kind": condition.kind, "condition": condition.identity()})
+            out[s] = res
+        return out
+
+
+def _json_safe(x: Any) -> Any:
+    return json.loads(json.dumps(x, default=str))
+
+
+# ------------------------------------------------------------------------------------------ learning curve
+def learning_curve(runner: ProtocolRunner, *, detectors: Sequence[str], seed_counts: Sequence[int],
+                   all_frames: bool, frame_step: int = 3, seeds: Sequence[int] | None = None,
+                   out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
+    """Real data only: each detector at each seed count (and all training frames), both protocols.
+
+    Writes (when ``out``): ``<kind>_<condition>[_x<scale>].json`` (:class:`ProtocolResult`),
+    ``learning_curve.md`` (a :func:`report_table` per detector and scale, the paired difference
+    against the largest seed count) and ``learning_curve.png`` (AP@main IoU with its 95 % CI
+    against the number of positives).
+    """
+    results: dict[str, dict[str, ProtocolResult]] = {}
+    for kind in detectors:
+        conds = [Condition(f"{kind} / {n} seeds", kind, seed_count=int(n)) for n in seed_counts]
+        if all_frames:
+            conds.append(Condition(f"{kind} / all training frames", kind, seed_count=None, all_frames=True,
+                                   frame_step=frame_step))
+        for c in conds:
+            for s, res in runner.run(c, seeds).items():
+                results.setdefault(kind if s == 1.0 else f"{kind} x{s:g}", {})[c.name] = res
+    if out is not None:
+        write_learning_curve(results, Path(out), baseline_count=max(seed_counts) if seed_counts else None)
+    return results
+
+
+def write_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], out: Path, *,
+                         baseline_count: int | None) -> None:
+    from synthaug.params import atomic_write_text
+
+    out.mkdir(parents=True, exist_ok=True)
+    lines = ["# Learning curve (real data only)", ""]
+    for group, conds in results.items():
+        for name, res in conds.items():
+            res.save(out / f"{_slug(name)}{'' if res.scale == 1.0 else f'_x{res.scale:g}'}.json")
+        base = next((n for n in conds if baseline_count is not None and n.endswith(f"/ {baseline_count} seeds")), None)
+        lines += [f"## {group}", "", report_table(dict(conds), baseline=base), ""]
+    atomic_write_text(out / "learning_curve.md", "\n".join(lines) + "\n")
+    _plot_learning_curve(results, out / "learning_curve.png")
+
+
+def _slug(name: str) -> str:
+    import re
+
+    return re.sub(r"[^A-Za-z0-9.]+", "_", name).strip("_")
+
+
+def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from synthaug.evaluate.protocol import summarize
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for group, conds in results.items():
+        xs, ys, lo, hi = [], [], [], []
+        for name, res in conds.items():
+            ap = summarize(res).ap[res.protocol.main_iou]
+            xs.append(_positives(res))
+            ys.append(ap.estimate)
+            lo.append(max(0.0, ap.estimate - ap.low) if np.isfinite(ap.low) else 0.0)
+            hi.append(max(0.0, ap.high - ap.estimate) if np.isfinite(ap.high) else 0.0)
+        order = np.argsort(xs)
+        ax.errorbar(np.asarray(xs)[order], np.asarray(ys)[order],
+                    yerr=[np.asarray(lo)[order], np.asarray(hi)[order]], marker="o", capsize=3, label=group)
+    ax.set_xscale("log")
+    ax.set_xlabel("real training positives")
+    ax.set_ylabel("frame AP@0.5 (mean over seeds, 95 % CI over test videos)")
+    ax.set_title("Learning curve, real data only")
+    ax.set_ylim(0, 1)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _positives(res: ProtocolResult) -> float:
+    counts = [sr.meta.get("positives") for sr in res.seeds.values() if sr.meta.get("positives")]
+    if counts:
+        return float(np.mean(counts))
+    cond = res.meta.get("condition", {})
+    return float(cond.get("seed_count") or 1e4)
+
+
+# ------------------------------------------------------------------------------------------ command line
+def main(argv: Sequence[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m synthaug.evaluate.runner",
+                                description="Experiments under the evaluation protocol (cached cells).",
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    sub = p.add_subparsers(dest="what", required=True)
+    lc = sub.add_parser("learning-curve", help="real data only: detectors x seed counts (+ all frames)",
+                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    lc.add_argument("--class", dest="class_name", default="drone", help="class to detect")
+    lc.add_argument("--detectors", nargs="+", default=["hog", "adaboost", "cnn"], choices=["hog", "adaboost", "cnn"],
+                    help="detector families")
+    lc.add_argument("--seed-counts", type=int, nargs="*", default=[12, 25, 100], help="real seed counts")
+    lc.add_argument("--all-frames", action="store_true", help="also train on every --frame-step-th labelled frame")
+    lc.add_argument("--frame-step", type=int, default=3, help="stride over labelled frames with --all-frames")
+    lc.add_argument("--seeds", type=int, nargs="*", default=None, help="training seeds (default: the protocol's count)")
+    lc.add_argument("--protocol", default="configs/protocol/halmstad_v1.json", help="protocol file")
+    lc.add_argument("--videos", default=DataPaths.videos_dir, help="folder of videos (shared format)")
+    lc.add_argument("--labels", default=DataPaths.labels_dir, help="folder of label JSON files")
+    lc.add_argument("--split", default=DataPaths.split_file, help="split JSON (by video)")
+    lc.add_argument("--work", default=DataPaths.work_dir, help="ingest shards and the cell cache live here")
+    lc.add_argument("--no-scale-check", action="store_true", help="skip the x2 / x0.75 test frames")
+    lc.add_argument("--no-patches", action="store_true", help="skip the paper's patch protocol")
+    lc.add_argument("--max-test-videos", type=int, default=None, help="first N test videos only (smoke runs)")
+    lc.add_argument("--mining-rounds", type=int, default=TrainOptions.mining_rounds, help="hard-negative mining rounds")
+    lc.add_argument("--threads", type=int, default=1, help="torch threads")
+    lc.add_argument("--read-only", action="store_true", help="never train: tables from cached cells only")
+    lc.add_argument("--out", required=True, help="output folder (results/learning_curve/<class>)")
+    args = p.parse_args(argv)
+    import torch
+
+    torch.set_num_threads(args.threads)
+    proto = load_protocol(args.protocol)
+    paths = DataPaths(args.videos, args.labels, args.split, args.work)
+    runner = ProtocolRunner(proto, args.class_name, paths, CellCache(Path(args.work) / "cells", read_only=args.read_only),
+                            options=dataclasses.replace(TrainOptions(), mining_rounds=args.mining_rounds),
+                            scale_check=not args.no_scale_check, patches=not args.no_patches,
+                            max_test_videos=args.max_test_videos)
+    t0 = time.perf_counter()
+    learning_curve(runner, detectors=args.detectors, seed_counts=args.seed_counts, all_frames=args.all_frames,
+                   frame_step=args.frame_step, seeds=args.seeds, out=args.out)
+    print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

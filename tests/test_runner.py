@@ -1,0 +1,101 @@
+"""The protocol runner: (condition, seed) cells trained by `synthaug train`'s code, scored under the protocol,
+cached and reused; the learning curve's files. Tiny generated videos with non-contiguous numbering."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+
+from synthaug.detectors.training import TrainOptions
+from synthaug.evaluate import runner as R
+from synthaug.evaluate.cells import CellCache
+from synthaug.evaluate.protocol import Protocol, example_protocol_dict
+
+TRAIN = ["V_DRONE_003", "V_DRONE_010", "V_DRONE_027"]
+VAL, TEST = ["V_DRONE_031"], ["V_DRONE_044", "V_DRONE_052"]
+FAST = TrainOptions(scales=(1.0, 0.8), mining_rounds=1, mining_stride=4, val_stride=4, hog_components=2)
+
+
+@pytest.fixture(scope="module")
+def ws(tmp_path_factory):
+    from synthaug.data.splits import VideoSplit, save_split
+    from synthaug.data.synthvideo import make_panning_video
+
+    root = tmp_path_factory.mktemp("runner")
+    for i, stem in enumerate(TRAIN + VAL + TEST):
+        make_panning_video(root, n_frames=12, size=(160, 128), seed=i, name=stem)
+    make_panning_video(root, n_frames=12, size=(160, 128), seed=9, name="V_BIRD_002", class_name="bird")
+    classes = {s: "drone" for s in TRAIN + VAL + TEST} | {"V_BIRD_002": "bird"}
+    save_split(VideoSplit(videos={"train": TRAIN + ["V_BIRD_002"], "val": VAL, "test": TEST}, classes=classes,
+                          info={"dataset": "runner test"}), root / "split.json")
+    proto = Protocol.from_dict(example_protocol_dict(
+        name="tiny", split_file=str(root / "split.json"), test={"split": "test", "frame_stride": 3},
+        val={"split": "val", "frame_stride": 3}, min_training_seeds=2, scale_check=[0.75],
+        bootstrap={"resamples": 50, "seed": 0, "ci": 0.95},
+        patch={"negatives_per_positive": 3, "seed": 0, "patch_size": 40, "object_fraction": 0.7, "max_tries": 100}))
+    paths = R.DataPaths(str(root / "videos"), str(root / "labels"), str(root / "split.json"), str(root / "work"))
+    return {"root": root, "proto": proto, "paths": paths}
+
+
+def make_runner(ws, **kw):
+    kw.setdefault("options", FAST)
+    kw.setdefault("scales", (1.0, 0.8))
+    return R.ProtocolRunner(ws["proto"], "drone", ws["paths"], log=lambda m: None, **kw)
+
+
+@pytest.fixture(scope="module")
+def curve(ws):
+    out = ws["root"] / "lc"
+    res = R.learning_curve(make_runner(ws), detectors=["hog"], seed_counts=[6], all_frames=True, frame_step=4,
+                           seeds=[0, 1], out=out)
+    return {"out": out, "results": res}
+
+
+def test_learning_curve_results_and_files(ws, curve):
+    res = curve["results"]
+    assert set(res) == {"hog", "hog x0.75"}
+    for group in res.values():
+        assert set(group) == {"hog / 6 seeds", "hog / all training frames"}
+        for r in group.values():
+            assert r.seed_ids == [0, 1] and r.stems == sorted(TEST)
+            assert 0.0 <= r.mean_ap() <= 1.0
+    assert res["hog"]["hog / 6 seeds"].patch_stems == sorted(TEST)  # patch protocol at scale 1 only
+    assert res["hog x0.75"]["hog / 6 seeds"].patch_stems == []
+    md = (curve["out"] / "learning_curve.md").read_text()
+    assert "hog / 6 seeds" in md and "hog / all training frames" in md and "tiny" in md
+    assert (curve["out"] / "learning_curve.png").stat().st_size > 1000
+    assert json.loads((curve["out"] / "hog_6_seeds.json").read_text())["condition"] == "hog / 6 seeds"
+    # seeds differ in what they trained on: the seed drives the seed draw of ingest
+    meta = [sr.meta for sr in res["hog"]["hog / 6 seeds"].seeds.values()]
+    assert all(m["positives"] == 6 for m in meta)
+
+
+def test_cells_are_reused_and_keyed_by_what_changes_a_result(ws, curve, monkeypatch):
+    cache = CellCache(Path(ws["paths"].work_dir) / "cells")
+    n_cells = len(cache)
+    assert n_cells == 4  # 2 conditions x 2 seeds, each scored at both scales inside its cell
+
+    def no_training(*a, **k):
+        raise AssertionError("a cached cell was trained again")
+
+    monkeypatch.setattr(R, "train_from_videos", no_training)
+    again = R.learning_curve(make_runner(ws), detectors=["hog"], seed_counts=[6], all_frames=True, frame_step=4,
+                             seeds=[0, 1])
+    for group in ("hog", "hog x0.75"):
+        for name, r in again[group].items():
+            assert r.to_json() == curve["results"][group][name].to_json()
+    # a read-only cache never trains; a changed budget, scale list or protocol is a new cell
+    ro = make_runner(ws, cache=CellCache(cache.root, read_only=True),
+                     options=dataclasses.replace(FAST, hog_components=3))
+    assert ro.run(R.Condition("hog / 6 seeds", "hog", seed_count=6), seeds=[0]) == {}
+    base = make_runner(ws)
+    c = R.Condition("x", "hog", seed_count=6)
+    ident = base.identity(c, 0)
+    assert make_runner(ws, scales=(1.0,)).identity(c, 0) != ident
+    assert make_runner(ws, options=dataclasses.replace(FAST, mining_rounds=2)).identity(c, 0) != ident
+    other = Protocol.from_dict({**ws["proto"].to_dict(), "test": {"split": "test", "frame_stride": 2}})
+    assert R.ProtocolRunner(other, "drone", ws["paths"], options=FAST, scales=(1.0, 0.8)).identity(c, 0) != ident
+    assert base.identity(R.Condition("renamed", "hog", seed_count=6), 0) == ident  # the label is not the condition
