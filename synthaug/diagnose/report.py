@@ -348,6 +348,7 @@ def _plots(out: Path, data: Any, syn0: torch.Tensor, ext: tuple[str, torch.Tenso
     ax.set_yticks([(i + 0.5) * data.real.shape[-1] for i in range(len(rows))])
     ax.set_yticklabels(["real", "fitted"] + ([f"+ {ext[0]}"] if ext is not None else []))
     ax.set_xticks([])
+    ax.set_title(f"first {n} seeds: real patch and its best-fit synthetic image", fontsize=9)
     fig.tight_layout()
     fig.savefig(out / "samples.png", dpi=90)
     plt.close(fig)

@@ -39,7 +39,10 @@ def plot_joint_histograms(params: CaptureParams | str | Path, out: str | Path, *
     fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.2 * rows), squeeze=False)
     for ax, (a, b) in zip(axes.flat, pairs):
         sa, sb = spec[a], spec[b]
-        ax.hist2d(values[b], values[a], bins=bins, range=[[sb.low, sb.high], [sa.low, sa.high]], cmap="viridis")
+        *_, mesh = ax.hist2d(values[b], values[a], bins=bins, range=[[sb.low, sb.high], [sa.low, sa.high]],
+                             cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label="seeds")
+        ax.set_title(f"{sa.symbol} vs {sb.symbol}", fontsize=9)
         ax.set_xlabel(f"{sb.symbol} ({sb.unit})")
         ax.set_ylabel(f"{sa.symbol} ({sa.unit})")
     for ax in list(axes.flat)[len(pairs):]:
