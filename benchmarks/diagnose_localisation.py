@@ -30,8 +30,9 @@ def main() -> None:
     from torchvision.ops import box_convert, box_iou
 
     from synthaug.detectors.sliding import DEFAULT_SCALES, detect_multiscale, geometric_scales
+    from synthaug.detectors.training import train_detector
     from synthaug.evaluate.ap import evaluate_detections
-    from synthaug.evaluate.experiments import ExperimentContext, train_detector
+    from synthaug.evaluate.context import ExperimentContext
 
     ctx = ExperimentContext(out_dir=Path("/tmp/diag"), val_stride_k=args.val_stride_k, max_val_videos=args.max_val_videos, log=lambda m: None)
     es = ctx.eval_set("val")

@@ -108,7 +108,8 @@ def make_measured_videos(out: Path, *, n_videos: int, n_frames: int, seed: int, 
 def main(args: argparse.Namespace) -> int:
     from synthaug.data.ingest import ingest_videos
     from synthaug.data.seedset import SeedSet
-    from synthaug.evaluate import experiments as ex
+    from synthaug.detectors.training import negative_pool, real_positives, synthetic_positives, train_detector
+    from synthaug.evaluate.videos import evaluate_on_videos, load_eval_set
     from synthaug.fit.fitting import FitConfig, fit_seedset
     from synthaug.fit.plots import plot_fitted_pairs, plot_joint_histograms
     from synthaug.render.cache import ViewCache
@@ -136,18 +137,18 @@ def main(args: argparse.Namespace) -> int:
     timings["fit"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    eval_set = ex.load_eval_set(split["test"], data / "videos", data / "labels", stride_k=args.stride)
-    real = ex.real_positives(seeds)
-    negatives = ex.negative_pool(seeds, extra=1000, seed=args.seed)
-    synthetic = ex.synthetic_positives(seeds, "quadcopter", fit_path, int(args.ratio * len(seeds)), seed=args.seed)
+    eval_set = load_eval_set(split["test"], data / "videos", data / "labels", stride_k=args.stride)
+    real = real_positives(seeds)
+    negatives = negative_pool(seeds, extra=1000, seed=args.seed)
+    synthetic = synthetic_positives(seeds, "quadcopter", fit_path, int(args.ratio * len(seeds)), seed=args.seed)
     from synthaug.detectors.base import box_in_window_from_boxes
 
     biw = box_in_window_from_boxes(torch.as_tensor(seeds.boxes), window=seeds.patch_size,
                                    object_fraction=float(seeds.object_fraction))
     rows = []
     for name, pos in (("real seeds only", real), (f"real + {args.ratio:g}x synthetic (ours)", torch.cat([real, synthetic]))):
-        det = ex.train_detector(args.detector, pos, negatives, seed=args.seed, box_in_window=biw)
-        res = ex.evaluate_on_videos(det, eval_set)
+        det = train_detector(args.detector, pos, negatives, seed=args.seed, box_in_window=biw)
+        res = evaluate_on_videos(det, eval_set)
         rows.append((name, len(pos), res))
         slug = "real" if name.startswith("real seeds") else "ours"
         _plot_pr(res, out / f"pr_{slug}.png", title=f"{args.detector}: {name}")

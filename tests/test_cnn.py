@@ -152,7 +152,7 @@ def test_fast_max_pool_matches_torch(size: tuple[int, int]) -> None:
 def test_one_training_loop_for_experiments_and_distance(monkeypatch) -> None:
     """train_detector("cnn") and train_patch_cnn both train PatchDetectorModule under lightning.Trainer."""
     from synthaug.detectors.lightning_module import PatchDetectorModule, fit_patch_detector
-    from synthaug.evaluate.experiments import TrainOptions, train_detector
+    from synthaug.detectors.training import TrainOptions, train_detector
 
     steps = []
     original = PatchDetectorModule.training_step

@@ -1,4 +1,5 @@
-"""Tests of the experiment runner (synthaug.evaluate.experiments) on generated data."""
+"""Tests of the experiments' parts on generated data: the perturbation baseline (evaluate.positives), evaluation
+on videos (evaluate.videos), detector training, the runner and its cell cache (evaluate.context), reports."""
 
 from __future__ import annotations
 
@@ -12,17 +13,11 @@ import torch
 import torch.nn.functional as F
 
 from synthaug.detectors.base import PatchDetector
-from synthaug.evaluate.experiments import (
-    EvalSet,
-    ExperimentContext,
-    TrainOptions,
-    _plot,
-    _write_report,
-    perturb_patches,
-    train_detector,
-)
-from synthaug.evaluate.videos import detect_on_eval_set, evaluate_on_videos, load_eval_set
-
+from synthaug.detectors.training import TrainOptions, train_detector
+from synthaug.evaluate.context import ExperimentContext
+from synthaug.evaluate.positives import perturb_patches
+from synthaug.evaluate.reporting import _plot, _write_report
+from synthaug.evaluate.videos import EvalSet, detect_on_eval_set, evaluate_on_videos, load_eval_set
 
 class DarknessDetector(PatchDetector):
     """Scores a window by how dark it is (1 - mean intensity): an oracle for dark squares on grey."""
@@ -252,3 +247,25 @@ def test_report_writes_table_plot_json(tmp_path: Path) -> None:
     _plot(tmp_path / "p.png", "line", {"s": {0: 0.1, 5: 0.3}}, title="t", xlabel="r", logx=True, marks={"s": 5})
     _plot(tmp_path / "q.png", "bar", {"d": {"a": 0.2, "b": None}}, title="t", xlabel="d")
     assert (tmp_path / "p.png").stat().st_size > 1000 and (tmp_path / "q.png").stat().st_size > 1000
+
+
+def test_moved_names_still_importable_from_experiments() -> None:
+    """experiments.py re-exports every name that moved to its own module (the same objects)."""
+    import synthaug.detectors.training as training
+    import synthaug.evaluate.context as context
+    import synthaug.evaluate.experiments as ex
+    import synthaug.evaluate.positives as positives
+    import synthaug.evaluate.reporting as reporting
+    import synthaug.evaluate.videos as videos
+
+    homes = {videos: ["EvalSet", "EvalResult", "load_eval_set", "evaluate_on_videos", "detect_on_eval_set"],
+             positives: ["perturb_patches", "perturbed_positives"], context: ["ExperimentContext"],
+             reporting: ["_fmt", "_stem", "_write_report", "_plot", "_ap"],
+             training: ["DETECTORS", "TrainOptions", "train_detector", "real_positives", "synthetic_positives",
+                        "frames_training_set", "negative_pool", "mining_frames"]}
+    for module, names in homes.items():
+        for name in names:
+            assert getattr(ex, name) is getattr(module, name), name
+    assert all(hasattr(ex, name) for name in ex.__all__)
+    assert list(ex.EXPERIMENTS) == ["baselines", "fig11_ratio", "table1_perturbation", "fig10_fitted_vs_uniform",
+                                    "fig9_effects_off", "fig12_seeds", "table2_detector_distance"]

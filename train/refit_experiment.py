@@ -40,7 +40,7 @@ def main() -> int:
     from synthaug.data.splits import load_split
     from synthaug.detectors.base import box_in_window_from_boxes
     from synthaug.detectors.lightning_module import PatchDetectorModule
-    from synthaug.evaluate.experiments import evaluate_on_videos, load_eval_set
+    from synthaug.evaluate.videos import evaluate_on_videos, load_eval_set
     from synthaug.fit.refit import CNNDistanceRefit, SyntheticEpochs, SyntheticPatchDataModule
 
     out = Path(args.out)

@@ -45,7 +45,7 @@ def _synthetic_build(ctx: Any, n: int, ratio: float, fit: Path) -> Callable[[], 
     grid, ...) act as in the diagnosis; the paper's effects do not read it (the base arm is Table 1's).
     """
     from synthaug.diagnose.reference_camera import seed_geometry
-    from synthaug.evaluate.experiments import synthetic_positives
+    from synthaug.detectors.training import synthetic_positives
 
     def build() -> dict[str, Any]:
         d = ctx.real_build(n)()
@@ -104,7 +104,7 @@ def run_gain(
         the numbers written to ``gain.json``.
     """
     from synthaug.diagnose.extend import extend_fit, select_extension
-    from synthaug.evaluate.experiments import ExperimentContext
+    from synthaug.evaluate.context import ExperimentContext
 
     if class_name not in DEFAULT_MESH and mesh is None:
         raise ValueError(f"no default mesh for class {class_name!r}; give mesh")

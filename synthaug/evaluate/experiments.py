@@ -1,4 +1,4 @@
-"""Experiment runner: train the three detector families on real / perturbed / synthetic positives, score them on videos.
+"""The paper's experiments: the three detector families on real / perturbed / synthetic positives, scored on videos.
 
 This module reproduces the paper's experiments (Rozantsev et al. 2015, Sec. 5)
 on any videos in the shared format (``videos/*.mp4`` + ``labels/*.json``, one
@@ -15,39 +15,37 @@ box or null per frame) with a committed video split:
 - :func:`table2_detector_distance` — each detector with each distance (Table 2).
 
 Every experiment is a set of *cells* (detector x training set x evaluation
-split). A cell's result is stored in ``<out>/cells.json`` under a key naming
-everything it depends on, so re-running an experiment (or another experiment
-that shares a cell, e.g. "real only, 100 seeds") reuses it instead of
-training again: an interrupted run resumes. Every experiment writes a
-markdown table (``<name>.md``), a plot (``<name>.png``) and its numbers
-(``<name>.json``) into the output folder, and returns the numbers.
+split) run and cached by :class:`~synthaug.evaluate.context.ExperimentContext`,
+so re-running an experiment (or another experiment that shares a cell, e.g.
+"real only, 100 seeds") reuses it instead of training again: an interrupted
+run resumes. Every experiment writes a markdown table (``<name>.md``), a plot
+(``<name>.png``) and its numbers (``<name>.json``) into the output folder
+(:mod:`synthaug.evaluate.reporting`), and returns the numbers.
 
-Randomness: every draw comes from a generator seeded by the context's ``seed``
-(and a per-cell offset), so a cell is deterministic given its key.
+The pieces live by concept; their names stay importable from here:
+
+- detector training and the training sets: :mod:`synthaug.detectors.training`;
+- evaluation sets, detection on them and AP: :mod:`synthaug.evaluate.videos`;
+- the perturbation baseline: :mod:`synthaug.evaluate.positives`;
+- the runner and its cell cache: :mod:`synthaug.evaluate.context`;
+- tables and plots: :mod:`synthaug.evaluate.reporting`.
 
 Example:
-    >>> import torch
-    >>> x = torch.rand(4, 1, 40, 40, generator=torch.Generator().manual_seed(0))
-    >>> y = perturb_patches(x, 3, generator=torch.Generator().manual_seed(1))
-    >>> tuple(y.shape), bool(((y >= 0) & (y <= 1)).all())
-    ((12, 1, 40, 40), True)
+    >>> EXPERIMENTS["fig11_ratio"] is fig11_ratio, list(EXPERIMENTS)[:2]
+    (True, ['baselines', 'fig11_ratio'])
 """
 
 from __future__ import annotations
 
 import json
-import math
 import time
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
-from typing import Any, Callable, Literal, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
-import numpy as np
 import torch
-import torch.nn.functional as F
-from torch import Tensor
 
-# Detector training lives beside the detectors (synthaug.detectors.training); these names stay importable from here.
+from synthaug._io import atomic_write_text
+
+# Names that moved to their own modules stay importable from here (backwards compatibility).
 from synthaug.detectors.training import (  # noqa: F401
     DETECTORS,
     DetectorKind,
@@ -60,24 +58,30 @@ from synthaug.detectors.training import (  # noqa: F401
     synthetic_positives,
     train_detector,
 )
-# Evaluation on labelled videos lives in synthaug.evaluate.videos; these names stay importable from here.
+from synthaug.evaluate.context import ExperimentContext
+from synthaug.evaluate.positives import perturb_patches, perturbed_positives  # noqa: F401
+from synthaug.evaluate.reporting import _ap, _fmt, _plot, _stem, _write_report  # noqa: F401
 from synthaug.evaluate.videos import EvalResult, EvalSet, detect_on_eval_set, evaluate_on_videos, load_eval_set  # noqa: F401
+from synthaug.params import CaptureParams
 
 __all__ = [
     "DETECTORS",
     "PAPER_DISTANCE",
+    "EXPERIMENTS",
     "TrainOptions",
     "EvalSet",
     "EvalResult",
     "ExperimentContext",
     "train_detector",
     "load_eval_set",
+    "detect_on_eval_set",
     "evaluate_on_videos",
     "perturb_patches",
     "real_positives",
     "perturbed_positives",
     "synthetic_positives",
     "frames_training_set",
+    "chosen_ratios",
     "baselines",
     "table1_perturbation",
     "fig9_effects_off",
@@ -90,350 +94,6 @@ __all__ = [
 PAPER_DISTANCE: dict[str, str] = {"hog": "hog", "adaboost": "wl_learned", "cnn": "cnn"}
 """The distance the paper pairs with each detector (d_HOG, d_WL^L, d_CNN)."""
 DISTANCES: tuple[str, ...] = ("eucl", "hog", "wl_random", "wl_learned", "cnn")
-
-
-# --------------------------------------------------------------------------- positive sets
-def perturb_patches(
-    patches: Tensor,
-    copies: int,
-    *,
-    generator: torch.Generator,
-    max_rotation_deg: float = 15.0,
-    max_translation: float = 0.08,
-    mirror: bool = True,
-    max_blur_sigma: float = 1.5,
-    max_noise_sigma: float = 0.03,
-) -> Tensor:
-    """The classic augmentation baseline: random rotation, translation, mirroring, blur and noise.
-
-    Every output is one input patch warped by a random rotation (uniform in
-    ±``max_rotation_deg``) and translation (uniform in ±``max_translation`` of
-    the side, border pixels replicated), mirrored with probability 1/2,
-    blurred by a Gaussian of σ uniform in [0, ``max_blur_sigma``] px and given
-    Gaussian noise of σ uniform in [0, ``max_noise_sigma``], then clipped to [0, 1].
-    The input is not modified.
-
-    Args:
-        patches: float patches in [0, 1].
-        copies: perturbed copies per patch (>= 0).
-        generator: the only source of randomness.
-        max_rotation_deg, max_translation, mirror, max_blur_sigma, max_noise_sigma: ranges.
-
-    Returns:
-        ``copies * N`` perturbed patches; copy ``c`` of patch ``i`` is row ``c * N + i``.
-
-    Shape:
-        - patches: (N, 1, P, P)
-        - output: (copies * N, 1, P, P)
-    """
-    if not isinstance(patches, Tensor) or patches.dim() != 4 or not patches.dtype.is_floating_point:
-        raise ValueError(f"patches must be a float (N, C, P, P) tensor, got {getattr(patches, 'shape', patches)}")
-    if copies < 0:
-        raise ValueError(f"copies must be >= 0, got {copies}")
-    n, c, h, w = patches.shape
-    m = n * copies
-    if m == 0:
-        return patches.new_zeros(0, c, h, w)
-    x = patches.repeat(copies, 1, 1, 1)
-    angle = (torch.rand(m, generator=generator) * 2 - 1) * math.radians(max_rotation_deg)
-    shift = (torch.rand(m, 2, generator=generator) * 2 - 1) * (2 * max_translation)  # normalised coords span 2
-    flip = (torch.rand(m, generator=generator) < 0.5) if mirror else torch.zeros(m, dtype=torch.bool)
-    sigma = torch.rand(m, generator=generator) * max_blur_sigma
-    noise_sigma = torch.rand(m, generator=generator) * max_noise_sigma
-    noise = torch.randn(m, c, h, w, generator=generator)
-    cos, sin = torch.cos(angle), torch.sin(angle)
-    sx = torch.where(flip, -1.0, 1.0)
-    theta = torch.stack([torch.stack([cos * sx, -sin, shift[:, 0]], 1), torch.stack([sin * sx, cos, shift[:, 1]], 1)], 1)
-    grid = F.affine_grid(theta.to(x.dtype), list(x.shape), align_corners=False)
-    x = F.grid_sample(x, grid, mode="bilinear", padding_mode="border", align_corners=False)
-    # per-sample separable Gaussian blur (σ = 0 -> identity kernel)
-    radius = max(1, math.ceil(3 * max_blur_sigma))
-    t = torch.arange(-radius, radius + 1, dtype=x.dtype)
-    k = torch.exp(-0.5 * (t[None] / sigma.clamp_min(1e-3)[:, None].to(x.dtype)) ** 2)
-    k = k / k.sum(1, keepdim=True)  # (m, 2r+1)
-    xb = x.reshape(1, m * c, h, w)
-    kc = k.repeat_interleave(c, 0)
-    xb = F.conv2d(F.pad(xb, (radius, radius, 0, 0), mode="replicate"), kc[:, None, None, :], groups=m * c)
-    xb = F.conv2d(F.pad(xb, (0, 0, radius, radius), mode="replicate"), kc[:, None, :, None], groups=m * c)
-    x = xb.reshape(m, c, h, w) + noise * noise_sigma[:, None, None, None].to(x.dtype)
-    return x.clamp(0.0, 1.0)
-
-
-def perturbed_positives(seedset: Any, copies: int, *, seed: int = 0) -> Tensor:
-    """Real patches plus ``copies`` perturbed versions of each (the Table 1 baseline)."""
-    real = real_positives(seedset)
-    return torch.cat([real, perturb_patches(real, copies, generator=torch.Generator().manual_seed(seed))])
-
-
-# --------------------------------------------------------------------------- context and cells
-@dataclass
-class ExperimentContext:
-    """Everything an experiment needs: data locations, budgets, and the cell cache.
-
-    Args:
-        out_dir: results folder (``cells.json``, tables, plots).
-        class_name: ``"drone"`` or ``"airplane"`` (selects videos and seed sets).
-        seedsets_dir: folder holding ``<class>_<n>`` seed sets.
-        mesh: mesh of the class.
-        fits_dir: folder of capture-parameter fits ``<class>_<n>_<distance>[_<tag>].json``
-            (made with :func:`synthaug.fit.fitting.fit_seedset` when missing).
-        videos_dir, labels_dir: the shared-format folders.
-        split_file: the committed video split.
-        stride_k: score every k-th test frame.
-        val_stride_k: every k-th validation frame (model selection).
-        max_test_videos, max_val_videos: caps on the number of videos (None: all).
-        scales: sliding-window pyramid (None: the default).
-        options: training budgets.
-        seed: base seed of every cell.
-        fit_workers: processes for fits made on the fly.
-        fit_budget: objective evaluations per seed for fits made on the fly.
-        log: progress printer.
-        cells_path: the cell cache (default ``<out_dir>/cells.json``); several
-            results folders may share one so that common cells run once.
-        cached_only: never train: cells missing from the cache are reported
-            as missing ("–"); regenerates every table from the cache.
-    """
-
-    out_dir: Path
-    class_name: str = "drone"
-    seedsets_dir: Path = Path("data/halmstad/seedsets")
-    mesh: str = "../shared/data/meshes/quadcopter.glb"
-    fits_dir: Path | None = None
-    videos_dir: Path = Path("../shared/data/halmstad/videos")
-    labels_dir: Path = Path("../shared/data/halmstad/labels")
-    split_file: Path = Path("configs/splits/halmstad.json")
-    stride_k: int = 10
-    val_stride_k: int = 20
-    max_test_videos: int | None = None
-    max_val_videos: int | None = None
-    scales: tuple[float, ...] | None = None
-    options: TrainOptions = field(default_factory=TrainOptions)
-    seed: int = 0
-    fit_workers: int = 2
-    fit_budget: int = 1500
-    log: Callable[[str], None] = print
-    cells_path: Path | None = None
-    cached_only: bool = False
-
-    def __post_init__(self) -> None:
-        self.out_dir = Path(self.out_dir)
-        self.fits_dir = Path(self.fits_dir) if self.fits_dir is not None else self.out_dir / "fits"
-        if self.stride_k < 1 or self.val_stride_k < 1:
-            raise ValueError(f"stride_k and val_stride_k must be >= 1, got {self.stride_k}, {self.val_stride_k}")
-        self._seedsets: dict[int, Any] = {}
-        self._eval: dict[str, EvalSet] = {}
-        self._negatives: dict[int, Tensor] = {}
-        self._cells_path = Path(self.cells_path) if self.cells_path is not None else self.out_dir / "cells.json"
-        self._cells: dict[str, Any] = json.loads(self._cells_path.read_text()) if self._cells_path.is_file() else {}
-
-    # data -------------------------------------------------------------
-    def videos(self, split: str) -> list[str]:
-        from synthaug.data.splits import load_split
-
-        vs = load_split(self.split_file)
-        return [v for v in vs.videos[split] if vs.classes.get(v) == self.class_name]
-
-    def seedset(self, n: int) -> Any:
-        from synthaug.data.seedset import SeedSet
-
-        if n not in self._seedsets:
-            self._seedsets[n] = SeedSet.load(self.seedsets_dir / f"{self.class_name}_{n}")
-        return self._seedsets[n]
-
-    def negatives(self, n: int) -> Tensor:
-        if n not in self._negatives:
-            self._negatives[n] = negative_pool(self.seedset(n), seed=self.seed)
-        return self._negatives[n]
-
-    def box_in_window(self, boxes: Any) -> tuple[float, float, float, float]:
-        from synthaug.detectors.base import box_in_window_from_boxes
-
-        return box_in_window_from_boxes(torch.as_tensor(np.asarray(boxes), dtype=torch.float32))
-
-    def eval_set(self, split: str) -> EvalSet:
-        if split not in self._eval:
-            t0 = time.perf_counter()
-            k = self.stride_k if split == "test" else self.val_stride_k
-            cap = self.max_test_videos if split == "test" else self.max_val_videos
-            self._eval[split] = load_eval_set(self.videos(split), self.videos_dir, self.labels_dir, stride_k=k, max_videos=cap)
-            es = self._eval[split]
-            self.log(f"[{split}] {len(es.stems)} videos, {es.n_frames} frames (k={k}), {es.n_objects} objects, "
-                     f"decoded in {time.perf_counter() - t0:.1f}s")
-        return self._eval[split]
-
-    def fit_file(self, n: int, distance: str, *, effects: Sequence[str] | None = None, tag: str = "") -> Path:
-        """The capture-parameter fit of seed set ``n`` with ``distance`` (fitted now if missing)."""
-        name = f"{self.class_name}_{n}_{distance}{('_' + tag) if tag else ''}.json"
-        path = self.fits_dir / name  # type: ignore[operator]
-        if not path.is_file():
-            from synthaug.fit.fitting import FitConfig, fit_seedset
-
-            t0 = time.perf_counter()
-            cfg = FitConfig(distance=distance, seed=self.seed, budget=self.fit_budget,
-                            effects=None if effects is None else tuple(effects))
-            fit_seedset(self.seedsets_dir / f"{self.class_name}_{n}", self.mesh, path, cfg, workers=self.fit_workers)
-            self.log(f"fit {name}: {time.perf_counter() - t0:.0f}s")
-        return path
-
-    # cells ------------------------------------------------------------
-    def _save_cells(self) -> None:
-        from synthaug.params import atomic_write_text
-
-        self._cells_path.parent.mkdir(parents=True, exist_ok=True)
-        # merge with what another process may have written meanwhile
-        if self._cells_path.is_file():
-            on_disk = json.loads(self._cells_path.read_text())
-            for k, v in on_disk.items():
-                self._cells.setdefault(k, {}).update({kk: vv for kk, vv in v.items() if kk not in self._cells.get(k, {})})
-        atomic_write_text(self._cells_path, json.dumps(self._cells, indent=1, sort_keys=True) + "\n")
-
-    def cell(
-        self,
-        key: str,
-        kind: str,
-        build: Callable[[], dict[str, Any]],
-        splits: Sequence[str] = ("test",),
-    ) -> dict[str, Any]:
-        """Train (once) and evaluate one detector configuration, cached under ``key``.
-
-        The cache key holds the class, detector kind, ``key``, seed, split,
-        frame stride and video cap — *not* the pyramid scales or the training
-        budgets: use another cells file when changing those.
-
-        Args:
-            key: unique name of the training set (the detector kind, class and
-                evaluation settings are added to it).
-            kind: detector family.
-            build: returns ``{"positives", "negatives", "box_in_window"[, "mining_frames", "mining_boxes"]}``.
-            splits: evaluation splits (``"test"``, ``"val"``).
-
-        Returns:
-            ``{"train": {...}, "<split>": EvalResult json, ...}``.
-        """
-        _check_kind(kind)
-        full = f"{self.class_name}/{kind}/{key}/seed{self.seed}"
-        entry = self._cells.setdefault(full, {})
-        ek = {s: f"{s}_k{self.stride_k if s == 'test' else self.val_stride_k}_v{self.max_test_videos if s == 'test' else self.max_val_videos}" for s in splits}
-        missing = [s for s in splits if ek[s] not in entry]
-        if missing and self.cached_only:
-            return {"train": entry.get("train", {}), **{s: entry.get(ek[s], {}) for s in splits}}
-        if missing:
-            t0 = time.perf_counter()
-            data = build()
-            t_build = time.perf_counter() - t0
-            t0 = time.perf_counter()
-            det = train_detector(kind, data["positives"], data["negatives"], self.seed, box_in_window=data.get("box_in_window"),
-                                 mining_frames=data.get("mining_frames", ()), mining_boxes=data.get("mining_boxes"), options=self.options)
-            t_train = time.perf_counter() - t0
-            entry["train"] = {"positives": int(data["positives"].shape[0]), "negatives": int(data["negatives"].shape[0]),
-                              "build_s": round(t_build, 1), "train_s": round(t_train, 1)}
-            for s in missing:
-                res = evaluate_on_videos(det, self.eval_set(s), scales=self.scales)
-                entry[ek[s]] = res.to_json()
-                self.log(f"  {full} [{s}] AP {res.ap:.3f} (IoU.3 {res.ap_iou03:.3f}) pos {entry['train']['positives']} "
-                         f"train {t_train:.0f}s eval {res.n_frames / max(res.frames_per_second, 1e-9):.0f}s ({res.frames_per_second:.1f} fps)")
-            self._save_cells()
-        return {"train": entry.get("train", {}), **{s: entry[ek[s]] for s in splits}}
-
-    # standard training sets --------------------------------------------
-    def real_build(self, n: int) -> Callable[[], dict[str, Any]]:
-        def build() -> dict[str, Any]:
-            ss = self.seedset(n)
-            mf, mb = mining_frames(ss, self.options.hog_mining_frames)
-            return {"positives": real_positives(ss), "negatives": self.negatives(n), "box_in_window": self.box_in_window(ss.boxes),
-                    "mining_frames": mf, "mining_boxes": mb}
-        return build
-
-    def perturbed_build(self, n: int, ratio: float) -> Callable[[], dict[str, Any]]:
-        def build() -> dict[str, Any]:
-            d = self.real_build(n)()
-            copies = int(round(ratio))
-            d["positives"] = torch.cat([d["positives"], perturb_patches(d["positives"], copies, generator=torch.Generator().manual_seed(self.seed + 1))])
-            return d
-        return build
-
-    def synthetic_build(self, n: int, ratio: float, distance: str, *, effects: Sequence[str] | None = None,
-                        fit_effects: Sequence[str] | None = None, fit_tag: str = "", capture_sampling: str = "seed") -> Callable[[], dict[str, Any]]:
-        def build() -> dict[str, Any]:
-            d = self.real_build(n)()
-            count = int(round(ratio * len(self.seedset(n))))
-            fit = self.fit_file(n, distance, effects=fit_effects, tag=fit_tag)
-            syn = synthetic_positives(self.seedset(n), self.mesh, fit, count, seed=self.seed + 2, effects=effects,
-                                      capture_sampling=capture_sampling)
-            d["positives"] = torch.cat([d["positives"], syn])
-            return d
-        return build
-
-
-# --------------------------------------------------------------------------- reporting helpers
-def _fmt(x: Any) -> str:
-    return "–" if x is None else f"{x:.3f}" if isinstance(x, float) else str(x)
-
-
-def _stem(ctx: ExperimentContext, name: str) -> str:
-    """Output file stem: ``name``, or ``name_seed<k>`` for a base seed other than 0."""
-    return name if ctx.seed == 0 else f"{name}_seed{ctx.seed}"
-
-
-def _write_report(ctx: ExperimentContext, name: str, title: str, header: Sequence[str], rows: Sequence[Sequence[Any]],
-                  numbers: dict[str, Any], notes: str = "") -> None:
-    from synthaug.params import atomic_write_text
-
-    ctx.out_dir.mkdir(parents=True, exist_ok=True)
-    lines = [f"## {title}", "", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(_fmt(v) for v in r) + " |" for r in rows]
-    if notes:
-        lines += ["", notes]
-    atomic_write_text(ctx.out_dir / f"{_stem(ctx, name)}.md", "\n".join(lines) + "\n")
-    atomic_write_text(ctx.out_dir / f"{_stem(ctx, name)}.json", json.dumps(numbers, indent=1, default=str) + "\n")
-
-
-def _plot(path: Path, kind: Literal["bar", "line"], series: Mapping[str, Mapping[Any, float | None]], *, title: str, xlabel: str,
-          ylabel: str = "AP (IoU 0.5)", logx: bool = False, marks: Mapping[str, Any] | None = None) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 4), dpi=110)
-    try:
-        if kind == "line":
-            for label, pts in series.items():
-                xs = [x for x in pts if pts[x] is not None]  # missing cells: the line joins the measured points
-                ys = [pts[x] for x in xs]
-                xp = [x + 1 for x in xs] if logx else xs
-                ax.plot(xp, ys, marker="o", label=label)
-                if marks and label in marks and pts.get(marks[label]) is not None:
-                    x = marks[label]
-                    ax.plot([x + 1 if logx else x], [pts[x]], marker="*", markersize=14, color="k", linestyle="none")
-            if logx:
-                ax.set_xscale("log")
-                ax.set_xlabel(xlabel + " (+1, log)")
-            else:
-                ax.set_xlabel(xlabel)
-        else:
-            groups = list(series.keys())
-            cats = list(dict.fromkeys(c for g in series.values() for c in g))
-            width = 0.8 / max(len(cats), 1)
-            for j, c in enumerate(cats):
-                ys = [np.nan if series[g].get(c) is None else series[g][c] for g in groups]
-                ax.bar(np.arange(len(groups)) + (j - (len(cats) - 1) / 2) * width, ys, width, label=str(c))
-            ax.set_xticks(np.arange(len(groups)), groups)
-            ax.set_xlabel(xlabel)
-        ax.set_ylabel(ylabel)
-        ax.set_ylim(0, max(0.05, min(1.0, 1.15 * max([v for s in series.values() for v in s.values() if v is not None] or [0.05]))))
-        ax.set_title(title, fontsize=9)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-        fig.tight_layout()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path)
-    finally:
-        plt.close(fig)
-
-
-def _ap(cell: dict[str, Any], split: str = "test", key: str = "ap") -> float | None:
-    return cell.get(split, {}).get(key)
 
 
 # --------------------------------------------------------------------------- experiments
@@ -482,8 +142,6 @@ def fig11_ratio(ctx: ExperimentContext, *, detectors: Sequence[str] = DETECTORS,
     Returns ``{"chosen": {detector: ratio}, "val": {...}, "test": {...}}``; the
     choice is also saved in ``chosen_ratio.json`` for the other experiments.
     """
-    from synthaug.params import atomic_write_text
-
     val: dict[str, dict[float, float | None]] = {}
     test: dict[str, dict[float, float | None]] = {}
     chosen: dict[str, float] = {}
@@ -568,8 +226,6 @@ EFFECT_ABBREV = {"boundary_blur": "BB", "motion_blur": "MB", "object_noise": "RN
 
 
 def _paper_effects() -> list[str]:
-    from synthaug.params import CaptureParams
-
     return list(CaptureParams.sample(1, generator=torch.Generator().manual_seed(0)).effects)
 
 

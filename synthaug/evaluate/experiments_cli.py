@@ -25,10 +25,14 @@ import sys
 import time
 from pathlib import Path
 
+import torch
+
+from synthaug.detectors.training import TrainOptions
+from synthaug.evaluate.context import ExperimentContext
+from synthaug.evaluate.experiments import EXPERIMENTS
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from synthaug.evaluate.experiments import EXPERIMENTS
-
     parser.add_argument("experiments", nargs="+", choices=[*EXPERIMENTS, "all"], help="experiments to run, in order")
     parser.add_argument("--class", dest="class_name", default="drone", help="object class (selects videos and seed sets)")
     parser.add_argument("--out", type=Path, required=True, help="results folder")
@@ -68,10 +72,6 @@ DEFAULT_MESH = {"drone": "../shared/data/meshes/quadcopter.glb", "airplane": "..
 
 
 def main(args: argparse.Namespace) -> int:
-    import torch
-
-    from synthaug.evaluate.experiments import EXPERIMENTS, ExperimentContext, TrainOptions
-
     if args.threads < 1:
         print(f"synthaug experiment: error: --threads must be >= 1, got {args.threads}", file=sys.stderr)
         return 2

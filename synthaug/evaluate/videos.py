@@ -25,9 +25,10 @@ import numpy as np
 import torch
 
 from synthaug.data.video import VIDEO_EXTENSIONS, read_video
-from synthaug.detectors.sliding import DEFAULT_SCALES, detect_multiscale
-from synthaug.evaluate.ap import evaluate_detections
 from synthaug.evaluate.cli import load_labels
+
+# synthaug.detectors.sliding and synthaug.evaluate.ap are imported where used: both import torchvision
+# (~1.4 s on top of torch), which would double the cost of importing this module and experiments.py.
 
 __all__ = ["EvalSet", "EvalResult", "load_eval_set", "detect_on_eval_set", "evaluate_on_videos"]
 
@@ -176,6 +177,8 @@ def detect_on_eval_set(
     Returns:
         Per video, per kept frame, float64 ``(K, 5)`` detections ``[x, y, w, h, score]``.
     """
+    from synthaug.detectors.sliding import DEFAULT_SCALES, detect_multiscale
+
     scales = list(DEFAULT_SCALES if scales is None else scales)
     out: list[list[np.ndarray]] = []
     for frames in eval_set.frames:
@@ -209,6 +212,8 @@ def evaluate_on_videos(
     Returns:
         An :class:`EvalResult` (all videos pooled into one PR curve).
     """
+    from synthaug.evaluate.ap import evaluate_detections
+
     t0 = time.perf_counter()
     dets = detect_on_eval_set(detector, eval_set, scales=scales, box_in_window=box_in_window, nms_iou=nms_iou,
                               max_detections=max_detections)
