@@ -469,7 +469,7 @@ def test_scale_interpolation_and_identity() -> None:
 
 
 @dataclass
-class _EvalSet:  # the fields of synthaug.evaluate.experiments.EvalSet
+class _EvalSet:  # the fields of synthaug.evaluate.videos.EvalSet
     stems: list
     frames: list
     frame_indices: list

@@ -1103,7 +1103,7 @@ def scale_frame(frame: np.ndarray, boxes: np.ndarray | None, scale: float) -> tu
 def scale_eval_set(eval_set: Any, scale: float) -> Any:
     """The scale check's test set: every frame of an ``EvalSet`` resized by ``scale``, boxes with it.
 
-    ``eval_set`` is an :class:`synthaug.evaluate.experiments.EvalSet` (``frames``: per video
+    ``eval_set`` is an :class:`synthaug.evaluate.videos.EvalSet` (``frames``: per video
     ``(T, H, W)`` uint8; ``boxes``: per video, per frame ``(G, 4)`` XYWH or None); a copy of the
     same type is returned (the frames take ``scale²`` times the memory).
     """
