@@ -11,11 +11,21 @@ has its own generator seed (a hash of the base seed and the seed index) the
 final file is identical whether the run was interrupted or not, and whatever
 the number of processes. Runs in-process, on local processes
 (``workers > 1``), or on a Dask cluster (``dask_address``).
+
+Every part records a fingerprint of what it depends on (:func:`fit_inputs`:
+the seed set's content, the mesh, every :class:`FitConfig` option, the
+synthaug version, and a caller-given distance's state); a rerun reuses a part
+only when its fingerprint is the current one, and recomputes the others with a
+warning naming what changed (another ``--distance``, ``--budget``, seed set...).
+Local workers die with their parent (:mod:`synthaug._procs`), so a ``kill -9``
+leaves no process behind.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
+import logging
 import os
 import shutil
 import time
@@ -26,7 +36,10 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import torch
 
+from synthaug._io import digest, sha256_file
 from synthaug.params import CaptureParams, atomic_write_text
+
+log = logging.getLogger("synthaug.fit")
 
 RESULT_FORMAT = "synthaug.fit"
 RESULT_VERSION = 1
@@ -336,7 +349,8 @@ def _context(seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, *, seeds
     return _CTX
 
 
-def _fit_index(index: int, seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, parts: str) -> int:
+def _fit_index(index: int, seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, parts: str,
+               fingerprint: dict[str, Any] | None = None) -> int:
     ctx = _context(seeds_path, mesh, cfg, distance)
     seeds = ctx["seeds"]
     scale = cfg.object_scale if cfg.object_scale is not None else float(seeds.object_fraction)
@@ -359,6 +373,9 @@ def _fit_index(index: int, seeds_path: str, mesh: Any, cfg: FitConfig, distance:
     res["stats"]["seconds"] = round(time.perf_counter() - t0, 3)
     res["index"] = index
     res["generator_seed"] = s
+    if fingerprint is not None:  # what the part depends on: a rerun with other inputs recomputes it
+        res["fingerprint"] = fingerprint["digest"]
+        res["inputs"] = fingerprint["inputs"]
     atomic_write_text(Path(parts) / f"seed_{index:05d}.json", json.dumps(res))
     return index
 
@@ -367,6 +384,151 @@ def _cfg_json(cfg: FitConfig) -> dict[str, Any]:
     d = asdict(cfg)
     d["effects"] = list(cfg.effects) if cfg.effects is not None else None
     return d
+
+
+def _hash_object(h: Any, x: Any, depth: int = 0) -> None:
+    """Feed a deterministic description of ``x`` (tensors and arrays by value) into the hash ``h``."""
+    if isinstance(x, torch.nn.Module):  # parameters, buffers, submodules and plain attributes (learners...)
+        h.update(f"module:{type(x).__module__}.{type(x).__qualname__}".encode())
+        _hash_object(h, {k: v for k, v in vars(x).items() if "hook" not in k}, depth + 1)
+        return
+    if isinstance(x, torch.Tensor):
+        t = x.detach().cpu().contiguous()
+        h.update(f"tensor:{t.dtype}:{tuple(t.shape)}".encode())
+        h.update(t.view(torch.uint8).numpy().tobytes() if t.numel() else b"")
+        return
+    if isinstance(x, np.ndarray):
+        a = np.ascontiguousarray(x)
+        h.update(f"array:{a.dtype}:{a.shape}".encode())
+        if a.dtype != object:
+            h.update(a.tobytes())
+            return
+        x = a.tolist()
+    if x is None or isinstance(x, (bool, int, float, str, bytes)):
+        h.update(repr(x).encode())
+    elif isinstance(x, dict):
+        h.update(b"{")
+        for k in sorted(x, key=str):
+            h.update(str(k).encode())
+            _hash_object(h, x[k], depth + 1)
+        h.update(b"}")
+    elif isinstance(x, (list, tuple, set, frozenset)):
+        h.update(b"[")
+        for v in (sorted(x, key=repr) if isinstance(x, (set, frozenset)) else x):
+            _hash_object(h, v, depth + 1)
+        h.update(b"]")
+    elif callable(x) and hasattr(x, "__qualname__") and not hasattr(x, "__dict__"):
+        h.update(f"fn:{getattr(x, '__module__', '')}.{x.__qualname__}".encode())
+    else:
+        h.update(f"obj:{type(x).__module__}.{type(x).__qualname__}".encode())
+        if depth < 24 and hasattr(x, "__dict__"):
+            _hash_object(h, {k: v for k, v in vars(x).items() if not k.startswith("__")}, depth + 1)
+
+
+def object_digest(x: Any) -> str:
+    """SHA-256 of an object's state (a prebuilt distance: its networks' weights, its arrays, its options)."""
+    h = hashlib.sha256()
+    _hash_object(h, x)
+    return h.hexdigest()[:20]
+
+
+def seedset_digest(seeds_path: str | os.PathLike) -> str:
+    """SHA-256 of a seed set's header and arrays (``seedset.json`` + ``arrays.npz``): what a fit reads."""
+    from synthaug.data.seedset import ARRAYS, HEADER
+
+    root = Path(seeds_path)
+    return digest({name: sha256_file(root / name) for name in (HEADER, ARRAYS) if (root / name).is_file()},
+                  length=64)
+
+
+def mesh_digest(mesh: Any) -> str:
+    """SHA-256 of a mesh file's bytes, ``builtin:<name>`` for a built-in mesh, of the arrays for a Trimesh."""
+    from synthaug.render.mesh import BUILTIN_MESHES
+
+    if isinstance(mesh, str) and mesh in BUILTIN_MESHES:  # as load_mesh: the name wins over a file
+        return f"builtin:{mesh}"
+    if isinstance(mesh, (str, os.PathLike)):
+        return sha256_file(mesh)
+    return object_digest({"vertices": np.asarray(mesh.vertices), "faces": np.asarray(mesh.faces)})
+
+
+def fit_inputs(seeds_path: str | os.PathLike, mesh: Any, cfg: FitConfig, distance: Any = None) -> dict[str, Any]:
+    """Everything a per-seed fit depends on: the seed set's content, the mesh, every option, the synthaug
+    version, and the state of a caller-given distance (None: built from ``cfg`` and the seeds)."""
+    from synthaug import __version__
+
+    out = {"seedset_sha256": seedset_digest(seeds_path), "mesh_sha256": mesh_digest(mesh), "config": _cfg_json(cfg),
+           "synthaug_version": __version__}
+    if distance is not None:
+        out["distance_object"] = object_digest(distance)
+    return out
+
+
+_INPUT_NAMES = {"seedset_sha256": "the seed set's content", "mesh_sha256": "the mesh",
+                "synthaug_version": "the synthaug version", "distance_object": "the given distance object"}
+
+
+def what_changed(old: dict[str, Any] | None, new: dict[str, Any]) -> str:
+    """A short human description of how two :func:`fit_inputs` differ (``""`` when they are equal)."""
+    if not isinstance(old, dict):
+        return "it records no fingerprint (written by an older synthaug)"
+    diffs = []
+    oc, nc = old.get("config", {}) or {}, new.get("config", {}) or {}
+    for k in sorted(set(oc) | set(nc)):
+        if oc.get(k) != nc.get(k):
+            diffs.append(f"{k} {json.dumps(oc.get(k), default=str)} -> {json.dumps(nc.get(k), default=str)}")
+    for k in ("seedset_sha256", "mesh_sha256", "synthaug_version", "distance_object"):
+        if old.get(k) != new.get(k):
+            what = _INPUT_NAMES[k]
+            if k == "synthaug_version":
+                what += f" {old.get(k)} -> {new.get(k)}"
+            diffs.append(what)
+    return ", ".join(diffs)
+
+
+def _read_part(path: Path) -> dict[str, Any] | None:
+    try:
+        doc = json.loads(path.read_text())
+        return doc if isinstance(doc, dict) and "theta" in doc else None
+    except (OSError, ValueError):
+        return None
+
+
+def _check_parts(parts: Path, fingerprint: dict[str, Any]) -> set[int]:
+    """The indices of the parts that may be reused; the others (other inputs, unreadable) are removed, with a
+    warning naming what changed."""
+    fp = fingerprint["digest"]
+    config = parts / "config.json"
+    if config.is_file():
+        try:
+            old = json.loads(config.read_text())
+        except (OSError, ValueError):
+            old = None
+        old_inputs = old.get("inputs") if isinstance(old, dict) else None
+        if not isinstance(old, dict) or old.get("fingerprint") != fp:
+            why = what_changed(old_inputs, fingerprint["inputs"]) or "its config file is unreadable"
+            log.warning("synthaug fit: %s holds an interrupted run with other inputs (%s)", parts, why)
+    done: set[int] = set()
+    stale: dict[str, list[int]] = {}
+    for p in sorted(parts.glob("seed_*.json")):
+        try:
+            i = int(p.stem.split("_")[1])
+        except (IndexError, ValueError):
+            continue
+        doc = _read_part(p)
+        if doc is not None and doc.get("fingerprint") == fp:
+            done.add(i)
+            continue
+        why = "unreadable" if doc is None else what_changed(doc.get("inputs"), fingerprint["inputs"])
+        stale.setdefault(why or "another fingerprint", []).append(i)
+        p.unlink(missing_ok=True)
+    for why, idx in stale.items():
+        shown = ", ".join(map(str, idx[:8])) + (", ..." if len(idx) > 8 else "")
+        log.warning("synthaug fit: recomputing %d finished seed(s) [%s] of an earlier run in %s: %s",
+                    len(idx), shown, parts, why)
+    atomic_write_text(config, json.dumps({"fingerprint": fp, "inputs": fingerprint["inputs"]}, indent=1,
+                                         default=str))
+    return done
 
 
 def fit_seedset(
@@ -414,14 +576,15 @@ def fit_seedset(
     load_mesh(mesh)  # a missing/corrupt mesh fails here, naming the file
     if seeds.patches.shape[-1] < 16:
         raise ValueError(f"seed patches of {seeds.patches.shape[-1]} px are too small to fit")
+    # a caller-given distance is hashed as given (a built one follows from cfg and the seed set)
+    inputs = fit_inputs(seeds_path, mesh, cfg, distance)
     if distance is None:
         distance = build_distance(cfg.distance, seeds, seed=cfg.seed, **cfg.distance_kwargs)
+    fingerprint = {"digest": digest(inputs), "inputs": inputs}
     out = Path(out_path)
     parts = out.parent / f".{out.name}.parts"
     parts.mkdir(parents=True, exist_ok=True)
-    (parts / "config.json").write_text(json.dumps({"cfg": _cfg_json(cfg), "seeds": seeds_path, "mesh": str(mesh)},
-                                                  default=str))
-    done = {int(p.stem.split("_")[1]) for p in parts.glob("seed_*.json")}
+    done = _check_parts(parts, fingerprint)
     todo = [i for i in todo_all if i not in done]
     bar = None
     if progress is True:
@@ -437,14 +600,14 @@ def fit_seedset(
 
     cache = _warm_cache(mesh, cfg)  # build sprites once (GL subprocess) before workers load them
     if dask_address is not None:
-        _run_dask(dask_address, todo, seeds_path, mesh, cfg, distance, str(parts), tick)
+        _run_dask(dask_address, todo, seeds_path, mesh, cfg, distance, str(parts), tick, fingerprint)
     elif workers <= 1:
         # one thread, as in worker processes (same floating-point results); the caller's setting is restored
         threads = torch.get_num_threads()
         try:
             _context(seeds_path, mesh, cfg, distance, seeds=seeds, cache=cache)
             for i in todo:
-                _fit_index(i, seeds_path, mesh, cfg, distance, str(parts))
+                _fit_index(i, seeds_path, mesh, cfg, distance, str(parts), fingerprint)
                 tick()
         finally:
             torch.set_num_threads(threads)
@@ -452,14 +615,17 @@ def fit_seedset(
         import multiprocessing as mp
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
-        with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as ex:
-            futs = [ex.submit(_fit_index, i, seeds_path, mesh, cfg, distance, str(parts)) for i in todo]
+        from synthaug._procs import pool_kwargs
+
+        # workers die with this process (a kill -9 of the command leaves nothing running)
+        with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"), **pool_kwargs()) as ex:
+            futs = [ex.submit(_fit_index, i, seeds_path, mesh, cfg, distance, str(parts), fingerprint) for i in todo]
             for f in as_completed(futs):
                 f.result()
                 tick()
     if bar is not None:
         bar.close()
-    _assemble(seeds, todo_all, cfg, mesh, seeds_path, parts, out)
+    _assemble(seeds, todo_all, cfg, mesh, seeds_path, parts, out, fingerprint["digest"])
     if indices is None:
         shutil.rmtree(parts, ignore_errors=True)
     return out
@@ -472,14 +638,14 @@ def _warm_cache(mesh: Any, cfg: FitConfig) -> Any:
 
 
 def _run_dask(address: Any, todo: list[int], seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any,
-              parts: str, tick: Callable[[], None]) -> None:
+              parts: str, tick: Callable[[], None], fingerprint: dict[str, Any] | None = None) -> None:
     from distributed import Client, as_completed
 
     own = isinstance(address, str)
     client = Client(address) if own else (address if isinstance(address, Client) else Client(address))
     try:
         dist_f = client.scatter(distance, broadcast=True)
-        futs = [client.submit(_fit_index, i, seeds_path, mesh, cfg, dist_f, parts, pure=False) for i in todo]
+        futs = [client.submit(_fit_index, i, seeds_path, mesh, cfg, dist_f, parts, fingerprint, pure=False) for i in todo]
         for f in as_completed(futs):
             f.result()
             tick()
@@ -489,10 +655,13 @@ def _run_dask(address: Any, todo: list[int], seeds_path: str, mesh: Any, cfg: Fi
 
 
 def _assemble(seeds: Any, indices: list[int], cfg: FitConfig, mesh: Any, seeds_path: str, parts: Path,
-              out: Path) -> None:
+              out: Path, fingerprint: str | None = None) -> None:
     rows, extra, timing = [], [], []
     for i in indices:
         res = json.loads((parts / f"seed_{i:05d}.json").read_text())
+        if fingerprint is not None and res.get("fingerprint") != fingerprint:  # another run wrote it meanwhile
+            raise RuntimeError(f"{parts / f'seed_{i:05d}.json'} was written by a run with other inputs "
+                               f"while this one ran (two runs into the same --out?); rerun the command")
         rows.append(res["theta"])
         rec = seeds.records[i] if i < len(seeds.records) else {}
         stats = dict(res["stats"])
@@ -508,6 +677,7 @@ def _assemble(seeds: Any, indices: list[int], cfg: FitConfig, mesh: Any, seeds_p
                                       effects=cfg.effects)
     meta = {"result_format": RESULT_FORMAT, "result_version": RESULT_VERSION, "config": _cfg_json(cfg),
             "seeds": seeds_path, "mesh": str(mesh),
+            **({"inputs_fingerprint": fingerprint} if fingerprint is not None else {}),
             "object_scale": cfg.object_scale if cfg.object_scale is not None else float(seeds.object_fraction),
             "distance_median": float(np.median([e["distance"] for e in extra]))}
     theta.save(out, extra=extra, metadata=meta)
