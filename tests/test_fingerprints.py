@@ -152,3 +152,124 @@ def test_mesh_file_bytes_are_part_of_the_fingerprint(fit_world, tmp_path):
     b = fit_inputs(seeds, m, _cfg())
     assert what_changed(a, b) == "the mesh"
     assert fit_inputs(seeds, "quadcopter", _cfg())["mesh_sha256"] == "builtin:quadcopter"
+
+
+# ------------------------------------------------------------------------ ingest
+from synthaug.data.ingest import IngestConfig, ingest_videos  # noqa: E402
+from synthaug.data.seedset import SeedSet  # noqa: E402
+from synthaug.data.synthvideo import make_panning_video  # noqa: E402
+
+ICFG = IngestConfig(seeds_per_video=3, negatives_per_video=4, hard_negatives_per_video=3, patch_size=24,
+                    colour=False)
+
+
+@pytest.fixture(scope="module")
+def videos(tmp_path_factory):
+    """Two folders of generated videos: ``a`` (drones 1-3) and ``b`` (the same names, other films, plus drone 4)."""
+    root = tmp_path_factory.mktemp("vids")
+    for k in range(3):
+        make_panning_video(root / "a", n_frames=24, size=(192, 144), seed=10 + k, name=f"V_DRONE_{k + 1:03d}")
+    for k in range(4):
+        make_panning_video(root / "b", n_frames=24, size=(192, 144), seed=40 + k, name=f"V_DRONE_{k + 1:03d}")
+    return root
+
+
+def _ingest(root, out, **kw):
+    kw.setdefault("cfg", ICFG)
+    kw.setdefault("workers", 1)
+    kw.setdefault("progress", False)
+    kw.setdefault("seed_counts", (3,))
+    return ingest_videos(root / "videos", root / "labels", out, **kw)
+
+
+def _ingest_warnings(caplog):
+    return [r.getMessage() for r in caplog.records if r.name == "synthaug.ingest" and r.levelno >= logging.WARNING]
+
+
+def test_editing_one_label_file_reingests_exactly_that_video(videos, tmp_path, caplog):
+    root = tmp_path / "a"
+    shutil.copytree(videos / "a", root)
+    out = tmp_path / "out"
+    first = _ingest(root, out)
+    assert first["processed"] == 3 and first["redone"] == {}
+    shard1 = (out / "pool/V_DRONE_001/arrays.npz").read_bytes()
+    # a user corrects the boxes of video 2 (shifted by 2 px)
+    lab = root / "labels/V_DRONE_002.json"
+    doc = json.loads(lab.read_text())
+    doc["boxes"] = [None if b is None else [b[0] + 2, b[1], b[2], b[3]] for b in doc["boxes"]]
+    lab.write_text(json.dumps(doc))
+    caplog.set_level(logging.WARNING, logger="synthaug.ingest")
+    again = _ingest(root, out)
+    assert again["processed"] == 1 and list(again["videos"]) == ["V_DRONE_002"]
+    assert again["skipped_current"] == 2 and again["redone"] == {"V_DRONE_002": "the label file"}
+    assert any("V_DRONE_002: the label file changed" in m for m in _ingest_warnings(caplog))
+    assert (out / "pool/V_DRONE_001/arrays.npz").read_bytes() == shard1  # the others untouched
+    boxes = {r["frame"]: r["box"] for r in SeedSet.load(out / "pool/V_DRONE_002").records}
+    for t, b in boxes.items():
+        assert b[0] == pytest.approx(doc["boxes"][t][0], abs=0.01)
+    seeds = SeedSet.load(out / "seedsets/drone_3")
+    for r in seeds.records:
+        if r["video"] == "V_DRONE_002":
+            assert r["box"][0] == pytest.approx(doc["boxes"][r["frame"]][0], abs=0.01)
+    # unchanged inputs: nothing redone, same seed set
+    caplog.clear()
+    third = _ingest(root, out)
+    assert third["processed"] == 0 and third["skipped_current"] == 3 and _ingest_warnings(caplog) == []
+
+
+def test_a_replaced_video_or_another_split_reingests_it(videos, tmp_path):
+    root = tmp_path / "a"
+    shutil.copytree(videos / "a", root)
+    out = tmp_path / "out"
+    _ingest(root, out, seed_counts=())
+    shutil.copy2(videos / "b/videos/V_DRONE_003.mp4", root / "videos/V_DRONE_003.mp4")
+    again = _ingest(root, out, seed_counts=())
+    assert list(again["videos"]) == ["V_DRONE_003"] and again["redone"] == {"V_DRONE_003": "the video file"}
+    from synthaug.data.splits import VideoSplit
+
+    split = VideoSplit(videos={"train": ["V_DRONE_001", "V_DRONE_003"], "val": ["V_DRONE_002"], "test": []})
+    moved = _ingest(root, out, seed_counts=(), split=split, splits=("train", "val"))
+    assert moved["redone"] == {"V_DRONE_002": "the split train -> val"}
+
+
+def test_a_rerun_with_other_videos_does_not_report_the_old_seed_set_as_current(videos, tmp_path, caplog):
+    out = tmp_path / "out"
+    _ingest(videos / "a", out, seed_counts=(3, 6))
+    caplog.set_level(logging.WARNING, logger="synthaug.ingest")
+    # the same names, other films and labels: every shard is redone, none reported current
+    other = _ingest(videos / "b", out, seed_counts=(3,))
+    assert other["skipped_current"] == 0 and other["processed"] == 4
+    assert set(other["redone"]) == {"V_DRONE_001", "V_DRONE_002", "V_DRONE_003"}
+    assert all("the video file" in w for w in other["redone"].values())
+    # drone_6 was drawn from the old videos and not redrawn: stale, with a warning, never current
+    assert other["stale_seed_sets"] == [str(out / "seedsets/drone_6")]
+    assert any("drone_6 was drawn by an earlier run" in m for m in _ingest_warnings(caplog))
+    s3 = SeedSet.load(out / "seedsets/drone_3")
+    src = {r["source_path"] for r in s3.records}
+    assert src and all(p.startswith(str(videos / "b")) for p in src)
+    # a folder with another video only: the seed set is drawn from it alone, not from the pool's older shards
+    sub = tmp_path / "sub"
+    for kind, ext in (("videos", "mp4"), ("labels", "json")):
+        (sub / kind).mkdir(parents=True)
+        shutil.copy2(videos / f"b/{kind}/V_DRONE_004.{ext}", sub / kind)
+    only4 = _ingest(sub, out, seed_counts=(3,))
+    assert only4["failed"] == {} and only4["skipped_current"] == 1  # the shard made from the same files
+    assert {r["video"] for r in SeedSet.load(out / "seedsets/drone_3").records} == {"V_DRONE_004"}
+
+
+def test_a_shard_of_an_older_synthaug_is_kept_until_its_files_change(videos, tmp_path):
+    root = tmp_path / "a"
+    shutil.copytree(videos / "a", root)
+    out = tmp_path / "out"
+    _ingest(root, out, seed_counts=())
+    for k in (1, 2, 3):  # as written before the inputs were recorded
+        head = out / f"pool/V_DRONE_00{k}/seedset.json"
+        doc = json.loads(head.read_text())
+        doc["ingest_fingerprint"] = ICFG.fingerprint()
+        doc.pop("ingest_inputs"), doc.pop("ingest_options_fingerprint")
+        head.write_text(json.dumps(doc))
+    st = os.stat(root / "labels/V_DRONE_001.json")
+    os.utime(root / "labels/V_DRONE_001.json", ns=(st.st_atime_ns, st.st_mtime_ns + 10**12))  # edited later
+    again = _ingest(root, out, seed_counts=())
+    assert list(again["videos"]) == ["V_DRONE_001"] and "V_DRONE_001.json newer" in again["redone"]["V_DRONE_001"]
+    assert again["skipped_current"] == 2

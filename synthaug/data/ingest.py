@@ -9,16 +9,25 @@ Two stages, both restartable:
    :mod:`synthaug.data.backgrounds`), its background negatives and, for
    hard-negative classes (birds), its hard negatives. A shard is written to a
    temporary folder and renamed into place, so an interrupted run leaves no
-   half-written shard; a rerun skips shards whose options fingerprint matches
-   and redoes the rest. A video that fails writes ``OUT/pool/<stem>.error.json``
-   with the reason and never stops the others.
+   half-written shard. Each shard records the fingerprint of its inputs (the
+   options, the video file's size, mtime and the SHA-256 of its first and last
+   MiB, the label file's SHA-256, the split, the synthaug version); a rerun
+   skips shards whose fingerprint is current and redoes the rest, with a
+   warning naming what changed (so editing one label file re-ingests exactly
+   that video). A video that fails writes ``OUT/pool/<stem>.error.json``
+   with the reason and never stops the others. Worker processes die with the
+   command (:mod:`synthaug._procs`): a ``kill -9`` leaves nothing running.
 2. **Seed sets.** For every positive class and every requested count (12, 25,
    50, 100...), seeds are drawn from the *train* shards only, spread across
    videos (round-robin over the videos in a seeded order, so the 12-seed set is
    contained in the 25-seed set, and so on), into
    ``OUT/seedsets/<class>_<count>/`` with a ``contact_sheet.png``. Negatives of
    a seed set are all background negatives of that class's train videos plus
-   the hard negatives of the train hard-negative videos.
+   the hard negatives of the train hard-negative videos. Seed sets are drawn
+   from this run's shards only (not from shards of other videos an earlier run
+   left in the pool), and record the run's fingerprint; a seed set under
+   ``OUT/seedsets`` left by an earlier run with other inputs is reported as
+   stale (``stale_seed_sets``), never as current.
 
 ``OUT/ingest_report.json`` sums up what was done, skipped, failed, repaired.
 """
@@ -27,6 +36,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 import shutil
 import sys
@@ -39,6 +49,10 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
+
+from synthaug._io import digest, quick_file_fingerprint, sha256_file
+
+log = logging.getLogger("synthaug.ingest")
 
 __all__ = ["IngestConfig", "VideoJob", "process_video", "process_images", "ingest_videos", "ingest_coco",
            "assemble_seed_sets", "select_spread"]
@@ -119,9 +133,90 @@ def _rng(cfg: IngestConfig, stem: str) -> np.random.Generator:
     return np.random.default_rng([cfg.seed, zlib.crc32(stem.encode())])
 
 
-def _metadata(cfg: IngestConfig, **more: Any) -> dict[str, Any]:
+def _metadata(cfg: IngestConfig, inputs: dict[str, Any] | None = None, **more: Any) -> dict[str, Any]:
     return {"patch_size": cfg.patch_size, "object_fraction": cfg.object_fraction,
-            "ingest_fingerprint": cfg.fingerprint(), "ingest_config": asdict(cfg), **more}
+            "ingest_fingerprint": digest(inputs) if inputs is not None else cfg.fingerprint(),
+            "ingest_options_fingerprint": cfg.fingerprint(), "ingest_inputs": inputs,
+            "ingest_config": asdict(cfg), **more}
+
+
+def _or_none(fn: Callable[[Any], Any], path: Any) -> Any:
+    try:
+        return fn(path)
+    except OSError:  # missing / unreadable: processing reports it
+        return None
+
+
+def video_inputs(job: VideoJob, cfg: IngestConfig) -> dict[str, Any]:
+    """What a video's shard depends on: the options, the video file (size, mtime, SHA-256 of its first and last
+    MiB), the label file's SHA-256, the split and the synthaug version."""
+    from synthaug import __version__
+
+    return {"options": cfg.fingerprint(), "synthaug_version": __version__, "split": job.split,
+            "video": _or_none(quick_file_fingerprint, job.video_path),
+            "labels_sha256": _or_none(sha256_file, job.label_path)}
+
+
+def images_inputs(images: Sequence[Any], split_of: dict[str, str], cfg: IngestConfig) -> dict[str, Any]:
+    """What a COCO chunk's shard depends on: the options, each image's file (as a video's), boxes, classes and
+    split, and the synthaug version."""
+    from synthaug import __version__
+
+    rows = [[str(im.path), int(im.image_id), np.asarray(im.boxes, np.float64).round(6).tolist(), list(im.classes),
+             split_of.get(im.path.name, split_of.get(im.path.stem, "train")),
+             _or_none(quick_file_fingerprint, im.path)] for im in images]
+    return {"options": cfg.fingerprint(), "synthaug_version": __version__, "images": digest(rows, length=64)}
+
+
+_INPUT_NAMES = {"options": "the ingest options", "synthaug_version": "the synthaug version",
+                "video": "the video file", "labels_sha256": "the label file", "images": "the images or their boxes"}
+
+
+def _what_changed(old: dict[str, Any], new: dict[str, Any]) -> str:
+    out = []
+    for k in sorted(set(old) | set(new)):
+        if old.get(k) != new.get(k):
+            out.append(f"the split {old.get(k)} -> {new.get(k)}" if k == "split" else _INPUT_NAMES.get(k, k))
+    return ", ".join(out) or "another fingerprint"
+
+
+def _mtime_ns(path: Path) -> int | None:
+    try:
+        return path.stat().st_mtime_ns
+    except OSError:
+        return None
+
+
+def _shard_status(shard: Path, cfg: IngestConfig, inputs: dict[str, Any] | None = None,
+                  sources: Sequence[Path] = ()) -> tuple[bool, str]:
+    """``(current, why not)`` of a shard against the inputs it would be made from now (``""`` for no shard).
+
+    Without ``inputs`` only the options are compared. A shard of an older synthaug (no recorded inputs) is kept
+    when its options and split match and its ``sources`` (video, label file) are not newer than it.
+    """
+    head = shard / "seedset.json"
+    if not head.is_file():
+        return False, ""
+    try:
+        meta = json.loads(head.read_text())
+    except (OSError, ValueError):
+        return False, "its header is unreadable"
+    if not isinstance(meta, dict):
+        return False, "its header is unreadable"
+    options = meta.get("ingest_options_fingerprint", meta.get("ingest_fingerprint"))
+    if inputs is None:
+        return options == cfg.fingerprint(), "the ingest options"
+    old = meta.get("ingest_inputs")
+    if isinstance(old, dict):
+        ok = meta.get("ingest_fingerprint") == digest(inputs)
+        return ok, "" if ok else _what_changed(old, inputs)
+    if options != cfg.fingerprint():
+        return False, "the ingest options"
+    if "split" in inputs and (meta.get("shard") or {}).get("split") != inputs["split"]:
+        return False, f"the split {(meta.get('shard') or {}).get('split')} -> {inputs['split']}"
+    made = head.stat().st_mtime_ns
+    newer = [p.name for p in sources if (_mtime_ns(p) or 0) > made]
+    return (not newer), (f"{', '.join(newer)} newer than its shard (made by an older synthaug)" if newer else "")
 
 
 def _fully_inside(box: np.ndarray, w: int, h: int) -> bool:
@@ -168,6 +263,7 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
     from synthaug.data.video import read_video_with_labels
 
     t0 = time.perf_counter()
+    inputs = video_inputs(job, cfg)  # before reading: an edit made meanwhile shows at the next run
     known = None if cfg.classes is None else tuple(cfg.classes) + tuple(cfg.hard_negative_classes)
     frames, labels, cleanup = read_video_with_labels(job.video_path, job.label_path, classes=known, colour=cfg.colour)
     frames_rgb = None
@@ -229,8 +325,8 @@ def process_video(job: VideoJob, cfg: IngestConfig, pool_dir: str | os.PathLike)
                   centres=np.array([[b[0] + b[2] / 2, b[1] + b[3] / 2] for b in sel_boxes], np.float32).reshape(-1, 2),
                   crops=np.array(crops, np.float32).reshape(-1, 3), records=recs, frames=full, background_frames=full_bg,
                   negatives=negs, negative_records=neg_recs,
-                  metadata=_metadata(cfg, source={"video": str(job.video_path), "labels": str(job.label_path)},
-                                     shard=summary),
+                  metadata=_metadata(cfg, inputs, source={"video": str(job.video_path),
+                                                          "labels": str(job.label_path)}, shard=summary),
                   patches_rgb=np.array(patches_rgb, np.uint8).reshape(-1, p, p, 3) if cfg.colour else None,
                   backgrounds_rgb=np.array(bgs_rgb, np.uint8).reshape(-1, p, p, 3) if cfg.colour else None,
                   neighbour_frames=neighbours)
@@ -252,6 +348,7 @@ def process_images(name: str, images: Sequence[Any], split_of: dict[str, str], c
     from synthaug.data.video import IngestInputError, clip_boxes, read_image_gray
 
     t0 = time.perf_counter()
+    inputs = images_inputs(images, split_of, cfg)
     rng = _rng(cfg, name)
     patches, bgs, crops, recs, full, full_bg, sel_boxes = [], [], [], [], [], [], []
     negs, neg_recs, errors = [], [], []
@@ -303,7 +400,7 @@ def process_images(name: str, images: Sequence[Any], split_of: dict[str, str], c
                   centres=np.array([[b[0] + b[2] / 2, b[1] + b[3] / 2] for b in sel_boxes], np.float32).reshape(-1, 2),
                   crops=np.array(crops, np.float32).reshape(-1, 3), records=recs, frames=full, background_frames=full_bg,
                   negatives=np.array(negs, np.uint8).reshape(-1, p, p), negative_records=neg_recs,
-                  metadata=_metadata(cfg, source={"coco": coco_path}, shard=summary))
+                  metadata=_metadata(cfg, inputs, source={"coco": coco_path}, shard=summary))
     summary["seconds"] = round(time.perf_counter() - t0, 3)
     return summary
 
@@ -315,13 +412,8 @@ def _worker_init() -> None:
 
 
 def _shard_is_current(shard: Path, cfg: IngestConfig) -> bool:
-    head = shard / "seedset.json"
-    if not head.is_file():
-        return False
-    try:
-        return json.loads(head.read_text()).get("ingest_fingerprint") == cfg.fingerprint()
-    except (OSError, json.JSONDecodeError):
-        return False
+    """Whether a shard was made with these options (its inputs are checked by :func:`_shard_status`)."""
+    return _shard_status(shard, cfg)[0]
 
 
 def _clean_stale(pool: Path) -> None:
@@ -366,8 +458,11 @@ def _run(tasks: list[tuple[str, Callable[..., dict[str, Any]], tuple[Any, ...]]]
         else:
             import multiprocessing as mp
 
+            from synthaug._procs import pool_kwargs
+
+            # workers die with this process: a kill -9 of the command leaves nothing running
             with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
-                                     initializer=_worker_init) as ex:
+                                     **pool_kwargs(_worker_init)) as ex:
                 futs = {ex.submit(fn, *args): stem for stem, fn, args in tasks}
                 try:
                     for fut in as_completed(futs):
@@ -420,23 +515,39 @@ def select_spread(candidates: Sequence[tuple[str, int]], n: int, rng: np.random.
     return out
 
 
+def _run_fingerprint(shards: Sequence[Any], cfg: IngestConfig) -> str:
+    """The fingerprint of a draw: the options and every shard's fingerprint."""
+    return digest({"options": cfg.fingerprint(),
+                   "shards": {Path(s.path).name: s.metadata.get("ingest_fingerprint") for s in shards}})
+
+
 def assemble_seed_sets(out_dir: str | os.PathLike, *, seed_counts: Sequence[int], cfg: IngestConfig,
                        classes: Sequence[str] | None = None, split: str = "train",
-                       contact_sheets: bool = True) -> list[dict[str, Any]]:
+                       contact_sheets: bool = True, shards: Sequence[str] | None = None) -> list[dict[str, Any]]:
     """Draw the seed sets ``OUT/seedsets/<class>_<n>`` from the shards in ``OUT/pool``.
 
+    Args:
+        shards: the names of the shards to draw from (a run's videos / chunks); default: every shard of the pool
+            made with these options.
+
     Returns:
-        One dict per written seed set (path, class, requested and actual counts).
+        One dict per written seed set (path, class, requested and actual counts). Each seed set records the
+        fingerprint of the draw (``ingest_fingerprint``: the options and every shard's fingerprint).
     """
     from synthaug.data.contact_sheet import contact_sheet_image, _caption
     from synthaug.data.seedset import SeedSet
 
     out_dir = Path(out_dir)
     pool = out_dir / "pool"
-    shards = []
-    for d in sorted(pool.iterdir()) if pool.is_dir() else []:
-        if d.is_dir() and not d.name.startswith(".") and _shard_is_current(d, cfg):
-            shards.append(SeedSet.load(d))
+    if shards is None:
+        dirs = [d for d in (sorted(pool.iterdir()) if pool.is_dir() else [])
+                if d.is_dir() and not d.name.startswith(".") and _shard_is_current(d, cfg)]
+    else:
+        dirs = [pool / name for name in sorted(set(shards)) if (pool / name / "seedset.json").is_file()]
+    shards = [SeedSet.load(d) for d in dirs]
+    run_fp = _run_fingerprint(shards, cfg)
+    run_inputs = {"options": cfg.fingerprint(),
+                  "shards": {Path(s.path).name: s.metadata.get("ingest_fingerprint") for s in shards}}
     written = []
     pos_classes = sorted({r["class"] for s in shards for r in s.records if r.get("split") == split})
     if classes is not None:
@@ -477,11 +588,42 @@ def assemble_seed_sets(out_dir: str | os.PathLike, *, seed_counts: Sequence[int]
             path = out_dir / "seedsets" / f"{cls}_{n}"
             meta = {"source": {"pool": str(pool), "class": cls, "split": split, "requested_seeds": n,
                                "videos": sorted({shards[si].records[ri]["video"] for si, ri in pick})},
-                    "shard": None}
+                    "shard": None, "ingest_fingerprint": run_fp, "ingest_inputs": run_inputs}
             SeedSet.concat_to(path, parts, metadata=meta, extra_files=extra)
             written.append({"path": str(path), "class": cls, "requested": n, "seeds": len(pick),
-                            "videos": len(meta["source"]["videos"])})
+                            "videos": len(meta["source"]["videos"]), "ingest_fingerprint": run_fp})
     return written
+
+
+def stale_seed_sets(out_dir: str | os.PathLike, written: Sequence[dict[str, Any]], cfg: IngestConfig,
+                    shards: Sequence[str]) -> list[str]:
+    """Seed sets under ``OUT/seedsets`` this run did not draw and that an earlier run drew from other inputs
+    (another fingerprint than this run's shards would give); each gets a warning."""
+    from synthaug.data.seedset import SeedSet
+
+    out_dir = Path(out_dir)
+    root = out_dir / "seedsets"
+    if not root.is_dir():
+        return []
+    pool = out_dir / "pool"
+    run_fp = _run_fingerprint([SeedSet.load(pool / s) for s in sorted(set(shards))
+                               if (pool / s / "seedset.json").is_file()], cfg)
+    done = {Path(w["path"]).resolve() for w in written}
+    stale = []
+    for d in sorted(root.iterdir()):
+        head = d / "seedset.json"
+        if d.resolve() in done or not head.is_file():
+            continue
+        try:
+            fp = json.loads(head.read_text()).get("ingest_fingerprint")
+        except (OSError, ValueError):
+            fp = None
+        if fp != run_fp:
+            stale.append(str(d))
+            log.warning("synthaug ingest: %s was drawn by an earlier run from other videos, labels or options and "
+                        "is not current (this run did not redraw it); delete it, or rerun with its class and count",
+                        d)
+    return stale
 
 
 def _write_report(out_dir: Path, report: dict[str, Any]) -> None:
@@ -503,6 +645,18 @@ def _summarise(done: list[dict[str, Any]], skipped: list[str], failed: dict[str,
     return {"processed": len(done), "skipped_current": len(skipped), "failed": failed,
             "background_methods": dict(methods), "box_cleanup": dict(cleanup), "seconds": round(seconds, 2),
             "videos": {d["stem"]: d for d in done}}
+
+
+def _finish(out_dir: Path, cfg: IngestConfig, seed_counts: Sequence[int], done: list[dict[str, Any]],
+            skipped: list[str], failed: dict[str, str], redone: dict[str, str], t0: float) -> dict[str, Any]:
+    """The report and the seed sets, drawn from this run's shards only (the reused and the made ones)."""
+    report = _summarise(done, skipped, failed, time.perf_counter() - t0)
+    report["redone"] = redone
+    shards = list(skipped) + [d["stem"] for d in done]
+    report["seed_sets"] = assemble_seed_sets(out_dir, seed_counts=seed_counts, cfg=cfg, shards=shards) \
+        if seed_counts else []
+    report["stale_seed_sets"] = stale_seed_sets(out_dir, report["seed_sets"], cfg, shards) if seed_counts else []
+    return report
 
 
 def ingest_videos(
@@ -562,15 +716,18 @@ def ingest_videos(
         jobs = jobs[:limit]
     if not jobs:
         raise ValueError(f"no video of {label_dir} belongs to the splits {list(splits)}")
-    todo, skipped = [], []
+    todo, skipped, redone = [], [], {}
     for job in jobs:
-        if not redo and _shard_is_current(pool / job.stem, cfg):
+        current, why = _shard_status(pool / job.stem, cfg, video_inputs(job, cfg), (job.video_path, job.label_path))
+        if not redo and current:
             skipped.append(job.stem)
-        else:
-            todo.append((job.stem, process_video, (job, cfg, str(pool))))
+            continue
+        if why and not redo:
+            redone[job.stem] = why
+            log.warning("synthaug ingest: %s: %s changed since its shard was made; ingesting it again", job.stem, why)
+        todo.append((job.stem, process_video, (job, cfg, str(pool))))
     done, failed = _run(todo, workers, progress, pool)
-    report = _summarise(done, skipped, failed, time.perf_counter() - t0)
-    report["seed_sets"] = assemble_seed_sets(out_dir, seed_counts=seed_counts, cfg=cfg) if seed_counts else []
+    report = _finish(out_dir, cfg, seed_counts, done, skipped, failed, redone, t0)
     report["seconds_total"] = round(time.perf_counter() - t0, 2)
     report["config"] = asdict(cfg)
     _write_report(out_dir, report)
@@ -624,17 +781,22 @@ def ingest_coco(
         for s in ("train", "val", "test"):
             for name in doc.get(s, []):
                 split_of[str(name)] = s
-    todo, skipped = [], []
+    todo, skipped, redone = [], [], {}
     for k in range(0, len(images), chunk):
         name = f"coco_{k // chunk:05d}"
-        if not redo and _shard_is_current(pool / name, cfg):
+        part = images[k:k + chunk]
+        current, why = _shard_status(pool / name, cfg, images_inputs(part, split_of, cfg),
+                                     [Path(coco_path)] + [im.path for im in part])
+        if not redo and current:
             skipped.append(name)
-        else:
-            todo.append((name, process_images, (name, images[k:k + chunk], split_of, cfg, str(pool), str(coco_path))))
+            continue
+        if why and not redo:
+            redone[name] = why
+            log.warning("synthaug ingest: %s: %s changed since its shard was made; ingesting it again", name, why)
+        todo.append((name, process_images, (name, part, split_of, cfg, str(pool), str(coco_path))))
     done, failed = _run(todo, workers, progress, pool)
-    report = _summarise(done, skipped, failed, time.perf_counter() - t0)
+    report = _finish(out_dir, cfg, seed_counts, done, skipped, failed, redone, t0)
     report["unreadable_images"] = [e for d in done for e in d.get("unreadable", [])]
-    report["seed_sets"] = assemble_seed_sets(out_dir, seed_counts=seed_counts, cfg=cfg) if seed_counts else []
     report["seconds_total"] = round(time.perf_counter() - t0, 2)
     report["config"] = asdict(cfg)
     _write_report(out_dir, report)

@@ -9,7 +9,9 @@ Examples::
     # an image folder with COCO boxes
     synthaug ingest --images my/images --coco my/annotations.json --out data/mine --seeds 12 25
 
-Safe to interrupt and rerun: finished videos are kept and not redone.
+Safe to interrupt and rerun: finished videos are kept and not redone, unless their video file, label file,
+split or the options changed since (then they are redone, and the warning says why). Workers die with the
+command, even after a ``kill -9``.
 """
 
 from __future__ import annotations
@@ -92,6 +94,10 @@ def main(args: argparse.Namespace) -> int:
                                     "seconds_total")}
     short["failed"] = report["failed"]
     short["seed_sets"] = [f"{s['path']} ({s['seeds']} seeds from {s['videos']} videos)" for s in report["seed_sets"]]
+    if report.get("redone"):  # shards made from other inputs (an edited label file...), made again
+        short["redone"] = report["redone"]
+    if report.get("stale_seed_sets"):  # seed sets of an earlier run with other inputs, not redrawn
+        short["stale_seed_sets"] = report["stale_seed_sets"]
     print(json.dumps(short, indent=1))
     for stem, msg in report["failed"].items():
         print(f"synthaug ingest: {stem} failed: {msg}", file=sys.stderr)
