@@ -645,7 +645,8 @@ def _run_dask(address: Any, todo: list[int], seeds_path: str, mesh: Any, cfg: Fi
     client = Client(address) if own else (address if isinstance(address, Client) else Client(address))
     try:
         dist_f = client.scatter(distance, broadcast=True)
-        futs = [client.submit(_fit_index, i, seeds_path, mesh, cfg, dist_f, parts, fingerprint, pure=False) for i in todo]
+        futs = [client.submit(_fit_index, i, seeds_path, mesh, cfg, dist_f, parts, fingerprint, pure=False)
+                for i in todo]
         for f in as_completed(futs):
             f.result()
             tick()

@@ -1,0 +1,158 @@
+"""Kill-safe long jobs (issue 18): a ``kill -9`` of ``synthaug fit --workers 2`` / ``synthaug ingest --workers 2``
+leaves no worker and no resource tracker running, and the rerun gives the output of an uninterrupted run."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+psutil = pytest.importorskip("psutil")
+
+from synthaug.data.procedural import sky_backgrounds  # noqa: E402
+from synthaug.data.seedset import write_seedset  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def _env():
+    return {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONWARNINGS": "ignore", "PYOPENGL_PLATFORM": "egl"}
+
+
+def _cli(*args):
+    return [sys.executable, "-m", "synthaug.cli", *map(str, args)]
+
+
+def _alive(pid):
+    try:
+        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return False
+
+
+def _kill_when(cmd, ready, *, timeout=60.0):
+    """Start ``cmd`` in its own session, wait until it has two workers and ``ready()``, SIGKILL it; return the
+    pids of the children it had, and whether they were all gone within 10 s."""
+    proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    children: set[int] = set()
+    try:
+        parent = psutil.Process(proc.pid)
+        deadline = time.time() + timeout
+        while time.time() < deadline and proc.poll() is None:
+            try:
+                kids = parent.children(recursive=True)
+            except psutil.NoSuchProcess:
+                break
+            children |= {k.pid for k in kids}
+            workers = [k for k in kids if "spawn_main" in " ".join(_cmdline(k)) and "resource_tracker" not in
+                       " ".join(_cmdline(k))]
+            if len(workers) >= 2 and ready():
+                break
+            time.sleep(0.05)
+        assert proc.poll() is None, f"the command ended before the kill:\n{proc.stderr.read().decode()[-3000:]}"
+        children |= {k.pid for k in parent.children(recursive=True)}
+        assert len(children) >= 2, children
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        gone_by = time.time() + 10
+        while time.time() < gone_by and any(_alive(p) for p in children):
+            time.sleep(0.1)
+        survivors = [p for p in children if _alive(p)]
+        return children, survivors
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        for p in children:  # never leave anything behind, even when the test fails
+            if _alive(p):
+                try:
+                    os.kill(p, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+
+
+def _cmdline(p):
+    try:
+        return p.cmdline()
+    except (psutil.NoSuchProcess, psutil.AccessDenied):
+        return []
+
+
+def _seedset(root, n=6):
+    rng = np.random.default_rng(0)
+    bgs = sky_backgrounds(n, (40, 40), seed=0)
+    patches = bgs.copy()
+    for i in range(n):
+        yy, xx = np.mgrid[:40, :40]
+        blob = ((xx - 20 - rng.integers(-3, 4)) ** 2 / 60 + (yy - 20) ** 2 / 12) < 1
+        patches[i][blob] = 40
+    frames = sky_backgrounds(n, (80, 80), seed=1)
+    write_seedset(root / "seeds", patches=patches, backgrounds=bgs, boxes=[[20, 20, 28, 14]] * n,
+                  centres=[[34, 27]] * n, crops=[[34, 27, 40]] * n,
+                  records=[{"video": f"v{i}", "frame": i} for i in range(n)], frames=list(frames),
+                  background_frames=list(frames), negatives=sky_backgrounds(8, (40, 40), seed=2),
+                  metadata={"patch_size": 40, "object_fraction": 0.7})
+    return root / "seeds"
+
+
+@pytest.mark.slow
+def test_kill_9_of_fit_leaves_no_process_and_the_rerun_gives_the_uninterrupted_file(tmp_path, caplog):
+    import logging
+
+    from synthaug.fit.fitting import FitConfig, fit_seedset
+
+    seeds = _seedset(tmp_path)
+    budget = 250
+    cfg = FitConfig(budget=budget, step_deg=30.0, sprite_size=48)  # as the CLI parses it
+    ref = fit_seedset(seeds, "quadcopter", tmp_path / "ref.json", cfg)  # also fills the sprite cache
+    out = tmp_path / "fit.json"
+    parts = tmp_path / ".fit.json.parts"
+    cmd = _cli("fit", "--seeds", seeds, "--out", out, "--budget", budget, "--step-deg", 30, "--sprite-size", 48,
+               "--workers", 2, "--no-progress")
+    children, survivors = _kill_when(cmd, lambda: len(list(parts.glob("seed_*.json"))) >= 1)
+    assert survivors == [], [(p, _cmdline(psutil.Process(p))) for p in survivors if psutil.pid_exists(p)]
+    done = len(list(parts.glob("seed_*.json")))
+    assert 1 <= done < 6 and not out.exists(), done
+    # resume (in this process: the file does not depend on the number of processes)
+    caplog.set_level(logging.WARNING, logger="synthaug.fit")
+    calls = []
+    fit_seedset(seeds, "quadcopter", out, cfg, progress=lambda d, t: calls.append(d))
+    assert len(calls) == 6 - done and not [r for r in caplog.records if r.name == "synthaug.fit"]  # parts reused
+    assert out.read_text() == ref.read_text()
+
+
+@pytest.mark.slow
+def test_kill_9_of_ingest_leaves_no_process_and_the_rerun_gives_the_uninterrupted_seed_set(tmp_path):
+    from synthaug.data.seedset import SeedSet
+    from synthaug.data.synthvideo import make_panning_video
+
+    data = tmp_path / "data"
+    for k in range(6):
+        make_panning_video(data, n_frames=40, size=(256, 192), seed=10 + k, name=f"V_DRONE_{k + 1:03d}")
+    opts = ["--seeds", 4, "--per-video", 3, "--patch-size", 24, "--negatives-per-video", 4, "--no-progress"]
+    ref = subprocess.run(_cli("ingest", "--videos", data / "videos", "--labels", data / "labels",
+                              "--out", tmp_path / "ref", "--workers", 1, *opts),
+                         cwd=REPO, env=_env(), capture_output=True, text=True, timeout=120)
+    assert ref.returncode == 0, ref.stderr[-3000:]
+    out = tmp_path / "out"
+    cmd = _cli("ingest", "--videos", data / "videos", "--labels", data / "labels", "--out", out, "--workers", 2,
+               *opts)
+    children, survivors = _kill_when(cmd, lambda: (out / "pool").is_dir())
+    assert survivors == [], [(p, _cmdline(psutil.Process(p))) for p in survivors if psutil.pid_exists(p)]
+    assert not (out / "seedsets").exists()
+    rerun = subprocess.run(cmd, cwd=REPO, env=_env(), capture_output=True, text=True, timeout=120)
+    assert rerun.returncode == 0, rerun.stderr[-3000:]
+    report = json.loads(rerun.stdout)
+    assert report["failed"] == {} and report["processed"] + report["skipped_current"] == 6
+    a, b = SeedSet.load(tmp_path / "ref/seedsets/drone_4"), SeedSet.load(out / "seedsets/drone_4")
+    assert [(r["video"], r["frame"]) for r in a.records] == [(r["video"], r["frame"]) for r in b.records]
+    assert np.array_equal(a.patches, b.patches) and np.array_equal(a.backgrounds, b.backgrounds)
+    assert np.array_equal(a.negatives, b.negatives)
