@@ -156,3 +156,30 @@ def test_kill_9_of_ingest_leaves_no_process_and_the_rerun_gives_the_uninterrupte
     assert [(r["video"], r["frame"]) for r in a.records] == [(r["video"], r["frame"]) for r in b.records]
     assert np.array_equal(a.patches, b.patches) and np.array_equal(a.backgrounds, b.backgrounds)
     assert np.array_equal(a.negatives, b.negatives)
+
+
+@pytest.mark.parametrize("extra, match", [
+    (["--step-deg", "0"], "step_deg"),
+    (["--effects", "rainbow"], "rainbow"),
+    (["--budget", "3"], "budget"),
+])
+def test_fit_option_errors_leave_nothing_behind(tmp_path, capsys, extra, match):
+    from synthaug.cli import main
+
+    seeds = _seedset(tmp_path, n=2)
+    out = tmp_path / "o" / "fit.json"
+    assert main(["fit", "--seeds", str(seeds), "--out", str(out), "--no-progress", *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("synthaug fit:") and match in err and "Traceback" not in err
+    assert not out.exists() and not (out.parent / ".fit.json.parts").exists()
+
+
+def test_fit_into_a_directory_fails_before_any_work(tmp_path, capsys):
+    from synthaug.cli import main
+
+    seeds = _seedset(tmp_path, n=2)
+    (tmp_path / "taken").mkdir()
+    rc = main(["fit", "--seeds", str(seeds), "--out", str(tmp_path / "taken"), "--no-progress", "--budget", "20",
+               "--step-deg", "30", "--sprite-size", "48"])
+    assert rc == 2 and f"{tmp_path / 'taken'} is a directory" in capsys.readouterr().err
+    assert not (tmp_path / ".taken.parts").exists()

@@ -112,6 +112,11 @@ class FitConfig:
 
         if self.object_scale is not None and not 0 < self.object_scale <= 1.5:
             raise ValueError(f"object_scale must be in (0, 1.5], got {self.object_scale}")
+        if self.effects is not None:  # unknown names fail now, not after the first expensive step
+            try:
+                CaptureParams.vector_names(effects=self.effects)
+            except ValueError as e:
+                raise ValueError(f"effects: {e}") from None
         from synthaug.fit.optimizers import list_optimizers
 
         if self.optimizer not in list_optimizers():
@@ -576,14 +581,34 @@ def fit_seedset(
     load_mesh(mesh)  # a missing/corrupt mesh fails here, naming the file
     if seeds.patches.shape[-1] < 16:
         raise ValueError(f"seed patches of {seeds.patches.shape[-1]} px are too small to fit")
+    out = Path(out_path)
+    if out.is_dir():
+        raise ValueError(f"the output {out} is a directory; give the path of a JSON file (--out)")
     # a caller-given distance is hashed as given (a built one follows from cfg and the seed set)
     inputs = fit_inputs(seeds_path, mesh, cfg, distance)
     if distance is None:
         distance = build_distance(cfg.distance, seeds, seed=cfg.seed, **cfg.distance_kwargs)
     fingerprint = {"digest": digest(inputs), "inputs": inputs}
-    out = Path(out_path)
+    cache = _warm_cache(mesh, cfg)  # checks step_deg / sprite_size; sprites built once before workers load them
     parts = out.parent / f".{out.name}.parts"
+    fresh = not parts.exists()
     parts.mkdir(parents=True, exist_ok=True)
+    try:
+        _fit_parts(seeds, seeds_path, mesh, cfg, distance, parts, out, fingerprint, todo_all, cache, workers=workers,
+             dask_address=dask_address, progress=progress)
+    except Exception:
+        if fresh and not any(parts.glob("seed_*.json")):  # nothing to resume: leave nothing behind
+            shutil.rmtree(parts, ignore_errors=True)
+        raise
+    if indices is None:
+        shutil.rmtree(parts, ignore_errors=True)
+    return out
+
+
+def _fit_parts(seeds: Any, seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, parts: Path, out: Path,
+         fingerprint: dict[str, Any], todo_all: list[int], cache: Any, *, workers: int,
+         dask_address: Any, progress: bool | Callable[[int, int], None]) -> None:
+    """Fit the seeds not finished yet (of ``todo_all``) into ``parts``, then assemble ``out``."""
     done = _check_parts(parts, fingerprint)
     todo = [i for i in todo_all if i not in done]
     bar = None
@@ -598,7 +623,6 @@ def fit_seedset(
         elif callable(progress):
             progress(len({int(p.stem.split("_")[1]) for p in parts.glob("seed_*.json")}), len(todo_all))
 
-    cache = _warm_cache(mesh, cfg)  # build sprites once (GL subprocess) before workers load them
     if dask_address is not None:
         _run_dask(dask_address, todo, seeds_path, mesh, cfg, distance, str(parts), tick, fingerprint)
     elif workers <= 1:
@@ -626,9 +650,6 @@ def fit_seedset(
     if bar is not None:
         bar.close()
     _assemble(seeds, todo_all, cfg, mesh, seeds_path, parts, out, fingerprint["digest"])
-    if indices is None:
-        shutil.rmtree(parts, ignore_errors=True)
-    return out
 
 
 def _warm_cache(mesh: Any, cfg: FitConfig) -> Any:
