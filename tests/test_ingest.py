@@ -335,3 +335,46 @@ def test_each_seed_keeps_an_aligned_neighbour_frame_for_the_noise_level_function
     s.save_subset(tmp_path / "sub", [1])
     assert SeedSet.load(tmp_path / "sub").records[0]["neighbour"] == s.records[1]["neighbour"]
     assert np.array_equal(SeedSet.load(tmp_path / "sub").neighbour_frame(0), s.neighbour_frame(1))
+
+
+@pytest.mark.parametrize("bad", [[0, 0, 0, 0], [5, 5, -3, 4], [float("nan"), 1, 2, 3], [900, 900, 10, 10], [1, 2]])
+def test_a_video_whose_every_box_is_unusable_fails_naming_its_label_file(data_copy, tmp_path, capsys, bad):
+    from synthaug.cli import main
+
+    root, _ = data_copy
+    path = root / "labels/V_DRONE_002.json"
+    lab = json.loads(path.read_text())
+    path.write_text(json.dumps({**lab, "boxes": [bad] * len(lab["boxes"])}))
+    rc = main(["ingest", "--videos", str(root / "videos"), "--labels", str(root / "labels"), "--out",
+               str(tmp_path / "out"), "--seeds", "2", "--per-video", "2", "--patch-size", "24", "--workers", "1",
+               "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 1 and "V_DRONE_002 failed" in err and "none of its boxes is usable" in err and str(path) in err
+
+
+def test_a_label_file_much_longer_than_its_video_warns(data_copy, caplog):
+    import logging
+
+    root, _ = data_copy
+    path = root / "labels/V_DRONE_001.json"
+    lab = json.loads(path.read_text())
+    path.write_text(json.dumps({**lab, "boxes": lab["boxes"] * 4}))  # 180 labels for 45 frames
+    caplog.set_level(logging.WARNING, logger="synthaug.data")
+    frames, labels, stats = read_video_with_labels(root / "videos/V_DRONE_001.mp4", path)
+    assert len(frames) == len(labels.boxes) == 45
+    assert any("180 entries for the 45 frames" in r.getMessage() for r in caplog.records)
+    caplog.clear()
+    path.write_text(json.dumps({**lab, "boxes": lab["boxes"] + [None]}))  # one more: the shorter rule, silently
+    read_video_with_labels(root / "videos/V_DRONE_001.mp4", path)
+    assert not caplog.records
+
+
+def test_ingest_into_a_file_is_one_clear_error(data_copy, tmp_path, capsys):
+    from synthaug.cli import main
+
+    root, _ = data_copy
+    (tmp_path / "taken").write_text("x")
+    rc = main(["ingest", "--videos", str(root / "videos"), "--labels", str(root / "labels"), "--out",
+               str(tmp_path / "taken"), "--no-progress", "--workers", "1"])
+    err = capsys.readouterr().err
+    assert rc == 2 and f"{tmp_path / 'taken'} is a file" in err and "Traceback" not in err

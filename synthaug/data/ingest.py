@@ -647,6 +647,16 @@ def _summarise(done: list[dict[str, Any]], skipped: list[str], failed: dict[str,
             "videos": {d["stem"]: d for d in done}}
 
 
+def _check_out(out_dir: str | os.PathLike) -> Path:
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ValueError(f"the output {out_dir} is a file; give a folder (--out)")
+    for p in (out_dir / "pool", out_dir / "seedsets"):
+        if p.exists() and not p.is_dir():
+            raise ValueError(f"{p} is a file; the output folder must hold a folder there (--out)")
+    return out_dir
+
+
 def _finish(out_dir: Path, cfg: IngestConfig, seed_counts: Sequence[int], done: list[dict[str, Any]],
             skipped: list[str], failed: dict[str, str], redone: dict[str, str], t0: float) -> dict[str, Any]:
     """The report and the seed sets, drawn from this run's shards only (the reused and the made ones)."""
@@ -696,7 +706,7 @@ def ingest_videos(
     from synthaug.data.video import iter_video_label_pairs
 
     t0 = time.perf_counter()
-    out_dir = Path(out_dir)
+    out_dir = _check_out(out_dir)
     pool = out_dir / "pool"
     pool.mkdir(parents=True, exist_ok=True)
     _clean_stale(pool)
@@ -770,7 +780,7 @@ def ingest_coco(
     t0 = time.perf_counter()
     if chunk < 1:
         raise ValueError(f"chunk must be >= 1, got {chunk}")
-    out_dir = Path(out_dir)
+    out_dir = _check_out(out_dir)
     pool = out_dir / "pool"
     pool.mkdir(parents=True, exist_ok=True)
     _clean_stale(pool)

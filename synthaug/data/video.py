@@ -29,6 +29,7 @@ Example:
 from __future__ import annotations
 
 import json
+import logging
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,6 +53,11 @@ __all__ = [
 
 VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".avi", ".mov", ".mkv", ".m4v")
 LABEL_BOX_FORMAT = "xywh_pixels"
+
+log = logging.getLogger("synthaug.data")
+
+# a label file and its video whose lengths differ by more than this fraction (and 2 frames) get a warning
+LENGTH_MISMATCH_WARN = 0.10
 
 
 class IngestInputError(ValueError):
@@ -271,18 +277,31 @@ def read_video_with_labels(
 ) -> tuple[np.ndarray, VideoLabels, BoxCleanup]:
     """Decode a video and its labels, aligned to the shorter of the two, boxes clipped.
 
+    A length difference of more than 10 % (and 2 frames) between the label file and the video is logged as a
+    warning (``synthaug.data``): the label file may not be this video's.
+
     Returns:
         ``(frames, labels, cleanup)``: uint8 ``(T, H, W)`` frames (``(T, H, W, 3)`` RGB with
         ``colour``) and labels with exactly ``T`` boxes, ``T = min(frames decoded, labels read)``.
 
     Raises:
-        IngestInputError: as :func:`read_labels` and :func:`read_video`.
+        IngestInputError: as :func:`read_labels` and :func:`read_video`; and when boxes were given but none is
+            usable (every one invalid or outside the frame).
     """
     labels = read_labels(label_path, classes=classes)
     frames = read_video(video_path, colour=colour)
     n = min(len(frames), len(labels.boxes))
+    diff = abs(len(frames) - len(labels.boxes))
+    if diff > 2 and diff > LENGTH_MISMATCH_WARN * n:
+        log.warning("synthaug: label file %s has %d entries for the %d frames of %s; using the first %d "
+                    "(the shorter of the two) - is it this video's label file?", label_path, len(labels.boxes),
+                    len(frames), video_path, n)
     boxes, stats = clip_boxes(labels.boxes[:n], width=frames.shape[2], height=frames.shape[1])
     stats.frames_decoded, stats.labels_read, stats.frames_used = len(frames), len(labels.boxes), n
+    if stats.invalid + stats.dropped and all(b is None for b in boxes):
+        raise IngestInputError(
+            f"label file {label_path}: none of its boxes is usable ({stats.invalid} invalid: not 4 finite numbers "
+            f"or a zero/negative size; {stats.dropped} outside the {frames.shape[2]}x{frames.shape[1]} frame)")
     labels.boxes = boxes
     return frames[:n], labels, stats
 
