@@ -272,6 +272,7 @@ def _slug(name: str) -> str:
 
 
 def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], path: Path) -> None:
+    """Two panels: frame AP at the main IoU and patch AP (the paper's protocol), each with its 95 % CI."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -279,24 +280,30 @@ def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], pa
 
     from synthaug.evaluate.protocol import summarize
 
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for group, conds in results.items():
-        xs, ys, lo, hi = [], [], [], []
-        for name, res in conds.items():
-            ap = summarize(res).ap[res.protocol.main_iou]
-            xs.append(_positives(res))
-            ys.append(ap.estimate)
-            lo.append(max(0.0, ap.estimate - ap.low) if np.isfinite(ap.low) else 0.0)
-            hi.append(max(0.0, ap.high - ap.estimate) if np.isfinite(ap.high) else 0.0)
-        order = np.argsort(xs)
-        ax.errorbar(np.asarray(xs)[order], np.asarray(ys)[order],
-                    yerr=[np.asarray(lo)[order], np.asarray(hi)[order]], marker="o", capsize=3, label=group)
-    ax.set_xscale("log")
-    ax.set_xlabel("real training positives")
-    ax.set_ylabel("frame AP@0.5 (mean over seeds, 95 % CI over test videos)")
-    ax.set_title("Learning curve, real data only")
-    ax.set_ylim(0, 1)
-    ax.legend(fontsize=8)
+        pts: dict[str, list[tuple[float, float, float, float]]] = {"frame": [], "patch": []}
+        for res in conds.values():
+            sm = summarize(res)
+            x = _positives(res)
+            for panel, iv in (("frame", sm.ap[res.protocol.main_iou]), ("patch", sm.patch_ap)):
+                if iv is not None and np.isfinite(iv.estimate):
+                    lo = iv.estimate - iv.low if np.isfinite(iv.low) else 0.0
+                    hi = iv.high - iv.estimate if np.isfinite(iv.high) else 0.0
+                    pts[panel].append((x, iv.estimate, max(lo, 0.0), max(hi, 0.0)))
+        for ax, panel in zip(axes, ("frame", "patch")):
+            if pts[panel]:
+                xs, ys, lo, hi = map(np.asarray, zip(*sorted(pts[panel])))
+                ax.errorbar(xs, ys, yerr=[lo, hi], marker="o", capsize=3, label=group)
+    titles = {"frame": "detection (frame AP@0.5)", "patch": "patch classification (paper's protocol)"}
+    for ax, panel in zip(axes, ("frame", "patch")):
+        ax.set_xscale("log")
+        ax.set_xlabel("real training positives")
+        ax.set_ylabel("AP, mean over seeds [95 % CI]")
+        ax.set_title(titles[panel], fontsize=10)
+        ax.set_ylim(0, 1)
+        ax.legend(fontsize=8)
+    fig.suptitle("Learning curve, real data only (CI: bootstrap over test videos)", fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
