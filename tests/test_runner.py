@@ -58,12 +58,20 @@ def test_learning_curve_results_and_files(ws, curve):
     res = curve["results"]
     assert set(res) == {"hog", "hog x0.75"}
     for group in res.values():
-        assert set(group) == {"hog / 6 seeds", "hog / all training frames"}
+        # every condition twice: boxes from the detector's box regression, and the windows' boxes (issue 15 item 5)
+        assert set(group) == {"hog / 6 seeds", "hog / all training frames",
+                              "hog / 6 seeds, window boxes", "hog / all training frames, window boxes"}
         for r in group.values():
             assert r.seed_ids == [0, 1] and r.stems == sorted(TEST)
             assert 0.0 <= r.mean_ap() <= 1.0
     assert res["hog"]["hog / 6 seeds"].patch_stems == sorted(TEST)  # patch protocol at scale 1 only
     assert res["hog x0.75"]["hog / 6 seeds"].patch_stems == []
+    # the two rows score the same detections: same scores, only the boxes (so the matches) differ
+    for name in ("hog / 6 seeds", "hog / all training frames"):
+        a, b = res["hog"][name], res["hog"][f"{name}, window boxes"]
+        for seed in (0, 1):
+            va, vb = a.seeds[seed].videos, b.seeds[seed].videos
+            assert [sorted(v.scores.tolist()) for v in va] == [sorted(v.scores.tolist()) for v in vb]
     md = (curve["out"] / "learning_curve.md").read_text()
     assert "hog / 6 seeds" in md and "hog / all training frames" in md and "tiny" in md
     assert (curve["out"] / "learning_curve.png").stat().st_size > 1000

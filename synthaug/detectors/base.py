@@ -62,12 +62,16 @@ class PatchDetector(abc.ABC):
             in window pixels, or None for the whole window; sliding-window
             detection reports this box. Saved and restored by
             :func:`save_detector` / :func:`load_detector` for every family.
+        box_regressor: a :class:`~synthaug.detectors.boxes.BoxRegressor` that maps each
+            detection's box to the annotators' box (fitted on the training labels by
+            ``synthaug train``), or None; saved and restored with the detector.
     """
 
     kind: ClassVar[str]
     window: int = 40
     stride: int = 4
     box_in_window: tuple[float, float, float, float] | None = None
+    box_regressor: Any = None
 
     @abc.abstractmethod
     def score_patches(self, patches: Tensor) -> Tensor:
@@ -310,6 +314,7 @@ def save_detector(detector: PatchDetector, path: str | Path) -> Path:
         "stride": int(detector.stride),
         "box_in_window": None if detector.box_in_window is None else [float(v) for v in detector.box_in_window],
         "state": detector.state_dict(),
+        "box_regressor": None if detector.box_regressor is None else detector.box_regressor.state_dict(),
     }
     tmp = path.with_name(f".{path.name}.tmp")
     torch.save(payload, tmp)
@@ -363,4 +368,14 @@ def load_detector(path: str | Path, *, map_location: str | torch.device = "cpu")
         if not (isinstance(box, (list, tuple)) and len(box) == 4):
             raise ValueError(f"{path}: box_in_window must be 4 numbers [x, y, w, h], got {box!r}")
         detector.box_in_window = tuple(float(v) for v in box)
+    reg = payload.get("box_regressor")
+    if reg is not None:
+        from synthaug.detectors.boxes import BoxRegressor
+
+        if not isinstance(reg, dict):
+            raise ValueError(f"{path}: box_regressor must be a state dict, got {type(reg).__name__}")
+        try:
+            detector.box_regressor = BoxRegressor.from_state_dict(reg)
+        except ValueError as e:
+            raise ValueError(f"{path}: {e}") from e
     return detector

@@ -230,6 +230,7 @@ def detect_multiscale(
     max_detections: int = 100,
     pre_nms_top_k: int = 3000,
     box_in_window: Sequence[float] | None = None,
+    refine_boxes: bool = True,
 ) -> Tensor:
     """Detect objects in one grayscale frame with an image pyramid.
 
@@ -253,6 +254,9 @@ def detect_multiscale(
             (bounds NMS's quadratic cost when the threshold is low).
         box_in_window: ``[x, y, w, h]`` of the object inside a window, in window
             pixels; default ``detector.box_in_window`` if set, else the whole window.
+        refine_boxes: map the kept boxes through ``detector.box_regressor`` (the
+            annotators' box convention, :mod:`synthaug.detectors.boxes`) when the
+            detector has one; False reports the windows' boxes.
 
     Returns:
         Detections ``[x, y, w, h, score]`` in input-image pixels, by decreasing
@@ -271,4 +275,8 @@ def detect_multiscale(
     if boxes.shape[0] == 0:
         return torch.zeros(0, 5)
     keep = nms(boxes, scores, nms_iou, max_keep=max_detections)
-    return torch.cat([tv_ops.box_convert(boxes[keep], "xyxy", "xywh"), scores[keep, None]], dim=1)
+    kept = boxes[keep]
+    regressor = getattr(detector, "box_regressor", None)
+    if refine_boxes and regressor is not None and kept.shape[0]:
+        kept = regressor.refine(check_image(image), kept)
+    return torch.cat([tv_ops.box_convert(kept, "xyxy", "xywh"), scores[keep, None]], dim=1)

@@ -48,13 +48,14 @@ from synthaug.evaluate.protocol import (
     score_patch_set,
     split_videos,
 )
-from synthaug.evaluate.videos import detect_on_eval_set, load_eval_set
+from synthaug.evaluate.videos import detect_on_eval_set, load_eval_set, refine_detections
 
 __all__ = ["TRAINING_VERSION", "Condition", "DataPaths", "ProtocolRunner", "learning_curve", "main"]
 
-TRAINING_VERSION = 3
+TRAINING_VERSION = 4
 """Bumped whenever the training code changes what a cell would hold (2: the CNN trains through
-``PatchDetectorModule``; 3: hard-negative mining over all training videos for every family)."""
+``PatchDetectorModule``; 3: hard-negative mining over all training videos for every family; 4: a box
+regressor in the annotators' convention, scored with and without it)."""
 
 
 @dataclass(frozen=True)
@@ -184,22 +185,34 @@ class ProtocolRunner:
         for s in self.scales_scored():
             es = self.eval_set(s)
             t1 = time.perf_counter()
-            dets = detect_on_eval_set(det, es, scales=self.scales, nms_iou=self.protocol.detection.nms_iou,
-                                      max_detections=self.protocol.detection.max_detections)
+            raw = detect_on_eval_set(det, es, scales=self.scales, nms_iou=self.protocol.detection.nms_iou,
+                                     max_detections=self.protocol.detection.max_detections, refine_boxes=False)
             t_det = time.perf_counter() - t1
+            dets = refine_detections(det, es, raw)  # what detect_multiscale reports (boxes in the annotators' convention)
+            t_ref = time.perf_counter() - t1 - t_det
             res = ProtocolResult(condition.name, self.protocol, scale=s)
             pats = score_patch_set(det, self.patch_set()) if (self.patches and s == 1.0) else ()
             res.add_seed(seed, videos=match_videos(es.stems, dets, es.boxes, self.protocol), patches=pats,
-                         meta={"detect_s": round(t_det, 1), "fps": round(es.n_frames / max(t_det, 1e-9), 2),
+                         meta={"detect_s": round(t_det + t_ref, 1), "fps": round(es.n_frames / max(t_det + t_ref, 1e-9), 2),
+                               "box_regression_s": round(t_ref, 1),
                                "positives": (meta.get("positives") or {}).get("count")})
             out["scales"][repr(float(s))] = res.to_json()
+            if getattr(det, "box_regressor", None) is not None:  # item 5: AP before the box mapping, same detections
+                unref = ProtocolResult(f"{condition.name} (window boxes)", self.protocol, scale=s)
+                unref.add_seed(seed, videos=match_videos(es.stems, raw, es.boxes, self.protocol), patches=pats, meta={})
+                out.setdefault("window_boxes", {})[repr(float(s))] = unref.to_json()
             self.log(f"  {condition.name} seed {seed} x{s:g}: AP@{self.protocol.main_iou:g} {res.mean_ap():.3f} "
                      f"(detect {t_det:.0f} s, {es.n_frames / max(t_det, 1e-9):.1f} fps)")
         out["total_s"] = round(time.perf_counter() - t0, 1)
         return out
 
-    def run(self, condition: Condition, seeds: Sequence[int] | None = None) -> dict[float, ProtocolResult]:
-        """The condition's results per scored scale, all seeds combined (cells reused when cached)."""
+    def run(self, condition: Condition, seeds: Sequence[int] | None = None, *,
+            window_boxes: bool = False) -> dict[float, ProtocolResult]:
+        """The condition's results per scored scale, all seeds combined (cells reused when cached).
+
+        With ``window_boxes``, the same detections scored with the windows' boxes (before the
+        detector's box regression; empty when the detectors have none).
+        """
         seeds = list(range(self.protocol.min_training_seeds)) if seeds is None else [int(s) for s in seeds]
         per_scale: dict[float, list[ProtocolResult]] = {}
         for seed in seeds:
@@ -211,11 +224,14 @@ class ProtocolRunner:
                 continue
             if time.perf_counter() - t0 > 1.0:
                 self.log(f"  {condition.name} seed {seed}: cell done in {cell.get('total_s', 0):.0f} s")
-            for s, doc in cell["scales"].items():
+            for s, doc in (cell.get("window_boxes") or {} if window_boxes else cell["scales"]).items():
                 per_scale.setdefault(float(s), []).append(ProtocolResult.from_json(doc))
         out = {}
+        name = f"{condition.name}, window boxes" if window_boxes else condition.name
         for s, parts in per_scale.items():
-            res = ProtocolResult.combine(parts, condition=condition.name)
+            if window_boxes and len(parts) != len(seeds):  # cells without a box regressor lack them
+                continue
+            res = ProtocolResult.combine(parts, condition=name)
             res.meta.update({"kind": condition.kind, "condition": condition.identity()})
             out[s] = res
         return out
@@ -245,6 +261,8 @@ def learning_curve(runner: ProtocolRunner, *, detectors: Sequence[str], seed_cou
         for c in conds:
             for s, res in runner.run(c, seeds).items():
                 results.setdefault(kind if s == 1.0 else f"{kind} x{s:g}", {})[c.name] = res
+            for s, res in runner.run(c, seeds, window_boxes=True).items():  # item 5: AP before the box mapping
+                results.setdefault(kind if s == 1.0 else f"{kind} x{s:g}", {})[res.condition] = res
     if out is not None:
         write_learning_curve(results, Path(out), baseline_count=max(seed_counts) if seed_counts else None)
     return results

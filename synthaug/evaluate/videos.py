@@ -163,6 +163,7 @@ def detect_on_eval_set(
     box_in_window: Sequence[float] | None = None,
     nms_iou: float = 0.3,
     max_detections: int = 10,
+    refine_boxes: bool = True,
 ) -> list[list[np.ndarray]]:
     """Multi-scale sliding-window detection on every frame of ``eval_set``.
 
@@ -173,6 +174,8 @@ def detect_on_eval_set(
         box_in_window: object box inside a window (default: the detector's).
         nms_iou: NMS overlap threshold.
         max_detections: boxes kept per frame.
+        refine_boxes: apply the detector's box regressor (if any); see
+            :func:`~synthaug.detectors.sliding.detect_multiscale` and :func:`refine_detections`.
 
     Returns:
         Per video, per kept frame, float64 ``(K, 5)`` detections ``[x, y, w, h, score]``.
@@ -185,9 +188,35 @@ def detect_on_eval_set(
         dets_v = []
         for frame in frames:
             image = torch.from_numpy(frame).float().div_(255.0)
-            d = detect_multiscale(detector, image, scales=scales, nms_iou=nms_iou, max_detections=max_detections, box_in_window=box_in_window)
+            d = detect_multiscale(detector, image, scales=scales, nms_iou=nms_iou, max_detections=max_detections,
+                                  box_in_window=box_in_window, refine_boxes=refine_boxes)
             dets_v.append(d.numpy().astype(np.float64))
         out.append(dets_v)
+    return out
+
+
+@torch.no_grad()
+def refine_detections(detector: Any, eval_set: EvalSet, detections: Sequence[Sequence[np.ndarray]]) -> list[list[np.ndarray]]:
+    """``detect_on_eval_set(..., refine_boxes=False)`` output -> the same detections with refined boxes.
+
+    Equal to ``detect_on_eval_set(..., refine_boxes=True)`` (the regressor acts on the kept
+    boxes only), without scanning the frames twice. Returns copies of ``detections`` when the
+    detector has no box regressor.
+    """
+    from torchvision.ops import box_convert
+
+    reg = getattr(detector, "box_regressor", None)
+    out: list[list[np.ndarray]] = []
+    for frames, dets_v in zip(eval_set.frames, detections):
+        refined = []
+        for frame, d in zip(frames, dets_v):
+            d = np.array(d, dtype=np.float64, copy=True).reshape(-1, 5)
+            if reg is not None and d.shape[0]:
+                image = torch.from_numpy(frame).float().div_(255.0)
+                boxes = box_convert(torch.as_tensor(d[:, :4], dtype=torch.float32), "xywh", "xyxy")
+                d[:, :4] = box_convert(reg.refine(image, boxes), "xyxy", "xywh").numpy()
+            refined.append(d)
+        out.append(refined)
     return out
 
 
