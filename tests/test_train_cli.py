@@ -46,6 +46,10 @@ def test_train_then_detect_end_to_end(ws: dict[str, Path], trained: dict[str, An
 
     det = load_detector(trained["out"])
     assert det.kind == "hog" and det.box_in_window is not None
+    assert det.box_regressor is not None  # the annotators' box convention, learned from the training labels
+    box = trained["meta"]["box_regression"]
+    assert box["videos"] == len(trained["meta"]["split"]["train"])  # every drone training video (not the bird)
+    assert box["samples"] > 0 and float(box["ridge"]) in [float(r) for r in box["cv_mse"]]
     val_video = trained["meta"]["split"]["val"][0]
     dets = ws["root"] / "dets.json"
     capsys.readouterr()
