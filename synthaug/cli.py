@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 # name -> (module, one-line help)
@@ -82,7 +83,18 @@ def main(argv: list[str] | None = None) -> int:
         print(args._unavailable, file=sys.stderr)
         return 2
     mod = importlib.import_module(args._module)
-    return int(mod.main(args) or 0)
+    try:
+        return int(mod.main(args) or 0)
+    except (ValueError, OSError) as e:
+        # the last guard of "bad input -> one clear line" (issue 18): a bad value or an unusable file that a
+        # command did not catch itself is still one line naming it, not a traceback. SYNTHAUG_DEBUG=1 re-raises.
+        if os.environ.get("SYNTHAUG_DEBUG"):
+            raise
+        from synthaug._checks import first_line
+
+        print(f"synthaug {args.command}: error: {first_line(e)} (SYNTHAUG_DEBUG=1 shows the traceback)",
+              file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

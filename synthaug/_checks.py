@@ -1,0 +1,179 @@
+"""Input checks shared by the commands: argparse ``type=`` functions and output-path checks.
+
+A bad option or an unusable output path is reported before the first expensive
+step, in one line that names the option (issue 18: "validate before working").
+
+* ``type=`` functions (:func:`positive_int`, :func:`finite_float`, ...) make
+  argparse reject a bad number as it parses: ``synthaug demo --ratio -1`` exits
+  2 with ``argument --ratio: must be a finite number >= 0, got '-1'``.
+* :func:`check_output_file` / :func:`check_output_dir` raise :class:`ValueError`
+  naming the option when ``--out`` can never be written (an existing folder
+  where a file is expected, a file where a folder is expected, a file on the
+  way to it), so a command fails before it works, not after.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+from pathlib import Path
+from typing import Callable
+
+__all__ = ["positive_int", "nonneg_int", "positive_float", "nonneg_float", "unit_float", "open_unit_float",
+           "finite_float", "float_in", "int_at_least", "check_output_file", "check_output_dir", "check_distance",
+           "check_seedset_dir", "first_line"]
+
+
+def _number(text: str, kind: type) -> float | int:
+    try:
+        value = kind(text)
+    except (TypeError, ValueError):
+        raise argparse.ArgumentTypeError(f"must be {'an integer' if kind is int else 'a number'}, got {text!r}") \
+            from None
+    if kind is float and not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    return value
+
+
+def int_at_least(low: int) -> Callable[[str], int]:
+    """An argparse type: an integer >= ``low``."""
+
+    def parse(text: str) -> int:
+        value = int(_number(text, int))
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {text!r}")
+        return value
+
+    parse.__name__ = f"integer >= {low}"  # argparse names the type in its "invalid ... value" message
+    return parse
+
+
+positive_int = int_at_least(1)
+nonneg_int = int_at_least(0)
+
+
+def finite_float(text: str) -> float:
+    """An argparse type: a finite number (no nan / inf)."""
+    return float(_number(text, float))
+
+
+def positive_float(text: str) -> float:
+    """An argparse type: a finite number > 0."""
+    value = finite_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
+    return value
+
+
+def nonneg_float(text: str) -> float:
+    """An argparse type: a finite number >= 0."""
+    value = finite_float(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
+    return value
+
+
+def unit_float(text: str) -> float:
+    """An argparse type: a number in [0, 1]."""
+    value = finite_float(text)
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be in [0, 1], got {text!r}")
+    return value
+
+
+def open_unit_float(text: str) -> float:
+    """An argparse type: a number in (0, 1)."""
+    value = finite_float(text)
+    if not 0.0 < value < 1.0:
+        raise argparse.ArgumentTypeError(f"must be in (0, 1), got {text!r}")
+    return value
+
+
+def float_in(low: float, high: float, *, low_open: bool = False) -> Callable[[str], float]:
+    """An argparse type: a finite number in ``[low, high]`` (``(low, high]`` with ``low_open``)."""
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if not ((low < value) if low_open else (low <= value)) or value > high:
+            raise argparse.ArgumentTypeError(f"must be in {'(' if low_open else '['}{low:g}, {high:g}], got {text!r}")
+        return value
+
+    parse.__name__ = f"number in [{low:g}, {high:g}]"
+    return parse
+
+
+def _blocking_parent(path: Path) -> Path | None:
+    """The first existing ancestor of ``path`` that is not a folder (so nothing can be made under it)."""
+    for parent in path.parents:
+        if parent.exists():
+            return None if parent.is_dir() else parent
+    return None
+
+
+def check_output_file(path: str | os.PathLike, option: str = "--out") -> Path:
+    """``path`` can be written as a file: it is not a folder and no file stands on its way.
+
+    Raises:
+        ValueError: naming ``option`` and the path.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{option}: {path} is a directory; give the path of a file")
+    blocker = _blocking_parent(path)
+    if blocker is not None:
+        raise ValueError(f"{option}: cannot write {path}: {blocker} is a file, not a folder")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise ValueError(f"{option}: {path} is not writable")
+    return path
+
+
+def check_output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
+    """``path`` is, or can be made, a folder: it is not a file and no file stands on its way.
+
+    Raises:
+        ValueError: naming ``option`` and the path.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{option}: {path} is a file; give a directory")
+    blocker = _blocking_parent(path)
+    if blocker is not None:
+        raise ValueError(f"{option}: cannot make the folder {path}: {blocker} is a file, not a folder")
+    return path
+
+
+def check_distance(name: str, option: str = "--distance") -> str:
+    """``name`` is a registered distance (imports the registry, and with it torch: call it when a command runs).
+
+    Raises:
+        ValueError: naming ``option`` and the registered distances.
+    """
+    from synthaug.distances.registry import list_distances
+
+    known = list_distances()
+    if name not in known:
+        raise ValueError(f"{option}: unknown distance {name!r}; registered: {known}")
+    return name
+
+
+def check_seedset_dir(path: str | os.PathLike, option: str = "--seeds") -> Path:
+    """``path`` is a seed-set folder (it holds ``seedset.json``); its contents are checked when it is loaded.
+
+    Raises:
+        FileNotFoundError: naming ``option`` and the path.
+    """
+    path = Path(path)
+    if not (path / "seedset.json").is_file():
+        why = "does not exist" if not path.exists() else "is not a folder" if not path.is_dir() else \
+            "holds no seedset.json"
+        raise FileNotFoundError(f"{option}: {path} is not a seed set: it {why} (`synthaug ingest` makes one)")
+    return path
+
+
+def first_line(message: object, limit: int = 300) -> str:
+    """The first non-empty line of an error message, at most ``limit`` characters (library errors such as
+    torch's weights-only refusal span many lines)."""
+    lines = [s.strip() for s in str(message).splitlines() if s.strip()]
+    text = lines[0] if lines else ""
+    return text if len(text) <= limit else text[: limit - 3] + "..."
