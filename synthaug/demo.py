@@ -35,21 +35,26 @@ import torch
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from synthaug._checks import int_at_least, positive_float, positive_int
+
+    # numbers are checked as they are parsed (a bad one exits 2 at once, naming the option)
     parser.add_argument("--out", default="outputs/demo", help="output folder")
-    parser.add_argument("--videos", type=int, default=8, help="generated videos (about 60%% train, 40%% test)")
-    parser.add_argument("--frames", type=int, default=90, help="frames per video")
-    parser.add_argument("--seeds", type=int, default=25, help="seed images drawn from the train videos")
-    parser.add_argument("--budget", type=int, default=800, help="fit evaluations per seed")
-    parser.add_argument("--ratio", type=float, default=20, help="synthetic patches per real seed")
+    parser.add_argument("--videos", type=int_at_least(2), default=8,
+                        help="generated videos (about 60%% train, 40%% test; >= 2)")
+    parser.add_argument("--frames", type=int_at_least(10), default=90, help="frames per video (>= 10)")
+    parser.add_argument("--seeds", type=positive_int, default=25, help="seed images drawn from the train videos")
+    parser.add_argument("--budget", type=int_at_least(10), default=800, help="fit evaluations per seed (>= 10)")
+    parser.add_argument("--ratio", type=positive_float, default=20, help="synthetic patches per real seed (> 0)")
     parser.add_argument("--detector", default="hog", choices=["hog", "adaboost", "cnn"],
                         help="detector trained on real seeds only and on real + synthetic")
-    parser.add_argument("--stride", type=int, default=3, help="score every k-th test frame")
+    parser.add_argument("--stride", type=positive_int, default=3, help="score every k-th test frame")
     parser.add_argument("--seed", type=int, default=0, help="seeds everything: videos, fits, training")
     parser.add_argument("--fit-init", default="grid", choices=["grid", "uniform"], help="how each fit starts")
     parser.add_argument("--hidden", default="rotor_blur",
                         help="camera effect hidden in the diagnosis step's measured data (issue 6); 'none' skips "
                              "the step")
-    parser.add_argument("--diagnosis-seeds", type=int, default=60, help="seeds of the diagnosis step")
+    parser.add_argument("--diagnosis-seeds", type=int_at_least(4), default=60,
+                        help="seeds of the diagnosis step (>= 4: two folds of two)")
 
 
 class RenderedQuadcopter:
@@ -105,7 +110,40 @@ def make_measured_videos(out: Path, *, n_videos: int, n_frames: int, seed: int, 
     return split
 
 
+def validate(args: argparse.Namespace) -> None:
+    """Everything checked before the first video is made: ``--hidden`` names a known effect, ``--out`` can be a
+    folder (numbers are checked by argparse). Raises ValueError naming the option."""
+    from synthaug._checks import check_output_dir
+    from synthaug.diagnose.reference_camera import resolve_hidden
+
+    check_output_dir(args.out)
+    if args.hidden != "none":
+        try:
+            resolve_hidden([args.hidden])
+        except ValueError as e:
+            raise ValueError(f"--hidden: {e} (or 'none')") from None
+
+
 def main(args: argparse.Namespace) -> int:
+    import shutil
+    import sys
+
+    try:
+        validate(args)
+    except ValueError as e:
+        print(f"synthaug demo: error: {e}", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+    fresh = not out.exists()
+    try:
+        return _run(args)
+    except BaseException:
+        if fresh:  # a failed or interrupted demo leaves no half-written folder behind (it is not resumable)
+            shutil.rmtree(out, ignore_errors=True)
+        raise
+
+
+def _run(args: argparse.Namespace) -> int:
     from synthaug.data.ingest import ingest_videos
     from synthaug.data.seedset import SeedSet
     from synthaug.detectors.training import negative_pool, real_positives, synthetic_positives, train_detector

@@ -17,19 +17,21 @@ import time
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from synthaug._checks import float_in, int_at_least, nonneg_int, positive_int
+
     sub = parser.add_subparsers(dest="bench", metavar="WHAT", required=True)
     p = sub.add_parser("render", help="rendering throughput of SyntheticObjectDataset",
                        formatter_class=parser.formatter_class)
     p.add_argument("--mode", choices=["patch", "frame", "both"], default="both", help="what to time")
     p.add_argument("--mesh", default="quadcopter", help="mesh path or built-in name")
-    p.add_argument("--size", type=int, default=64, help="patch side (patch mode)")
-    p.add_argument("--frame-size", type=int, nargs=2, default=(512, 640), metavar=("H", "W"),
+    p.add_argument("--size", type=int_at_least(8), default=64, help="patch side (patch mode)")
+    p.add_argument("--frame-size", type=int_at_least(16), nargs=2, default=(512, 640), metavar=("H", "W"),
                    help="frame height and width (frame mode)")
-    p.add_argument("--workers", type=int, default=2, help="DataLoader worker processes")
-    p.add_argument("--batch-size", type=int, default=256, help="items per batch")
-    p.add_argument("--batches", type=int, default=40, help="batches timed per repeat")
-    p.add_argument("--repeats", type=int, default=3, help="timed repeats (median reported)")
-    p.add_argument("--step-deg", type=float, default=5.0, help="view-cache grid step")
+    p.add_argument("--workers", type=nonneg_int, default=2, help="DataLoader worker processes")
+    p.add_argument("--batch-size", type=positive_int, default=256, help="items per batch")
+    p.add_argument("--batches", type=positive_int, default=40, help="batches timed per repeat")
+    p.add_argument("--repeats", type=positive_int, default=3, help="timed repeats (median reported)")
+    p.add_argument("--step-deg", type=float_in(0.1, 45), default=5.0, help="view-cache grid step")
     p.add_argument("--seed", type=int, default=0, help="dataset seed")
 
 

@@ -13,6 +13,7 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -84,17 +85,18 @@ def main(args: argparse.Namespace) -> int:
     from synthaug.params import CaptureParams, fitted_object_scales
     from synthaug.render.cache import ViewCache
 
-    if args.n < 1 or args.per_seed < 1 or args.zoom < 1:
-        print("--n, --per-seed and --zoom must be >= 1", file=sys.stderr)
+    try:
+        out, seeds, loaded = _validate(args)
+    except (ValueError, FileNotFoundError) as e:
+        print(f"synthaug preview: error: {e}", file=sys.stderr)
         return 2
     cache = ViewCache.build(args.mesh, step_deg=args.step_deg, sprite_size=96 if args.mode == "patch" else 128)
-    out = Path(args.out)
-    if args.seeds is None:
+    if seeds is None:
         if args.mode == "patch":
             bgs = sky_backgrounds(8, (args.size * 2, args.size * 2), seed=args.seed)
         else:
             bgs = sky_backgrounds(4, (256, 320), seed=args.seed)
-        params = CaptureParams.load(args.params) if args.params else None
+        params = loaded[0] if loaded else None
         ds = SyntheticObjectDataset(args.mesh, bgs, params, length=args.n, mode=args.mode, patch_size=args.size,
                                     negative_fraction=0.0, effects=args.effects, seed=args.seed, cache=cache)
         tiles = [_u8(img) for img, _ in ds.__getitems__(list(range(len(ds))))]
@@ -103,17 +105,11 @@ def main(args: argparse.Namespace) -> int:
                          col_labels=["synthetic"] * cols)
         info = {"samples": len(tiles), "mode": args.mode}
     else:
-        from synthaug.data.seedset import SeedSet
-
-        seeds = SeedSet.load(args.seeds)
         n = min(args.n, len(seeds))
         params, scales = None, None
-        if args.params:
-            params, extra, _ = CaptureParams.load_with_extra(args.params)
+        if loaded:
+            params, extra, _ = loaded
             scales = fitted_object_scales(extra)
-        if params is not None and params.batch_size != len(seeds):
-            print(f"{args.params} has {params.batch_size} rows but {args.seeds} has {len(seeds)} seeds", file=sys.stderr)
-            return 2
         if params is None:
             params = CaptureParams.sample(len(seeds), generator=torch.Generator().manual_seed(args.seed))
         tiles = []
@@ -131,6 +127,46 @@ def main(args: argparse.Namespace) -> int:
                          row_labels=[f"seed {k}" for k in range(n)])
         info = {"seeds": n, "columns": ["real", "background"] + ["synthetic"] * args.per_seed}
     out.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(grid).save(out)
+    tmp = out.with_name(f".{out.name}.tmp{out.suffix}")  # atomic: a crash never leaves half a PNG under --out
+    Image.fromarray(grid).save(tmp)
+    tmp.replace(out)
     print(json.dumps({"preview": str(out), **info}))
     return 0
+
+
+def _validate(args: argparse.Namespace) -> tuple[Path, Any, tuple | None]:
+    """Every option and input file checked before the view cache is built: ``(out, seed set or None, the
+    loaded ``--params`` (CaptureParams, extra, metadata) or None)``; raises ValueError / FileNotFoundError
+    naming the option."""
+    from PIL import Image
+
+    from synthaug._checks import check_output_file, check_seedset_dir
+    from synthaug.params import CaptureParams
+
+    for name in ("n", "per_seed", "zoom"):
+        if getattr(args, name) < 1:
+            raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+    if args.size < 8:
+        raise ValueError(f"--size must be >= 8, got {args.size}")
+    if not (math.isfinite(args.step_deg) and 0.1 <= args.step_deg <= 45):
+        raise ValueError(f"--step-deg must be in [0.1, 45], got {args.step_deg}")
+    out = check_output_file(args.out)
+    if out.suffix.lower() not in Image.registered_extensions():
+        raise ValueError(f"--out: {out} has no image extension PIL can write (e.g. .png)")
+    seeds = None
+    if args.seeds is not None:
+        from synthaug.data.seedset import SeedSet
+
+        seeds = SeedSet.load(check_seedset_dir(args.seeds))
+        if len(seeds) == 0:
+            raise ValueError(f"--seeds: {args.seeds} holds no seeds")
+    loaded = CaptureParams.load_with_extra(args.params) if args.params else None
+    if loaded is not None and seeds is not None and loaded[0].batch_size != len(seeds):
+        raise ValueError(f"--params: {args.params} has {loaded[0].batch_size} rows but {args.seeds} has "
+                         f"{len(seeds)} seeds")
+    if args.effects:
+        known = loaded[0].effects if loaded else CaptureParams.sample(1, generator=torch.Generator()).effects
+        unknown = [e for e in args.effects if e not in known]
+        if unknown:
+            raise ValueError(f"--effects: {unknown} are not among the capture parameters' effects {list(known)}")
+    return out, seeds, loaded
