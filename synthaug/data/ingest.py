@@ -648,9 +648,9 @@ def _summarise(done: list[dict[str, Any]], skipped: list[str], failed: dict[str,
 
 
 def _check_out(out_dir: str | os.PathLike) -> Path:
-    out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise ValueError(f"the output {out_dir} is a file; give a folder (--out)")
+    from synthaug._checks import check_output_dir
+
+    out_dir = check_output_dir(out_dir)  # not a file, and no file on the way to it
     for p in (out_dir / "pool", out_dir / "seedsets"):
         if p.exists() and not p.is_dir():
             raise ValueError(f"{p} is a file; the output folder must hold a folder there (--out)")
@@ -707,9 +707,7 @@ def ingest_videos(
 
     t0 = time.perf_counter()
     out_dir = _check_out(out_dir)
-    pool = out_dir / "pool"
-    pool.mkdir(parents=True, exist_ok=True)
-    _clean_stale(pool)
+    # inputs are checked before the output folder is made: a bad one leaves nothing behind
     vs = split if isinstance(split, VideoSplit) or split is None else load_split(split)
     for s in splits:
         if s not in ("train", "val", "test"):
@@ -717,8 +715,13 @@ def ingest_videos(
     label_dir = Path(label_dir)
     if not label_dir.is_dir():
         raise FileNotFoundError(f"label folder not found: {label_dir}")
+    if not Path(video_dir).is_dir():
+        raise FileNotFoundError(f"video folder not found: {video_dir}")
     jobs = []
-    for stem, vpath, lpath in iter_video_label_pairs(video_dir, label_dir):
+    pairs = list(iter_video_label_pairs(video_dir, label_dir))
+    if not pairs:
+        raise ValueError(f"no label file (*.json) in {label_dir}")
+    for stem, vpath, lpath in pairs:
         which = "train" if vs is None else vs.split_of(stem)
         if which in splits:
             jobs.append(VideoJob(stem, vpath, lpath, which))
@@ -726,6 +729,9 @@ def ingest_videos(
         jobs = jobs[:limit]
     if not jobs:
         raise ValueError(f"no video of {label_dir} belongs to the splits {list(splits)}")
+    pool = out_dir / "pool"
+    pool.mkdir(parents=True, exist_ok=True)
+    _clean_stale(pool)
     todo, skipped, redone = [], [], {}
     for job in jobs:
         current, why = _shard_status(pool / job.stem, cfg, video_inputs(job, cfg), (job.video_path, job.label_path))
@@ -781,9 +787,7 @@ def ingest_coco(
     if chunk < 1:
         raise ValueError(f"chunk must be >= 1, got {chunk}")
     out_dir = _check_out(out_dir)
-    pool = out_dir / "pool"
-    pool.mkdir(parents=True, exist_ok=True)
-    _clean_stale(pool)
+    # inputs are checked before the output folder is made: a bad one leaves nothing behind
     images = read_coco(coco_path, image_dir, classes=cfg.classes)
     split_of: dict[str, str] = {}
     if split is not None:
@@ -791,6 +795,9 @@ def ingest_coco(
         for s in ("train", "val", "test"):
             for name in doc.get(s, []):
                 split_of[str(name)] = s
+    pool = out_dir / "pool"
+    pool.mkdir(parents=True, exist_ok=True)
+    _clean_stale(pool)
     todo, skipped, redone = [], [], {}
     for k in range(0, len(images), chunk):
         name = f"coco_{k // chunk:05d}"

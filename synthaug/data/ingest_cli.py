@@ -24,6 +24,9 @@ __all__ = ["add_arguments", "main"]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from synthaug._checks import float_in, int_at_least, nonneg_int, positive_int
+
+    # numbers are checked as they are parsed: a bad one exits 2 at once, naming the option
     src = parser.add_argument_group("input (videos + labels, or images + COCO)")
     src.add_argument("--videos", help="folder of videos (V_*.mp4), matched to label files by stem")
     src.add_argument("--labels", help="folder of per-video label JSON files (halmstad format)")
@@ -35,24 +38,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                         "Default: everything is train")
     parser.add_argument("--splits", nargs="+", default=["train"], choices=["train", "val", "test"],
                         help="splits to ingest into the pool (seed sets are drawn from train only)")
-    parser.add_argument("--seeds", type=int, nargs="*", default=[12, 25, 50, 100],
+    parser.add_argument("--seeds", type=positive_int, nargs="*", default=[12, 25, 50, 100],
                         help="seed-set sizes to draw per class (default: 12 25 50 100)")
     parser.add_argument("--classes", nargs="+", help="known classes; a label file of another class is an error")
     parser.add_argument("--hard-negative-classes", nargs="*", default=["bird"],
                         help="classes whose videos give hard negatives only (default: bird)")
-    parser.add_argument("--patch-size", type=int, default=40, help="seed patch side P (default 40, as the paper)")
-    parser.add_argument("--object-fraction", type=float, default=0.7,
+    parser.add_argument("--patch-size", type=int_at_least(8), default=40, help="seed patch side P (default 40, as the paper)")
+    parser.add_argument("--object-fraction", type=float_in(0, 1, low_open=True), default=0.7,
                         help="the box's longest side spans this fraction of the patch (default 0.7)")
-    parser.add_argument("--per-video", type=int, default=8, help="seed candidates per video (default 8)")
-    parser.add_argument("--negatives-per-video", type=int, default=16,
+    parser.add_argument("--per-video", type=positive_int, default=8, help="seed candidates per video (default 8)")
+    parser.add_argument("--negatives-per-video", type=nonneg_int, default=16,
                         help="random object-free background crops kept per train video")
-    parser.add_argument("--hard-negatives-per-video", type=int, default=16,
+    parser.add_argument("--hard-negatives-per-video", type=nonneg_int, default=16,
                         help="object-free crops near the object (clutter next to it) kept per train video")
     parser.add_argument("--inpaint", default="pushpull", choices=["pushpull", "telea", "ns"],
                         help="fill used where aligned frames cannot serve (default pushpull)")
     parser.add_argument("--seed", type=int, default=0, help="base random seed")
-    parser.add_argument("--workers", type=int, default=2, help="parallel worker processes (default 2)")
-    parser.add_argument("--limit", type=int, help="ingest at most this many videos (quick look)")
+    parser.add_argument("--workers", type=positive_int, default=2, help="parallel worker processes (default 2)")
+    parser.add_argument("--limit", type=positive_int, help="ingest at most this many videos (quick look)")
     parser.add_argument("--redo", action="store_true", help="reprocess videos even if their shard is current")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 

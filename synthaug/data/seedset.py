@@ -69,6 +69,7 @@ __all__ = [
     "seed_geometry",
     "atomic_write_bytes",
     "replace_dir",
+    "load_npz",
 ]
 
 FORMAT_NAME = "synthaug.seedset"
@@ -76,6 +77,41 @@ FORMAT_VERSION = 1
 HEADER = "seedset.json"
 ARRAYS = "arrays.npz"
 COLOUR = "colour.npz"  # optional RGB patches (patches_rgb, backgrounds_rgb)
+ARRAY_KEYS = ("patches", "backgrounds", "boxes", "centres", "crops", "negatives")
+
+
+def load_npz(path: str | os.PathLike, keys: Sequence[str] = ()) -> dict[str, np.ndarray]:
+    """All arrays of an ``.npz`` file, never unpickling (``allow_pickle=False``); errors name the file.
+
+    Raises:
+        FileNotFoundError: if the file is missing.
+        ValueError: naming the file, if it is truncated, not an npz archive, holds pickled (object) arrays
+            or lacks one of ``keys``.
+    """
+    import zipfile
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path} is missing")
+    try:
+        z = np.load(path, allow_pickle=False)
+    except (zipfile.BadZipFile, OSError, ValueError, EOFError) as e:
+        # bytes that are neither .npz nor .npy are taken for a pickle, which allow_pickle=False refuses
+        why = "unrecognised bytes" if "pickle" in str(e) else f"{type(e).__name__}: {e}"
+        raise ValueError(f"{path} is not a readable npz archive (truncated or corrupt?): {why}") from None
+    if not hasattr(z, "files"):
+        raise ValueError(f"{path} is a single .npy array, not an .npz archive")
+    try:
+        with z:
+            arrays = {k: z[k] for k in z.files}
+    except (zipfile.BadZipFile, EOFError, OSError, ValueError, KeyError) as e:
+        why = ("it holds pickled (object) arrays, which are never loaded" if "allow_pickle" in str(e)
+               else f"{type(e).__name__}: {e}")
+        raise ValueError(f"{path} is not a readable npz archive (truncated or corrupt?): {why}") from None
+    missing = [k for k in keys if k not in arrays]
+    if missing:
+        raise ValueError(f"{path}: arrays {missing} are missing (it has {sorted(arrays)})")
+    return arrays
 
 
 def replace_dir(tmp: Path, final: Path) -> None:
@@ -405,11 +441,12 @@ class SeedSet:
             raise ValueError(f"{head}: not a synthaug seed set (format != {FORMAT_NAME!r})")
         if header.get("version") != FORMAT_VERSION:
             raise ValueError(f"{head}: unsupported version {header.get('version')} (this synthaug reads {FORMAT_VERSION})")
-        with np.load(path / ARRAYS) as z:
-            arrays = {k: z[k] for k in z.files}
-        n = len(header.get("records", []))
+        if not isinstance(header.get("records"), list):
+            raise ValueError(f"{head}: the header has no 'records' list")
+        arrays = load_npz(path / ARRAYS, ARRAY_KEYS)
+        n = len(header["records"])
         if len(arrays["patches"]) != n:
-            raise ValueError(f"{path}: {len(arrays['patches'])} patches for {n} records")
+            raise ValueError(f"{path / ARRAYS}: {len(arrays['patches'])} patches for {n} records in {head}")
         return cls(path, header, arrays)
 
     def __len__(self) -> int:
@@ -462,8 +499,8 @@ class SeedSet:
         f = self.path / COLOUR
         if not f.exists():
             return None
-        with np.load(f) as z:
-            rgb, bg = z["patches_rgb"], z["backgrounds_rgb"]
+        z = load_npz(f, ("patches_rgb", "backgrounds_rgb"))
+        rgb, bg = z["patches_rgb"], z["backgrounds_rgb"]
         want = (len(self), self.patch_size, self.patch_size, 3)
         if rgb.shape != want or bg.shape != want:
             raise ValueError(f"{f}: expected RGB patches {want}, got {rgb.shape} and {bg.shape}")
