@@ -395,18 +395,26 @@ class CaptureParams:
             raise ValueError(f"{path}: not a synthaug capture-parameter file (format != {FORMAT_NAME!r})")
         if doc.get("version") != FORMAT_VERSION:
             raise ValueError(f"{path}: unsupported version {doc.get('version')} (this synthaug reads {FORMAT_VERSION})")
+        meta = doc.get("metadata", {})
+        if isinstance(meta, dict) and meta.get("result_format") == "synthaug.fit":
+            from synthaug.fit.fitting import RESULT_VERSION
+
+            if meta.get("result_version") != RESULT_VERSION:
+                raise ValueError(f"{path}: unsupported fit result_version {meta.get('result_version')!r} "
+                                 f"(this synthaug reads {RESULT_VERSION})")
         rows = doc.get("rows") or []
         if not rows:
             raise ValueError(f"{path}: the file holds no rows")
-        channels = int(doc.get("channels", 1))
-        effects = doc.get("effects")
-        names = [f["name"] for f in doc["fields"]]
-        values = {n: [r["theta"][n] for r in rows] for n in names}
         try:
+            channels = int(doc.get("channels", 1))
+            effects = doc.get("effects")
+            names = [f["name"] for f in doc["fields"]]
+            values = {n: [r["theta"][n] for r in rows] for n in names}
             params = cls(values, channels=channels, effects=effects)
-        except ValueError as e:
-            raise ValueError(f"{path}: {e}") from None
-        return params, [r.get("extra", {}) for r in rows], doc.get("metadata", {})
+            extra = [r.get("extra", {}) for r in rows]
+        except (KeyError, TypeError, ValueError) as e:
+            raise ValueError(f"{path}: malformed capture-parameter file ({type(e).__name__}: {e})") from None
+        return params, extra, meta if isinstance(meta, dict) else {}
 
     def __repr__(self) -> str:
         return f"CaptureParams(batch_size={self.batch_size}, channels={self.channels}, effects={list(self.effects)})"

@@ -31,10 +31,34 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "nothing is written when there is no candidate-effect finding")
 
 
+def _validate(args: argparse.Namespace) -> None:
+    """Options and output paths checked before any work; a --distance other than the fit's is a warning."""
+    import math
+
+    from synthaug._checks import check_distance, check_output_dir, check_output_file, check_seedset_dir
+    from synthaug.params import CaptureParams
+
+    if not (math.isfinite(args.alpha) and 0.0 < args.alpha < 1.0):
+        raise ValueError(f"--alpha must be in (0, 1), got {args.alpha}")
+    if args.folds < 2:
+        raise ValueError(f"--folds must be >= 2, got {args.folds}")
+    check_seedset_dir(args.seeds)
+    check_distance(args.distance)
+    check_output_dir(args.out)
+    if args.extended_fit:
+        check_output_file(args.extended_fit, "--extended-fit")
+    _, _, meta = CaptureParams.load_with_extra(args.fit)  # a missing / corrupt fit is named now
+    fitted = (meta.get("config") or {}).get("distance") if isinstance(meta.get("config"), dict) else None
+    if isinstance(fitted, str) and fitted != args.distance:
+        print(f"synthaug diagnose: warning: {args.fit} was fitted with distance {fitted!r} but --distance is "
+              f"{args.distance!r}; the residuals are measured in {args.distance!r} space", file=sys.stderr)
+
+
 def main(args: argparse.Namespace) -> int:
     from synthaug.diagnose.report import diagnose
 
     try:
+        _validate(args)
         report = diagnose(args.seeds, args.mesh, args.fit, distance=args.distance, out_dir=args.out,
                           candidates=args.candidates, k=args.folds, seed=args.seed, alpha=args.alpha,
                           plots=not args.no_plots,

@@ -584,22 +584,28 @@ def fit_seedset(
     out = Path(out_path)
     if out.is_dir():
         raise ValueError(f"the output {out} is a directory; give the path of a JSON file (--out)")
+    if isinstance(dask_address, str):
+        _probe_dask(dask_address)  # a dead or malformed scheduler address fails before the distance is built
     # a caller-given distance is hashed as given (a built one follows from cfg and the seed set)
     inputs = fit_inputs(seeds_path, mesh, cfg, distance)
     if distance is None:
         distance = build_distance(cfg.distance, seeds, seed=cfg.seed, **cfg.distance_kwargs)
     fingerprint = {"digest": digest(inputs), "inputs": inputs}
     cache = _warm_cache(mesh, cfg)  # checks step_deg / sprite_size; sprites built once before workers load them
+    client = _dask_client(dask_address) if isinstance(dask_address, str) else dask_address  # a dead one fails now
     parts = out.parent / f".{out.name}.parts"
     fresh = not parts.exists()
-    parts.mkdir(parents=True, exist_ok=True)
     try:
+        parts.mkdir(parents=True, exist_ok=True)
         _fit_parts(seeds, seeds_path, mesh, cfg, distance, parts, out, fingerprint, todo_all, cache, workers=workers,
-             dask_address=dask_address, progress=progress)
-    except Exception:
+             dask_address=client, progress=progress)
+    except BaseException:
         if fresh and not any(parts.glob("seed_*.json")):  # nothing to resume: leave nothing behind
             shutil.rmtree(parts, ignore_errors=True)
         raise
+    finally:
+        if client is not None and client is not dask_address:
+            client.close()
     if indices is None:
         shutil.rmtree(parts, ignore_errors=True)
     return out
@@ -656,6 +662,43 @@ def _warm_cache(mesh: Any, cfg: FitConfig) -> Any:
     from synthaug.render.cache import ViewCache
 
     return ViewCache.build(mesh, step_deg=cfg.step_deg, sprite_size=cfg.sprite_size)
+
+
+def _probe_dask(address: str, *, timeout_s: float = 10.0) -> None:
+    """Fail at once, naming ``--dask``, when ``address`` cannot be a live scheduler: ``distributed`` is missing,
+    or a ``tcp://host:port`` address is malformed or refuses a plain socket (known in milliseconds, where a
+    ``distributed.Client`` would retry for 30 s)."""
+    import importlib.util
+    import socket
+    from urllib.parse import urlsplit
+
+    if importlib.util.find_spec("distributed") is None:
+        raise ValueError("--dask needs the 'distributed' package (pip install distributed)")
+    parsed = urlsplit(address if "://" in address else f"tcp://{address}")
+    if parsed.scheme != "tcp":
+        return
+    try:
+        host, port = parsed.hostname, parsed.port
+    except ValueError:
+        host, port = None, None
+    if not host or port is None:
+        raise ValueError(f"--dask: {address!r} is not a scheduler address (tcp://HOST:PORT)")
+    try:
+        socket.create_connection((host, port), timeout=timeout_s).close()
+    except OSError as e:
+        raise ValueError(f"--dask: no Dask scheduler answers at {address} ({e.strerror or e})") from None
+
+
+def _dask_client(address: str, *, timeout_s: float = 10.0) -> Any:
+    """A ``distributed.Client`` on ``address`` (probed first by :func:`_probe_dask`), connected within
+    ``timeout_s``; errors name ``--dask``."""
+    _probe_dask(address, timeout_s=timeout_s)
+    from distributed import Client
+
+    try:
+        return Client(address, timeout=f"{timeout_s}s")
+    except (OSError, TimeoutError, ValueError) as e:
+        raise ValueError(f"--dask: cannot connect to the Dask scheduler at {address} ({e})") from None
 
 
 def _run_dask(address: Any, todo: list[int], seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any,
