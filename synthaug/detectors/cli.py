@@ -7,7 +7,7 @@ Usage::
 The output file::
 
     {"format": "synthaug.detections", "version": 1,
-     "video": "V_DRONE_001.mp4", "source": "/path/to/V_DRONE_001.mp4",
+     "video": "V_DRONE_001.mp4", "input": "video", "source": "/path/to/V_DRONE_001.mp4",
      "detector": "hog", "checkpoint": "runs/hog.pt",
      "frame_stride": 5, "n_frames": 300, "box_format": "xywh_score_pixels",
      "scales": [...], "nms_iou": 0.3, "score_threshold": null, "max_detections": 10,
@@ -18,6 +18,9 @@ empty) of ``[x, y, w, h, score]`` boxes in pixels of the original frame, best
 first, for every processed frame, and ``null`` for frames skipped by the frame
 stride or after ``--max-frames`` — ``synthaug evaluate`` leaves those out.
 Frames are converted to grayscale float in [0, 1] (OpenCV's BGR -> gray).
+``input`` is ``"video"`` (``video`` names the video file) or ``"images"``
+(``video`` names the folder of frames); ``synthaug evaluate`` refuses to score
+a video's detections against another video's labels.
 """
 
 from __future__ import annotations
@@ -175,6 +178,7 @@ def main(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     import torch
 
+    from synthaug._checks import check_output_file
     from synthaug.detectors.base import load_detector
     from synthaug.detectors.sliding import DEFAULT_SCALES
 
@@ -187,11 +191,24 @@ def _run(args: argparse.Namespace) -> int:
         raise ValueError(f"--max-frames must be >= 0, got {args.max_frames}")
     if args.threads < 1:
         raise ValueError(f"--threads must be >= 1, got {args.threads}")
+    if not (math.isfinite(args.nms_iou) and 0.0 <= args.nms_iou <= 1.0):
+        raise ValueError(f"--nms-iou must be in [0, 1], got {args.nms_iou}")
+    if not args.scales or not all(math.isfinite(s) and s > 0 for s in args.scales):
+        raise ValueError(f"--scales must be positive numbers, got {args.scales}")
+    if args.max_detections < 1:
+        raise ValueError(f"--max-detections must be >= 1, got {args.max_detections}")
+    if args.score_threshold is not None and not math.isfinite(args.score_threshold):
+        raise ValueError(f"--score-threshold must be a finite number, got {args.score_threshold}")
+    if args.video is not None and not args.video.is_file():
+        raise FileNotFoundError(f"--video: video not found: {args.video}" if not args.video.is_dir()
+                                else f"--video: {args.video} is a directory (use --images for a folder of frames)")
+    if args.images is not None and not args.images.is_dir():
+        raise FileNotFoundError(f"--images: folder not found: {args.images}" if not args.images.exists()
+                                else f"--images: {args.images} is a file (use --video for a video file)")
+    check_output_file(args.out)
     torch.set_num_threads(args.threads)
     detector = load_detector(args.checkpoint)
     if args.video is not None:
-        if not args.video.is_file():
-            raise FileNotFoundError(f"video not found: {args.video}")
         source = args.video
         frames = iter_video_frames(args.video, frame_stride=args.frame_stride, max_frames=args.max_frames)
     else:
@@ -210,6 +227,7 @@ def _run(args: argparse.Namespace) -> int:
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
         "video": source.name,
+        "input": "video" if args.video is not None else "images",
         "source": str(source.resolve()),
         "detector": detector.kind,
         "checkpoint": str(args.checkpoint),

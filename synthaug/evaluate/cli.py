@@ -8,7 +8,10 @@ Each detections file (written by ``synthaug detect``; a bare JSON list of
 per-frame lists is accepted too) is paired with its label file: the label file
 whose ``"video"`` field, or whose stem, equals the detections' video stem.
 ``--labels`` takes a folder of label files, or label files. With exactly one
-detections file and one label file they are paired whatever their names.
+detections file and one label file they are paired whatever their names, unless
+both name a video and the videos differ (an error: another video's labels).
+Label boxes must be finite (an error names the file and frame); a box of zero
+or negative width or height is left out of the ground truth, with a warning.
 
 Label format (shared halmstad)::
 
@@ -27,6 +30,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -44,10 +48,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def load_labels(path: Path) -> tuple[str, list[np.ndarray | None]]:
     """Read one label file: ``(video name, per-frame (G, 4) boxes or None)``.
 
-    Accepts ``boxes`` entries that are None, one ``[x, y, w, h]`` box, or a list of boxes.
+    Accepts ``boxes`` entries that are None, one ``[x, y, w, h]`` box, or a list of boxes. Boxes of zero or
+    negative width or height are left out (a :class:`UserWarning` names the file and frames): they are no
+    ground truth a detection could match.
 
     Raises:
-        ValueError: naming the file, for a malformed file or an unsupported ``box_format``.
+        ValueError: naming the file, for a malformed file, a non-finite box or an unsupported ``box_format``.
     """
     try:
         data = json.loads(Path(path).read_text())
@@ -58,17 +64,34 @@ def load_labels(path: Path) -> tuple[str, list[np.ndarray | None]]:
     fmt = data.get("box_format", "xywh_pixels")
     if fmt != "xywh_pixels":
         raise ValueError(f"{path}: unsupported box_format {fmt!r} (expected 'xywh_pixels')")
+    if not isinstance(data["boxes"], list):
+        raise ValueError(f"{path}: 'boxes' must be a list with one entry per frame, got {type(data['boxes']).__name__}")
     frames: list[np.ndarray | None] = []
+    degenerate: list[int] = []
     for i, entry in enumerate(data["boxes"]):
         if entry is None or (isinstance(entry, list) and len(entry) == 0):
             frames.append(None)
             continue
-        arr = np.asarray(entry, dtype=np.float64)
+        try:
+            arr = np.asarray(entry, dtype=np.float64)
+        except (ValueError, TypeError):
+            arr = np.zeros((0, 0))
         if arr.ndim == 1:
             arr = arr[None]
         if arr.ndim != 2 or arr.shape[1] != 4:
             raise ValueError(f"{path}: frame {i} box must be [x, y, w, h] or a list of them, got {entry!r}")
-        frames.append(arr)
+        if not np.isfinite(arr).all():
+            raise ValueError(f"{path}: frame {i} has a non-finite box: {entry!r}")
+        # a box of zero or negative size is no ground truth (nothing could match it): left out, with a warning
+        keep = (arr[:, 2:] > 0).all(axis=1)
+        if not keep.all():
+            degenerate.append(i)
+            arr = arr[keep]
+        frames.append(arr if len(arr) else None)
+    if degenerate:
+        warnings.warn(f"{path}: {len(degenerate)} frame(s) have boxes of zero or negative width/height, left out "
+                      f"of the ground truth (frames {degenerate[:5]}{' ...' if len(degenerate) > 5 else ''})",
+                      stacklevel=2)
     return str(data.get("video", Path(path).stem)), frames
 
 
@@ -97,8 +120,23 @@ def load_detections(path: Path) -> tuple[str, list[np.ndarray | None]]:
             raise ValueError(f"{path}: frame {i} must be a list of [x, y, w, h, score], got {entry!r}") from e
         if not np.isfinite(arr[:, :4]).all():
             raise ValueError(f"{path}: frame {i} has non-finite box coordinates: {entry!r}")
+        if (arr[:, 2:4] < 0).any() or np.isnan(arr[:, 4]).any():
+            raise ValueError(f"{path}: frame {i} has a box of negative size or a NaN score: {entry!r}")
         frames.append(arr)
     return video, frames
+
+
+def _from_images(path: Path) -> bool:
+    """Whether a detections file was made from a folder of frames (its 'video' is the folder's name)."""
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, json.JSONDecodeError):
+        return False
+    if not isinstance(data, dict):
+        return True  # a bare list names no video
+    if "input" in data:
+        return data["input"] == "images"
+    return not Path(str(data.get("video", ""))).suffix  # older files: a folder name has no extension
 
 
 def _label_files(paths: list[Path]) -> list[Path]:
@@ -120,7 +158,18 @@ def pair_files(detection_files: list[Path], label_paths: list[Path]) -> list[tup
     labels = _label_files(label_paths)
     explicit_files = all(p.is_file() for p in label_paths)
     if len(detection_files) == 1 and len(labels) == 1 and explicit_files:
-        return [(detection_files[0], labels[0])]
+        # paired whatever their names, unless both name a video and the videos differ
+        det, lab = detection_files[0], labels[0]
+        if not _from_images(det):
+            video, _ = load_detections(det)
+            try:
+                label_video = json.loads(lab.read_text()).get("video")
+            except (OSError, json.JSONDecodeError, AttributeError):
+                label_video = None
+            if isinstance(label_video, str) and Path(label_video).stem != Path(video).stem:
+                raise ValueError(f"{det} holds detections of video {video!r} but the label file {lab} is for "
+                                 f"{label_video!r}; give the label file of the same video")
+        return [(det, lab)]
     by_stem: dict[str, Path] = {}
     for f in labels:
         by_stem.setdefault(f.stem, f)
@@ -171,6 +220,7 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from synthaug._checks import check_output_dir
     from synthaug.evaluate.ap import plot_pr
     from synthaug.params import atomic_write_text
 
@@ -179,6 +229,7 @@ def _run(args: argparse.Namespace) -> int:
     for d in args.detections:
         if not d.is_file():
             raise FileNotFoundError(f"detections file not found: {d}")
+    check_output_dir(args.out)
     result, metrics = evaluate_files(list(args.detections), list(args.labels), iou=args.iou)
     args.out.mkdir(parents=True, exist_ok=True)
     label = "detector"

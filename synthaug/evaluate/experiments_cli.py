@@ -27,12 +27,14 @@ from pathlib import Path
 
 import torch
 
+from synthaug._checks import check_output_dir, int_at_least, nonneg_float, nonneg_int, positive_float, positive_int
 from synthaug.detectors.training import TrainOptions
 from synthaug.evaluate.context import ExperimentContext
 from synthaug.evaluate.experiments import EXPERIMENTS
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    # numbers are checked as they are parsed: a bad one exits 2 at once, naming the option (not after fitting)
     parser.add_argument("experiments", nargs="+", choices=[*EXPERIMENTS, "all"], help="experiments to run, in order")
     parser.add_argument("--class", dest="class_name", default="drone", help="object class (selects videos and seed sets)")
     parser.add_argument("--out", type=Path, required=True, help="results folder")
@@ -43,29 +45,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--videos", type=Path, default=Path("../shared/data/halmstad/videos"), help="folder of videos")
     parser.add_argument("--labels", type=Path, default=Path("../shared/data/halmstad/labels"), help="folder of per-video label JSON files")
     parser.add_argument("--split", type=Path, default=Path("configs/splits/halmstad.json"), help="split JSON (by video)")
-    parser.add_argument("--stride-k", type=int, default=15, help="score every k-th test frame")
-    parser.add_argument("--val-stride-k", type=int, default=30, help="every k-th validation frame (model selection)")
-    parser.add_argument("--max-test-videos", type=int, default=None, help="use at most this many test videos (quick look; None: all)")
-    parser.add_argument("--max-val-videos", type=int, default=None, help="use at most this many validation videos (None: all)")
-    parser.add_argument("--scales", type=float, nargs="+", default=None, help="pyramid factors (default: sliding.DEFAULT_SCALES)")
+    parser.add_argument("--stride-k", type=positive_int, default=15, help="score every k-th test frame")
+    parser.add_argument("--val-stride-k", type=positive_int, default=30, help="every k-th validation frame (model selection)")
+    parser.add_argument("--max-test-videos", type=positive_int, default=None, help="use at most this many test videos (quick look; None: all)")
+    parser.add_argument("--max-val-videos", type=positive_int, default=None, help="use at most this many validation videos (None: all)")
+    parser.add_argument("--scales", type=positive_float, nargs="+", default=None, help="pyramid factors (default: sliding.DEFAULT_SCALES)")
     parser.add_argument("--detectors", nargs="+", default=None, choices=["hog", "adaboost", "cnn"],
                         help="detectors (default: each experiment's own)")
-    parser.add_argument("--ratios", type=float, nargs="+", default=None, help="fig11: synthetic per real")
-    parser.add_argument("--seed-counts", type=int, nargs="+", default=None, help="baselines / fig12: seed-set sizes")
+    parser.add_argument("--ratios", type=nonneg_float, nargs="+", default=None, help="fig11: synthetic per real (>= 0)")
+    parser.add_argument("--seed-counts", type=positive_int, nargs="+", default=None, help="baselines / fig12: seed-set sizes")
     parser.add_argument("--distances", nargs="+", default=None, help="table2: distances")
-    parser.add_argument("--frame-step", type=int, default=1, help="baselines: use every n-th labelled training frame")
+    parser.add_argument("--frame-step", type=positive_int, default=1, help="baselines: use every n-th labelled training frame")
     parser.add_argument("--refit", action="store_true", help="fig9: refit Θ without each effect (the paper) instead of dropping it at generation")
     parser.add_argument("--report-only", action="store_true", help="train nothing: rewrite the tables from the cell cache (missing cells show '–')")
     parser.add_argument("--seed", type=int, default=0, help="training seed of every cell")
-    parser.add_argument("--threads", type=int, default=1, help="torch threads")
-    parser.add_argument("--fit-workers", type=int, default=2, help="processes fitting Θ")
-    parser.add_argument("--fit-budget", type=int, default=1500, help="objective evaluations per seed fit")
-    parser.add_argument("--cnn-epochs", type=int, default=12, help="CNN training epochs")
-    parser.add_argument("--cnn-max-steps", type=int, default=1200, help="cap on CNN optimiser steps")
-    parser.add_argument("--ada-rounds", type=int, default=100, help="AdaBoost boosting rounds")
-    parser.add_argument("--ada-candidates", type=int, default=2000, help="weak-learner candidates scored per round")
-    parser.add_argument("--hog-components", type=int, default=3, help="HOG mixture components (aspect clusters)")
-    parser.add_argument("--hog-mining-rounds", type=int, default=2, help="HOG hard-negative mining rounds")
+    parser.add_argument("--threads", type=positive_int, default=1, help="torch threads")
+    parser.add_argument("--fit-workers", type=positive_int, default=2, help="processes fitting Θ")
+    parser.add_argument("--fit-budget", type=int_at_least(10), default=1500, help="objective evaluations per seed fit")
+    parser.add_argument("--cnn-epochs", type=positive_int, default=12, help="CNN training epochs")
+    parser.add_argument("--cnn-max-steps", type=positive_int, default=1200, help="cap on CNN optimiser steps")
+    parser.add_argument("--ada-rounds", type=positive_int, default=100, help="AdaBoost boosting rounds")
+    parser.add_argument("--ada-candidates", type=positive_int, default=2000, help="weak-learner candidates scored per round")
+    parser.add_argument("--hog-components", type=positive_int, default=3, help="HOG mixture components (aspect clusters)")
+    parser.add_argument("--hog-mining-rounds", type=nonneg_int, default=2, help="HOG hard-negative mining rounds")
 
 
 DEFAULT_MESH = {"drone": "../shared/data/meshes/quadcopter.glb", "airplane": "../shared/data/meshes/twin_prop_airplane.glb"}
@@ -87,6 +89,13 @@ def main(args: argparse.Namespace) -> int:
         print(f"[{time.strftime('%H:%M:%S')}] {msg}", flush=True)
 
     try:
+        check_output_dir(args.out)
+        if args.distances is not None:
+            from synthaug.distances.registry import list_distances
+
+            unknown = [d for d in args.distances if d not in list_distances()]
+            if unknown:
+                raise ValueError(f"--distances: unknown {unknown}; registered: {list_distances()}")
         ctx = ExperimentContext(out_dir=args.out, class_name=args.class_name, seedsets_dir=args.seedsets, mesh=mesh, fits_dir=args.fits,
                                 videos_dir=args.videos, labels_dir=args.labels, split_file=args.split, stride_k=args.stride_k,
                                 val_stride_k=args.val_stride_k, max_test_videos=args.max_test_videos, max_val_videos=args.max_val_videos,
