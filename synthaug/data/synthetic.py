@@ -45,6 +45,7 @@ Example:
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -204,6 +205,15 @@ def _to_float_image(img: Any, channels: int, where: str) -> torch.Tensor:
     raise ValueError(f"{where}: cannot convert {chw.shape[0]} channels to {channels}")
 
 
+def _is_integral(x: Any) -> bool:
+    """An int (Python or numpy), or a float with no fractional part; never a bool."""
+    if isinstance(x, (bool, np.bool_)):
+        return False
+    if isinstance(x, (int, np.integer)):
+        return True
+    return isinstance(x, (float, np.floating)) and math.isfinite(x) and float(x).is_integer()
+
+
 class SyntheticObjectDataset(Dataset):
     """Synthetic object samples (the paper's generator), optionally mixed with real ones.
 
@@ -301,8 +311,16 @@ class SyntheticObjectDataset(Dataset):
             raise ValueError(f"render must be 'cache' or 'exact', got {render!r}")
         if channels not in (1, 3):
             raise ValueError(f"channels must be 1 or 3, got {channels}")
-        if patch_size < 8:
-            raise ValueError(f"patch_size must be >= 8, got {patch_size}")
+        if not _is_integral(patch_size) or patch_size < 8:
+            raise ValueError(f"patch_size must be an integer >= 8, got {patch_size!r}")
+        # checked whether or not real is given: a bad value is a mistake either way, never silently ignored
+        if isinstance(synthetic_per_real, (bool, np.bool_)) or not isinstance(synthetic_per_real, numbers.Real) or \
+                not math.isfinite(synthetic_per_real) or synthetic_per_real < 0:
+            raise ValueError(f"synthetic_per_real must be a finite number >= 0, got {synthetic_per_real!r}")
+        if length is not None and (not _is_integral(length) or length < 0):
+            raise ValueError(f"length must be an integer >= 0, got {length!r}")
+        if real is not None and length is not None:
+            raise ValueError("give length (synthetic items alone) or real (mixed with synthetic_per_real), not both")
         if object_scale is not None and not 0 < object_scale <= 1.5:
             raise ValueError(f"object_scale must be in (0, 1.5], got {object_scale}")
         neg = (0.5 if mode == "patch" else 0.0) if negative_fraction is None else float(negative_fraction)
