@@ -183,6 +183,16 @@ def test_mining_rounds_stop_when_validation_fp_stops_falling() -> None:
     res = train_with_mining("toy", pos, grey, 0, options=TrainOptions(mining_rounds=2, mining_per_frame=3, scales=(1.0,)),
                             mining_source=mining, fit=fit)
     assert [r["round"] for r in res.log["rounds"]] == [0, 1, 2] and res.log["chosen_round"] == 2
+    # a box regressor is set on every round's detector, and the validation count matches at its boxes:
+    # one that moves every box by a whole box width turns each object hit into a miss (round 0: 4 FPs -> 6)
+    from synthaug.detectors.boxes import BoxRegressor
+
+    off = BoxRegressor.identity()
+    off.mean_y = torch.tensor([1.0, 0.0, 0.0, 0.0], dtype=torch.float64)
+    res = train_with_mining("toy", pos, grey, 0, box_in_window=(0, 0, 40, 40), options=opts, mining_source=mining,
+                            val_frames=val, fit=fit, box_regressor=off)
+    assert res.detector.box_regressor is off
+    assert res.log["rounds"][0]["val"]["fp"] > 4 and not res.log["rounds"][0]["val"]["recall_reached"]
 
 
 # ----------------------------------------------------------------- the three families on generated videos
