@@ -205,3 +205,34 @@ def test_fit_patch_detector_validation_and_errors() -> None:
         fit_patch_detector(pos, neg, epochs=0)
     with pytest.raises(ValueError, match="one size"):
         PatchDataModule.from_tensors(pos, neg[..., :32, :32])
+
+
+def test_shift_patches_is_a_reflect_pad_and_crop_of_the_flagged_patches_only():
+    import numpy as np
+
+    from synthaug.detectors.lightning_module import shift_patches
+
+    x = torch.rand(5, 1, 10, 10, generator=torch.Generator().manual_seed(0))
+    before = x.clone()
+    which = torch.tensor([True, False, True, True, False])
+    out = shift_patches(x, which, 2, generator=torch.Generator().manual_seed(4))
+    offsets = torch.randint(0, 5, (3, 2), generator=torch.Generator().manual_seed(4)).tolist()  # the same draws
+    assert torch.equal(x, before)  # input untouched
+    for k, i in enumerate([0, 2, 3]):
+        dy, dx = offsets[k]
+        ref = np.pad(x[i, 0].numpy(), 2, mode="reflect")[dy:dy + 10, dx:dx + 10]
+        np.testing.assert_array_equal(out[i, 0].numpy(), ref)
+    assert torch.equal(out[1], x[1]) and torch.equal(out[4], x[4])
+    assert torch.equal(shift_patches(x, which, 0, generator=torch.Generator()), x)
+
+
+def test_cnn_training_with_shift_is_deterministic_and_differs_from_without():
+    from synthaug.detectors.lightning_module import fit_patch_detector
+    from synthaug.detectors.toy import toy_patches
+
+    pos, neg = toy_patches(16, 32, seed=0)
+    a = fit_patch_detector(pos, neg, epochs=2, batch_size=16, seed=0, shift=4).net.state_dict()
+    b = fit_patch_detector(pos, neg, epochs=2, batch_size=16, seed=0, shift=4).net.state_dict()
+    c = fit_patch_detector(pos, neg, epochs=2, batch_size=16, seed=0, shift=0).net.state_dict()
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    assert not all(torch.equal(a[k], c[k]) for k in a)

@@ -55,6 +55,11 @@ class PatchDetectorModule(L.LightningModule):
         pos_weight: weight of the positive class in the BCE loss; None balances
             the classes from the data module's counts when available, else 1.
         init_seed: seeds the weight initialisation.
+        shift: each training positive is moved by a random whole-pixel offset in
+            ``[-shift, shift]`` (x and y, reflected border; :func:`shift_patches`), a new
+            draw every step from ``(init_seed, global_step)``. The network scores
+            windows every 8 pixels, so the object rarely sits where the seed crops put
+            it; 0 = off.
     """
 
     def __init__(
@@ -65,8 +70,11 @@ class PatchDetectorModule(L.LightningModule):
         weight_decay: float = 1e-4,
         pos_weight: float | None = None,
         init_seed: int = 0,
+        shift: int = 0,
     ) -> None:
         super().__init__()
+        if shift < 0:
+            raise ValueError(f"shift must be >= 0, got {shift}")
         if lr <= 0:
             raise ValueError(f"lr must be > 0, got {lr}")
         if weight_decay < 0:
@@ -76,11 +84,12 @@ class PatchDetectorModule(L.LightningModule):
         # plain lists/ints/floats only, so the Lightning checkpoint loads with weights_only=True
         self.save_hyperparameters({"channels": [int(c) for c in channels], "window": int(window), "lr": float(lr),
                                    "weight_decay": float(weight_decay), "pos_weight": pos_weight,
-                                   "init_seed": int(init_seed)})
+                                   "init_seed": int(init_seed), "shift": int(shift)})
         self.net = PatchCNN(channels, window=window, generator=torch.Generator().manual_seed(init_seed))
         self.lr = lr
         self.weight_decay = weight_decay
         self.pos_weight = pos_weight
+        self.shift = int(shift)
 
     def forward(self, x: Tensor) -> Tensor:
         return self.net(x)
@@ -102,6 +111,10 @@ class PatchDetectorModule(L.LightningModule):
         return loss
 
     def training_step(self, batch: tuple[Tensor, Tensor], batch_idx: int) -> Tensor:
+        if self.shift:
+            x, y = batch
+            g = torch.Generator().manual_seed(int(self.hparams["init_seed"]) * 1_000_003 + int(self.global_step))
+            batch = (shift_patches(x, y > 0.5, self.shift, generator=g), y)
         return self._step(batch, "train")
 
     def validation_step(self, batch: tuple[Tensor, Tensor], batch_idx: int) -> Tensor:
@@ -115,6 +128,34 @@ class PatchDetectorModule(L.LightningModule):
         net = PatchCNN(self.net.channels, window=self.net.window, generator=torch.Generator())  # weights replaced
         net.load_state_dict({k: v.detach().cpu() for k, v in self.net.state_dict().items()})
         return CNNDetector(net)
+
+
+def shift_patches(x: Tensor, which: Tensor, shift: int, *, generator: torch.Generator) -> Tensor:
+    """Move the patches flagged in ``which`` by random whole-pixel offsets in ``[-shift, shift]``.
+
+    The patch is reflect-padded by ``shift`` and cropped at the offset (no resampling:
+    no blur that would tell a shifted positive from a negative). Draws come from
+    ``generator`` only; the input is not modified.
+
+    Shape:
+        - x: (B, C, S, S), which: (B,) bool
+        - output: (B, C, S, S)
+
+    Example:
+        >>> x = torch.arange(16.).reshape(1, 1, 4, 4)
+        >>> out = shift_patches(x, torch.tensor([True]), 1, generator=torch.Generator().manual_seed(0))
+        >>> out.shape, bool((out[0, 0, 1:3, 1:3] != 0).all())
+        (torch.Size([1, 1, 4, 4]), True)
+    """
+    if shift <= 0 or not bool(which.any()):
+        return x
+    s = x.shape[-1]
+    offsets = torch.randint(0, 2 * shift + 1, (int(which.sum()), 2), generator=generator)
+    padded = torch.nn.functional.pad(x[which], (shift, shift, shift, shift), mode="reflect")
+    moved = torch.stack([p[:, dy:dy + s, dx:dx + s] for p, (dy, dx) in zip(padded, offsets.tolist())])
+    out = x.clone()
+    out[which] = moved
+    return out
 
 
 class PatchDataset(Dataset):
@@ -312,6 +353,7 @@ def fit_patch_detector(
     weight_decay: float = 1e-4,
     seed: int = 0,
     val_fraction: float = 0.0,
+    shift: int = 0,
 ) -> PatchDetectorModule:
     """Train a :class:`PatchDetectorModule` on patches in memory: the CNN's one training loop.
 
@@ -337,6 +379,7 @@ def fit_patch_detector(
         seed: seeds initialisation, split and shuffling.
         val_fraction: patches held out for a validation loss/accuracy each
             epoch (logged only; 0: none).
+        shift: random whole-pixel shifts of the positives (:class:`PatchDetectorModule`).
 
     Returns:
         The trained module (``.net`` in eval mode; ``.to_detector()`` for a detector).
@@ -355,7 +398,7 @@ def fit_patch_detector(
     n_train = len(dm.train_set) // 2  # the set holds every patch and its mirror image
     max_steps = math.ceil(epochs * n_train / batch_size)
     module = PatchDetectorModule(tuple(int(c) for c in channels), window=int(positives.shape[-1]), lr=lr,
-                                 weight_decay=weight_decay, init_seed=seed)
+                                 weight_decay=weight_decay, init_seed=seed, shift=shift)
     rank_zero = logging.getLogger("lightning.pytorch.utilities.rank_zero")
     level = rank_zero.level
     rank_zero.setLevel(logging.WARNING)  # no "GPU available: ..." banner per call

@@ -67,6 +67,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--ada-candidates", type=int, default=2000, help="AdaBoost weak-learner candidates")
     parser.add_argument("--cnn-epochs", type=int, default=12, help="CNN passes over the patches")
     parser.add_argument("--cnn-max-steps", type=int, default=1200, help="cap on CNN optimiser steps")
+    parser.add_argument("--cnn-shift", type=int, default=0,
+                        help="CNN positives moved by random whole-pixel offsets up to this (0: off)")
     parser.add_argument("--extra-negatives", type=int, default=3000, help="object-free crops of the seed frames added to the seed set's negatives")
     parser.add_argument("--work", type=Path, help="ingest folder for --seed-counts (default: <out>.work)")
     parser.add_argument("--workers", type=int, default=2, help="ingest worker processes")
@@ -104,7 +106,7 @@ def main(args: argparse.Namespace) -> int:
     try:
         options = TrainOptions(hog_components=args.hog_components, hog_mining_rounds=args.hog_mining_rounds,
                                ada_rounds=args.ada_rounds, ada_candidates=args.ada_candidates, cnn_epochs=args.cnn_epochs,
-                               cnn_max_steps=args.cnn_max_steps, mining_rounds=args.mining_rounds,
+                               cnn_max_steps=args.cnn_max_steps, cnn_shift=args.cnn_shift, mining_rounds=args.mining_rounds,
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
                                val_stride=args.val_stride, scales=None if args.scales is None else tuple(args.scales))
     except ValueError as e:

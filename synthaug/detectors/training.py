@@ -115,6 +115,8 @@ class TrainOptions:
         cnn_batch_size: mini-batch size.
         cnn_max_steps: the number of epochs is reduced so that training takes
             at most about this many optimiser steps (large synthetic sets).
+        cnn_shift: positives moved by random whole-pixel offsets up to this many pixels
+            each step (the CNN scans every 8 pixels; ``PatchDetectorModule(shift=)``).
         mining_rounds: rounds of :func:`train_with_mining` (mine, add, retrain) at most;
             used only when a mining source is given; 0 = no mining.
         mining_stride: every k-th frame of every mining video is scanned. Measured at 30 on the 56 halmstad
@@ -148,6 +150,7 @@ class TrainOptions:
     cnn_epochs: int = 12
     cnn_batch_size: int = 128
     cnn_max_steps: int = 1200
+    cnn_shift: int = 0
     mining_rounds: int = 3
     mining_stride: int = 30
     mining_per_frame: int = 5
@@ -170,6 +173,8 @@ class TrainOptions:
             raise ValueError(f"mining_rounds must be >= 0, got {self.mining_rounds}")
         if self.mining_margin < 0:
             raise ValueError(f"mining_margin must be >= 0, got {self.mining_margin}")
+        if not 0 <= int(self.cnn_shift) < 20:
+            raise ValueError(f"cnn_shift must be in [0, 20) pixels, got {self.cnn_shift}")
         if not 0 < self.val_target_recall <= 1 or not 0 < self.val_iou <= 1:
             raise ValueError(f"val_target_recall and val_iou must be in (0, 1], got {self.val_target_recall}, {self.val_iou}")
         if self.scales is not None:
@@ -242,7 +247,8 @@ def _fit_once(
         n = positives.shape[0] + negatives.shape[0]
         steps_per_epoch = max(1, math.ceil(n / options.cnn_batch_size))
         epochs = max(1, min(options.cnn_epochs, options.cnn_max_steps // steps_per_epoch))
-        module = fit_patch_detector(positives, negatives, epochs=epochs, batch_size=options.cnn_batch_size, seed=seed)
+        module = fit_patch_detector(positives, negatives, epochs=epochs, batch_size=options.cnn_batch_size, seed=seed,
+                                    shift=options.cnn_shift)
         det = module.to_detector()
     det.box_in_window = None if box_in_window is None else tuple(float(v) for v in box_in_window)
     return det

@@ -115,6 +115,8 @@ class ProtocolRunner:
         scale_check: also score the protocol's ``scale_check`` factors.
         patches: also score the paper's patch protocol.
         max_test_videos: use only the first this-many test videos (smoke runs; part of the key).
+        eval_split: ``"test"`` (the protocol's test frames) or ``"val"`` (its validation frames:
+            choosing a setting on them keeps the test split for the final number; part of the key).
         log: progress printer.
     """
 
@@ -127,17 +129,23 @@ class ProtocolRunner:
     scale_check: bool = True
     patches: bool = True
     max_test_videos: int | None = None
+    eval_split: str = "test"
     log: Callable[[str], None] = print
 
     def __post_init__(self) -> None:
+        if self.eval_split not in ("test", "val"):
+            raise ValueError(f"eval_split must be 'test' or 'val', got {self.eval_split!r}")
         if self.cache is None:
             self.cache = CellCache(Path(self.paths.work_dir) / "cells")
         self._eval: dict[float, Any] = {}
         self._patches: Any = None
 
     # data ---------------------------------------------------------------------------------------
+    def _frames(self) -> Any:
+        return self.protocol.test if self.eval_split == "test" else self.protocol.val
+
     def test_videos(self) -> list[str]:
-        stems = split_videos(self.protocol, self.protocol.test.split, split_file=self.paths.split_file,
+        stems = split_videos(self.protocol, self._frames().split, split_file=self.paths.split_file,
                              class_name=self.class_name)
         return stems[: self.max_test_videos] if self.max_test_videos else stems
 
@@ -148,7 +156,7 @@ class ProtocolRunner:
         if 1.0 not in self._eval:
             t0 = time.perf_counter()
             self._eval[1.0] = load_eval_set(self.test_videos(), self.paths.videos_dir, self.paths.labels_dir,
-                                            stride_k=self.protocol.test.frame_stride)
+                                            stride_k=self._frames().frame_stride)
             es = self._eval[1.0]
             self.log(f"[test] {len(es.stems)} videos, {es.n_frames} frames (every {es.stride_k}th), "
                      f"{es.n_objects} objects, decoded in {time.perf_counter() - t0:.0f} s")
@@ -158,7 +166,7 @@ class ProtocolRunner:
 
     def patch_set(self) -> Any:
         if self._patches is None:
-            self._patches = patch_eval_set(self.paths.videos_dir, self.paths.labels_dir, self.protocol.test.split,
+            self._patches = patch_eval_set(self.paths.videos_dir, self.paths.labels_dir, self._frames().split,
                                            self.protocol, videos=self.test_videos(), split_file=self.paths.split_file,
                                            class_name=self.class_name)
         return self._patches
@@ -169,6 +177,7 @@ class ProtocolRunner:
                 "condition": condition.identity(), "seed": int(seed), "options": dataclasses.asdict(self.options),
                 "scales": None if self.scales is None else list(self.scales), "scored_scales": list(self.scales_scored()),
                 "patches": self.patches, "max_test_videos": self.max_test_videos,
+                **({} if self.eval_split == "test" else {"eval_split": self.eval_split}),
                 "split_file": self.paths.split_file, "training_version": TRAINING_VERSION}
 
     def _train_and_score(self, condition: Condition, seed: int) -> dict[str, Any]:
@@ -360,6 +369,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     lc.add_argument("--no-patches", action="store_true", help="skip the paper's patch protocol")
     lc.add_argument("--max-test-videos", type=int, default=None, help="first N test videos only (smoke runs)")
     lc.add_argument("--mining-rounds", type=int, default=TrainOptions.mining_rounds, help="hard-negative mining rounds")
+    lc.add_argument("--cnn-shift", type=int, default=TrainOptions.cnn_shift, help="CNN positives' random shift (pixels)")
+    lc.add_argument("--eval-split", default="test", choices=["test", "val"],
+                    help="score on the protocol's test frames, or its validation frames (to choose a setting)")
     lc.add_argument("--threads", type=int, default=1, help="torch threads")
     lc.add_argument("--read-only", action="store_true", help="never train: tables from cached cells only")
     lc.add_argument("--out", required=True, help="output folder (results/learning_curve/<class>)")
@@ -370,9 +382,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     proto = load_protocol(args.protocol)
     paths = DataPaths(args.videos, args.labels, args.split, args.work)
     runner = ProtocolRunner(proto, args.class_name, paths, CellCache(Path(args.work) / "cells", read_only=args.read_only),
-                            options=dataclasses.replace(TrainOptions(), mining_rounds=args.mining_rounds),
+                            options=dataclasses.replace(TrainOptions(), mining_rounds=args.mining_rounds,
+                                                        cnn_shift=args.cnn_shift),
                             scale_check=not args.no_scale_check, patches=not args.no_patches,
-                            max_test_videos=args.max_test_videos)
+                            max_test_videos=args.max_test_videos, eval_split=args.eval_split)
     t0 = time.perf_counter()
     learning_curve(runner, detectors=args.detectors, seed_counts=args.seed_counts, all_frames=args.all_frames,
                    frame_step=args.frame_step, seeds=args.seeds, out=args.out)
