@@ -12,7 +12,9 @@ from torchvision.ops import box_convert, box_iou
 
 from synthaug.detectors.base import load_detector, save_detector
 from synthaug.detectors.boxes import BoxRegressor, _ridge, decode_deltas, encode_deltas, jitter_boxes
+from synthaug.detectors.sliding import nms
 from synthaug.detectors.training import MiningFrame
+from synthaug.evaluate.videos import EvalSet, detect_on_eval_set, refine_detections
 
 
 def test_deltas_match_torchvision_boxcoder_and_round_trip():
@@ -94,11 +96,29 @@ def test_identity_and_state_round_trip_through_the_detector_file(tmp_path):
     image = toy_frame(seed=0)[0]
     raw = detect_multiscale(back, image, scales=(1.0,), refine_boxes=False)
     ref = detect_multiscale(back, image, scales=(1.0,))
-    assert torch.equal(raw[:, 4], ref[:, 4])  # same detections, only the boxes move
-    expect = back.box_regressor.refine(image, box_convert(raw[:, :4], "xywh", "xyxy"))
-    torch.testing.assert_close(ref[:, :4], box_convert(expect, "xyxy", "xywh"))
+    # the kept boxes refined, then a second NMS at the same threshold over the refined boxes
+    moved = back.box_regressor.refine(image, box_convert(raw[:, :4], "xywh", "xyxy"))
+    keep = nms(moved, raw[:, 4], 0.3)
+    torch.testing.assert_close(ref[:, :4], box_convert(moved[keep], "xyxy", "xywh"))
+    assert torch.equal(ref[:, 4], raw[keep, 4])
+    # the evaluation path gives the same without scanning twice
+    es = EvalSet(["V_T_001"], [(image[0, 0] * 255).round().to(torch.uint8).numpy()[None]], [[0]], [[None]], 1)
+    image_u8 = torch.as_tensor(es.frames[0][0]).float() / 255
+    a = detect_on_eval_set(back, es, scales=(1.0,), max_detections=10)
+    b = refine_detections(back, es, detect_on_eval_set(back, es, scales=(1.0,), max_detections=10, refine_boxes=False))
+    np.testing.assert_allclose(a[0][0], b[0][0], atol=1e-4)
+    assert a[0][0].shape[0] <= detect_multiscale(back, image_u8, scales=(1.0,), refine_boxes=False, max_detections=10).shape[0]
     det.box_regressor = BoxRegressor.identity()
     torch.testing.assert_close(detect_multiscale(det, image, scales=(1.0,))[:, :4], raw[:, :4])
+
+
+def test_refine_and_suppress_keeps_the_best_of_boxes_that_now_coincide():
+    from synthaug.detectors.sliding import refine_and_suppress
+
+    boxes = torch.tensor([[10.0, 10.0, 30.0, 30.0], [10.0, 10.0, 30.0, 30.0], [60.0, 60.0, 80.0, 80.0], [11.0, 10.0, 31.0, 30.0]])
+    scores = torch.tensor([0.9, 0.8, 0.7, 0.6])
+    b, s = refine_and_suppress(BoxRegressor.identity(), torch.rand(1, 1, 100, 100), boxes, scores, 0.3)
+    assert s.tolist() == pytest.approx([0.9, 0.7]) and torch.equal(b, boxes[[0, 2]])
 
 
 def test_malformed_state_is_a_clear_error():

@@ -66,12 +66,15 @@ def test_learning_curve_results_and_files(ws, curve):
             assert 0.0 <= r.mean_ap() <= 1.0
     assert res["hog"]["hog / 6 seeds"].patch_stems == sorted(TEST)  # patch protocol at scale 1 only
     assert res["hog x0.75"]["hog / 6 seeds"].patch_stems == []
-    # the two rows score the same detections: same scores, only the boxes (so the matches) differ
+    # the two rows score the same detections: the refined ones are those of the window boxes that
+    # survive the second NMS (same scores, a subset), only the boxes (so the matches) differ
+    from collections import Counter
+
     for name in ("hog / 6 seeds", "hog / all training frames"):
         a, b = res["hog"][name], res["hog"][f"{name}, window boxes"]
         for seed in (0, 1):
-            va, vb = a.seeds[seed].videos, b.seeds[seed].videos
-            assert [sorted(v.scores.tolist()) for v in va] == [sorted(v.scores.tolist()) for v in vb]
+            for va, vb in zip(a.seeds[seed].videos, b.seeds[seed].videos):
+                assert not Counter(va.scores.tolist()) - Counter(vb.scores.tolist())
     md = (curve["out"] / "learning_curve.md").read_text()
     assert "hog / 6 seeds" in md and "hog / all training frames" in md and "tiny" in md
     assert (curve["out"] / "learning_curve.png").stat().st_size > 1000

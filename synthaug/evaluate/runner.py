@@ -52,11 +52,12 @@ from synthaug.evaluate.videos import detect_on_eval_set, load_eval_set, refine_d
 
 __all__ = ["TRAINING_VERSION", "Condition", "DataPaths", "ProtocolRunner", "learning_curve", "main"]
 
-TRAINING_VERSION = 5
+TRAINING_VERSION = 6
 """Bumped whenever the training code changes what a cell would hold (2: the CNN trains through
 ``PatchDetectorModule``; 3: hard-negative mining over all training videos for every family; 4: a box
 regressor in the annotators' convention, scored with and without it; 5: the box regressor is fitted
-before the mining rounds, so their validation false-positive count matches at the reported boxes)."""
+before the mining rounds, so their validation false-positive count matches at the reported boxes; 6: a second
+NMS after the box regression)."""
 
 
 @dataclass(frozen=True)
@@ -198,7 +199,7 @@ class ProtocolRunner:
             raw = detect_on_eval_set(det, es, scales=self.scales, nms_iou=self.protocol.detection.nms_iou,
                                      max_detections=self.protocol.detection.max_detections, refine_boxes=False)
             t_det = time.perf_counter() - t1
-            dets = refine_detections(det, es, raw)  # what detect_multiscale reports (boxes in the annotators' convention)
+            dets = refine_detections(det, es, raw, nms_iou=self.protocol.detection.nms_iou)  # what detect_multiscale reports
             t_ref = time.perf_counter() - t1 - t_det
             res = ProtocolResult(condition.name, self.protocol, scale=s)
             pats = score_patch_set(det, self.patch_set()) if (self.patches and s == 1.0) else ()

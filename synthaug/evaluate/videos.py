@@ -196,14 +196,18 @@ def detect_on_eval_set(
 
 
 @torch.no_grad()
-def refine_detections(detector: Any, eval_set: EvalSet, detections: Sequence[Sequence[np.ndarray]]) -> list[list[np.ndarray]]:
-    """``detect_on_eval_set(..., refine_boxes=False)`` output -> the same detections with refined boxes.
+def refine_detections(detector: Any, eval_set: EvalSet, detections: Sequence[Sequence[np.ndarray]], *,
+                      nms_iou: float = 0.3) -> list[list[np.ndarray]]:
+    """``detect_on_eval_set(..., refine_boxes=False)`` output -> what ``refine_boxes=True`` reports.
 
-    Equal to ``detect_on_eval_set(..., refine_boxes=True)`` (the regressor acts on the kept
-    boxes only), without scanning the frames twice. Returns copies of ``detections`` when the
-    detector has no box regressor.
+    The detector's box regressor acts on the kept boxes only, followed by the second NMS of
+    :func:`~synthaug.detectors.sliding.refine_and_suppress` (``nms_iou``: the detection's),
+    so this equals ``detect_on_eval_set(..., refine_boxes=True)`` without scanning the frames
+    twice. Returns copies of ``detections`` when the detector has no box regressor.
     """
     from torchvision.ops import box_convert
+
+    from synthaug.detectors.sliding import refine_and_suppress
 
     reg = getattr(detector, "box_regressor", None)
     out: list[list[np.ndarray]] = []
@@ -212,9 +216,10 @@ def refine_detections(detector: Any, eval_set: EvalSet, detections: Sequence[Seq
         for frame, d in zip(frames, dets_v):
             d = np.array(d, dtype=np.float64, copy=True).reshape(-1, 5)
             if reg is not None and d.shape[0]:
-                image = torch.from_numpy(frame).float().div_(255.0)
+                image = torch.from_numpy(frame).float().div_(255.0)[None, None]
                 boxes = box_convert(torch.as_tensor(d[:, :4], dtype=torch.float32), "xywh", "xyxy")
-                d[:, :4] = box_convert(reg.refine(image, boxes), "xyxy", "xywh").numpy()
+                b, sc = refine_and_suppress(reg, image, boxes, torch.as_tensor(d[:, 4], dtype=torch.float32), nms_iou)
+                d = np.concatenate([box_convert(b, "xyxy", "xywh").numpy(), sc.numpy()[:, None]], 1).astype(np.float64)
             refined.append(d)
         out.append(refined)
     return out
