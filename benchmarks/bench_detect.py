@@ -10,7 +10,9 @@ cascade barely depends on what it learned), or for every ``--checkpoint``
 given, times ``detect_multiscale`` on a real halmstad frame (a generated one
 when ../shared/data is absent) at the default pyramid (6 scales, ratio 1.25)
 and prints one JSON object with the median frames/s per detector, the
-per-stage split (pyramid + score maps + candidate boxes vs NMS) and the issue's
+per-stage split (pyramid + score maps + candidate boxes vs NMS), the time of the
+same detection reporting the windows' boxes (without the box regressor and its
+second NMS: ``median_ms_per_frame_window_boxes``) and the issue's
 targets (HOG >= 10, AdaBoost >= 10, CNN >= 20 frames/s; NMS <= 5 ms per frame).
 
 The NMS stage is timed on the frame's own candidate boxes (the ``pre_nms_top_k``
@@ -148,7 +150,7 @@ def _time_detector(
     from synthaug.detectors.sliding import candidate_boxes, detect_multiscale
 
     detect_multiscale(det, frame, scales=scales)  # warm-up (allocator, lazy imports)
-    totals, stage1, cpu = [], [], []
+    totals, stage1, cpu, unrefined = [], [], [], []
     n_out = 0
     for _ in range(repeats):
         t0, c0 = time.perf_counter(), time.process_time()
@@ -156,6 +158,9 @@ def _time_detector(
         totals.append(time.perf_counter() - t0)
         cpu.append(time.process_time() - c0)
         n_out = int(out.shape[0])
+        t0 = time.perf_counter()  # side by side: the same detection reporting the windows' boxes
+        detect_multiscale(det, frame, scales=scales, max_detections=max_detections, nms_iou=nms_iou, refine_boxes=False)
+        unrefined.append(time.perf_counter() - t0)
         t0 = time.perf_counter()
         boxes, scores = candidate_boxes(det, frame, scales=scales)
         stage1.append(time.perf_counter() - t0)
@@ -170,6 +175,8 @@ def _time_detector(
         "nms_meets_target": nms_ms <= NMS_TARGET_MS,
         # CPU seconds of this process: robust to other jobs sharing the machine
         "median_cpu_ms_per_frame": round(1000 * statistics.median(cpu), 1),
+        "box_regression": getattr(det, "box_regressor", None) is not None,
+        "median_ms_per_frame_window_boxes": round(1000 * statistics.median(unrefined), 1),
         "window": det.window,
         "stride": det.stride,
         "nms_candidates": int(boxes.shape[0]),
@@ -188,6 +195,9 @@ def main() -> int:
     p.add_argument("--max-detections", type=int, default=10, help="boxes kept per frame (as `synthaug detect` and the experiments)")
     p.add_argument("--nms-iou", type=float, default=0.3, help="NMS IoU threshold (detect_multiscale's default)")
     p.add_argument("--nms-repeats", type=int, default=21, help="timed repeats of the NMS stage")
+    p.add_argument("--no-box-regression", action="store_true",
+                   help="toy detectors without a box regressor (default: one, as `synthaug train` writes; its cost "
+                        "does not depend on its weights)")
     args = p.parse_args()
 
     from synthaug.detectors.base import get_detector_class, list_detectors, load_detector
@@ -219,6 +229,10 @@ def main() -> int:
             if det is None:
                 results[kind] = {"skipped": "no toy builder for this kind (pass --checkpoint)"}
                 continue
+            if not args.no_box_regression:
+                from synthaug.detectors.boxes import BoxRegressor
+
+                det.box_regressor = BoxRegressor.identity()
             results[kind] = {**_time_detector(det, frame, scales, args.repeats, **timing), "toy_training_seconds": round(train_s, 1)}
     for name, r in results.items():
         kind = name.split(":")[0]
