@@ -339,3 +339,79 @@ def test_figures_show_the_difference(patches):
     assert render_cnn_separation(e, fc, channels=4).shape[2] == 3
     with pytest.raises(ValueError, match="needs a cnn extractor"):
         render_cnn_separation(e, fx)
+
+
+def paired_blobs(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two uint8 (n, 40, 40) sets of one distribution, pair i sharing its blob and background (like a seed and
+    its synthetic images): only the blob's centre is drawn anew."""
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:40, 0:40].astype(float)
+    out = np.empty((2, n, 40, 40))
+    for i in range(n):
+        s, a = rng.uniform(5, 8), rng.uniform(0.2, 0.4) * rng.choice([-1, 1])
+        g = rng.uniform(-0.004, 0.004, 2)
+        for k in range(2):
+            cy, cx = 20 + rng.uniform(-3, 3, 2)
+            out[k, i] = (0.5 + g[0] * (yy - 20) + g[1] * (xx - 20)
+                         + a * np.exp(-((yy - cy) ** 2 + (xx - cx) ** 2) / (2 * s * s)))
+    out = np.round(np.clip(out, 0, 1) * 255).astype(np.uint8)
+    return out[0], out[1]
+
+
+def test_grouped_folds_remove_the_pairing_bias():
+    """Known answer: paired draws of one distribution. Folds that split a pair teach the classifier the pair's
+    shared background under the other label, and the held-out accuracy falls clearly below 0.5; folds that
+    hold each pair out together give an accuracy whose CI covers 0.5."""
+    fx = feature_extractor("hog")
+    real, syn = paired_blobs(60, 0)
+    fr, fs = fx(real), fx(syn)
+    split = classifier_two_sample_test(fr, fs, seed=0)
+    pairs = np.arange(60)
+    grouped = classifier_two_sample_test(fr, fs, seed=0, permutations=19, groups_real=pairs, groups_syn=pairs)
+    assert split.ci[1] < 0.5, split.ci
+    assert grouped.ci[0] <= 0.5 <= grouped.ci[1] and grouped.p_permutation > 0.05, (grouped.ci, grouped.p_permutation)
+    with pytest.raises(ValueError, match="give both groups_real and groups_syn"):
+        classifier_two_sample_test(fr, fs, groups_real=pairs)
+    with pytest.raises(ValueError, match="at least folds=5 groups, got 3"):
+        classifier_two_sample_test(fr, fs, groups_real=pairs % 3, groups_syn=pairs % 3)
+
+
+def test_gap_section_in_the_diagnosis_markdown(tmp_path, patches):
+    """The diagnosis report's gap section (synthaug diagnose --gap): one table row per comparison and family,
+    figure links that exist, and a report without the section unchanged."""
+    from synthaug.diagnose.gap import gap_section
+    from synthaug.diagnose.report import write_markdown
+
+    real, syn = patches["real"][:30], patches["speckle"][:45]
+    seed_of = np.arange(30)
+    section = gap_section(real, {"training": (syn, np.arange(45) % 30), "fitted": patches["same"][:30]},
+                          real_groups=seed_of, families=("hog", "cnn"), folds=3, permutations=2, kid_subsets=3,
+                          out_dir=tmp_path)
+    assert section["comparisons"]["training"]["grouped_folds"] and not section["comparisons"]["fitted"]["grouped_folds"]
+    base = {"inputs": {"seeds": "s", "n_seeds": 30, "mesh": "m", "fit": "f", "distance": "hog", "k_folds": 5,
+                       "alpha": 0.01},
+            "findings": [], "residuals": {}, "parameter_dependence": [], "screened": [],
+            "realism": {"accuracy_base": 0.5}, "seconds": 1.0}
+    md = write_markdown({**base, "gap": json.loads(json.dumps(section))})
+    assert "## Gap in the detectors' features" not in write_markdown(base)
+    rows = [line for line in md.splitlines() if line.startswith(("| training |", "| fitted |"))]
+    assert len(rows) == 4 and rows[0].startswith("| training | hog | HOG descriptor")
+    links = [line[line.index("(") + 1:-1] for line in md.splitlines() if line.startswith("![")]
+    assert "gap_training/gap_hog_glyphs.png" in links and all((tmp_path / p).is_file() for p in links)
+
+
+def test_diagnose_cli_checks_the_gap_options_first(tmp_path, capsys):
+    import argparse
+
+    from synthaug.diagnose import cli
+
+    parser = argparse.ArgumentParser()
+    cli.add_arguments(parser)
+    base = ["--seeds", str(tmp_path / "none"), "--fit", str(tmp_path / "f.json"), "--out", str(tmp_path / "o")]
+    for extra, message in ((["--gap", "2", "--gap-detector", "svm=x.pt"], "--gap-detector must be FAMILY=CHECKPOINT"),
+                           (["--gap", "2", "--gap-detector", f"cnn={tmp_path / 'no.pt'}"], "is not a file"),
+                           (["--gap-detector", f"hog={tmp_path}"], "--gap-detector needs --gap N"),
+                           (["--gap", "-1"], "--gap must be >= 0, got -1")):
+        assert cli.main(parser.parse_args(base + extra)) == 2
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

@@ -29,6 +29,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--extended-fit", default=None, metavar="PATH",
                         help="also write the fit extended by the first finding's effect (per-seed patch units); "
                              "nothing is written when there is no candidate-effect finding")
+    parser.add_argument("--gap", type=int, default=0, metavar="N",
+                        help="add the gap section: real seed patches vs N random-pose synthetic samples per seed "
+                             "(and vs the best-fit renders) in each detector's features: classifier two-sample "
+                             "accuracy with CI, KID, most separating features (default 0: off)")
+    parser.add_argument("--gap-detector", action="append", default=[], metavar="FAMILY=CHECKPOINT",
+                        help="measure the gap in this trained detector's features (hog, adaboost or cnn; "
+                             "repeatable); families not given use HOG settings, random weak learners and an "
+                             "untrained seeded CNN")
 
 
 def _validate(args: argparse.Namespace) -> None:
@@ -38,6 +46,7 @@ def _validate(args: argparse.Namespace) -> None:
     from synthaug._checks import check_distance, check_output_dir, check_output_file, check_seedset_dir
     from synthaug.params import CaptureParams
 
+    gap_detectors(args)  # cheap, named first
     if not (math.isfinite(args.alpha) and 0.0 < args.alpha < 1.0):
         raise ValueError(f"--alpha must be in (0, 1), got {args.alpha}")
     if args.folds < 2:
@@ -54,6 +63,31 @@ def _validate(args: argparse.Namespace) -> None:
               f"{args.distance!r}; the residuals are measured in {args.distance!r} space", file=sys.stderr)
 
 
+def gap_detectors(args: argparse.Namespace) -> dict[str, str]:
+    """``--gap`` and ``--gap-detector FAMILY=CHECKPOINT`` checked: ``{family: checkpoint path}``."""
+    from pathlib import Path
+
+    from synthaug.diagnose.gap import FAMILIES
+
+    gap = getattr(args, "gap", 0)
+    given = getattr(args, "gap_detector", None) or []
+    if gap < 0:
+        raise ValueError(f"--gap must be >= 0, got {gap}")
+    if given and not gap:
+        raise ValueError("--gap-detector needs --gap N (N > 0 synthetic samples per seed)")
+    out: dict[str, str] = {}
+    for item in given:
+        family, sep, path = item.partition("=")
+        if not sep or family not in FAMILIES or not path:
+            raise ValueError(f"--gap-detector must be FAMILY=CHECKPOINT with FAMILY in {list(FAMILIES)}, got {item!r}")
+        if family in out:
+            raise ValueError(f"--gap-detector: {family} given twice")
+        if not Path(path).is_file():
+            raise ValueError(f"--gap-detector: {path} (for {family}) is not a file")
+        out[family] = path
+    return out
+
+
 def main(args: argparse.Namespace) -> int:
     from synthaug.diagnose.report import diagnose
 
@@ -61,7 +95,8 @@ def main(args: argparse.Namespace) -> int:
         _validate(args)
         report = diagnose(args.seeds, args.mesh, args.fit, distance=args.distance, out_dir=args.out,
                           candidates=args.candidates, k=args.folds, seed=args.seed, alpha=args.alpha,
-                          plots=not args.no_plots,
+                          plots=not args.no_plots, gap=getattr(args, "gap", 0),
+                          gap_detectors=gap_detectors(args) or None,
                           progress=None if args.quiet else (lambda s: print(s, file=sys.stderr)))
     except (ValueError, FileNotFoundError) as e:
         print(f"synthaug diagnose: {e}", file=sys.stderr)

@@ -141,6 +141,8 @@ def diagnose(
     plots: bool = True,
     progress: Callable[[str], None] | None = None,
     max_effects: int = 3,
+    gap: int = 0,
+    gap_detectors: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Diagnose a fitted simulation against its measured seed set.
 
@@ -158,6 +160,11 @@ def diagnose(
         progress: called with a short message at each step.
         max_effects: at most this many effects are accepted by forward selection
             (each later one screened on top of those before it: ``given``).
+        gap: when > 0, add the ``gap`` section (:func:`synthaug.diagnose.gap.gap_section`): the real seed
+            patches against ``gap`` random-pose training samples of the fit per seed (``"training"``) and
+            against each seed's best-fit render (``"fitted"``), in each detector family's features.
+        gap_detectors: ``{family: detector or checkpoint}`` whose features the gap is measured in
+            (default: HOG settings, random weak learners, an untrained seeded CNN).
 
     Returns:
         the report: ``findings`` (ranked; each ``effect`` — a candidate name or
@@ -243,6 +250,19 @@ def diagnose(
         remaining = structure_measures(data, syn_acc, rng=np.random.default_rng(seed + 2), alpha=alpha)
         explains = {h for e in accepted for h, cands in HINTS.items() if e in cands}
         remaining = {n_: m for n_, m in remaining.items() if n_ not in explains}
+    gap_report = None
+    if gap:
+        say(f"gap in the detectors' features ({gap} training samples per seed)")
+        from synthaug.data.seedset import SeedSet
+        from synthaug.diagnose.gap import gap_section, training_samples
+
+        seedset = SeedSet.load(seeds_dir) if isinstance(seeds_dir, (str, os.PathLike)) else seeds_dir
+        seed_of = np.arange(len(data))  # folds hold a seed's real and synthetic patches out together
+        gap_report = gap_section(data.real, {"training": training_samples(seedset, mesh, fit_path, gap * len(data),
+                                                                          seed=seed),
+                                             "fitted": (syn0, seed_of)},
+                                 real_groups=seed_of, detectors=gap_detectors, seed=seed,
+                                 out_dir=out_dir if plots else None)
     sig_struct = {n_: m for n_, m in remaining.items() if m["significant"] and n_ != "background_bias"}
     if sig_struct:
         findings.append({
@@ -283,6 +303,8 @@ def diagnose(
                             "indistinguishable"},
         "seconds": time.perf_counter() - t0,
     }
+    if gap_report is not None:
+        report["gap"] = gap_report
     report = _jsonable(report)
     if out_dir is not None:
         out = Path(out_dir)
@@ -425,6 +447,10 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                      + (f"{100 * gc:.2f} % |" if gc is not None else "|"))
     lines += ["", f"Real-vs-synthetic classifier accuracy (fitted model): "
               f"{100 * report['realism']['accuracy_base']:.0f} % (50 % = indistinguishable).", ""]
+    if report.get("gap"):
+        from synthaug.diagnose.gap import gap_markdown
+
+        lines += gap_markdown(report["gap"])
     for key, title in (("residuals", "Residual maps and intensity curve"), ("samples", "Samples: real / fitted / "
                                                                                         "extended")):
         if key in figs:
