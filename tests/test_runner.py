@@ -110,3 +110,14 @@ def test_cells_are_reused_and_keyed_by_what_changes_a_result(ws, curve, monkeypa
     other = Protocol.from_dict({**ws["proto"].to_dict(), "test": {"split": "test", "frame_stride": 2}})
     assert R.ProtocolRunner(other, "drone", ws["paths"], options=FAST, scales=(1.0, 0.8)).identity(c, 0) != ident
     assert base.identity(R.Condition("renamed", "hog", seed_count=6), 0) == ident  # the label is not the condition
+
+
+def test_eval_split_val_scores_the_validation_videos_in_their_own_cells(ws, curve):
+    c = R.Condition("hog / 6 seeds", "hog", seed_count=6)
+    val = make_runner(ws, eval_split="val", patches=False, scale_check=False)
+    assert val.test_videos() == VAL
+    assert val.identity(c, 0) != make_runner(ws, patches=False, scale_check=False).identity(c, 0)
+    res = val.run(c, seeds=[0])[1.0]
+    assert res.split == "val" and res.stems == VAL
+    with pytest.raises(ValueError, match="eval_split"):
+        make_runner(ws, eval_split="train")

@@ -201,7 +201,7 @@ class ProtocolRunner:
             t_det = time.perf_counter() - t1
             dets = refine_detections(det, es, raw, nms_iou=self.protocol.detection.nms_iou)  # what detect_multiscale reports
             t_ref = time.perf_counter() - t1 - t_det
-            res = ProtocolResult(condition.name, self.protocol, scale=s)
+            res = ProtocolResult(condition.name, self.protocol, split=self.eval_split, scale=s)
             pats = score_patch_set(det, self.patch_set()) if (self.patches and s == 1.0) else ()
             res.add_seed(seed, videos=match_videos(es.stems, dets, es.boxes, self.protocol), patches=pats,
                          meta={"detect_s": round(t_det + t_ref, 1), "fps": round(es.n_frames / max(t_det + t_ref, 1e-9), 2),
@@ -209,7 +209,7 @@ class ProtocolRunner:
                                "positives": (meta.get("positives") or {}).get("count")})
             out["scales"][repr(float(s))] = res.to_json()
             if getattr(det, "box_regressor", None) is not None:  # item 5: AP before the box mapping, same detections
-                unref = ProtocolResult(f"{condition.name} (window boxes)", self.protocol, scale=s)
+                unref = ProtocolResult(f"{condition.name} (window boxes)", self.protocol, split=self.eval_split, scale=s)
                 unref.add_seed(seed, videos=match_videos(es.stems, raw, es.boxes, self.protocol), patches=pats, meta={})
                 out.setdefault("window_boxes", {})[repr(float(s))] = unref.to_json()
             self.log(f"  {condition.name} seed {seed} x{s:g}: AP@{self.protocol.main_iou:g} {res.mean_ap():.3f} "
