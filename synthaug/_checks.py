@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 from pathlib import Path
 from typing import Callable
 
@@ -177,3 +178,16 @@ def first_line(message: object, limit: int = 300) -> str:
     lines = [s.strip() for s in str(message).splitlines() if s.strip()]
     text = lines[0] if lines else ""
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def torch_load_error(e: BaseException, limit: int = 200) -> str:
+    """One line for an exception from ``torch.load(..., weights_only=True)``: a refused pickle (code or objects
+    other than tensors and plain values) says so and names the refused global; anything else is its first line."""
+    text = str(e)
+    if "Weights only load failed" in text:
+        m = re.search(r"Unsupported global: GLOBAL (\S+)", text)
+        if m:
+            return f"it holds pickled code or objects ({m.group(1)}), which are never loaded (weights_only)"
+        m = re.search(r"WeightsUnpickler error: ([^\n]+)", text)
+        return "unreadable bytes, refused by the weights-only unpickler" + (f" ({m.group(1).strip()})" if m else "")
+    return f"{type(e).__name__}: {first_line(text, limit)}"

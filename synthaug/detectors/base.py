@@ -343,8 +343,10 @@ def load_detector(path: str | Path, *, map_location: str | torch.device = "cpu")
         raise FileNotFoundError(f"detector checkpoint not found: {path}")
     try:
         payload = torch.load(path, map_location=map_location, weights_only=True)
-    except Exception as e:  # torch raises many types for truncated/garbage files
-        raise ValueError(f"{path} is not a readable synthaug detector checkpoint ({type(e).__name__}: {e})") from e
+    except Exception as e:  # torch raises many types for truncated/garbage files, and refuses pickled code
+        from synthaug._checks import torch_load_error
+
+        raise ValueError(f"{path} is not a readable synthaug detector checkpoint ({torch_load_error(e)})") from e
     if not isinstance(payload, dict) or payload.get("format") != FORMAT_NAME:
         got = payload.get("format") if isinstance(payload, dict) else type(payload).__name__
         raise ValueError(f"{path} is not a synthaug detector checkpoint (format {got!r}, expected {FORMAT_NAME!r})")

@@ -242,9 +242,9 @@ def load_patch_cnn(path: str | Path) -> PatchCNN:
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # truncated / garbage files, and pickled code that weights_only refuses
-        from synthaug._checks import first_line
+        from synthaug._checks import torch_load_error
 
-        raise ValueError(f"{path} is not a readable checkpoint ({type(e).__name__}: {first_line(e, 200)})") from e
+        raise ValueError(f"{path} is not a readable checkpoint ({torch_load_error(e)})") from e
     if isinstance(payload, dict) and payload.get("format") == "synthaug.detector":
         from synthaug.detectors.base import load_detector
 
