@@ -227,3 +227,44 @@ def test_per_seed_object_scale_from_a_fit_file(tmp_path, small_cache):
     fixed = SyntheticObjectDataset("quadcopter", bgs, tmp_path / "fit.json", cache=small_cache, length=4,
                                    object_scale=0.5)
     assert fixed.seed_scales is None
+
+
+CROSS_PROCESS_SCRIPT = textwrap.dedent("""
+    import hashlib, sys
+    import torch
+    from torch.utils.data import DataLoader
+    from synthaug.data.procedural import sky_backgrounds
+    from synthaug.data.synthetic import EpochSampler, SyntheticObjectDataset
+    from synthaug.render.cache import ViewCache
+
+    cache = ViewCache.build("quadcopter", step_deg=30, sprite_size=48)
+    ds = SyntheticObjectDataset("quadcopter", sky_backgrounds(4, (64, 72), seed=1), cache=cache, length=12, seed=3)
+    workers = int(sys.argv[1])
+    sampler = EpochSampler(ds)
+    loader = DataLoader(ds, batch_size=5, sampler=sampler, num_workers=workers, persistent_workers=workers > 0)
+    for epoch in (0, 1):
+        sampler.set_epoch(epoch)
+        h = hashlib.sha256()
+        for images, targets in loader:
+            h.update(images.numpy().tobytes()); h.update(targets["theta"].numpy().tobytes())
+            h.update(targets["labels"].numpy().tobytes())
+        print(epoch, h.hexdigest(), flush=True)
+""")
+
+
+@pytest.mark.slow
+def test_identical_bytes_across_processes_and_persistent_workers(tmp_path):
+    """Fresh interpreters (other hash seeds), 0 workers and 2 persistent workers over two epochs: same bytes."""
+    import os
+
+    script = tmp_path / "cross_process.py"
+    script.write_text(CROSS_PROCESS_SCRIPT)
+    outs = []
+    for hash_seed, workers in (("1", "0"), ("2", "2"), ("3", "1")):
+        env = {**os.environ, "PYTHONHASHSEED": hash_seed, "OMP_NUM_THREADS": "1", "PYTHONWARNINGS": "ignore"}
+        proc = subprocess.run([sys.executable, str(script), workers], capture_output=True, text=True, timeout=240,
+                              env=env)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        outs.append(proc.stdout.split())
+    assert len(outs[0]) == 4 and outs[0][1] != outs[0][3]  # the epoch reaches the workers: new poses
+    assert outs[0] == outs[1] == outs[2]
