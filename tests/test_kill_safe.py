@@ -37,9 +37,13 @@ def _alive(pid):
         return False
 
 
-def _kill_when(cmd, ready, *, timeout=60.0):
-    """Start ``cmd`` in its own session, wait until it has two workers and ``ready()``, SIGKILL it; return the
-    pids of the children it had, and whether they were all gone within 10 s."""
+def _spawned_worker(cmdline: str) -> bool:
+    return "spawn_main" in cmdline and "resource_tracker" not in cmdline
+
+
+def _kill_when(cmd, ready, *, timeout=60.0, is_worker=_spawned_worker):
+    """Start ``cmd`` in its own session, wait until it has two workers (``is_worker(cmdline)``) and ``ready()``,
+    SIGKILL it; return the pids of the children it had, and whether they were all gone within 10 s."""
     proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), start_new_session=True,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     children: set[int] = set()
@@ -52,8 +56,7 @@ def _kill_when(cmd, ready, *, timeout=60.0):
             except psutil.NoSuchProcess:
                 break
             children |= {k.pid for k in kids}
-            workers = [k for k in kids if "spawn_main" in " ".join(_cmdline(k)) and "resource_tracker" not in
-                       " ".join(_cmdline(k))]
+            workers = [k for k in kids if is_worker(" ".join(_cmdline(k)))]
             if len(workers) >= 2 and ready():
                 break
             time.sleep(0.05)
@@ -187,3 +190,26 @@ def test_fit_into_a_directory_fails_before_any_work(tmp_path, capsys):
                "--step-deg", "30", "--sprite-size", "48"])
     assert rc == 2 and f"{tmp_path / 'taken'} is a directory" in capsys.readouterr().err
     assert not (tmp_path / ".taken.parts").exists()
+
+
+@pytest.mark.slow
+def test_kill_9_of_train_fit_leaves_no_dataloader_or_render_worker(tmp_path):
+    """``python train/fit.py --config configs/cnn_tiny_synthetic.yaml`` with 2 DataLoader workers, SIGKILLed while it
+    trains: every child (the forked DataLoader workers, any render worker) is gone within 10 s."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_refit import tiny_seedset
+
+    seeds = tiny_seedset(tmp_path)
+    log_root = tmp_path / "runs"
+    cmd = [sys.executable, str(REPO / "train" / "fit.py"), "--config", str(REPO / "configs" / "cnn_tiny_synthetic.yaml"),
+           "--data.init_args.seed_dir", str(seeds), "--data.init_args.params", "null",
+           "--data.init_args.synthetic_per_real", "200", "--data.init_args.num_workers", "2",
+           "--trainer.max_epochs", "1000", "--trainer.default_root_dir", str(log_root),
+           "--trainer.logger.init_args.save_dir", str(log_root)]
+    started = time.time()
+    # forked DataLoader workers run the parent's command line; wait until two of them (and 2 s of training) exist
+    children, survivors = _kill_when(cmd, lambda: time.time() - started > 2, timeout=180,
+                                     is_worker=lambda c: "train/fit.py" in c)
+    assert len(children) >= 2, children
+    print(f"killed train/fit.py with {len(children)} children")
+    assert survivors == [], f"children still running 10 s after the kill: {survivors}"
