@@ -209,11 +209,11 @@ class ProtocolRunner:
                                "positives": (meta.get("positives") or {}).get("count")})
             out["scales"][repr(float(s))] = res.to_json()
             if getattr(det, "box_regressor", None) is not None:  # item 5: AP before the box mapping, same detections
-                unref = ProtocolResult(f"{condition.name} (window boxes)", self.protocol, split=self.eval_split, scale=s)
+                unref = ProtocolResult(f"{condition.name}, window boxes", self.protocol, split=self.eval_split, scale=s)
                 unref.add_seed(seed, videos=match_videos(es.stems, raw, es.boxes, self.protocol), patches=pats, meta={})
                 out.setdefault("window_boxes", {})[repr(float(s))] = unref.to_json()
             self.log(f"  {condition.name} seed {seed} x{s:g}: AP@{self.protocol.main_iou:g} {res.mean_ap():.3f} "
-                     f"(detect {t_det:.0f} s, {es.n_frames / max(t_det, 1e-9):.1f} fps)")
+                     f"(detect {t_det + t_ref:.0f} s, {es.n_frames / max(t_det + t_ref, 1e-9):.1f} fps)")
         out["total_s"] = round(time.perf_counter() - t0, 1)
         return out
 
