@@ -250,3 +250,9 @@ def test_split_by_video_deterministic_any_numbering(videos: Path, tmp_path: Path
     assert e.value.option == "--class"
     with pytest.raises(TrainingInputError, match="--split"):
         split_by_video(vs, "drone", split=tmp_path / "missing.json")
+
+
+@pytest.mark.parametrize("field, value", [("box_stride", 0), ("cnn_shift", -1), ("cnn_shift", 20), ("mining_stride", 0)])
+def test_train_options_refuse_bad_values_naming_the_field(field: str, value: int) -> None:
+    with pytest.raises(ValueError, match=field):
+        TrainOptions(**{field: value})

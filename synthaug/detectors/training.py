@@ -166,7 +166,7 @@ class TrainOptions:
     box_stride: int = 15
 
     def __post_init__(self) -> None:
-        for name in ("mining_stride", "mining_per_frame", "mining_max_per_round", "val_stride", "val_top_k"):
+        for name in ("mining_stride", "mining_per_frame", "mining_max_per_round", "val_stride", "val_top_k", "box_stride"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
         if self.mining_rounds < 0:
