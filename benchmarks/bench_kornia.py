@@ -13,7 +13,7 @@ Two comparisons, each on the same inputs in one process, median of ``--repeats``
    only, kernel size fixed by the largest σ). Accuracy of both against ``scipy.ndimage.gaussian_filter``
    (truncate 4, constant 0 border) on the same images.
 2. **The perturbation baseline** (rotation ±15°, translation ±8 %, mirror, blur σ ≤ 1.5, noise σ ≤ 0.03 on
-   40×40 patches): the hand-written ``evaluate.positives.perturb_patches`` (one batched affine warp +
+   40×40 patches): the hand-written ``effects.perturb.perturb_patches`` (one batched affine warp +
    one grouped separable convolution) against a kornia ``AugmentationSequential`` of RandomAffine,
    RandomHorizontalFlip, RandomGaussianBlur and RandomGaussianNoise (p=1 each).
 """
@@ -79,7 +79,7 @@ def bench_blur(batch: int, size: int, repeats: int, seed: int = 0) -> dict:
 def bench_perturbation(n: int, copies: int, repeats: int, seed: int = 0) -> dict:
     import kornia.augmentation as K
 
-    from synthaug.evaluate.positives import perturb_patches
+    from synthaug.effects.perturb import perturb_patches
 
     g = torch.Generator().manual_seed(seed)
     x = torch.rand(n, 1, 40, 40, generator=g)

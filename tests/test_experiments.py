@@ -1,4 +1,4 @@
-"""Tests of the experiments' parts on generated data: the perturbation baseline (evaluate.positives), evaluation
+"""Tests of the experiments' parts on generated data: the perturbation baseline (effects.perturb), evaluation
 on videos (evaluate.videos), detector training, the runner and its cell cache (evaluate.context), reports."""
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import torch.nn.functional as F
 from synthaug.detectors.base import PatchDetector
 from synthaug.detectors.training import TrainOptions, train_detector
 from synthaug.evaluate.context import ExperimentContext
-from synthaug.evaluate.positives import perturb_patches
+from synthaug.effects.perturb import perturb_patches
 from synthaug.evaluate.reporting import _plot, _write_report
 from synthaug.evaluate.videos import EvalSet, detect_on_eval_set, evaluate_on_videos, load_eval_set
 
@@ -254,15 +254,15 @@ def test_moved_names_still_importable_from_experiments() -> None:
     import synthaug.detectors.training as training
     import synthaug.evaluate.context as context
     import synthaug.evaluate.experiments as ex
-    import synthaug.evaluate.positives as positives
+    import synthaug.effects.perturb as perturb
     import synthaug.evaluate.reporting as reporting
     import synthaug.evaluate.videos as videos
 
     homes = {videos: ["EvalSet", "EvalResult", "load_eval_set", "evaluate_on_videos", "detect_on_eval_set"],
-             positives: ["perturb_patches", "perturbed_positives"], context: ["ExperimentContext"],
+             perturb: ["perturb_patches"], context: ["ExperimentContext"],
              reporting: ["_fmt", "_stem", "_write_report", "_plot", "_ap"],
              training: ["DETECTORS", "TrainOptions", "train_detector", "real_positives", "synthetic_positives",
-                        "frames_training_set", "negative_pool", "mining_frames"]}
+                        "frames_training_set", "negative_pool", "mining_frames", "perturbed_positives"]}
     for module, names in homes.items():
         for name in names:
             assert getattr(ex, name) is getattr(module, name), name

@@ -121,3 +121,46 @@ def test_eval_split_val_scores_the_validation_videos_in_their_own_cells(ws, curv
     assert res.split == "val" and res.stems == VAL
     with pytest.raises(ValueError, match="eval_split"):
         make_runner(ws, eval_split="train")
+
+
+def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_against_real(ws, curve):
+    """Issue 16 under the protocol: + synthetic (a fit made on the fly per training seed) and + perturbed
+    conditions share the real-only condition's seeds; each synthetic cell trains on its own seed set's fit."""
+    from synthaug.data.seedset import SeedSet
+    from synthaug.params import CaptureParams
+
+    out = ws["root"] / "syn"
+    fit_opts = {"budget": 40, "step_deg": 30.0, "sprite_size": 32, "init": "uniform"}
+    res = R.synthetic_comparison(make_runner(ws), detectors=["hog"], seed_count=6,
+                                 synthetic_ratios=[2], fit_distance="eucl", fit_options=fit_opts,
+                                 perturb_copies=[2], seeds=[0, 1], out=out)
+    group = res["hog"]
+    syn, per = "hog / 6 seeds + 2x synthetic (eucl)", "hog / 6 seeds + 2x perturbed"
+    assert list(group) == ["hog / 6 seeds", syn, per]
+    # the real-only cells are the learning curve's (same key): identical results, nothing retrained
+    assert group["hog / 6 seeds"].to_json() == curve["results"]["hog"]["hog / 6 seeds"].to_json()
+    fits = Path(ws["paths"].work_dir) / "fits"
+    for seed in (0, 1):
+        fit = fits / f"drone_6_seed{seed}_eucl.json"
+        ss = SeedSet.load(Path(ws["paths"].work_dir) / f"ingest_drone_seed{seed}" / "seedsets" / "drone_6")
+        theta, _, _ = CaptureParams.load_with_extra(fit)
+        assert theta.batch_size == len(ss) == 6  # one row per seed of *this* training seed's seed set
+        for name in (syn, per):
+            assert group[name].seeds[seed].meta["positives"] == 6  # the real count; the added ones: the cell's metadata
+    md = (out / "comparison.md").read_text()
+    assert syn in md and per in md and "paired" in md.lower()
+    # the cells record what was added, and the perturbed copies are the library's perturbation
+    cache = CellCache(Path(ws["paths"].work_dir) / "cells")
+    runner = make_runner(ws)
+    cond_syn = R.Condition(syn, "hog", seed_count=6, synthetic_ratio=2.0, fit_distance="eucl",
+                           fit_options=tuple(sorted(fit_opts.items())))
+    cell = cache.get_or_compute(runner.identity(cond_syn, 1), lambda: pytest.fail("synthetic cell not cached"))
+    assert cell["train"]["synthetic"]["count"] == 12 and cell["train"]["synthetic"]["params"].endswith("drone_6_seed1_eucl.json")
+    cond_per = R.Condition(per, "hog", seed_count=6, perturb_copies=2)
+    cell = cache.get_or_compute(runner.identity(cond_per, 0), lambda: pytest.fail("perturbed cell not cached"))
+    assert cell["train"]["perturbed"] == {"copies": 2, "count": 12}
+    # a given fit file is part of the key by its bytes; the new fields leave older keys unchanged
+    given = R.Condition("g", "hog", seed_count=6, params=str(fits / "drone_6_seed{seed}_eucl.json"), synthetic_ratio=2.0)
+    k0 = runner.identity(given, 0)["condition"]["params_sha256"]
+    assert k0 and k0 != runner.identity(given, 1)["condition"]["params_sha256"]
+    assert "perturb_copies" not in R.Condition("r", "hog", seed_count=6).identity()

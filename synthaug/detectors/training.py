@@ -81,6 +81,7 @@ __all__ = [
     "mine_hard_negatives",
     "validation_false_positives",
     "real_positives",
+    "perturbed_positives",
     "synthetic_positives",
     "negative_pool",
     "mining_frames",
@@ -880,6 +881,15 @@ def real_positives(seedset: Any) -> Tensor:
     return _as_float_patches(seedset.patches)
 
 
+def perturbed_positives(seedset: Any, copies: int, *, seed: int = 0) -> Tensor:
+    """Real patches plus ``copies`` perturbed versions of each (the paper's Table 1 baseline,
+    :func:`~synthaug.effects.perturb.perturb_patches`)."""
+    from synthaug.effects.perturb import perturb_patches
+
+    real = real_positives(seedset)
+    return torch.cat([real, perturb_patches(real, copies, generator=torch.Generator().manual_seed(seed))])
+
+
 def synthetic_positives(
     seedset: Any,
     mesh: Any,
@@ -1205,9 +1215,10 @@ def train_from_videos(
     all_frames: bool = False,
     frame_step: int = 1,
     seedset: str | Path | None = None,
-    params: str | Path | None = None,
+    params: str | Path | Callable[[Path], str | Path] | None = None,
     mesh: str | None = None,
     synthetic_ratio: float = 0.0,
+    perturb_copies: int = 0,
     options: TrainOptions = TrainOptions(),
     work_dir: str | Path | None = None,
     ingest_seed: int = 0,
@@ -1243,9 +1254,12 @@ def train_from_videos(
         all_frames: every labelled frame of the training videos (every ``frame_step``-th).
         frame_step: see ``all_frames``.
         seedset: use this seed set (``synthaug ingest`` output) instead of ingesting.
-        params: ``synthaug fit`` output made on the seed set (one row per seed).
+        params: ``synthaug fit`` output made on the seed set (one row per seed), or a callable
+            given the seed set's folder once it exists that returns that file (e.g. fits it).
         mesh: mesh of the synthetic object (default: the fit's, else the built-in quadcopter).
         synthetic_ratio: synthetic patches per real seed (needs ``params``).
+        perturb_copies: perturbed copies of every real positive added to the positives (the
+            paper's Table 1 baseline, :func:`~synthaug.effects.perturb.perturb_patches`).
         options: budgets (:class:`TrainOptions`).
         work_dir: ingest output folder (default: ``<out>.work``; a temporary folder when ``out`` is None).
         ingest_seed: ``synthaug ingest --seed`` of the seed draw (0: the same seed set as a
@@ -1277,7 +1291,9 @@ def train_from_videos(
         raise TrainingInputError("--synthetic-ratio", "synthetic positives need a fit: give --params FIT.json")
     if not all_frames and seedset is None and (seed_count is None or seed_count < 1):
         raise TrainingInputError("--seed-counts", f"must be >= 1, got {seed_count}")
-    if params is not None and not Path(params).is_file():
+    if perturb_copies < 0:
+        raise TrainingInputError("--perturb-copies", f"must be >= 0, got {perturb_copies}")
+    if params is not None and not callable(params) and not Path(params).is_file():
         raise TrainingInputError("--params", f"file not found: {params}")
     if seedset is not None and not (Path(seedset) / "seedset.json").is_file():
         raise TrainingInputError("--seedset", f"not a seed set folder (no seedset.json): {seedset}")
@@ -1332,7 +1348,17 @@ def train_from_videos(
         hog_frames, hog_boxes = d["mining_frames"], d["mining_boxes"]
         box_in_window = box_in_window_from_boxes(d["boxes"])
         positives_info = {"mode": "all_frames", "frame_step": frame_step, "count": int(pos.shape[0])}
+    perturb_info = None
+    if perturb_copies:
+        from synthaug.effects.perturb import perturb_patches
+
+        real = pos
+        pos = torch.cat([real, perturb_patches(real, perturb_copies, generator=torch.Generator().manual_seed(seed + 3))])
+        perturb_info = {"copies": perturb_copies, "count": int(pos.shape[0] - real.shape[0])}
+        say(f"perturbed: {perturb_info['count']} copies of the {real.shape[0]} real positives")
     synthetic_info = None
+    if params is not None and callable(params):
+        params = params(Path(ss.path)) if ss is not None else params
     if params is not None:
         from synthaug.params import CaptureParams
 
@@ -1380,7 +1406,7 @@ def train_from_videos(
         "format": METADATA_FORMAT, "version": METADATA_VERSION, "synthaug_version": synthaug.__version__,
         "detector": kind, "class": class_name, "seed": seed,
         "videos_dir": str(Path(videos_dir).resolve()), "labels_dir": str(Path(labels_dir).resolve()),
-        "split": sp, "positives": positives_info, "synthetic": synthetic_info,
+        "split": sp, "positives": positives_info, "synthetic": synthetic_info, "perturbed": perturb_info,
         "negatives": {"initial": int(neg.shape[0]), "final": int(res.negatives.shape[0]),
                       "initial_source": ("seed set negatives + object-free crops of the seed frames" if ss is not None
                                          else "object-free crops of the training videos + look-alike crops of negative-class videos")},

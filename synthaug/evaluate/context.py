@@ -35,7 +35,7 @@ from synthaug.detectors.training import (
     synthetic_positives,
     train_detector,
 )
-from synthaug.evaluate.positives import perturb_patches
+from synthaug.effects.perturb import perturb_patches
 from synthaug.evaluate.videos import EvalSet, evaluate_on_videos, load_eval_set
 from synthaug.fit.fitting import FitConfig, fit_seedset
 

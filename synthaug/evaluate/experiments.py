@@ -26,7 +26,7 @@ The pieces live by concept; their names stay importable from here:
 
 - detector training and the training sets: :mod:`synthaug.detectors.training`;
 - evaluation sets, detection on them and AP: :mod:`synthaug.evaluate.videos`;
-- the perturbation baseline: :mod:`synthaug.evaluate.positives`;
+- the perturbation baseline: :mod:`synthaug.effects.perturb`;
 - the runner and its cell cache: :mod:`synthaug.evaluate.context`;
 - tables and plots: :mod:`synthaug.evaluate.reporting`.
 
@@ -54,12 +54,13 @@ from synthaug.detectors.training import (  # noqa: F401
     frames_training_set,
     mining_frames,
     negative_pool,
+    perturbed_positives,
     real_positives,
     synthetic_positives,
     train_detector,
 )
 from synthaug.evaluate.context import ExperimentContext
-from synthaug.evaluate.positives import perturb_patches, perturbed_positives  # noqa: F401
+from synthaug.effects.perturb import perturb_patches  # noqa: F401
 from synthaug.evaluate.reporting import _ap, _fmt, _plot, _stem, _write_report  # noqa: F401
 from synthaug.evaluate.videos import EvalResult, EvalSet, detect_on_eval_set, evaluate_on_videos, load_eval_set  # noqa: F401
 from synthaug.params import CaptureParams

@@ -50,7 +50,11 @@ from synthaug.evaluate.protocol import (
 )
 from synthaug.evaluate.videos import detect_on_eval_set, load_eval_set, refine_detections
 
-__all__ = ["TRAINING_VERSION", "Condition", "DataPaths", "ProtocolRunner", "learning_curve", "main"]
+__all__ = ["TRAINING_VERSION", "OWN_DISTANCE", "Condition", "DataPaths", "ProtocolRunner", "learning_curve",
+           "synthetic_comparison", "main"]
+
+OWN_DISTANCE = {"hog": "hog", "adaboost": "wl_learned", "cnn": "cnn"}
+"""Each detector family's own distance of the paper's fits (d_HOG, d_WL^L, d_CNN)."""
 
 TRAINING_VERSION = 6
 """Bumped whenever the training code changes what a cell would hold (2: the CNN trains through
@@ -70,7 +74,14 @@ class Condition:
         seed_count: real seeds drawn as ``synthaug ingest`` draws them (None with ``all_frames``).
         all_frames: every ``frame_step``-th labelled frame of the training videos.
         frame_step: see ``all_frames``.
-        params, synthetic_ratio, mesh: synthetic positives from a fit (``synthaug fit`` output).
+        params, synthetic_ratio, mesh: synthetic positives from a fit (``synthaug fit`` output) of the
+            cell's seed set: ``params`` may hold ``{seed}`` (one fit per training seed, since each
+            training seed draws its own seed set).
+        fit_distance: fit the cell's seed set with this distance (``synthaug fit``'s defaults) when
+            the ``params`` file is missing (default path: ``<work>/fits/<class>_<n>_seed<seed>_<distance>.json``).
+        fit_options: other :class:`~synthaug.fit.fitting.FitConfig` fields of that fit, as
+            ``(name, value)`` pairs (default: ``synthaug fit``'s).
+        perturb_copies: perturbed copies of every real positive (the paper's baseline).
     """
 
     name: str
@@ -81,6 +92,9 @@ class Condition:
     params: str | None = None
     synthetic_ratio: float = 0.0
     mesh: str | None = None
+    fit_distance: str | None = None
+    fit_options: tuple[tuple[str, Any], ...] = ()
+    perturb_copies: int = 0
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -89,6 +103,9 @@ class Condition:
             d["seed_count"] = None
         else:
             d["frame_step"] = None
+        for k in ("fit_distance", "fit_options", "perturb_copies"):  # added later: absent at their defaults (older cells keep their keys)
+            if d[k] in (None, 0, ()):
+                d.pop(k)
         return d
 
 
@@ -174,12 +191,40 @@ class ProtocolRunner:
 
     # cells --------------------------------------------------------------------------------------
     def identity(self, condition: Condition, seed: int) -> dict[str, Any]:
+        cond = condition.identity()
+        if condition.params is not None and condition.fit_distance is None:  # a given fit: its bytes are part of the key
+            import hashlib
+
+            path = Path(condition.params.format(seed=seed))
+            cond["params_sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()[:16] if path.is_file() else None
         return {"what": "protocol_cell", "protocol": self.protocol.fingerprint(), "class": self.class_name,
-                "condition": condition.identity(), "seed": int(seed), "options": dataclasses.asdict(self.options),
+                "condition": cond, "seed": int(seed), "options": dataclasses.asdict(self.options),
                 "scales": None if self.scales is None else list(self.scales), "scored_scales": list(self.scales_scored()),
                 "patches": self.patches, "max_test_videos": self.max_test_videos,
                 **({} if self.eval_split == "test" else {"eval_split": self.eval_split}),
                 "split_file": self.paths.split_file, "training_version": TRAINING_VERSION}
+
+    def params_for(self, condition: Condition, seed: int) -> Any:
+        """The fit of the cell's seed set: a path, a callable that makes it when missing, or None."""
+        if condition.params is None and condition.fit_distance is None:
+            return None
+        n = condition.seed_count
+        path = Path(condition.params.format(seed=seed)) if condition.params is not None else \
+            Path(self.paths.work_dir) / "fits" / f"{self.class_name}_{n}_seed{seed}_{condition.fit_distance}.json"
+        if condition.fit_distance is None:
+            return path
+
+        def make(seedset_path: Path) -> Path:
+            if not path.is_file():
+                from synthaug.fit.fitting import FitConfig, fit_seedset
+
+                t0 = time.perf_counter()
+                cfg = FitConfig(distance=condition.fit_distance, **dict(condition.fit_options))
+                fit_seedset(seedset_path, condition.mesh or "quadcopter", path, cfg)
+                self.log(f"    fit {path} ({condition.fit_distance}): {time.perf_counter() - t0:.0f} s")
+            return path
+
+        return make
 
     def _train_and_score(self, condition: Condition, seed: int) -> dict[str, Any]:
         t0 = time.perf_counter()
@@ -187,8 +232,8 @@ class ProtocolRunner:
         det, meta = train_from_videos(
             condition.kind, self.class_name, self.paths.videos_dir, self.paths.labels_dir,
             split=self.paths.split_file, seed=seed, seed_count=condition.seed_count, all_frames=condition.all_frames,
-            frame_step=condition.frame_step, params=condition.params, mesh=condition.mesh,
-            synthetic_ratio=condition.synthetic_ratio, options=options,
+            frame_step=condition.frame_step, params=self.params_for(condition, seed), mesh=condition.mesh,
+            synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies, options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
         t_train = time.perf_counter() - t0
@@ -346,7 +391,76 @@ def _positives(res: ProtocolResult) -> float:
     return float(cond.get("seed_count") or 1e4)
 
 
+# ------------------------------------------------------------------------------------------ synthetic data
+def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
+                         synthetic_ratios: Sequence[float] = (), fit_distance: str | Mapping[str, str] | None = None,
+                         params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
+                         fit_options: Mapping[str, Any] | None = None, seeds: Sequence[int] | None = None,
+                         out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
+    """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
+
+    Every condition uses the same training seeds, so each one's paired difference against
+    ``<kind> / <n> seeds`` (real only; the learning curve's cell, reused from the cache) is
+    over the same seed sets, negatives and initialisations. Synthetic positives come from a fit
+    of *each training seed's own* seed set: ``params`` (a path that may hold ``{seed}``) or, when
+    it is missing, a fit made on the fly with ``fit_distance`` (a name, or detector -> name) and
+    ``fit_options`` (other :class:`~synthaug.fit.fitting.FitConfig` fields).
+
+    Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
+    detector and scale, paired against real only).
+    """
+    results: dict[str, dict[str, ProtocolResult]] = {}
+    for kind in detectors:
+        dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
+        base = f"{kind} / {seed_count} seeds"
+        conds = [Condition(base, kind, seed_count=seed_count)]
+        conds += [Condition(f"{base} + {r:g}x synthetic ({dist or Path(str(params)).stem})", kind, seed_count=seed_count,
+                            params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
+                            fit_options=tuple(sorted((fit_options or {}).items())) if dist else ())
+                  for r in synthetic_ratios]
+        conds += [Condition(f"{base} + {c}x perturbed", kind, seed_count=seed_count, perturb_copies=int(c))
+                  for c in perturb_copies]
+        for c in conds:
+            for s, res in runner.run(c, seeds).items():
+                results.setdefault(kind if s == 1.0 else f"{kind} x{s:g}", {})[c.name] = res
+    if out is not None:
+        from synthaug.params import atomic_write_text
+
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        lines = ["# Real seeds vs + synthetic vs + perturbed (paired against real only)", ""]
+        for group, conds_ in results.items():
+            for name, res in conds_.items():
+                res.save(out / f"{_slug(name)}{'' if res.scale == 1.0 else f'_x{res.scale:g}'}.json")
+            base = next((n for n in conds_ if n.endswith(f"/ {seed_count} seeds")), None)
+            lines += [f"## {group}", "", report_table(dict(conds_), baseline=base), ""]
+        atomic_write_text(out / "comparison.md", "\n".join(lines) + "\n")
+    return results
+
+
 # ------------------------------------------------------------------------------------------ command line
+def _common_arguments(q: argparse.ArgumentParser) -> None:
+    q.add_argument("--class", dest="class_name", default="drone", help="class to detect")
+    q.add_argument("--detectors", nargs="+", default=["hog", "adaboost", "cnn"], choices=["hog", "adaboost", "cnn"],
+                   help="detector families")
+    q.add_argument("--seeds", type=int, nargs="*", default=None, help="training seeds (default: the protocol's count)")
+    q.add_argument("--protocol", default="configs/protocol/halmstad_v1.json", help="protocol file")
+    q.add_argument("--videos", default=DataPaths.videos_dir, help="folder of videos (shared format)")
+    q.add_argument("--labels", default=DataPaths.labels_dir, help="folder of label JSON files")
+    q.add_argument("--split", default=DataPaths.split_file, help="split JSON (by video)")
+    q.add_argument("--work", default=DataPaths.work_dir, help="ingest shards, fits and the cell cache live here")
+    q.add_argument("--no-scale-check", action="store_true", help="skip the x2 / x0.75 test frames")
+    q.add_argument("--no-patches", action="store_true", help="skip the paper's patch protocol")
+    q.add_argument("--max-test-videos", type=int, default=None, help="first N test videos only (smoke runs)")
+    q.add_argument("--mining-rounds", type=int, default=TrainOptions.mining_rounds, help="hard-negative mining rounds")
+    q.add_argument("--cnn-shift", type=int, default=TrainOptions.cnn_shift, help="CNN positives' random shift (pixels)")
+    q.add_argument("--eval-split", default="test", choices=["test", "val"],
+                   help="score on the protocol's test frames, or its validation frames (to choose a setting)")
+    q.add_argument("--threads", type=int, default=1, help="torch threads")
+    q.add_argument("--read-only", action="store_true", help="never train: tables from cached cells only")
+    q.add_argument("--out", required=True, help="output folder")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m synthaug.evaluate.runner",
                                 description="Experiments under the evaluation protocol (cached cells).",
@@ -354,28 +468,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     sub = p.add_subparsers(dest="what", required=True)
     lc = sub.add_parser("learning-curve", help="real data only: detectors x seed counts (+ all frames)",
                         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    lc.add_argument("--class", dest="class_name", default="drone", help="class to detect")
-    lc.add_argument("--detectors", nargs="+", default=["hog", "adaboost", "cnn"], choices=["hog", "adaboost", "cnn"],
-                    help="detector families")
+    _common_arguments(lc)
     lc.add_argument("--seed-counts", type=int, nargs="*", default=[12, 25, 100], help="real seed counts")
     lc.add_argument("--all-frames", action="store_true", help="also train on every --frame-step-th labelled frame")
     lc.add_argument("--frame-step", type=int, default=3, help="stride over labelled frames with --all-frames")
-    lc.add_argument("--seeds", type=int, nargs="*", default=None, help="training seeds (default: the protocol's count)")
-    lc.add_argument("--protocol", default="configs/protocol/halmstad_v1.json", help="protocol file")
-    lc.add_argument("--videos", default=DataPaths.videos_dir, help="folder of videos (shared format)")
-    lc.add_argument("--labels", default=DataPaths.labels_dir, help="folder of label JSON files")
-    lc.add_argument("--split", default=DataPaths.split_file, help="split JSON (by video)")
-    lc.add_argument("--work", default=DataPaths.work_dir, help="ingest shards and the cell cache live here")
-    lc.add_argument("--no-scale-check", action="store_true", help="skip the x2 / x0.75 test frames")
-    lc.add_argument("--no-patches", action="store_true", help="skip the paper's patch protocol")
-    lc.add_argument("--max-test-videos", type=int, default=None, help="first N test videos only (smoke runs)")
-    lc.add_argument("--mining-rounds", type=int, default=TrainOptions.mining_rounds, help="hard-negative mining rounds")
-    lc.add_argument("--cnn-shift", type=int, default=TrainOptions.cnn_shift, help="CNN positives' random shift (pixels)")
-    lc.add_argument("--eval-split", default="test", choices=["test", "val"],
-                    help="score on the protocol's test frames, or its validation frames (to choose a setting)")
-    lc.add_argument("--threads", type=int, default=1, help="torch threads")
-    lc.add_argument("--read-only", action="store_true", help="never train: tables from cached cells only")
-    lc.add_argument("--out", required=True, help="output folder (results/learning_curve/<class>)")
+    sy = sub.add_parser("synthetic", help="real seeds vs + synthetic (a fit per training seed) vs + perturbed, paired",
+                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    _common_arguments(sy)
+    sy.add_argument("--seed-counts", type=int, default=100, help="real seeds per training set")
+    sy.add_argument("--synthetic-ratios", type=float, nargs="*", default=[], help="synthetic patches per real seed")
+    sy.add_argument("--params", default=None,
+                    help="fit of each training seed's seed set; may hold {seed} (e.g. fits/drone_100_seed{seed}_hog.json)")
+    sy.add_argument("--fit-distance", default=None,
+                    help="fit missing --params files with this distance (default: each detector's own: hog, wl_learned, cnn)")
+    sy.add_argument("--mesh", default=None, help="mesh of the synthetic object (default: the fit's)")
+    sy.add_argument("--perturb-copies", type=int, nargs="*", default=[], help="perturbed copies per real positive")
     args = p.parse_args(argv)
     import torch
 
@@ -388,8 +495,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                             scale_check=not args.no_scale_check, patches=not args.no_patches,
                             max_test_videos=args.max_test_videos, eval_split=args.eval_split)
     t0 = time.perf_counter()
-    learning_curve(runner, detectors=args.detectors, seed_counts=args.seed_counts, all_frames=args.all_frames,
-                   frame_step=args.frame_step, seeds=args.seeds, out=args.out)
+    if args.what == "learning-curve":
+        learning_curve(runner, detectors=args.detectors, seed_counts=args.seed_counts, all_frames=args.all_frames,
+                       frame_step=args.frame_step, seeds=args.seeds, out=args.out)
+    else:
+        dist = args.fit_distance or (None if args.params else OWN_DISTANCE)
+        synthetic_comparison(runner, detectors=args.detectors, seed_count=args.seed_counts,
+                             synthetic_ratios=args.synthetic_ratios, fit_distance=dist, params=args.params,
+                             perturb_copies=args.perturb_copies, mesh=args.mesh, seeds=args.seeds, out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 

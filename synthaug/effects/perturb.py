@@ -1,4 +1,4 @@
-"""The classic augmentation baseline of Table 1: real seed patches perturbed by rotation, shift, mirror, blur, noise.
+"""The classic augmentation baseline of the paper's Table 1: patches perturbed by rotation, shift, mirror, blur, noise.
 
 Example:
     >>> import torch
@@ -17,15 +17,12 @@ every perturbed training set and the cached Table 1 cells.
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from synthaug.detectors.training import real_positives
-
-__all__ = ["perturb_patches", "perturbed_positives"]
+__all__ = ["perturb_patches"]
 
 
 def perturb_patches(
@@ -92,9 +89,3 @@ def perturb_patches(
     xb = F.conv2d(F.pad(xb, (0, 0, radius, radius), mode="replicate"), kc[:, None, :, None], groups=m * c)
     x = xb.reshape(m, c, h, w) + noise * noise_sigma[:, None, None, None].to(x.dtype)
     return x.clamp(0.0, 1.0)
-
-
-def perturbed_positives(seedset: Any, copies: int, *, seed: int = 0) -> Tensor:
-    """Real patches plus ``copies`` perturbed versions of each (the Table 1 baseline)."""
-    real = real_positives(seedset)
-    return torch.cat([real, perturb_patches(real, copies, generator=torch.Generator().manual_seed(seed))])
