@@ -21,9 +21,12 @@ one and below every window that survived with the same partial sum.
 
 Dense scoring evaluates every stump at every window from one set of
 orientation integral images per pyramid level (block-summed when the
-rectangles and the stride share a grid, see :meth:`AdaBoostDetector._grid`),
-copying whole window grids out of a strided view of the integral images while
-most windows are alive and gathering only the survivors afterwards.
+rectangles and the stride share a grid, see :meth:`AdaBoostDetector._grid`):
+while most windows are alive, each stump's margin is computed over the whole
+window grid at once from shifted views of its response map (no gathers); once
+the cascade has dropped most windows, only the survivors' corners are gathered.
+``AdaBoostDetector._score_map_reference`` keeps the former implementation
+(stage-wise gathers), against which the tests check the scores.
 
 Example:
     >>> from synthaug.detectors.toy import toy_patches
@@ -48,6 +51,7 @@ from synthaug.detectors.weak_learners import (
     WeakLearners,
     edge_orientation_energy,
     exhaustive_candidates,
+    interior_block_integrals,
     interior_orientation_maps,
 )
 
@@ -384,7 +388,136 @@ class AdaBoostDetector(PatchDetector):
         return max(g, 1)
 
     def score_map(self, image: Tensor) -> Tensor:
-        """Scores of every window on a ``stride`` grid, from one integral image per bin.
+        """Scores of every window on a ``stride`` grid, one stump at a time over whole maps.
+
+        The orientation integral images are computed once for the whole image
+        (float64 sums over g x g blocks when the stride and every rectangle lie
+        on a grid of g pixels, see :meth:`_grid`). While most windows are alive,
+        each stump is evaluated at every window at once, on its own response
+        map: with P its bin's integral image and T the all-bin one,
+        D = P - τ T is linear, so the stump's margin G_o - τ (G + ε) at every
+        window is four shifted views of D (one row and one column difference) —
+        five whole-map operations per stump, no gathers. With the cascade on,
+        windows are dropped after each stage as before (see the module docstring
+        for their score); once fewer than a quarter are alive, only the
+        survivors' corners are gathered. Same scores as
+        :meth:`_score_map_reference` (the former implementation) up to float
+        rounding of the sums of α.
+
+        Shape:
+            - image: (1, 1, H, W)
+            - output: ((H - window) // stride + 1, (W - window) // stride + 1)
+        """
+        image = check_image(image)
+        h_out, w_out = score_map_shape(image.shape[-2], image.shape[-1], self.window, self.stride)
+        if h_out == 0 or w_out == 0:
+            return torch.zeros(max(h_out, 0), max(w_out, 0))
+        wl = self.learners
+        g = self._grid()
+        full = interior_block_integrals(image, wl.n_bins, g)  # (K+1, h1, w1), last plane = all bins
+        k, h1, w1 = full.shape[0] - 1, full.shape[1], full.shape[2]
+        step = self.stride // g
+        n_pos = h_out * w_out
+        rh, rw = (h_out - 1) * step + 1, (w_out - 1) * step + 1  # rows/columns spanned by the window corners
+        # per stump, in window blocks: top-left corner, size, plane, threshold, the margin's comparison
+        y0s, x0s = ((wl.rects[:, 0] - 1) // g).tolist(), ((wl.rects[:, 1] - 1) // g).tolist()
+        hs, ws = (wl.rects[:, 2] // g).tolist(), (wl.rects[:, 3] // g).tolist()
+        planes, taus = wl.orientations.tolist(), wl.thresholds.double().tolist()
+        positive = (wl.polarity > 0).tolist()
+        alpha = wl.weights.double()
+        alphas = alpha.tolist()
+        remaining = alpha.flip(0).cumsum(0).flip(0)  # Σ α from stump t on
+        use_cascade = self.cascade and self.rejection is not None
+        total = full[k]
+        d_buf = torch.empty(h1 * w1, dtype=torch.float64)
+        v_buf = torch.empty(h_out * w1, dtype=torch.float64)
+        margin = torch.empty(h_out, w_out, dtype=torch.float64)
+        gained = torch.empty(h_out, w_out, dtype=torch.float64)
+        run = torch.zeros(h_out, w_out, dtype=torch.float64)  # partial score F_t of every window
+        alive: Tensor | None = None  # windows not dropped by the cascade (None: all)
+        final = run  # score of the dropped windows, where alive is False
+        start = 0
+        stage_ends = self._stage_ends()
+        for stage, end in enumerate(stage_ends):
+            if alive is not None and int(alive.sum()) * 4 < n_pos:
+                return self._finish_sparse(full, torch.where(alive, run, final).reshape(-1), alive.reshape(-1).nonzero()[:, 0],
+                                           stage, g, h_out, w_out)
+            # every window: gained = Σ_t α_t (2 h_t - 1) over the stage, one stump at a time
+            gained.zero_()
+            for t in range(start, end):
+                y0, x0, h, w = y0s[t], x0s[t], hs[t], ws[t]
+                rows, cols = slice(y0, y0 + rh + h), slice(x0, x0 + rw + w)
+                d = d_buf[: (rh + h) * (rw + w)].view(rh + h, rw + w)
+                torch.add(full[planes[t], rows, cols], total[rows, cols], alpha=-taus[t], out=d)
+                v = v_buf[: h_out * (rw + w)].view(h_out, rw + w)
+                if step == 1:
+                    torch.sub(d[h:], d[:h_out], out=v)
+                    torch.sub(v[:, w:], v[:, :w_out], out=margin)
+                else:
+                    torch.sub(d[h::step][:h_out], d[::step][:h_out], out=v)
+                    torch.sub(v[:, w::step][:, :w_out], v[:, ::step][:, :w_out], out=margin)
+                # margin = G_o - τ G; E > τ  <=>  G_o - τ (G + ε) > 0; the in-place
+                # comparison leaves 1.0 / 0.0 in margin (no bool-to-float copy)
+                (margin.gt_ if positive[t] else margin.lt_)(taus[t] * wl.eps)
+                gained.add_(margin, alpha=2.0 * alphas[t])
+            run = run + gained.sub_(alpha[start:end].sum())
+            if use_cascade and end < len(wl):
+                drop = run < self.rejection[stage]
+                if alive is not None:
+                    drop &= alive
+                if bool(drop.any()):
+                    final = torch.where(drop, run - remaining[end], final)
+                    alive = ~drop if alive is None else alive & ~drop
+            start = end
+        return (run if alive is None else torch.where(alive, run, final)).float()
+
+    def _finish_sparse(self, full: Tensor, scores: Tensor, live: Tensor, first_stage: int, g: int, h_out: int,
+                       w_out: int) -> Tensor:
+        """Stages ``first_stage:`` of :meth:`score_map` at the surviving windows ``live`` only.
+
+        ``scores`` holds the partial score of the live windows and the final one of the dropped ones.
+        """
+        wl = self.learners
+        remaining = wl.weights.double().flip(0).cumsum(0).flip(0)
+        ends = self._stage_ends()
+        start = 0 if first_stage == 0 else ends[first_stage - 1]
+        for stage in range(first_stage, len(ends)):
+            end = ends[stage]
+            part = scores[live] + self._survivor_gains(full, live, start, end, g, h_out, w_out)
+            scores[live] = part
+            if self.cascade and self.rejection is not None and end < len(wl):
+                drop = part < self.rejection[stage]
+                if bool(drop.any()):
+                    scores[live[drop]] = part[drop] - remaining[end]
+                    live = live[~drop]
+                    if live.numel() == 0:
+                        break
+            start = end
+        return scores.reshape(h_out, w_out).float()
+
+    def _survivor_gains(self, full: Tensor, live: Tensor, start: int, end: int, g: int, h_out: int, w_out: int) -> Tensor:
+        """Σ α_t (2 h_t - 1) of stumps ``start:end`` at the windows ``live`` only (flat gathers of their corners)."""
+        wl = self.learners
+        k, h1, w1 = full.shape[0] - 1, full.shape[1], full.shape[2]
+        plane, step = h1 * w1, self.stride // g
+        y0, x0 = (wl.rects[start:end, 0] - 1) // g, (wl.rects[start:end, 1] - 1) // g
+        y1, x1 = y0 + wl.rects[start:end, 2] // g, x0 + wl.rects[start:end, 3] // g
+        cy = torch.stack([y1, y0, y1, y0])  # (4, t): corners (+, -, -, +)
+        cx = torch.stack([x1, x1, x0, x0])
+        cc = torch.stack([wl.orientations[start:end].expand(4, -1), torch.full_like(cy, k)])  # (2, 4, t)
+        base = (live // w_out) * (step * w1) + (live % w_out) * step
+        vals = torch.take(full.reshape(-1), (cc * plane + cy * w1 + cx)[..., None] + base)  # (2, 4, t, P)
+        sums = vals[:, 0] - vals[:, 1] - vals[:, 2] + vals[:, 3]  # bin energy, total energy
+        margin = sums[0] - wl.thresholds[start:end].double()[:, None] * (sums[1] + wl.eps)
+        vote = torch.where(margin * wl.polarity[start:end].double()[:, None] > 0, 1.0, -1.0).to(torch.float64)
+        return wl.weights[start:end].double() @ vote
+
+    def _score_map_reference(self, image: Tensor) -> Tensor:
+        """The former :meth:`score_map` (stage-wise gathers of corner values), kept as the reference.
+
+        Every stage copies the 8 corner values of its stumps for every live window
+        out of a strided view of the integral images; :meth:`score_map` gives the
+        same scores (tests compare them) several times faster.
 
         The orientation integral images are computed once for the whole image
         (in float64, on g x g block sums when the stride and every rectangle lie
