@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 import torch
+import torch.nn.functional as F
 from torch import Tensor, nn
 
 from synthaug.detectors.base import PatchDetector, check_image, check_patches, register_detector, score_map_shape
@@ -133,7 +134,36 @@ class PatchCNN(nn.Module):
         return self.logits_map(x).flatten()
 
     def score_map(self, image: Tensor) -> Tensor:
-        """Logit of every window on an 8-pixel grid, one forward pass over the image."""
+        """Logit of every window on an 8-pixel grid, one forward pass over the image.
+
+        The same layers as :meth:`logits_map`, run in channels-last (NHWC) memory
+        layout, which oneDNN's CPU convolutions take without reordering (about
+        1.6x faster on a 640x512 frame, the first 1-channel layer 3x); equal to
+        :meth:`_score_map_reference` up to float rounding.
+        """
+        image = check_image(image)
+        h, w = score_map_shape(image.shape[-2], image.shape[-1], self.window, self.stride)
+        if h == 0 or w == 0:
+            return image.new_zeros(max(h, 0), max(w, 0))
+        w1, w2, w3, w4, w5 = self._nhwc_weights()
+        x = ((image - _MEAN) * _SCALE).contiguous(memory_format=torch.channels_last)
+        x = torch.relu(F.conv2d(x, w1, self.conv1.bias, self.conv1.stride))
+        x = torch.relu(_max_pool2(F.conv2d(x, w2, self.conv2.bias)))
+        x = torch.relu(_max_pool2(F.conv2d(x, w3, self.conv3.bias)))
+        x = torch.relu(F.conv2d(x, w4, self.fc.bias))
+        return F.conv2d(x, w5, self.out.bias)[0, 0, :h, :w]
+
+    def _nhwc_weights(self) -> list[Tensor]:
+        """The five convolution weights in channels-last layout.
+
+        ``Tensor.to`` (not ``contiguous``): a 1-input-channel weight is already
+        "contiguous" in both layouts, and would keep the NCHW strides that make
+        oneDNN run the first layer ~3x slower.
+        """
+        return [m.weight.to(memory_format=torch.channels_last) for m in (self.conv1, self.conv2, self.conv3, self.fc, self.out)]
+
+    def _score_map_reference(self, image: Tensor) -> Tensor:
+        """The former :meth:`score_map`: :meth:`logits_map` in the default (NCHW) layout."""
         image = check_image(image)
         h, w = score_map_shape(image.shape[-2], image.shape[-1], self.window, self.stride)
         if h == 0 or w == 0:
@@ -171,6 +201,10 @@ class CNNDetector(PatchDetector):
     @torch.no_grad()
     def score_map(self, image: Tensor) -> Tensor:
         return self.net.score_map(image)
+
+    @torch.no_grad()
+    def _score_map_reference(self, image: Tensor) -> Tensor:
+        return self.net._score_map_reference(image)
 
     def state_dict(self) -> dict[str, Any]:
         return {"config": self.net.config(), "weights": {k: v.detach().clone() for k, v in self.net.state_dict().items()}}
