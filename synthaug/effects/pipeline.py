@@ -101,8 +101,12 @@ def simulate(
         if needs and generator is None:
             raise ValueError("these effects draw random fields: pass `fields` or a `generator`")
         fields = sample_fields(names, tuple(background.shape), generator) if needs else {}
-    default_w = torch.full((background.shape[0], theta.channels), 0.5, dtype=background.dtype)
-    color = Fx.diffuse_material(normals, coverage, default_w)
+    if ordered(names)[:1] == [get_effect("material")]:
+        # the material effect runs first and replaces the object colour: skip the default one
+        color = torch.zeros((), dtype=background.dtype).expand_as(background)
+    else:
+        default_w = torch.full((background.shape[0], theta.channels), 0.5, dtype=background.dtype)
+        color = Fx.diffuse_material(normals, coverage, default_w)
     state = RenderState(object_color=color, coverage=coverage, normals=normals, background=background,
                         origin=origin, frame_size=frame_size, fields=fields, extras=dict(extras or {}))
     return apply_effects(state, theta, names, clamp=clamp).image
