@@ -100,8 +100,9 @@ class ViewCache:
     Args:
         coverage: (N, S, S) uint8, coverage × 255.
         normals: (N, 3, S, S) int8, camera-frame normals × 127.
-        (Held as one (N, 4, S, S) int8 tensor, coverage requantised to 0..127,
-        so a batch is one gather and one conversion.)
+        (Held as one (N, 4, S', S'') int8 tensor, coverage requantised to 0..127,
+        cropped to the box where some view has content, so a batch is one
+        small gather and one conversion.)
         alphas: (Na,) grid of α (rad); betas: (Nb,) grid of β; view n = ia * Nb + ib.
         sprite_scale: mesh unit length as a fraction of the sprite side.
     """
@@ -114,7 +115,15 @@ class ViewCache:
         self.coverage = torch.from_numpy(np.asarray(coverage))
         self.normals = torch.from_numpy(np.asarray(normals))
         cov7 = torch.round(self.coverage.to(torch.float32) * (127.0 / 255.0)).to(torch.int8)
-        self._sprites = torch.cat([cov7[:, None], self.normals], dim=1).contiguous()
+        sprites = torch.cat([cov7[:, None], self.normals], dim=1)
+        # Only the box where some view has content is kept: outside it every sprite is zero, which is what
+        # grid_sample's zero padding reads there, so the crop changes nothing but the bytes gathered per batch.
+        filled = (sprites != 0).any(1).any(0)
+        rows, cols = torch.nonzero(filled.any(1)).flatten(), torch.nonzero(filled.any(0)).flatten()
+        y0, y1 = (int(rows[0]), int(rows[-1]) + 1) if len(rows) else (0, 1)
+        x0, x1 = (int(cols[0]), int(cols[-1]) + 1) if len(cols) else (0, 1)
+        self._sprites = sprites[..., y0:y1, x0:x1].contiguous()
+        self._content_box = (y0, y1, x0, x1)
         self.alphas = np.asarray(alphas, np.float64)
         self.betas = np.asarray(betas, np.float64)
         self.sprite_scale = float(sprite_scale)
@@ -278,7 +287,7 @@ class ViewCache:
         if b == 0:
             return torch.zeros(0, 1, h, w, dtype=dtype), torch.zeros(0, 3, h, w, dtype=dtype)
         idx = self.view_index(alpha, beta)
-        sprites = self._sprites[idx].to(dtype).mul_(1.0 / 127.0)
+        sprites = self._sprites[idx].to(dtype)  # int8 units: coverage 0..127, normals × 127
         tx = torch.as_tensor(t_x, dtype=dtype)
         ty = torch.as_tensor(t_y, dtype=dtype)
         osc = torch.as_tensor(object_scale, dtype=dtype).expand(b)
@@ -291,15 +300,26 @@ class ViewCache:
             torch.stack([k * c, -k * s * aspect, -k * (c * px_x - s * px_y)], 1),
             torch.stack([k * s, k * c * aspect, -k * (s * px_x + c * px_y)], 1),
         ], 1)
+        # from the full sprite's normalised coordinates to the cropped one's (grid_sample, align_corners=False:
+        # pixel i of n spans [2i/n - 1, 2(i+1)/n - 1]): x' = (x + 1) S / n' - 2 x0 / n' - 1
+        y0, y1, x0, x1 = self._content_box
+        side = self.sprite_size
+        scale = theta.new_tensor([side / (x1 - x0), side / (y1 - y0)])
+        shift = theta.new_tensor([(side - 2 * x0) / (x1 - x0) - 1.0, (side - 2 * y0) / (y1 - y0) - 1.0])
+        theta = theta * scale[:, None]
+        theta = torch.cat([theta[..., :2], theta[..., 2:] + shift[:, None]], -1)
         grid = F.affine_grid(theta, [b, 4, h, w], align_corners=False)
         out = F.grid_sample(sprites, grid, mode="bilinear", padding_mode="zeros", align_corners=False)
-        cov = out[:, :1].clamp(0.0, 1.0)
-        nx, ny, nz = out[:, 1], out[:, 2], out[:, 3]
-        cg, sg = c[:, None, None], s[:, None, None]
-        nrm = torch.stack([cg * nx - sg * ny, sg * nx + cg * ny, nz], 1)
-        # (x*x).sum().sqrt() is ~10x faster than linalg.vector_norm on CPU here
-        norm = (nrm * nrm).sum(1, keepdim=True).sqrt_()
-        nrm = nrm * torch.where(norm > 1e-3, 1.0 / norm.clamp_min(1e-3), 0.0)
+        # bilinear sampling is linear: scale to [0, 1] / unit normals after it, on the smaller output
+        cov = out[:, :1].mul(1.0 / 127.0).clamp_(0.0, 1.0)
+        raw = out[:, 1:]
+        # the γ rotation keeps lengths, so normalise with the unrotated length (threshold 1e-3 in unit
+        # normals = 0.127 in int8 units)
+        sq = (raw * raw).sum(1, keepdim=True)
+        inv = torch.where(sq > 0.127 ** 2, sq.clamp_min(0.127 ** 2).rsqrt(), 0.0)
+        ci, si = c[:, None, None, None] * inv, s[:, None, None, None] * inv
+        nx, ny = raw[:, :1], raw[:, 1:2]
+        nrm = torch.cat([ci * nx - si * ny, si * nx + ci * ny, raw[:, 2:] * inv], 1)
         return cov, nrm
 
 
