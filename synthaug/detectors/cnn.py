@@ -137,20 +137,24 @@ class PatchCNN(nn.Module):
         """Logit of every window on an 8-pixel grid, one forward pass over the image.
 
         The same layers as :meth:`logits_map`, run in channels-last (NHWC) memory
-        layout, which oneDNN's CPU convolutions take without reordering (about
-        1.6x faster on a 640x512 frame, the first 1-channel layer 3x); equal to
-        :meth:`_score_map_reference` up to float rounding.
+        layout, which oneDNN's CPU convolutions take without reordering (the
+        first, 1-channel layer 3x faster), with the input normalisation folded
+        into the first layer and in-place ReLUs: about 1.6x faster than
+        :meth:`_score_map_reference` on a 640x512 frame, equal to it up to float
+        rounding.
         """
         image = check_image(image)
         h, w = score_map_shape(image.shape[-2], image.shape[-1], self.window, self.stride)
         if h == 0 or w == 0:
             return image.new_zeros(max(h, 0), max(w, 0))
         w1, w2, w3, w4, w5 = self._nhwc_weights()
-        x = ((image - _MEAN) * _SCALE).contiguous(memory_format=torch.channels_last)
-        x = torch.relu(F.conv2d(x, w1, self.conv1.bias, self.conv1.stride))
-        x = torch.relu(_max_pool2(F.conv2d(x, w2, self.conv2.bias)))
-        x = torch.relu(_max_pool2(F.conv2d(x, w3, self.conv3.bias)))
-        x = torch.relu(F.conv2d(x, w4, self.fc.bias))
+        # the input normalisation folded into the first layer: conv(s (x - m), w) + b = conv(x, s w) + b - s m Σw
+        b1 = self.conv1.bias - (_SCALE * _MEAN) * self.conv1.weight.sum((1, 2, 3))
+        x = image.contiguous(memory_format=torch.channels_last)
+        x = torch.relu_(F.conv2d(x, w1 * _SCALE, b1, self.conv1.stride))
+        x = torch.relu_(_max_pool2(F.conv2d(x, w2, self.conv2.bias)))
+        x = torch.relu_(_max_pool2(F.conv2d(x, w3, self.conv3.bias)))
+        x = torch.relu_(F.conv2d(x, w4, self.fc.bias))
         return F.conv2d(x, w5, self.out.bias)[0, 0, :h, :w]
 
     def _nhwc_weights(self) -> list[Tensor]:
