@@ -247,3 +247,29 @@ def test_dataset_items_equal_reference(cache, reference_path, mode, channels):
     reference_path()
     ref = _items(ds, idx)
     _assert_images_close(new, ref, f"{mode}, {channels} channel(s)")
+
+
+def test_frame_batches_from_workers_equal_the_main_process(cache):
+    """Frames built in one shared block per batch (in workers) and per-item views of batch tensors."""
+    from torch.utils.data import DataLoader
+
+    from synthaug.data.synthetic import collate_detection
+
+    bgs = sky_backgrounds(3, (120, 150), seed=4)
+    ds = SyntheticObjectDataset("quadcopter", bgs, cache=cache, length=12, mode="frame", negative_fraction=0.3,
+                                seed=9, object_size=(20.0, 40.0))
+    runs = []
+    for workers in (0, 2):
+        items = []
+        for images, targets in DataLoader(ds, batch_size=5, num_workers=workers, collate_fn=collate_detection):
+            items += [(img.as_subclass(torch.Tensor).clone(), {k: v.as_subclass(torch.Tensor).clone()
+                                                               for k, v in t.items()}) for img, t in zip(images, targets)]
+        runs.append(items)
+    assert len(runs[0]) == len(runs[1]) == 12
+    assert any(len(t["boxes"]) == 0 for _, t in runs[0]) and any(len(t["boxes"]) == 1 for _, t in runs[0])
+    for (img0, t0), (img1, t1) in zip(*runs):
+        assert torch.equal(img0, img1)
+        assert t0.keys() == t1.keys() and all(torch.equal(t0[k], t1[k]) for k in t0)
+    single = ds[7]
+    assert torch.equal(single[0].as_subclass(torch.Tensor), runs[0][7][0])
+    assert torch.equal(single[1]["boxes"].as_subclass(torch.Tensor), runs[0][7][1]["boxes"])

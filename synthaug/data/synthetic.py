@@ -650,34 +650,58 @@ class SyntheticObjectDataset(Dataset):
                                       dtype=torch.float32)
         images = simulate(cov, nrm, bgs, theta, effects=self.effects, fields=fields, origin=origin,
                           frame_size=frame_size, extras=extras)
+        # Every per-item tensor is a view of a batch tensor: from a DataLoader worker a batch then crosses as a
+        # few shared blocks (one per storage), not one shared segment and file descriptor per item and key,
+        # which cost more than rendering a frame (issue 19).
         vec = theta.to_vector().float()
+        synthetic = torch.ones(len(draws), dtype=torch.bool)
+        if self.mode == "patch":
+            labels = torch.tensor([0 if d["negative"] else self.label for d in draws], dtype=torch.int64)
+        else:
+            frames = self._frame_batch(draws)
+            labels = torch.full((len(draws), 1), self.label, dtype=torch.int64)
+            boxes = torch.zeros((len(draws), 1, 4), dtype=torch.float32)
         out = []
         for k, d in enumerate(draws):
-            target: dict[str, torch.Tensor] = {
-                "synthetic": torch.tensor(True),
-                "seed_index": torch.tensor(d["seed_index"], dtype=torch.int64),
-                "theta": vec[k].clone(),
-            }
+            target: dict[str, torch.Tensor] = {"synthetic": synthetic[k], "seed_index": seeds[k], "theta": vec[k]}
             if self.mode == "patch":
-                if d["negative"]:
-                    img = bgs[k].clone()
-                    target["labels"] = torch.tensor(0, dtype=torch.int64)
-                else:
-                    img = images[k].contiguous()
-                    target["labels"] = torch.tensor(self.label, dtype=torch.int64)
-                out.append((img, target))
+                target["labels"] = labels[k]
+                out.append((bgs[k] if d["negative"] else images[k], target))
             else:
-                frame = self.backgrounds[d["seed_index"]].clone()
-                if d["negative"]:
-                    boxes = torch.zeros((0, 4), dtype=torch.float32)
-                else:
+                frame = frames[k]
+                n_boxes = 0
+                if not d["negative"]:
                     x0, y0 = d["crop_xy"]
                     frame[:, y0:y0 + crop, x0:x0 + crop] = images[k]
-                    boxes = _box_from_coverage(cov[k, 0], x0, y0)
-                target["boxes"] = tv_tensors.BoundingBoxes(boxes, format="XYXY", canvas_size=tuple(frame.shape[-2:]))
-                target["labels"] = torch.full((len(boxes),), self.label, dtype=torch.int64)
+                    box = _box_from_coverage(cov[k, 0], x0, y0)
+                    n_boxes = len(box)
+                    boxes[k, :n_boxes] = box
+                target["boxes"] = tv_tensors.BoundingBoxes(boxes[k, :n_boxes], format="XYXY",
+                                                           canvas_size=tuple(frame.shape[-2:]))
+                target["labels"] = labels[k, :n_boxes]
                 out.append((tv_tensors.Image(frame), target))
         return out
+
+    def _frame_batch(self, draws: list[dict[str, Any]]) -> list[torch.Tensor]:
+        """The batch's full frames (copies of their backgrounds), views of one storage.
+
+        In a DataLoader worker that storage is allocated in shared memory, as
+        ``default_collate`` does: the batch then crosses to the main process as
+        one shared block, written once, instead of one copy into a new shared
+        segment per frame (which cost more than rendering them: issue 19).
+        """
+        shapes = {tuple(self.backgrounds[d["seed_index"]].shape) for d in draws}
+        if len(shapes) != 1:  # backgrounds of different sizes: one tensor per frame
+            return [self.backgrounds[d["seed_index"]].clone() for d in draws]
+        shape = (len(draws), *shapes.pop())
+        if torch.utils.data.get_worker_info() is not None:
+            storage = torch.UntypedStorage._new_shared(math.prod(shape) * 4)
+            frames = torch.empty(0, dtype=torch.float32).set_(storage, 0, shape)
+        else:
+            frames = torch.empty(shape, dtype=torch.float32)
+        for k, d in enumerate(draws):
+            frames[k].copy_(self.backgrounds[d["seed_index"]])
+        return list(frames.unbind(0))
 
     def _pose_in_range(self, pose: dict[str, torch.Tensor]) -> bool:
         for spec in POSE_SPECS:
