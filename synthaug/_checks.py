@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Callable
 
 __all__ = ["positive_int", "nonneg_int", "positive_float", "nonneg_float", "unit_float", "open_unit_float",
-           "finite_float", "float_in", "int_at_least", "check_output_file", "check_output_dir", "check_distance",
+           "finite_float", "float_in", "int_at_least", "check_output_file", "check_output_dir",
            "check_seedset_dir", "first_line"]
 
 
@@ -142,20 +142,6 @@ def check_output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
     if blocker is not None:
         raise ValueError(f"{option}: cannot make the folder {path}: {blocker} is a file, not a folder")
     return path
-
-
-def check_distance(name: str, option: str = "--distance") -> str:
-    """``name`` is a registered distance (imports the registry, and with it torch: call it when a command runs).
-
-    Raises:
-        ValueError: naming ``option`` and the registered distances.
-    """
-    from synthaug.distances.registry import list_distances
-
-    known = list_distances()
-    if name not in known:
-        raise ValueError(f"{option}: unknown distance {name!r}; registered: {known}")
-    return name
 
 
 def check_seedset_dir(path: str | os.PathLike, option: str = "--seeds") -> Path:

@@ -37,6 +37,10 @@ from synthaug._io import atomic_write_text  # noqa: F401  (re-exported: used by 
 
 FORMAT_NAME = "synthaug.capture_params"
 FORMAT_VERSION = 1
+# A fit result is a capture-parameter file whose metadata says so (written by
+# ``synthaug fit``); its version is checked here, where the file is read.
+FIT_RESULT_FORMAT = "synthaug.fit"
+FIT_RESULT_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -95,7 +99,11 @@ POSE_SPECS: tuple[ParamSpec, ...] = (
 POSE_NAMES: tuple[str, ...] = tuple(s.name for s in POSE_SPECS)
 
 
-def _effect_specs(effects: Sequence[str] | None) -> tuple[ParamSpec, ...]:
+def effect_param_specs(effects: Sequence[str] | None) -> tuple[ParamSpec, ...]:
+    """The capture parameters of ``effects`` (None: the paper's four), in Θ's order.
+
+    Raises ``ValueError`` for an unknown effect or a parameter name two effects share.
+    """
     from synthaug.effects.registry import get_effect, PAPER_EFFECTS
 
     names = PAPER_EFFECTS if effects is None else tuple(effects)
@@ -139,8 +147,8 @@ class CaptureParams:
         if channels not in (1, 3):
             raise ValueError(f"channels must be 1 or 3, got {channels}")
         values = dict(values or {})
-        self.effects: tuple[str, ...] = _effective_effect_names(effects)
-        self.specs: tuple[ParamSpec, ...] = POSE_SPECS + _effect_specs(self.effects)
+        self.effects: tuple[str, ...] = resolve_effect_names(effects)
+        self.specs: tuple[ParamSpec, ...] = POSE_SPECS + effect_param_specs(self.effects)
         self.channels = channels
         known = {s.name for s in self.specs}
         unknown = sorted(set(values) - known)
@@ -264,7 +272,7 @@ class CaptureParams:
     def vector_names(cls, *, channels: int = 1, effects: Sequence[str] | None = None) -> list[str]:
         """Column names of :meth:`to_vector` (``sigma_s[0]`` for channel 0...)."""
         names = list(POSE_NAMES)
-        for spec in _effect_specs(_effective_effect_names(effects)):
+        for spec in effect_param_specs(resolve_effect_names(effects)):
             names += [f"{spec.name}[{c}]" for c in range(channels)] if channels > 1 else [spec.name]
         return names
 
@@ -272,7 +280,7 @@ class CaptureParams:
     def bounds(cls, *, channels: int = 1, effects: Sequence[str] | None = None) -> tuple[torch.Tensor, torch.Tensor]:
         """Lower and upper bound of every column of :meth:`to_vector`."""
         lo, hi = [], []
-        for spec in POSE_SPECS + _effect_specs(_effective_effect_names(effects)):
+        for spec in POSE_SPECS + effect_param_specs(resolve_effect_names(effects)):
             k = channels if spec.per_channel else 1
             lo += [spec.low] * k
             hi += [spec.high] * k
@@ -291,8 +299,8 @@ class CaptureParams:
         vector = torch.as_tensor(vector)
         if vector.ndim == 1:
             vector = vector[None]
-        eff = _effective_effect_names(effects)
-        specs = POSE_SPECS + _effect_specs(eff)
+        eff = resolve_effect_names(effects)
+        specs = POSE_SPECS + effect_param_specs(eff)
         width = sum(channels if s.per_channel else 1 for s in specs)
         if vector.ndim != 2 or vector.shape[1] != width:
             raise ValueError(f"expected a (B, {width}) vector for channels={channels}, got {tuple(vector.shape)}")
@@ -316,9 +324,9 @@ class CaptureParams:
         ranges: Mapping[str, tuple[float, float]] | None = None,
     ) -> "CaptureParams":
         """Draw Θ uniformly in each field's sampling range (``ranges`` overrides)."""
-        eff = _effective_effect_names(effects)
+        eff = resolve_effect_names(effects)
         ranges = dict(ranges or {})
-        specs = POSE_SPECS + _effect_specs(eff)
+        specs = POSE_SPECS + effect_param_specs(eff)
         unknown = sorted(set(ranges) - {s.name for s in specs})
         if unknown:
             raise ValueError(f"unknown parameter(s) in ranges: {unknown}")
@@ -333,7 +341,7 @@ class CaptureParams:
 
     @classmethod
     def default(cls, batch_size: int = 1, *, channels: int = 1, effects: Sequence[str] | None = None) -> "CaptureParams":
-        eff = _effective_effect_names(effects)
+        eff = resolve_effect_names(effects)
         values = {s.name: torch.full((batch_size,), s.default) for s in POSE_SPECS}
         return cls(values, channels=channels, effects=eff)
 
@@ -396,12 +404,10 @@ class CaptureParams:
         if doc.get("version") != FORMAT_VERSION:
             raise ValueError(f"{path}: unsupported version {doc.get('version')} (this synthaug reads {FORMAT_VERSION})")
         meta = doc.get("metadata", {})
-        if isinstance(meta, dict) and meta.get("result_format") == "synthaug.fit":
-            from synthaug.fit.fitting import RESULT_VERSION
-
-            if meta.get("result_version") != RESULT_VERSION:
+        if isinstance(meta, dict) and meta.get("result_format") == FIT_RESULT_FORMAT:
+            if meta.get("result_version") != FIT_RESULT_VERSION:
                 raise ValueError(f"{path}: unsupported fit result_version {meta.get('result_version')!r} "
-                                 f"(this synthaug reads {RESULT_VERSION})")
+                                 f"(this synthaug reads {FIT_RESULT_VERSION})")
         rows = doc.get("rows") or []
         if not rows:
             raise ValueError(f"{path}: the file holds no rows")
@@ -420,7 +426,8 @@ class CaptureParams:
         return f"CaptureParams(batch_size={self.batch_size}, channels={self.channels}, effects={list(self.effects)})"
 
 
-def _effective_effect_names(effects: Iterable[str] | None) -> tuple[str, ...]:
+def resolve_effect_names(effects: Iterable[str] | None) -> tuple[str, ...]:
+    """``effects`` as a tuple of registered effect names (None: the paper's four); unknown names raise."""
     from synthaug.effects.registry import PAPER_EFFECTS, get_effect
 
     names = PAPER_EFFECTS if effects is None else tuple(effects)

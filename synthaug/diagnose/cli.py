@@ -43,7 +43,8 @@ def _validate(args: argparse.Namespace) -> None:
     """Options and output paths checked before any work; a --distance other than the fit's is a warning."""
     import math
 
-    from synthaug._checks import check_distance, check_output_dir, check_output_file, check_seedset_dir
+    from synthaug._checks import check_output_dir, check_output_file, check_seedset_dir
+    from synthaug.distances.registry import check_distance
     from synthaug.params import CaptureParams
 
     gap_detectors(args)  # cheap, named first

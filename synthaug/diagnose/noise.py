@@ -40,6 +40,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from synthaug.diagnose.stats import t_test
+
 __all__ = ["frame_noise_levels", "nlf_slope", "seed_noise_levels", "aligned_neighbour", "noise_channel",
            "NOISE_CANDIDATES"]
 
@@ -250,8 +252,6 @@ def noise_channel(nlfs: Sequence[dict[str, np.ndarray]], folds: Sequence[np.ndar
         slope), ``per_seed_slope``, ``gain`` (mean held-out log-likelihood gain of the pooled
         power-law NLF over a flat one, nats per pixel), ``per_seed_gain``, ``fitted_slope`` (on all seeds).
     """
-    from synthaug.diagnose.residuals import t_test
-
     n = len(nlfs)
     slopes = np.array([nlf_slope(x) for x in nlfs])
     m, t, p = t_test(slopes)

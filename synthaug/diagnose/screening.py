@@ -323,7 +323,8 @@ def absorption_gain(data: DiagnosisData, effect: str, w_d: np.ndarray, folds: li
         ``sign_ok`` and ``gain`` (held-out R² of the dependence: the variance
         of the fitted parameter the effect explains).
     """
-    from synthaug.diagnose.residuals import permutation_spearman, seed_groups, within_groups
+    from synthaug.diagnose.residuals import seed_groups
+    from synthaug.diagnose.stats import permutation_spearman, within_groups
 
     if effect not in ABSORPTION:
         return None

@@ -202,6 +202,18 @@ def list_distances() -> list[str]:
     return sorted(_REGISTRY)
 
 
+def check_distance(name: str, option: str = "--distance") -> str:
+    """``name`` is a registered distance (checked before a command starts working).
+
+    Raises:
+        ValueError: naming ``option`` and the registered distances.
+    """
+    known = list_distances()
+    if name not in known:
+        raise ValueError(f"{option}: unknown distance {name!r}; registered: {known}")
+    return name
+
+
 def get_entry(name: str) -> DistanceEntry:
     """The :class:`DistanceEntry` of a name; ValueError listing the known names."""
     if name not in _REGISTRY:

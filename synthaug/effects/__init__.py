@@ -19,6 +19,10 @@ from synthaug.effects.registry import (
 )
 from synthaug.effects.transform import CaptureEffects
 
+# the built-in effects register themselves when imported: the paper's four, the
+# camera candidates of the diagnosis, the material extensions
+from synthaug.effects import camera, material, paper  # noqa: E402,F401  (registration)
+
 __all__ = [
     "PAPER_EFFECTS", "Effect", "RenderState", "get_effect", "list_effects", "register_effect",
     "apply_effects", "sample_fields", "simulate", "CaptureEffects",

@@ -16,7 +16,10 @@ Stages, in the order :func:`synthaug.effects.simulate` runs them:
     background (boundary blur, object noise, camera effects...).
 
 New effects subclass :class:`Effect` and call :func:`register_effect`; nothing
-else in the pipeline changes.
+else in the pipeline changes. The built-in effects (:mod:`~synthaug.effects.paper`,
+:mod:`~synthaug.effects.camera`, :mod:`~synthaug.effects.material`) register
+when the :mod:`synthaug.effects` package is imported, which any import of this
+module does first; this module imports none of them.
 """
 
 from __future__ import annotations
@@ -79,6 +82,11 @@ class Effect:
     order: ClassVar[float]
     params: ClassVar[tuple[ParamSpec, ...]] = ()
     doc: ClassVar[str] = ""
+    # Gradients are exact w.r.t. the parameters and the image layers (object colour, background,
+    # composite), so the effect can sit in a gradient-based fit; the shared test battery
+    # (tests/effect_checks.py) gradchecks every effect that keeps this True. Coverage is geometry
+    # and is not part of the promise.
+    differentiable: ClassVar[bool] = True
 
     def sample_fields(self, shape: tuple[int, int, int, int], generator: torch.Generator,
                       dtype: torch.dtype = torch.float32) -> dict[str, torch.Tensor]:
@@ -110,21 +118,7 @@ def register_effect(cls: type[Effect]) -> type[Effect]:
     return cls
 
 
-_BUILTIN_LOADED = False
-
-
-def _ensure_builtin() -> None:
-    # importing the module registers the paper's effects (once; this is on a hot path)
-    global _BUILTIN_LOADED
-    if not _BUILTIN_LOADED:
-        _BUILTIN_LOADED = True
-        import synthaug.effects.paper  # noqa: F401
-        import synthaug.effects.camera  # noqa: F401  (the candidate camera effects of the diagnosis)
-        import synthaug.effects.material  # noqa: F401  (model extensions: object_texture)
-
-
 def get_effect(name: str) -> Effect:
-    _ensure_builtin()
     try:
         return _REGISTRY[name]
     except KeyError:
@@ -132,7 +126,6 @@ def get_effect(name: str) -> Effect:
 
 
 def list_effects() -> list[str]:
-    _ensure_builtin()
     return sorted(_REGISTRY)
 
 

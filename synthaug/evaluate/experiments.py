@@ -50,7 +50,6 @@ from synthaug.detectors.training import (  # noqa: F401
     DETECTORS,
     DetectorKind,
     TrainOptions,
-    _check_kind,
     frames_training_set,
     mining_frames,
     negative_pool,

@@ -42,7 +42,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from synthaug._checks import check_distance, check_output_file, check_seedset_dir
+    from synthaug._checks import check_output_file, check_seedset_dir
+    from synthaug.distances.registry import check_distance
     from synthaug.fit.fitting import FitConfig, fit_seedset
     from synthaug.params import CaptureParams
 

@@ -28,7 +28,7 @@ from typing import Literal
 
 import torch
 
-from synthaug.params import CaptureParams, _effect_specs
+from synthaug.params import CaptureParams, effect_param_specs
 
 Kind = Literal["kde", "uniform"]
 
@@ -53,7 +53,7 @@ class CaptureDensity:
         data = params.to_vector().double()[:, 5:]
         self.data = data
         lo, hi, per = [], [], []
-        for s in _effect_specs(params.effects):
+        for s in effect_param_specs(params.effects):
             k = params.channels if s.per_channel else 1
             lo += [s.low] * k
             hi += [s.high] * k

@@ -37,12 +37,13 @@ import numpy as np
 import torch
 
 from synthaug._io import digest, sha256_file
+from synthaug.data.seedset import seed_geometry
+from synthaug.params import FIT_RESULT_FORMAT as RESULT_FORMAT
+from synthaug.params import FIT_RESULT_VERSION as RESULT_VERSION
 from synthaug.params import CaptureParams, atomic_write_text
 
 log = logging.getLogger("synthaug.fit")
 
-RESULT_FORMAT = "synthaug.fit"
-RESULT_VERSION = 1
 INITS = ("uniform", "grid")
 
 
@@ -220,9 +221,9 @@ def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance
 def neutral_u(space: Any, object_scale: float) -> np.ndarray:
     """Search coordinates of a neutral Θ: rotations 0, t = 0, the default scale, capture parameters at the
     middle of their sampling ranges (clipped to the search bounds)."""
-    from synthaug.params import POSE_SPECS, _effect_specs
+    from synthaug.params import POSE_SPECS, effect_param_specs
 
-    specs = {sp.name: sp for sp in POSE_SPECS + _effect_specs(space.effects)}
+    specs = {sp.name: sp for sp in POSE_SPECS + effect_param_specs(space.effects)}
     u = np.full(space.dim, 0.5)
     free = [i for i, f in enumerate(space.free) if f]
     for j, col in enumerate(free):
@@ -367,8 +368,6 @@ def _fit_index(index: int, seeds_path: str, mesh: Any, cfg: FitConfig, distance:
     if cfg.effects is not None and set(cfg.effects) - {"boundary_blur", "motion_blur", "object_noise", "material"}:
         # camera effects may depend on where the patch sits in its frame (vignetting, distortion...)
         if "geometry" not in ctx:
-            from synthaug.diagnose.reference_camera import seed_geometry
-
             ctx["geometry"] = seed_geometry(seeds)
         g = ctx["geometry"]
         geometry = {"origin": g["origin"][index:index + 1], "frame_size": g["frame_size"][index:index + 1],

@@ -20,7 +20,7 @@ import numpy as np
 import torch
 
 from synthaug.effects.pipeline import sample_fields, simulate
-from synthaug.params import POSE_SPECS, CaptureParams, _effect_specs, _effective_effect_names
+from synthaug.params import POSE_SPECS, CaptureParams, effect_param_specs, resolve_effect_names
 
 
 @dataclass(frozen=True)
@@ -66,8 +66,8 @@ class FitSpace:
         """Θ with every field free within its spec range; t_x, t_y within ±``translation``
         (the annotated centre is the patch centre). ``fixed`` pins fields (e.g. to
         switch an effect's parameters off), ``bounds`` narrows ranges."""
-        eff = _effective_effect_names(effects)
-        specs = POSE_SPECS + _effect_specs(eff)
+        eff = resolve_effect_names(effects)
+        specs = POSE_SPECS + effect_param_specs(eff)
         names, low, high, per = [], [], [], []
         for s in specs:
             k = channels if s.per_channel else 1
