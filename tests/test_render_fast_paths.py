@@ -273,3 +273,16 @@ def test_frame_batches_from_workers_equal_the_main_process(cache):
     single = ds[7]
     assert torch.equal(single[0].as_subclass(torch.Tensor), runs[0][7][0])
     assert torch.equal(single[1]["boxes"].as_subclass(torch.Tensor), runs[0][7][1]["boxes"])
+
+
+def test_items_do_not_depend_on_the_batch_they_are_rendered_in(cache):
+    """A large batch is rendered in chunks and shares per-σ operators: its items equal the items alone."""
+    bgs = sky_backgrounds(4, (96, 96), seed=5)
+    ds = SyntheticObjectDataset("quadcopter", bgs, cache=cache, length=300, patch_size=32, negative_fraction=0.1,
+                                seed=11)
+    idx = list(range(3, 3 + 150))  # more than one chunk of 32x32 patches
+    batch = _items(ds, idx)
+    alone = torch.stack([ds[i][0] for i in idx[::7]])
+    small = _items(ds, idx[::7])
+    torch.testing.assert_close(batch[::7], alone, atol=1e-6, rtol=0)
+    torch.testing.assert_close(small, alone, atol=1e-6, rtol=0)
