@@ -38,3 +38,15 @@ def small_cache():
     from synthaug.render.cache import ViewCache
 
     return ViewCache.build("quadcopter", step_deg=30, sprite_size=48)
+
+
+@pytest.fixture
+def effect_registry(monkeypatch):
+    """The effect registry, restored after the test: an effect a test registers does not leak into others.
+
+    Returns the :mod:`synthaug.effects.registry` module; ``register_effect`` writes into a copy of its table.
+    """
+    from synthaug.effects import registry
+
+    monkeypatch.setattr(registry, "_REGISTRY", dict(registry._REGISTRY))
+    return registry

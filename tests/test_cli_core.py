@@ -52,5 +52,6 @@ def test_bench_render_prints_json(capsys):
 
 
 def test_unknown_subcommand_exits_nonzero():
-    with pytest.raises(SystemExit):
+    with pytest.raises(SystemExit) as exc:
         main(["frobnicate"])
+    assert exc.value.code == 2  # argparse's usage error (a bare raises(SystemExit) also passed on exit 0)

@@ -248,7 +248,7 @@ def test_simulate_replays_with_the_same_fields():
         simulate(_t(cov), _t(nrm), _t(np.repeat(bg, 3, 1)), theta, fields=fields)
 
 
-def test_new_effect_plugs_in_without_touching_the_others():
+def test_new_effect_plugs_in_without_touching_the_others(effect_registry):
     @register_effect
     class _TestGain(Effect):
         name = "_test_gain"
@@ -274,3 +274,7 @@ def test_new_effect_plugs_in_without_touching_the_others():
             order = 1.0
     with pytest.raises(ValueError, match="unknown effect"):
         get_effect("nope")
+
+
+def test_a_test_effect_does_not_outlive_its_test():
+    assert "_test_gain" not in list_effects()  # registered above inside the effect_registry fixture

@@ -234,8 +234,25 @@ def test_cell_is_cached_and_resumes(tmp_path: Path) -> None:
     ctx2 = _video_ctx(tmp_path)
     both = ctx2.cell("toy", "cnn", build, splits=("val", "test"))
     assert len(calls) == 2 and both["test"] == first["test"] and both["val"]["n_frames"] == 2
-    # same seed, same training set: the retrained detector gives the same test AP
-    assert json.loads((tmp_path / "out" / "cells.json").read_text())
+    cells = json.loads((tmp_path / "out" / "cells.json").read_text())
+    assert first["test"] in _leaves(cells), "the test result is not in cells.json"
+    # same seed, same training set: a context without the cache retrains and gives the same test AP
+    (tmp_path / "fresh").mkdir()
+    third = _video_ctx(tmp_path / "fresh").cell("toy", "cnn", build, splits=("test",))
+    assert len(calls) == 3 and third["test"]["ap"] == first["test"]["ap"]
+
+
+def _leaves(doc: Any) -> list[dict[str, Any]]:
+    """Every dict nested in ``doc`` (the cell entries of a cells.json, whatever its layout)."""
+    out = []
+    if isinstance(doc, dict):
+        out.append(doc)
+        for v in doc.values():
+            out += _leaves(v)
+    elif isinstance(doc, list):
+        for v in doc:
+            out += _leaves(v)
+    return out
 
 
 def test_report_writes_table_plot_json(tmp_path: Path) -> None:

@@ -122,16 +122,19 @@ def test_full_fit_from_a_random_start_improves_far_beyond_random(measured, fit_c
     assert abs(float(fitted.t_x) - THETA_STAR["t_x"]) < 0.1 and abs(float(fitted.t_y) - THETA_STAR["t_y"]) < 0.1
 
 
-def test_cmaes_beats_annealing_at_equal_budget(measured, fit_cache):
-    small_cache = fit_cache
+def test_optimizers_keep_the_budget_and_improve_on_the_start(measured, fit_cache):
+    """Behaviour only. Which optimiser is better at equal budget is a quality comparison, measured by
+    ``benchmarks/bench_fit.py`` (CMA-ES vs the paper's annealing, and vs 10x-budget annealing)."""
     x, bg, space, _ = measured
-    obj = RenderObjective(x, bg, small_cache, build_distance("hog"), space, object_scale=0.7, noise_seed=11)
+    obj = RenderObjective(x, bg, fit_cache, build_distance("hog"), space, object_scale=0.7, noise_seed=11)
     x0 = np.random.default_rng(1).random(space.dim)
-    cma = get_optimizer("cmaes").minimize(obj, space.dim, x0=x0, seed=1, budget=600)
-    sa = get_optimizer("anneal").minimize(obj, space.dim, x0=x0, seed=1, budget=600)
-    assert cma.n_evals <= 600 and sa.n_evals <= 600
-    assert cma.fun <= sa.fun * 1.05
-    assert cma.trace[-1][1] == pytest.approx(cma.fun) and all(b <= a for (_, a), (_, b) in zip(cma.trace, cma.trace[1:]))
+    start = float(obj(x0[None])[0])
+    for name in ("cmaes", "anneal"):
+        res = get_optimizer(name).minimize(obj, space.dim, x0=x0, seed=1, budget=150)
+        assert 0 < res.n_evals <= 150, (name, res.n_evals)
+        assert res.fun <= start, (name, res.fun, start)
+        assert res.trace[-1][1] == pytest.approx(res.fun), name
+        assert all(b <= a for (_, a), (_, b) in zip(res.trace, res.trace[1:])), name  # best-so-far trace
 
 
 def test_fit_is_deterministic(measured, fit_cache):

@@ -53,15 +53,28 @@ def test_refit_callback_updates_the_synthetic_stream(tmp_path):
                         enable_progress_bar=False, enable_model_summary=False, default_root_dir=tmp_path,
                         callbacks=[SyntheticEpochs(), refit])
     model = PatchDetectorModule(channels=(4, 8, 8, 8))
-    before = dm.synthetic.params.to_vector().clone() if dm.synthetic is not None else None
+    assert dm.synthetic is None  # the stream is made in setup, which runs inside fit
+    start = _StartParams()
+    trainer.callbacks.append(start)
     trainer.fit(model, datamodule=dm)
-    assert before is None  # setup runs inside fit
+    assert start.theta is not None  # the stream's Θ when training began (setup had run)
     assert len(refit.history) == 1  # after epoch 0 (none after the last epoch)
     out = refit.history[0]["file"]
     doc = json.loads(open(out).read())
     assert doc["metadata"]["config"]["distance"] == "cnn" and len(doc["rows"]) == 6
     torch.testing.assert_close(dm.synthetic.params.to_vector(), CaptureParams.load(out).to_vector())
+    assert not torch.equal(dm.synthetic.params.to_vector(), start.theta)  # the refit replaced Θ
     assert dm.synthetic.seed_scales is not None
+
+
+class _StartParams(L.Callback):
+    """Keeps the synthetic stream's Θ as training starts (after the data module's setup)."""
+
+    theta: torch.Tensor | None = None
+
+    def on_fit_start(self, trainer, pl_module):
+        params = trainer.datamodule.synthetic.params
+        self.theta = None if params is None else params.to_vector().clone()
 
 
 class _Recorder(PatchDetectorModule):

@@ -367,6 +367,7 @@ class Compression(Effect):
     name = "compression"
     stage = "image"
     order = 40.0
+    differentiable = False  # the straight-through gradient w.r.t. the image is by design, not exact
     params = (
         ParamSpec("jpeg_quality", "q", "JPEG quality", 5.0, 100.0, 100.0, "JPEG quality (100 = off)",
                   sample_low=30.0, sample_high=95.0),

@@ -78,6 +78,8 @@ def texture_field(white: torch.Tensor, scale: torch.Tensor, size: tuple[int, int
     if scale.ndim != 2 or scale.shape[0] != b:
         raise ValueError(f"texture_scale must be (B,) or (B, C) with B = {b}, got {tuple(scale.shape)}")
     c = scale.shape[1]
+    if b == 0:  # nothing to smooth (an FFT of an empty batch is an error)
+        return white.new_zeros((0, c, h, w))
     # the centre crop of the padded field: every pixel has ≥ P px of noise on each side
     oy = (white.shape[-2] - h) // 2
     ox = (white.shape[-1] - w) // 2
