@@ -154,3 +154,20 @@ def test_cnn_fast_path_follows_weight_updates_and_keeps_gradients() -> None:
     w = net.conv2.weight
     net.score_map(img).sum().backward()
     assert w.grad is not None and torch.isfinite(w.grad).all() and w.grad.abs().sum() > 0
+
+
+@pytest.mark.parametrize("binning", ["soft", "hard"])
+def test_hog_dense_block_map_without_autograd_equals_block_features(binning: str) -> None:
+    # the detector's path (in-place normalisation, per-cell sums of squares) vs the autograd path
+    from synthaug.detectors.hog import HOGConfig, block_features, cell_histograms, dense_block_map
+
+    config = HOGConfig(binning=binning)
+    g = torch.Generator().manual_seed(0)
+    for image in (torch.rand(1, 1, 83, 117, generator=g), toy_frame(120, 160, 2, seed=3)[0], torch.full((1, 1, 48, 48), 0.3)):
+        with torch.no_grad():
+            fast = dense_block_map(image, config, stride=4)
+        reference = block_features(cell_histograms(image, config, stride=4), config, dilation=2)
+        torch.testing.assert_close(fast, reference, rtol=1e-5, atol=1e-6)
+        x = image.clone().requires_grad_(True)  # with autograd: block_features itself, differentiable
+        dense_block_map(x, config, stride=4).sum().backward()
+        assert x.grad is not None and torch.isfinite(x.grad).all()

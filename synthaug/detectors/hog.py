@@ -34,6 +34,7 @@ skimage's "channel of largest gradient" rule.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -243,18 +244,30 @@ def _subcell_sums(images: Tensor, config: HOGConfig, sub: int) -> Tensor:
     b, c, h, w = images.shape
     hs, ws = h // sub, w // sub
     n_slots, index, pairs = _gradient_bins(images, config)
-    rows = torch.arange(hs * sub, device=images.device) // sub
-    cols = torch.arange(ws * sub, device=images.device) // sub
-    first_slot = ((rows[:, None] * ws + cols[None, :]) * n_slots).reshape(1, 1, -1)
-    sums = images.new_zeros(b, c, hs * ws * n_slots)
+    first_slot = _first_slots(hs, ws, sub, n_slots, images.device)
+    size = hs * ws * n_slots
+    sums = images.new_zeros(b, c, size + max(offset for offset, _ in pairs))
     pixels = hs * sub * ws * sub
-    target = first_slot + index[..., : hs * sub, : ws * sub].reshape(b, c, pixels)
+    # the add writes the cropped indices contiguously: no separate copy of the crop
+    target = (first_slot + index[..., : hs * sub, : ws * sub]).reshape(b, c, pixels)
     for offset, vote in pairs:
         vote = vote[..., : hs * sub, : ws * sub].reshape(b, c, pixels)
-        sums = sums.scatter_add(2, target + offset if offset else target, vote)
-    sums = _fold_slots(sums.reshape(b, c, hs, ws, n_slots), config, dim=4)
+        # slot + offset: the same indices into a view shifted by offset (same order of accumulation)
+        sums.narrow(2, offset, size).scatter_add_(2, target, vote)
+    sums = _fold_slots(sums.narrow(2, 0, size).reshape(b, c, hs, ws, n_slots), config, dim=4)
     sums = sums.permute(0, 1, 4, 2, 3).reshape(b, c * config.orientations, hs, ws)
     return sums / float(sub * sub)
+
+
+@functools.lru_cache(maxsize=32)
+def _first_slots(hs: int, ws: int, sub: int, n_slots: int, device: torch.device) -> Tensor:
+    """Index of the first slot of each pixel's sub-cell, ``(hs * sub, ws * sub)`` int64 (cached: pyramid sizes repeat).
+
+    Read-only: callers must not modify it in place.
+    """
+    rows = torch.arange(hs * sub, device=device) // sub
+    cols = torch.arange(ws * sub, device=device) // sub
+    return (rows[:, None] * ws + cols[None, :]) * n_slots
 
 
 def cell_histograms(images: Tensor, config: HOGConfig = DEFAULT_HOG, stride: int | None = None) -> Tensor:
@@ -387,7 +400,41 @@ def dense_block_map(image: Tensor, config: HOGConfig = DEFAULT_HOG, stride: int 
     if stride < 1 or config.cell_size % stride:
         raise ValueError(f"stride must divide cell_size={config.cell_size}, got {stride}")
     cells = cell_histograms(image, config, stride=stride)
-    return block_features(cells, config, dilation=config.cell_size // stride)
+    if torch.is_grad_enabled() and cells.requires_grad:
+        return block_features(cells, config, dilation=config.cell_size // stride)
+    return _dense_block_features(cells, config, dilation=config.cell_size // stride)
+
+
+def _dense_block_features(cells: Tensor, config: HOGConfig, dilation: int) -> Tensor:
+    """:func:`block_features` without autograd, for dense maps (equal up to float rounding).
+
+    The first normalisation's sum of squares comes from per-cell sums (a block's
+    cells are shared by ``b * b`` blocks: 4x less work), and the normalisations
+    run in place on the stacked blocks; each pass over the ``b * b * O``-channel
+    map is memory-bound on a full frame.
+    """
+    n, b = config.orientations, config.block_size
+    if cells.dim() != 4 or cells.shape[1] % n:
+        raise ValueError(f"cells must be (B, C*{n}, Hc, Wc), got shape {tuple(cells.shape)}")
+    batch, cn, hc, wc = cells.shape
+    span = (b - 1) * dilation
+    if hc <= span or wc <= span:
+        raise ValueError(f"a cell map of size {(hc, wc)} holds no {b}x{b} block (dilation {dilation})")
+    hb, wb = hc - span, wc - span
+    grouped = cells.reshape(batch, cn // n, n, hc, wc)
+    offsets = [(i * dilation, j * dilation) for i in range(b) for j in range(b)]
+    cell_sq = (grouped * grouped).sum(2)  # (B, C, Hc, Wc)
+    sq = cell_sq[..., :hb, :wb].clone()
+    for y, x in offsets[1:]:
+        sq.add_(cell_sq[..., y : y + hb, x : x + wb])
+    eps2 = config.eps * config.eps
+    blocks = torch.stack([grouped[..., y : y + hb, x : x + wb] for y, x in offsets], dim=2)
+    blocks = blocks.reshape(batch, cn // n, b * b * n, hb, wb)
+    blocks.div_(sq.add_(eps2).sqrt_().unsqueeze(2))
+    if config.block_norm == "L2-Hys":
+        blocks.clamp_max_(config.clip)
+        blocks.div_((blocks * blocks).sum(2, keepdim=True).add_(eps2).sqrt_())
+    return blocks.reshape(batch, (cn // n) * b * b * n, hb, wb)
 
 
 def descriptor_to_filter(weights: Tensor, config: HOGConfig, window: int) -> Tensor:
