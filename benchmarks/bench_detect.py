@@ -18,8 +18,10 @@ second NMS: ``median_ms_per_frame_window_boxes``) and the targets of issue 19
 
 ``--reference`` also times, interleaved in the same repeats, the same detection
 with each detector's former dense scoring (``_score_map_reference``: AdaBoost's
-stage-wise corner gathers, the CNN in NCHW layout; HOG has none) and says whether
-both return the same detections (boxes and scores allclose).
+stage-wise corner gathers, the CNN in NCHW layout) and says whether both return
+the same detections (boxes and scores allclose). HOG has no such method (its
+speed-up is bookkeeping inside ``dense_block_map``): time an older checkout
+(``git archive <commit>``) against this one, alternating runs.
 
 The NMS stage is timed on the frame's own candidate boxes (the ``pre_nms_top_k``
 best windows of all levels, exactly what ``detect_multiscale`` suppresses), for
