@@ -215,17 +215,19 @@ def _blur_pair(a: torch.Tensor, b: torch.Tensor, sigma_u: torch.Tensor, sigma_v:
     """
     h, w = a.shape[-2:]
     hp, wp = next_fast_len(h + 2 * pad), next_fast_len(w + 2 * pad)
-    t = _by_distinct_rows(lambda su, sv, an: _hermitian_transfer(hp, wp, su, sv, an), sigma_u, sigma_v, angle)
-    if torch.is_grad_enabled() and (t.requires_grad or a.requires_grad or b.requires_grad):
+    params = (sigma_u, sigma_v, angle)
+    if torch.is_grad_enabled() and any(p.requires_grad for p in (a, b, *params)):
+        t = _hermitian_transfer(hp, wp, *params)
         spec = torch.fft.ifft2(torch.fft.fft2(torch.complex(a, b), s=(hp, wp)) * t)
-    else:  # in place, in one zero-padded buffer: no autograd graph to keep (about half the time on CPU)
+    else:  # one zero-padded buffer, the transfer gathered as complex: no autograd graph to keep (~half the time)
         dtype = torch.complex128 if a.dtype == torch.float64 else torch.complex64
+        t = _by_distinct_rows(lambda su, sv, an: _hermitian_transfer(hp, wp, su, sv, an).to(dtype), *params)
         spec = torch.zeros(*a.shape[:-2], hp, wp, dtype=dtype, device=a.device)
         buf = torch.view_as_real(spec)
         buf[..., :h, :w, 0] = a
         buf[..., :h, :w, 1] = b
-        torch.fft.fft2(spec, out=spec)
-        buf.mul_(t[..., None])
+        torch.fft.fft2(spec, out=spec)  # in place: faster than a fresh buffer here (measured, issue 19)
+        spec.mul_(t)
         torch.fft.ifft2(spec, out=spec)
     out = torch.view_as_real(spec)[..., :h, :w, :]
     return out[..., 0], out[..., 1]
@@ -307,7 +309,9 @@ def diffuse_material(
     if l.ndim == 1:
         l = l[None].expand(b, 3)
     l = l / l.norm(dim=1, keepdim=True).clamp_min(1e-12)
-    lambert = (normals * l[:, :, None, None]).sum(1, keepdim=True).clamp_min(0.0)
+    h, wd = normals.shape[-2:]
+    # n·l as one batched (1 × 3) @ (3 × HW) product: one pass over the normals instead of three
+    lambert = torch.bmm(l[:, None, :], normals.reshape(b, 3, h * wd)).view(b, 1, h, wd).clamp_min(0.0)
     shade = (ambient + (1.0 - ambient) * lambert) * (coverage > 0).to(normals.dtype)
     return shade * w[:, :, None, None]
 
@@ -341,8 +345,7 @@ def motion_blur(
         return object_color.clone(), cov.clone()
     premul_b, cov_b = _blur_pair(premul, cov, su, sv, an, pad=pad)
     cov_b = cov_b.clamp(0.0, 1.0)
-    color = premul_b / cov_b.clamp_min(1e-6)
-    color = torch.where(cov_b > 1e-6, color, torch.zeros_like(color))
+    color = torch.where(cov_b > 1e-6, premul_b / cov_b.clamp_min(1e-6), 0.0)
     return color, cov_b
 
 

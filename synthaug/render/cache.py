@@ -315,11 +315,12 @@ class ViewCache:
         raw = out[:, 1:]
         # the γ rotation keeps lengths, so normalise with the unrotated length (threshold 1e-3 in unit
         # normals = 0.127 in int8 units)
-        sq = (raw * raw).sum(1, keepdim=True)
+        sq = torch.addcmul(torch.addcmul(raw[:, 2:] * raw[:, 2:], raw[:, 1:2], raw[:, 1:2]), raw[:, :1], raw[:, :1])
         inv = torch.where(sq > 0.127 ** 2, sq.clamp_min(0.127 ** 2).rsqrt(), 0.0)
-        ci, si = c[:, None, None, None] * inv, s[:, None, None, None] * inv
-        nx, ny = raw[:, :1], raw[:, 1:2]
-        nrm = torch.cat([ci * nx - si * ny, si * nx + ci * ny, raw[:, 2:] * inv], 1)
+        zero, one = torch.zeros_like(c), torch.ones_like(c)
+        rot = torch.stack([torch.stack([c, -s, zero], 1), torch.stack([s, c, zero], 1),
+                           torch.stack([zero, zero, one], 1)], 1)  # γ about the camera axis, (B, 3, 3)
+        nrm = torch.bmm(rot, raw.reshape(b, 3, h * w)).view(b, 3, h, w) * inv
         return cov, nrm
 
 
