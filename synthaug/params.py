@@ -3,8 +3,9 @@
 Θ = [α, β, γ, t_x, t_y | σ_s, σ_u, σ_v, α_m, σ_n, w_d] (Rozantsev et al., eq. 1).
 The first five ("extrinsic") place the object; the rest ("intrinsic", here
 *capture* parameters) belong to the capture effects in :mod:`synthaug.effects`.
-Effects declare their own :class:`ParamSpec` s, so an effect registered later
-(vignetting, gamma, ...) extends Θ without touching this module.
+The capture parameters are declared effect by effect (:data:`EFFECT_PARAM_SPECS`);
+an effect registered later declares its own :class:`ParamSpec` s and extends Θ
+without touching this module.
 
 Pose parameters are one value per sample, shape ``(B,)``; capture parameters
 are one value per sample *and channel*, shape ``(B, C)`` (``C = 1`` grayscale,
@@ -29,6 +30,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any, Iterable, Mapping, Sequence
 
 import torch
@@ -99,23 +101,161 @@ POSE_SPECS: tuple[ParamSpec, ...] = (
 POSE_NAMES: tuple[str, ...] = tuple(s.name for s in POSE_SPECS)
 
 
+# ---------------------------------------------------------- capture parameters, effect by effect
+# Θ's capture parameters are declared here, next to the pose: Θ is this module's concept, and the
+# effects (synthaug.effects) are functions of it. Each built-in effect's class reads its tuple from
+# EFFECT_PARAM_SPECS; an effect registered later (synthaug.effects.register_effect) declares its
+# own parameters through declare_effect_params, and nothing here changes.
+
+# The paper's four effects, in the paper's order of presentation.
+PAPER_EFFECTS: tuple[str, ...] = ("boundary_blur", "motion_blur", "object_noise", "material")
+
+# σ ranges (px) are those of a 40-64 px patch; the effects' blur padding follows them.
+SIGMA_S_MAX = 3.0
+SIGMA_M_MAX = 5.0
+SIGMA_N_MAX = 0.3
+DEFOCUS_SIGMA_MAX = 3.0
+SHARPEN_SIGMA_MAX = 3.0
+TEXTURE_SCALE_MIN = 0.3
+TEXTURE_SCALE_MAX = 4.0
+
+_DECLARED: dict[str, tuple[ParamSpec, ...]] = {
+    # paper: the paper's four (Rozantsev et al. 2015, Sec. 3)
+    "material": (
+        ParamSpec("w_d", "w_d", "reflectance", 0.0, 1.0, 0.5,
+                  "diffuse reflection weight: object intensity under the default light",
+                  sample_low=0.05, sample_high=0.9),
+    ),
+    "motion_blur": (
+        ParamSpec("sigma_u", "σ_u", "px", 0.0, SIGMA_M_MAX, 0.0, "motion-blur std along α_m",
+                  sample_high=2.0),
+        ParamSpec("sigma_v", "σ_v", "px", 0.0, SIGMA_M_MAX, 0.0, "motion-blur std across α_m",
+                  sample_high=2.0),
+        ParamSpec("alpha_m", "α_m", "rad", -math.pi / 2, math.pi / 2, 0.0,
+                  "motion direction from +x toward +y (π-periodic)", periodic=True),
+    ),
+    "boundary_blur": (
+        ParamSpec("sigma_s", "σ_s", "px", 0.0, SIGMA_S_MAX, 0.0, "boundary-blur std", sample_high=1.5),
+    ),
+    "object_noise": (
+        ParamSpec("sigma_n", "σ_n", "intensity", 0.0, SIGMA_N_MAX, 0.0,
+                  "std of the noise added to object pixels (image in [0, 1])", sample_high=0.08),
+    ),
+    # material: material extensions (issue 6)
+    "object_texture": (
+        ParamSpec("texture_amp", "a", "relative", 0.0, 1.0, 0.0,
+                  "relative std of the albedo variation (0 = none)", sample_high=0.6),
+        ParamSpec("texture_scale", "ℓ", "px", TEXTURE_SCALE_MIN, TEXTURE_SCALE_MAX, 1.0,
+                  "std of the Gaussian that smooths the albedo field (its correlation length)",
+                  sample_low=0.5, sample_high=2.5),
+    ),
+    # camera: the camera candidates of the diagnosis
+    "specular": (
+        ParamSpec("specular_ks", "k_s", "reflectance", 0.0, 1.0, 0.0, "specular reflection weight",
+                  sample_high=0.6),
+        ParamSpec("specular_shininess", "p_s", "exponent", 2.0, 200.0, 30.0,
+                  "Blinn-Phong exponent: larger = smaller, sharper highlights", sample_low=5.0, sample_high=80.0),
+    ),
+    "haze": (
+        ParamSpec("haze_amount", "h", "fraction", 0.0, 0.95, 0.0, "1 - transmission between object and camera",
+                  sample_high=0.5),
+        ParamSpec("haze_airlight", "A", "intensity", 0.0, 1.0, 0.8, "airlight (horizon sky) intensity",
+                  sample_low=0.5),
+    ),
+    "vignetting": (
+        ParamSpec("vignette_k", "k_v", "fraction", 0.0, 0.9, 0.0, "fraction of light lost at the frame corners",
+                  sample_high=0.5),
+    ),
+    "exposure": (
+        ParamSpec("exposure_gain", "g_e", "factor", 0.25, 4.0, 1.0, "exposure gain", sample_low=0.7,
+                  sample_high=1.4),
+        ParamSpec("exposure_offset", "o_e", "intensity", -0.3, 0.3, 0.0, "black-level offset",
+                  sample_low=-0.05, sample_high=0.05),
+    ),
+    "white_balance": (
+        ParamSpec("wb_gain", "g_c", "factor", 0.5, 2.0, 1.0, "white-balance gain of the channel",
+                  sample_low=0.8, sample_high=1.25),
+    ),
+    "rotor_blur": (
+        ParamSpec("rotor_opacity", "ρ", "fraction", 0.0, 1.0, 1.0,
+                  "fraction of the exposure a rotor-disc pixel is covered by a blade (1 = solid disc)",
+                  sample_low=0.1),
+    ),
+    "rolling_shutter": (
+        ParamSpec("rs_skew", "s_x", "px/row", -0.5, 0.5, 0.0, "horizontal object displacement per image row",
+                  sample_low=-0.15, sample_high=0.15),
+        ParamSpec("rs_stretch", "s_y", "px/row", -0.3, 0.3, 0.0, "vertical object displacement per image row",
+                  sample_low=-0.08, sample_high=0.08),
+    ),
+    "defocus": (
+        ParamSpec("defocus_sigma", "σ_f", "px", 0.0, DEFOCUS_SIGMA_MAX, 0.0, "defocus PSF std", sample_high=1.5),
+    ),
+    "chromatic_aberration": (
+        ParamSpec("ca_shift", "δ_ca", "px", 0.0, 4.0, 0.0, "red/blue displacement at the frame corners (frame px)",
+                  sample_high=2.5),
+    ),
+    "lens_distortion": (
+        ParamSpec("distortion_k1", "k₁", "1", -0.3, 0.3, 0.0, "radial distortion coefficient (r = 1 at corners)",
+                  sample_low=-0.2, sample_high=0.1),
+    ),
+    "shot_noise": (
+        ParamSpec("shot_sigma", "σ_shot", "intensity", 0.0, 0.2, 0.0, "noise std at full intensity (var ∝ I)",
+                  sample_high=0.08),
+    ),
+    "gamma": (
+        ParamSpec("gamma_g", "g", "exponent", 0.4, 2.5, 1.0, "tone-curve exponent (1 = linear)",
+                  sample_low=0.7, sample_high=1.4),
+    ),
+    "sharpening": (
+        ParamSpec("sharpen_amount", "a_s", "factor", 0.0, 3.0, 0.0, "unsharp-mask amount", sample_high=1.5),
+        ParamSpec("sharpen_sigma", "σ_us", "px", 0.3, SHARPEN_SIGMA_MAX, 1.0, "unsharp-mask radius (Gaussian std)",
+                  sample_low=0.5, sample_high=2.0),
+    ),
+    "compression": (
+        ParamSpec("jpeg_quality", "q", "JPEG quality", 5.0, 100.0, 100.0, "JPEG quality (100 = off)",
+                  sample_low=30.0, sample_high=95.0),
+    ),
+}
+EFFECT_PARAM_SPECS: Mapping[str, tuple[ParamSpec, ...]] = MappingProxyType(_DECLARED)
+"""Effect name -> its capture parameters (read-only view; add with :func:`declare_effect_params`)."""
+
+
+def declare_effect_params(effect: str, specs: Sequence[ParamSpec]) -> None:
+    """Declare the capture parameters of ``effect`` (done by ``register_effect``; once per name).
+
+    Raises ``ValueError`` if ``effect`` is already declared with other parameters.
+    """
+    specs = tuple(specs)
+    if not all(isinstance(s, ParamSpec) for s in specs):
+        raise ValueError(f"parameters of effect {effect!r} must be ParamSpec instances, got {specs!r}")
+    if effect in _DECLARED and _DECLARED[effect] != specs:
+        raise ValueError(f"effect {effect!r} is already declared with parameters "
+                         f"{[s.name for s in _DECLARED[effect]]}")
+    _DECLARED[effect] = specs
+
+
 def effect_param_specs(effects: Sequence[str] | None) -> tuple[ParamSpec, ...]:
     """The capture parameters of ``effects`` (None: the paper's four), in Θ's order.
 
     Raises ``ValueError`` for an unknown effect or a parameter name two effects share.
     """
-    from synthaug.effects.registry import get_effect, PAPER_EFFECTS
-
     names = PAPER_EFFECTS if effects is None else tuple(effects)
     specs: list[ParamSpec] = []
     seen: set[str] = set(POSE_NAMES)
     for name in names:
-        for spec in get_effect(name).params:
+        for spec in _declared(name):
             if spec.name in seen:
                 raise ValueError(f"parameter {spec.name!r} of effect {name!r} is already defined")
             seen.add(spec.name)
             specs.append(spec)
     return tuple(specs)
+
+
+def _declared(effect: str) -> tuple[ParamSpec, ...]:
+    try:
+        return _DECLARED[effect]
+    except KeyError:
+        raise ValueError(f"unknown effect {effect!r}; registered: {sorted(_DECLARED)}") from None
 
 
 class CaptureParams:
@@ -196,9 +336,7 @@ class CaptureParams:
         return {n: self._values[n] for n in POSE_NAMES}
 
     def effect_params(self, effect: str) -> dict[str, torch.Tensor]:
-        from synthaug.effects.registry import get_effect
-
-        return {s.name: self._values[s.name] for s in get_effect(effect).params}
+        return {s.name: self._values[s.name] for s in _declared(effect)}
 
     def __getitem__(self, index: int | slice | Sequence[int] | torch.Tensor) -> "CaptureParams":
         if isinstance(index, int):
@@ -428,11 +566,9 @@ class CaptureParams:
 
 def resolve_effect_names(effects: Iterable[str] | None) -> tuple[str, ...]:
     """``effects`` as a tuple of registered effect names (None: the paper's four); unknown names raise."""
-    from synthaug.effects.registry import PAPER_EFFECTS, get_effect
-
     names = PAPER_EFFECTS if effects is None else tuple(effects)
     for n in names:
-        get_effect(n)  # raises a clear KeyError-like ValueError for unknown names
+        _declared(n)  # a clear ValueError for an unknown name
     return tuple(names)
 
 

@@ -44,9 +44,16 @@ def small_cache():
 def effect_registry(monkeypatch):
     """The effect registry, restored after the test: an effect a test registers does not leak into others.
 
-    Returns the :mod:`synthaug.effects.registry` module; ``register_effect`` writes into a copy of its table.
+    Returns the :mod:`synthaug.effects.registry` module; ``register_effect`` writes into a copy of its
+    table, and the parameters it declares to :mod:`synthaug.params` are taken back afterwards.
     """
+    from synthaug import params
     from synthaug.effects import registry
 
     monkeypatch.setattr(registry, "_REGISTRY", dict(registry._REGISTRY))
-    return registry
+    declared = dict(params._DECLARED)
+    try:
+        yield registry
+    finally:
+        params._DECLARED.clear()
+        params._DECLARED.update(declared)

@@ -277,4 +277,9 @@ def test_new_effect_plugs_in_without_touching_the_others(effect_registry):
 
 
 def test_a_test_effect_does_not_outlive_its_test():
+    from synthaug.params import EFFECT_PARAM_SPECS
+
     assert "_test_gain" not in list_effects()  # registered above inside the effect_registry fixture
+    assert "_test_gain" not in EFFECT_PARAM_SPECS  # and its parameters left Θ's table with it
+    with pytest.raises(ValueError, match="unknown effect"):
+        CaptureParams({"gain_test": [0.5]}, effects=["material", "_test_gain"])

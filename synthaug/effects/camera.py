@@ -76,12 +76,10 @@ import torch
 from synthaug.effects import camera_functional as Cx
 from synthaug.effects.paper import DEFAULT_LIGHT
 from synthaug.effects.registry import Effect, RenderState, register_effect
-from synthaug.params import ParamSpec
+from synthaug.params import DEFOCUS_SIGMA_MAX, EFFECT_PARAM_SPECS, SHARPEN_SIGMA_MAX  # noqa: F401  (re-exported)
 
 __all__ = ["CAMERA_EFFECTS", "DEFOCUS_SIGMA_MAX", "SHARPEN_SIGMA_MAX", "frame_geometry"]
 
-DEFOCUS_SIGMA_MAX = 3.0
-SHARPEN_SIGMA_MAX = 3.0
 
 # the candidate effects, in the order
 CAMERA_EFFECTS: tuple[str, ...] = (
@@ -122,12 +120,7 @@ class Specular(Effect):
     name = "specular"
     stage = "object"
     order = 1.0
-    params = (
-        ParamSpec("specular_ks", "k_s", "reflectance", 0.0, 1.0, 0.0, "specular reflection weight",
-                  sample_high=0.6),
-        ParamSpec("specular_shininess", "p_s", "exponent", 2.0, 200.0, 30.0,
-                  "Blinn-Phong exponent: larger = smaller, sharper highlights", sample_low=5.0, sample_high=80.0),
-    )
+    params = EFFECT_PARAM_SPECS["specular"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, specular_ks: torch.Tensor,
               specular_shininess: torch.Tensor) -> RenderState:
@@ -143,12 +136,7 @@ class Haze(Effect):
     name = "haze"
     stage = "object"
     order = 2.0
-    params = (
-        ParamSpec("haze_amount", "h", "fraction", 0.0, 0.95, 0.0, "1 - transmission between object and camera",
-                  sample_high=0.5),
-        ParamSpec("haze_airlight", "A", "intensity", 0.0, 1.0, 0.8, "airlight (horizon sky) intensity",
-                  sample_low=0.5),
-    )
+    params = EFFECT_PARAM_SPECS["haze"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, haze_amount: torch.Tensor, haze_airlight: torch.Tensor) -> RenderState:
         return state.replace(object_color=Cx.haze(state.object_color, haze_amount, haze_airlight))
@@ -161,10 +149,7 @@ class Vignetting(Effect):
     name = "vignetting"
     stage = "object"
     order = 3.0
-    params = (
-        ParamSpec("vignette_k", "k_v", "fraction", 0.0, 0.9, 0.0, "fraction of light lost at the frame corners",
-                  sample_high=0.5),
-    )
+    params = EFFECT_PARAM_SPECS["vignetting"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, vignette_k: torch.Tensor) -> RenderState:
         return state.replace(object_color=Cx.vignetting(state.object_color, vignette_k, **frame_geometry(state)))
@@ -177,12 +162,7 @@ class Exposure(Effect):
     name = "exposure"
     stage = "object"
     order = 4.0
-    params = (
-        ParamSpec("exposure_gain", "g_e", "factor", 0.25, 4.0, 1.0, "exposure gain", sample_low=0.7,
-                  sample_high=1.4),
-        ParamSpec("exposure_offset", "o_e", "intensity", -0.3, 0.3, 0.0, "black-level offset",
-                  sample_low=-0.05, sample_high=0.05),
-    )
+    params = EFFECT_PARAM_SPECS["exposure"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, exposure_gain: torch.Tensor, exposure_offset: torch.Tensor) -> RenderState:
         return state.replace(object_color=Cx.exposure(state.object_color, exposure_gain, exposure_offset))
@@ -195,10 +175,7 @@ class WhiteBalance(Effect):
     name = "white_balance"
     stage = "object"
     order = 5.0
-    params = (
-        ParamSpec("wb_gain", "g_c", "factor", 0.5, 2.0, 1.0, "white-balance gain of the channel",
-                  sample_low=0.8, sample_high=1.25),
-    )
+    params = EFFECT_PARAM_SPECS["white_balance"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, wb_gain: torch.Tensor) -> RenderState:
         return state.replace(object_color=Cx.white_balance(state.object_color, wb_gain))
@@ -211,11 +188,7 @@ class RotorBlur(Effect):
     name = "rotor_blur"
     stage = "object"
     order = 7.0
-    params = (
-        ParamSpec("rotor_opacity", "ρ", "fraction", 0.0, 1.0, 1.0,
-                  "fraction of the exposure a rotor-disc pixel is covered by a blade (1 = solid disc)",
-                  sample_low=0.1),
-    )
+    params = EFFECT_PARAM_SPECS["rotor_blur"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, rotor_opacity: torch.Tensor) -> RenderState:
         cov = Cx.rotor_blur(state.coverage, rotor_opacity, state.extras.get("part_rotor"))
@@ -229,12 +202,7 @@ class RollingShutter(Effect):
     name = "rolling_shutter"
     stage = "object"
     order = 15.0
-    params = (
-        ParamSpec("rs_skew", "s_x", "px/row", -0.5, 0.5, 0.0, "horizontal object displacement per image row",
-                  sample_low=-0.15, sample_high=0.15),
-        ParamSpec("rs_stretch", "s_y", "px/row", -0.3, 0.3, 0.0, "vertical object displacement per image row",
-                  sample_low=-0.08, sample_high=0.08),
-    )
+    params = EFFECT_PARAM_SPECS["rolling_shutter"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, rs_skew: torch.Tensor, rs_stretch: torch.Tensor) -> RenderState:
         color, cov = Cx.rolling_shutter(state.object_color, state.coverage, rs_skew, rs_stretch)
@@ -249,9 +217,7 @@ class Defocus(Effect):
     name = "defocus"
     stage = "image"
     order = 5.0
-    params = (
-        ParamSpec("defocus_sigma", "σ_f", "px", 0.0, DEFOCUS_SIGMA_MAX, 0.0, "defocus PSF std", sample_high=1.5),
-    )
+    params = EFFECT_PARAM_SPECS["defocus"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, defocus_sigma: torch.Tensor) -> RenderState:
         return _on_difference(state, self.name,
@@ -265,10 +231,7 @@ class ChromaticAberration(Effect):
     name = "chromatic_aberration"
     stage = "image"
     order = 6.0
-    params = (
-        ParamSpec("ca_shift", "δ_ca", "px", 0.0, 4.0, 0.0, "red/blue displacement at the frame corners (frame px)",
-                  sample_high=2.5),
-    )
+    params = EFFECT_PARAM_SPECS["chromatic_aberration"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, ca_shift: torch.Tensor) -> RenderState:
         geo = frame_geometry(state)
@@ -282,10 +245,7 @@ class LensDistortion(Effect):
     name = "lens_distortion"
     stage = "image"
     order = 7.0
-    params = (
-        ParamSpec("distortion_k1", "k₁", "1", -0.3, 0.3, 0.0, "radial distortion coefficient (r = 1 at corners)",
-                  sample_low=-0.2, sample_high=0.1),
-    )
+    params = EFFECT_PARAM_SPECS["lens_distortion"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, distortion_k1: torch.Tensor) -> RenderState:
         geo = frame_geometry(state)
@@ -299,10 +259,7 @@ class ShotNoise(Effect):
     name = "shot_noise"
     stage = "image"
     order = 25.0
-    params = (
-        ParamSpec("shot_sigma", "σ_shot", "intensity", 0.0, 0.2, 0.0, "noise std at full intensity (var ∝ I)",
-                  sample_high=0.08),
-    )
+    params = EFFECT_PARAM_SPECS["shot_noise"]  # declared in synthaug.params
 
     def sample_fields(self, shape, generator, dtype=torch.float32):
         return {"shot_noise": torch.randn(shape, generator=generator, dtype=dtype)}
@@ -322,10 +279,7 @@ class Gamma(Effect):
     name = "gamma"
     stage = "image"
     order = 30.0
-    params = (
-        ParamSpec("gamma_g", "g", "exponent", 0.4, 2.5, 1.0, "tone-curve exponent (1 = linear)",
-                  sample_low=0.7, sample_high=1.4),
-    )
+    params = EFFECT_PARAM_SPECS["gamma"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, gamma_g: torch.Tensor) -> RenderState:
         img = _image(state, self.name)
@@ -339,11 +293,7 @@ class Sharpening(Effect):
     name = "sharpening"
     stage = "image"
     order = 35.0
-    params = (
-        ParamSpec("sharpen_amount", "a_s", "factor", 0.0, 3.0, 0.0, "unsharp-mask amount", sample_high=1.5),
-        ParamSpec("sharpen_sigma", "σ_us", "px", 0.3, SHARPEN_SIGMA_MAX, 1.0, "unsharp-mask radius (Gaussian std)",
-                  sample_low=0.5, sample_high=2.0),
-    )
+    params = EFFECT_PARAM_SPECS["sharpening"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, sharpen_amount: torch.Tensor, sharpen_sigma: torch.Tensor) -> RenderState:
         return _on_difference(state, self.name, lambda d: Cx.unsharp_mask(d, sharpen_amount, sharpen_sigma,
@@ -368,10 +318,7 @@ class Compression(Effect):
     stage = "image"
     order = 40.0
     differentiable = False  # the straight-through gradient w.r.t. the image is by design, not exact
-    params = (
-        ParamSpec("jpeg_quality", "q", "JPEG quality", 5.0, 100.0, 100.0, "JPEG quality (100 = off)",
-                  sample_low=30.0, sample_high=95.0),
-    )
+    params = EFFECT_PARAM_SPECS["compression"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, jpeg_quality: torch.Tensor) -> RenderState:
         img = _image(state, self.name)

@@ -32,12 +32,10 @@ import torch
 
 from synthaug.effects import functional as Fx
 from synthaug.effects.registry import Effect, RenderState, register_effect
-from synthaug.params import ParamSpec
+from synthaug.params import EFFECT_PARAM_SPECS, TEXTURE_SCALE_MAX, TEXTURE_SCALE_MIN  # noqa: F401  (re-exported)
 
 __all__ = ["ObjectTexture", "texture_field", "TEXTURE_SCALE_MAX", "TEXTURE_PAD"]
 
-TEXTURE_SCALE_MIN = 0.3
-TEXTURE_SCALE_MAX = 4.0
 # white-noise margin on each side of the patch: the smoothed field at a patch pixel sees all the noise
 # within 4ℓ_max of it (kernel weight beyond is < exp(-8))
 TEXTURE_PAD = int(math.ceil(4.0 * TEXTURE_SCALE_MAX))
@@ -100,13 +98,7 @@ class ObjectTexture(Effect):
     name = "object_texture"
     stage = "object"
     order = 5.0  # after the material (0), before motion blur (10)
-    params = (
-        ParamSpec("texture_amp", "a", "relative", 0.0, 1.0, 0.0,
-                  "relative std of the albedo variation (0 = none)", sample_high=0.6),
-        ParamSpec("texture_scale", "ℓ", "px", TEXTURE_SCALE_MIN, TEXTURE_SCALE_MAX, 1.0,
-                  "std of the Gaussian that smooths the albedo field (its correlation length)",
-                  sample_low=0.5, sample_high=2.5),
-    )
+    params = EFFECT_PARAM_SPECS["object_texture"]  # declared in synthaug.params
 
     def sample_fields(self, shape, generator, dtype=torch.float32):
         b, _, h, w = shape

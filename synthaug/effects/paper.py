@@ -18,12 +18,9 @@ import torch
 
 from synthaug.effects import functional as Fx
 from synthaug.effects.registry import Effect, RenderState, register_effect
-from synthaug.params import ParamSpec
+from synthaug.params import EFFECT_PARAM_SPECS, SIGMA_M_MAX, SIGMA_N_MAX, SIGMA_S_MAX  # noqa: F401  (re-exported)
 
-# σ ranges (px) are those of a 40-64 px patch; the blur padding follows them.
-SIGMA_S_MAX = 3.0
-SIGMA_M_MAX = 5.0
-SIGMA_N_MAX = 0.3
+# the σ ranges (SIGMA_*_MAX, px) are declared with the parameters in synthaug.params; the blur padding follows them
 DEFAULT_LIGHT = (0.0, 0.5, 0.8660254)  # toward the light: from above, in front
 
 
@@ -39,11 +36,7 @@ class Material(Effect):
     stage = "object"
     order = 0.0
     ambient = 0.4
-    params = (
-        ParamSpec("w_d", "w_d", "reflectance", 0.0, 1.0, 0.5,
-                  "diffuse reflection weight: object intensity under the default light",
-                  sample_low=0.05, sample_high=0.9),
-    )
+    params = EFFECT_PARAM_SPECS["material"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, w_d: torch.Tensor) -> RenderState:
         light = state.extras.get("light_dir", torch.tensor(DEFAULT_LIGHT))
@@ -58,14 +51,7 @@ class MotionBlur(Effect):
     name = "motion_blur"
     stage = "object"
     order = 10.0
-    params = (
-        ParamSpec("sigma_u", "σ_u", "px", 0.0, SIGMA_M_MAX, 0.0, "motion-blur std along α_m",
-                  sample_high=2.0),
-        ParamSpec("sigma_v", "σ_v", "px", 0.0, SIGMA_M_MAX, 0.0, "motion-blur std across α_m",
-                  sample_high=2.0),
-        ParamSpec("alpha_m", "α_m", "rad", -math.pi / 2, math.pi / 2, 0.0,
-                  "motion direction from +x toward +y (π-periodic)", periodic=True),
-    )
+    params = EFFECT_PARAM_SPECS["motion_blur"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, sigma_u: torch.Tensor, sigma_v: torch.Tensor,
               alpha_m: torch.Tensor) -> RenderState:
@@ -81,9 +67,7 @@ class BoundaryBlur(Effect):
     name = "boundary_blur"
     stage = "image"
     order = 10.0
-    params = (
-        ParamSpec("sigma_s", "σ_s", "px", 0.0, SIGMA_S_MAX, 0.0, "boundary-blur std", sample_high=1.5),
-    )
+    params = EFFECT_PARAM_SPECS["boundary_blur"]  # declared in synthaug.params
 
     def apply(self, state: RenderState, *, sigma_s: torch.Tensor) -> RenderState:
         assert state.image is not None
@@ -97,10 +81,7 @@ class ObjectNoise(Effect):
     name = "object_noise"
     stage = "image"
     order = 20.0
-    params = (
-        ParamSpec("sigma_n", "σ_n", "intensity", 0.0, SIGMA_N_MAX, 0.0,
-                  "std of the noise added to object pixels (image in [0, 1])", sample_high=0.08),
-    )
+    params = EFFECT_PARAM_SPECS["object_noise"]  # declared in synthaug.params
 
     def sample_fields(self, shape, generator, dtype=torch.float32):
         return {"noise": torch.randn(shape, generator=generator, dtype=dtype)}

@@ -1,6 +1,7 @@
 """Effect registry: every capture effect is a named plug-in of S(Θ, B).
 
-An effect declares its parameters (:class:`~synthaug.params.ParamSpec`), the
+An effect declares its parameters (:class:`~synthaug.params.ParamSpec`; the
+built-in effects' are in :data:`synthaug.params.EFFECT_PARAM_SPECS`), the
 stage where it acts, an order within the stage, and an ``apply`` that maps a
 :class:`RenderState` to a new one without drawing random numbers (random fields
 such as noise are drawn beforehand by :meth:`Effect.sample_fields`, so that a
@@ -29,12 +30,12 @@ from typing import Callable, ClassVar, Literal
 
 import torch
 
-from synthaug.params import ParamSpec
+from synthaug.params import PAPER_EFFECTS, ParamSpec, declare_effect_params
+
+__all__ = ["PAPER_EFFECTS", "Effect", "EffectFn", "RenderState", "Stage", "get_effect", "list_effects", "ordered",
+           "register_effect"]
 
 Stage = Literal["object", "image"]
-
-# The paper's four effects, in the paper's order of presentation.
-PAPER_EFFECTS: tuple[str, ...] = ("boundary_blur", "motion_blur", "object_noise", "material")
 
 
 @dataclass(frozen=True)
@@ -114,6 +115,7 @@ def register_effect(cls: type[Effect]) -> type[Effect]:
         raise ValueError(f"{cls.__name__}.stage must be 'object' or 'image', got {cls.stage!r}")
     if name in _REGISTRY and type(_REGISTRY[name]) is not cls:
         raise ValueError(f"an effect named {name!r} is already registered ({type(_REGISTRY[name]).__name__})")
+    declare_effect_params(name, cls.params)  # Θ learns the effect's parameters (built-ins: already declared)
     _REGISTRY[name] = cls()
     return cls
 
