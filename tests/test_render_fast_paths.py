@@ -286,3 +286,34 @@ def test_items_do_not_depend_on_the_batch_they_are_rendered_in(cache):
     small = _items(ds, idx[::7])
     torch.testing.assert_close(batch[::7], alone, atol=1e-6, rtol=0)
     torch.testing.assert_close(small, alone, atol=1e-6, rtol=0)
+
+
+def _ref_box_from_coverage(cov, x0, y0, threshold=0.5):
+    mask = cov >= threshold
+    if not mask.any():
+        mask = cov > 0
+    if not mask.any():
+        return torch.zeros((0, 4), dtype=torch.float32)
+    ys = torch.nonzero(mask.any(1)).flatten()
+    xs = torch.nonzero(mask.any(0)).flatten()
+    return torch.tensor([[x0 + xs[0].item(), y0 + ys[0].item(), x0 + xs[-1].item() + 1, y0 + ys[-1].item() + 1]],
+                        dtype=torch.float32)
+
+
+def test_batched_boxes_equal_the_per_item_boxes():
+    from synthaug.data.synthetic import _boxes_from_coverage
+
+    g = torch.Generator().manual_seed(0)
+    cov = torch.zeros(6, 20, 24)
+    cov[0, 3:9, 5:7] = 1.0
+    cov[1, 2, 3] = 0.3  # nothing >= 0.5: the box of what is > 0
+    cov[1, 10, 20] = 0.2
+    cov[3] = torch.rand(20, 24, generator=g) * (torch.rand(20, 24, generator=g) > 0.9)  # cov[2]: empty
+    cov[4, 0, 0] = cov[4, 19, 23] = 0.9
+    cov[5, 7:8, :] = 0.6
+    x0, y0 = torch.tensor([0, 5, 7, 11, 2, 100]), torch.tensor([1, 0, 3, 8, 4, 50])
+    boxes, counts = _boxes_from_coverage(cov, x0, y0)
+    for k in range(6):
+        ref = _ref_box_from_coverage(cov[k], int(x0[k]), int(y0[k]))
+        assert counts[k] == len(ref)
+        assert torch.equal(boxes[k, None][:counts[k]], ref)

@@ -673,7 +673,9 @@ class SyntheticObjectDataset(Dataset):
         else:
             frames = self._frame_batch(draws)
             labels = torch.full((len(draws), 1), self.label, dtype=torch.int64)
-            boxes = torch.zeros((len(draws), 1, 4), dtype=torch.float32)
+            corner = torch.tensor([d["crop_xy"] for d in draws])
+            boxes, n_boxes = _boxes_from_coverage(cov[:, 0], corner[:, 0], corner[:, 1])
+            boxes = boxes[:, None]
         out = []
         for k, d in enumerate(draws):
             target: dict[str, torch.Tensor] = {"synthetic": synthetic[k], "seed_index": seeds[k], "theta": vec[k]}
@@ -682,16 +684,14 @@ class SyntheticObjectDataset(Dataset):
                 out.append((bgs[k] if d["negative"] else images[k], target))
             else:
                 frame = frames[k]
-                n_boxes = 0
+                n = 0
                 if not d["negative"]:
                     x0, y0 = d["crop_xy"]
                     frame[:, y0:y0 + crop, x0:x0 + crop] = images[k]
-                    box = _box_from_coverage(cov[k, 0], x0, y0)
-                    n_boxes = len(box)
-                    boxes[k, :n_boxes] = box
-                target["boxes"] = tv_tensors.BoundingBoxes(boxes[k, :n_boxes], format="XYXY",
+                    n = n_boxes[k]
+                target["boxes"] = tv_tensors.BoundingBoxes(boxes[k, :n], format="XYXY",
                                                            canvas_size=tuple(frame.shape[-2:]))
-                target["labels"] = labels[k, :n_boxes]
+                target["labels"] = labels[k, :n]
                 out.append((tv_tensors.Image(frame), target))
         return out
 
@@ -727,14 +727,24 @@ class SyntheticObjectDataset(Dataset):
 _CHUNK_PIXELS = 64 * 64 * 64  # pixels rendered together (see SyntheticObjectDataset._synthetic_items)
 
 
-def _box_from_coverage(cov: torch.Tensor, x0: int, y0: int, threshold: float = 0.5) -> torch.Tensor:
-    """Tight XYXY box (pixel edges) of coverage >= threshold (or > 0 if none), offset to the frame."""
+def _boxes_from_coverage(cov: torch.Tensor, x0: torch.Tensor, y0: torch.Tensor, threshold: float = 0.5,
+                         ) -> tuple[torch.Tensor, list[int]]:
+    """Tight XYXY boxes (pixel edges) of coverage >= threshold (or > 0 where none is), offset to the frame.
+
+    Args:
+        cov: (B, H, W) coverages; x0, y0: (B,) the crops' corners in their frames.
+
+    Returns:
+        (B, 4) float32 boxes and each item's box count: 1, or 0 where the object is not in view.
+    """
+    b, h, w = cov.shape
     mask = cov >= threshold
-    if not mask.any():
-        mask = cov > 0
-    if not mask.any():
-        return torch.zeros((0, 4), dtype=torch.float32)
-    ys = torch.nonzero(mask.any(1)).flatten()
-    xs = torch.nonzero(mask.any(0)).flatten()
-    return torch.tensor([[x0 + xs[0].item(), y0 + ys[0].item(), x0 + xs[-1].item() + 1, y0 + ys[-1].item() + 1]],
-                        dtype=torch.float32)
+    mask = torch.where(mask.flatten(1).any(1)[:, None, None], mask, cov > 0)
+    rows, cols = mask.any(2), mask.any(1)
+    ys, xs = torch.arange(h), torch.arange(w)
+    top = torch.where(rows, ys, h).amin(1)
+    bottom = torch.where(rows, ys, -1).amax(1) + 1
+    left = torch.where(cols, xs, w).amin(1)
+    right = torch.where(cols, xs, -1).amax(1) + 1
+    boxes = torch.stack([x0 + left, y0 + top, x0 + right, y0 + bottom], 1).to(torch.float32)
+    return boxes, rows.any(1).to(torch.int64).tolist()
