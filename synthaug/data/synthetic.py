@@ -738,9 +738,11 @@ def _boxes_from_coverage(cov: torch.Tensor, x0: torch.Tensor, y0: torch.Tensor, 
         (B, 4) float32 boxes and each item's box count: 1, or 0 where the object is not in view.
     """
     b, h, w = cov.shape
-    mask = cov >= threshold
-    mask = torch.where(mask.flatten(1).any(1)[:, None, None], mask, cov > 0)
-    rows, cols = mask.any(2), mask.any(1)
+    # a row (column) holds a pixel >= t iff its maximum does: reduce the floats once, not boolean masks
+    row_max, col_max = cov.amax(2), cov.amax(1)
+    strong = (row_max.amax(1) >= threshold)[:, None]
+    rows = torch.where(strong, row_max >= threshold, row_max > 0)
+    cols = torch.where(strong, col_max >= threshold, col_max > 0)
     ys, xs = torch.arange(h), torch.arange(w)
     top = torch.where(rows, ys, h).amin(1)
     bottom = torch.where(rows, ys, -1).amax(1) + 1
