@@ -118,7 +118,9 @@ class ViewCache:
         sprites = torch.cat([cov7[:, None], self.normals], dim=1)
         # Only the box where some view has content is kept: outside it every sprite is zero, which is what
         # grid_sample's zero padding reads there, so the crop changes nothing but the bytes gathered per batch.
-        filled = (sprites != 0).any(1).any(0)
+        filled = torch.zeros(sprites.shape[-2:], dtype=torch.bool)
+        for i in range(0, len(sprites), 256):  # in slices: no full-size boolean copy
+            filled |= (sprites[i:i + 256] != 0).any(1).any(0)
         rows, cols = torch.nonzero(filled.any(1)).flatten(), torch.nonzero(filled.any(0)).flatten()
         y0, y1 = (int(rows[0]), int(rows[-1]) + 1) if len(rows) else (0, 1)
         x0, x1 = (int(cols[0]), int(cols[-1]) + 1) if len(cols) else (0, 1)
