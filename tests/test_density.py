@@ -5,7 +5,7 @@ import pytest
 import scipy.stats
 import torch
 
-from synthaug.fit.density import CaptureDensity
+from synthaug.data.density import CaptureDensity
 from synthaug.params import CaptureParams
 
 

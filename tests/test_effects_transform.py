@@ -165,7 +165,7 @@ def test_same_on_batch_shares_theta_and_fields():
 
 
 def test_uniform_sampling_is_capture_density_uniform():
-    density = pytest.importorskip("synthaug.fit.density")
+    density = pytest.importorskip("synthaug.data.density")
     fitted = _fitted(7, channels=3)
     aug = CaptureEffects(fitted, sampling="uniform", generator=21)
     draw = aug.make_params((5, 3, 8, 8))

@@ -371,7 +371,7 @@ class SyntheticObjectDataset(Dataset):
         self.seed_geometry = None if seed_geometry is None else self._check_geometry(seed_geometry, n_seeds)
         self._density = None
         if capture_sampling != "seed":
-            from synthaug.fit.density import CaptureDensity
+            from synthaug.data.density import CaptureDensity
 
             self._density = CaptureDensity(self.params, kind=capture_sampling)
         self._random_effects = [e for e in ordered(list(self.effects)) if e.is_random]

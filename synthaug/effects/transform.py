@@ -57,9 +57,9 @@ fields included (as kornia's ``RandomGaussianNoise`` shares its noise map): a
 batch of identical images gives identical outputs. All numbers come from one
 CPU ``torch.Generator`` (``generator=``; None = torch's global generator), so
 the same seed gives the same output. ``"kde"`` is not offered: the kernel
-density (:class:`synthaug.fit.density.CaptureDensity`) lives in
-``synthaug.fit``, which this layer must not import (render → params → effects
-→ data → detectors → distances → fit). Its draws can be passed as rows:
+density (:class:`synthaug.data.density.CaptureDensity`) lives in
+``synthaug.data``, which this layer must not import (render → params → effects
+→ data → ...). Its draws can be passed as rows:
 ``CaptureEffects(dens.to_params(dens.sample(10_000, generator=g)))``.
 
 Why not a subclass of kornia's ``AugmentationBase2D``
@@ -204,8 +204,8 @@ class CaptureEffects(nn.Module):
         self.same_on_batch = bool(same_on_batch)
         if sampling == "kde":
             raise ValueError(
-                "sampling='kde' is not offered here: the kernel density (synthaug.fit.density.CaptureDensity) "
-                "lives in synthaug.fit, which the effects layer must not import. Draw rows from it and pass "
+                "sampling='kde' is not offered here: the kernel density (synthaug.data.density.CaptureDensity) "
+                "lives in synthaug.data, which the effects layer must not import. Draw rows from it and pass "
                 "them as params (CaptureEffects(dens.to_params(dens.sample(n, generator=g)))), or use "
                 "sampling='seed' or 'uniform'")
         if sampling not in ("seed", "uniform"):
