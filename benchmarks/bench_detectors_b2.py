@@ -85,7 +85,8 @@ def _training_patches(seed_dir: str | None) -> tuple[torch.Tensor, torch.Tensor,
 
 def bench_detectors(frame: torch.Tensor, scales: list[float], repeats: int, seed_dir: str | None) -> dict[str, Any]:
     from synthaug.detectors.adaboost import train_adaboost
-    from synthaug.detectors.cnn import CNNDetector, train_patch_cnn
+    from synthaug.detectors.cnn import CNNDetector
+    from synthaug.detectors.lightning_module import train_patch_cnn
     from synthaug.detectors.sliding import detect_multiscale, resize_image
 
     pos, neg, held, source = _training_patches(seed_dir)
@@ -142,7 +143,7 @@ def bench_detectors(frame: torch.Tensor, scales: list[float], repeats: int, seed
 def bench_distances(batch: int, repeats: int) -> dict[str, Any]:
     from synthaug.distances import get_distance
     from synthaug.detectors.adaboost import train_adaboost
-    from synthaug.detectors.cnn import train_patch_cnn
+    from synthaug.detectors.lightning_module import train_patch_cnn
     from synthaug.detectors.toy import toy_patches
 
     pos, neg = toy_patches(150, 400, seed=0)

@@ -38,8 +38,6 @@ ALLOWED_BACK_EDGES: dict[tuple[str, str], str] = {
 ALLOWED_PRIVATE: dict[tuple[str, str, str], str] = {}
 # modules of one circle: why it is still there.
 ALLOWED_CYCLES: dict[frozenset[str], str] = {
-    # fix: cnn.py's fit_patch_detector call moves to the caller, or the Lightning glue takes load_patch_cnn
-    frozenset({"synthaug.detectors.cnn", "synthaug.detectors.lightning_module"}): CONCURRENT,
 }
 
 

@@ -7,7 +7,8 @@ import pytest
 import torch
 
 from synthaug.detectors.base import load_detector, save_detector
-from synthaug.detectors.cnn import CNNDetector, PatchCNN, load_patch_cnn, train_patch_cnn
+from synthaug.detectors.cnn import CNNDetector, PatchCNN, load_patch_cnn
+from synthaug.detectors.lightning_module import train_patch_cnn
 from synthaug.detectors.toy import toy_frame, toy_patches
 from synthaug.distances import get_distance
 from synthaug.distances.cnn import CNNDistance

@@ -39,7 +39,7 @@ from torch import Tensor, nn
 
 from synthaug.detectors.base import PatchDetector, check_image, check_patches, register_detector, score_map_shape
 
-__all__ = ["PatchCNN", "CNNDetector", "train_patch_cnn", "load_patch_cnn"]
+__all__ = ["PatchCNN", "CNNDetector", "load_patch_cnn"]
 
 _MEAN, _SCALE = 0.5, 4.0  # fixed input normalisation: keeps the network fully convolutional
 
@@ -222,46 +222,6 @@ class CNNDetector(PatchDetector):
         except RuntimeError as e:
             raise ValueError(f"weights do not match PatchCNN(channels={cfg['channels']}, window={cfg['window']}): {e}") from e
         return cls(net)
-
-
-def train_patch_cnn(
-    positives: Tensor,
-    negatives: Tensor,
-    *,
-    channels: Sequence[int] = (8, 16, 32, 64),
-    epochs: int = 15,
-    batch_size: int = 64,
-    lr: float = 3e-3,
-    weight_decay: float = 1e-4,
-    seed: int = 0,
-) -> PatchCNN:
-    """Train a :class:`PatchCNN` on patches in memory; returns the bare network.
-
-    A thin wrapper over :func:`synthaug.detectors.lightning_module.fit_patch_detector`
-    (the :class:`~synthaug.detectors.lightning_module.PatchDetectorModule` under a
-    quiet CPU ``lightning.Trainer``), so the code base has one training loop:
-    for the d_CNN distance ("a CNN trained on the real seed images only") and
-    the benchmarks. Classes are balanced by the loss weight; mirrored copies
-    of every patch are the augmentation.
-
-    Args:
-        positives: object patches ``(P, 1, S, S)`` in [0, 1].
-        negatives: background patches ``(N, 1, S, S)``.
-        channels: network width, see :class:`PatchCNN`.
-        epochs: passes over the data (each patch mirrored or not).
-        batch_size: mini-batch size.
-        lr: Adam learning rate.
-        weight_decay: Adam weight decay.
-        seed: seeds initialisation and shuffling.
-
-    Returns:
-        The trained network, in eval mode.
-    """
-    from synthaug.detectors.lightning_module import fit_patch_detector
-
-    module = fit_patch_detector(positives, negatives, channels=channels, epochs=epochs, batch_size=batch_size, lr=lr,
-                                weight_decay=weight_decay, seed=seed)
-    return module.to_detector().net
 
 
 def load_patch_cnn(path: str | Path) -> PatchCNN:

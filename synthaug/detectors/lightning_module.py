@@ -10,7 +10,7 @@ tensors in memory (:meth:`PatchDataModule.from_tensors`), and/or from any user
 
 :func:`fit_patch_detector` is the one training loop of the patch CNN for code
 that holds tensors (the experiments' ``train_detector("cnn")``, the d_CNN
-distance through :func:`~synthaug.detectors.cnn.train_patch_cnn`): the same
+distance through :func:`train_patch_cnn`): the same
 module and data module under a quiet CPU ``lightning.Trainer``.
 
 Items are pure functions of ``(seed, index)`` (the horizontal-flip augmentation
@@ -41,7 +41,8 @@ from torch.utils.data import ConcatDataset, DataLoader, Dataset
 from synthaug.detectors.base import save_detector
 from synthaug.detectors.cnn import CNNDetector, PatchCNN, load_patch_cnn
 
-__all__ = ["PatchDetectorModule", "PatchDataModule", "PatchDataset", "fit_patch_detector", "export_detector"]
+__all__ = ["PatchDetectorModule", "PatchDataModule", "PatchDataset", "fit_patch_detector", "export_detector",
+           "train_patch_cnn"]
 
 
 class PatchDetectorModule(L.LightningModule):
@@ -428,3 +429,41 @@ def export_detector(checkpoint: str | Path, out: str | Path) -> Path:
         FileNotFoundError / ValueError: see :func:`~synthaug.detectors.cnn.load_patch_cnn`.
     """
     return save_detector(CNNDetector(load_patch_cnn(checkpoint)), out)
+
+
+def train_patch_cnn(
+    positives: Tensor,
+    negatives: Tensor,
+    *,
+    channels: Sequence[int] = (8, 16, 32, 64),
+    epochs: int = 15,
+    batch_size: int = 64,
+    lr: float = 3e-3,
+    weight_decay: float = 1e-4,
+    seed: int = 0,
+) -> PatchCNN:
+    """Train a :class:`PatchCNN` on patches in memory; returns the bare network.
+
+    A thin wrapper over :func:`fit_patch_detector`
+    (the :class:`PatchDetectorModule` under a
+    quiet CPU ``lightning.Trainer``), so the code base has one training loop:
+    for the d_CNN distance ("a CNN trained on the real seed images only") and
+    the benchmarks. Classes are balanced by the loss weight; mirrored copies
+    of every patch are the augmentation.
+
+    Args:
+        positives: object patches ``(P, 1, S, S)`` in [0, 1].
+        negatives: background patches ``(N, 1, S, S)``.
+        channels: network width, see :class:`PatchCNN`.
+        epochs: passes over the data (each patch mirrored or not).
+        batch_size: mini-batch size.
+        lr: Adam learning rate.
+        weight_decay: Adam weight decay.
+        seed: seeds initialisation and shuffling.
+
+    Returns:
+        The trained network, in eval mode.
+    """
+    module = fit_patch_detector(positives, negatives, channels=channels, epochs=epochs, batch_size=batch_size, lr=lr,
+                                weight_decay=weight_decay, seed=seed)
+    return module.to_detector().net

@@ -72,6 +72,7 @@ __all__ = [
     "DETECTORS",
     "TrainOptions",
     "TrainingInputError",
+    "check_kind",
     "train_detector",
     "train_with_mining",
     "TrainResult",
@@ -195,7 +196,8 @@ class TrainingInputError(ValueError):
         self.option = option
 
 
-def _check_kind(kind: str) -> None:
+def check_kind(kind: str) -> None:
+    """Raise ``ValueError`` naming the known families unless ``kind`` is one of :data:`DETECTORS`."""
     if kind not in DETECTORS:
         raise ValueError(f"unknown detector kind {kind!r}; choose from {list(DETECTORS)}")
 
@@ -214,7 +216,7 @@ def _fit_once(
 ) -> Any:
     from synthaug.detectors.base import check_patches
 
-    _check_kind(kind)
+    check_kind(kind)
     if not isinstance(positives, Tensor) or positives.dim() != 4 or positives.shape[0] == 0:
         raise ValueError(f"positives must be a non-empty (P, 1, S, S) float tensor, got {getattr(positives, 'shape', positives)}")
     if not isinstance(negatives, Tensor) or negatives.dim() != 4 or negatives.shape[0] == 0:
@@ -795,7 +797,7 @@ def train_with_mining(
         return det
 
     if fit is None:
-        _check_kind(kind)
+        check_kind(kind)
     scales = options.pyramid()
     val = None
     if val_frames is not None:

@@ -5,7 +5,7 @@
 CNN_i^n the i-th neuron of layer n of a :class:`~synthaug.detectors.cnn.PatchCNN`
 "trained on the real seed images only". The network is given directly, loaded
 from a checkpoint (``save_detector`` file or Lightning ``.ckpt``), or trained
-here on seed positives/negatives with :func:`~synthaug.detectors.cnn.train_patch_cnn`
+here on seed positives/negatives with :func:`~synthaug.detectors.lightning_module.train_patch_cnn`
 (the project's one CNN training loop: ``PatchDetectorModule`` under ``lightning.Trainer``).
 
 Differentiable in the synthetic image (ReLU / max-pool subgradients); the
@@ -29,7 +29,8 @@ from typing import Sequence
 import torch
 from torch import Tensor
 
-from synthaug.detectors.cnn import PatchCNN, load_patch_cnn, train_patch_cnn
+from synthaug.detectors.cnn import PatchCNN, load_patch_cnn
+from synthaug.detectors.lightning_module import train_patch_cnn
 from synthaug.distances.registry import Distance, register_distance
 
 __all__ = ["CNNDistance", "cnn_distance"]

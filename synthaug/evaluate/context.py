@@ -27,8 +27,8 @@ from synthaug.data.seedset import SeedSet
 from synthaug.data.splits import load_split
 from synthaug.detectors.base import box_in_window_from_boxes
 from synthaug.detectors.training import (
-    DETECTORS,
     TrainOptions,
+    check_kind,
     mining_frames,
     negative_pool,
     real_positives,
@@ -176,8 +176,7 @@ class ExperimentContext:
         Returns:
             ``{"train": {...}, "<split>": EvalResult json, ...}``.
         """
-        if kind not in DETECTORS:  # the message of detectors.training's own check
-            raise ValueError(f"unknown detector kind {kind!r}; choose from {list(DETECTORS)}")
+        check_kind(kind)
         full = f"{self.class_name}/{kind}/{key}/seed{self.seed}"
         entry = self._cells.setdefault(full, {})
         ek = {s: f"{s}_k{self.stride_k if s == 'test' else self.val_stride_k}_v{self.max_test_videos if s == 'test' else self.max_val_videos}" for s in splits}
