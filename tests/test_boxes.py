@@ -129,3 +129,20 @@ def test_malformed_state_is_a_clear_error():
         BoxRegressor.from_state_dict({k: v for k, v in state.items() if k != "mean_y"})
     with pytest.raises(ValueError, match="no labelled box"):
         BoxRegressor.fit([MiningFrame(np.zeros((50, 50), np.uint8), None, "v", 0)], aspect=1.0)
+
+
+def test_data_boxes_is_torchvision_in_float64_and_empty_pairs_do_not_match() -> None:
+    """synthaug.data.boxes: the one home of box conversion and IoU (XYXY inside, XYWH at file edges)."""
+    import numpy as np
+    from torchvision.ops import box_iou as tv_box_iou
+
+    from synthaug.data.boxes import box_iou, xywh_to_xyxy, xyxy_to_xywh
+
+    xywh = np.array([[1.5, 2.0, 3.0, 4.0], [0.0, 0.0, 0.0, 0.0]])
+    xyxy = xywh_to_xyxy(xywh)
+    assert xyxy.dtype == np.float64 and xyxy.tolist() == [[1.5, 2.0, 4.5, 6.0], [0.0, 0.0, 0.0, 0.0]]
+    assert np.array_equal(xyxy_to_xywh(xyxy), xywh)
+    iou = box_iou(xyxy, xyxy)
+    assert np.allclose(iou[0], tv_box_iou(torch.as_tensor(xyxy), torch.as_tensor(xyxy)).numpy()[0])
+    assert iou[1, 1] == 0.0  # torchvision's 0/0 (NaN) is no match
+    assert box_iou(np.zeros((0, 4)), xyxy).shape == (0, 2)

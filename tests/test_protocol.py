@@ -274,11 +274,11 @@ def test_size_buckets_match_pycocotools_area_ranges(seed: int) -> None:
     dets = [f for d, _ in videos for f in d]
     gts = [f for _, g in videos for f in g]
     # the two matching rules agree when no detection reaches the threshold with two objects
-    from synthaug.evaluate.protocol import _iou, _xyxy
+    from synthaug.data.boxes import box_iou, xywh_to_xyxy
 
     for d, g in zip(dets, gts):
         if g is not None and len(g) and len(d):
-            assert ((_iou(_xyxy(d[:, :4]), _xyxy(g)) >= 0.3).sum(1) <= 1).all()
+            assert ((box_iou(xywh_to_xyxy(d[:, :4]), xywh_to_xyxy(g)) >= 0.3).sum(1) <= 1).all()
     scores = np.concatenate([d[:, 4] for d in dets])
     assert np.unique(scores).size == scores.size
     vms = [match_video(d, g, iou_thresholds=p.iou_thresholds, stem=f"v{i}") for i, (d, g) in enumerate(videos)]

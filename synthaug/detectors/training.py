@@ -68,6 +68,8 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from synthaug.data.boxes import box_iou, xywh_to_xyxy
+
 __all__ = [
     "DETECTORS",
     "TrainOptions",
@@ -628,15 +630,6 @@ def mine_hard_negatives(
                           time.perf_counter() - t0)
 
 
-def _iou_xywh(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """IoU matrix of XYWH boxes (torchvision's box_iou on XYXY)."""
-    import torchvision.ops as tv_ops
-
-    ta = tv_ops.box_convert(torch.as_tensor(a, dtype=torch.float64).reshape(-1, 4), "xywh", "xyxy")
-    tb = tv_ops.box_convert(torch.as_tensor(b, dtype=torch.float64).reshape(-1, 4), "xywh", "xyxy")
-    return tv_ops.box_iou(ta, tb).numpy()
-
-
 @torch.no_grad()
 def validation_false_positives(
     detector: Any,
@@ -695,7 +688,7 @@ def validation_false_positives(
         g = 0 if gts is None else len(gts)
         n_obj += g
         used = np.zeros(g, bool)
-        ious = _iou_xywh(dets[:, :4], gts) if g and len(dets) else np.zeros((len(dets), g))
+        ious = box_iou(xywh_to_xyxy(dets[:, :4]), xywh_to_xyxy(gts)) if g and len(dets) else np.zeros((len(dets), g))
         for d in range(len(dets)):  # best first
             hit = False
             if g:
@@ -903,6 +896,7 @@ def synthetic_positives(
     capture_sampling: str = "seed",
     batch: int = 2048,
     seed_geometry: Mapping[str, Any] | str | None = "auto",
+    pose_sampling: str = "uniform",
 ) -> Tensor:
     """``count`` synthetic object patches generated from a capture-parameter fit.
 
@@ -921,6 +915,8 @@ def synthetic_positives(
         seed_geometry: each seed's place in its frame, for position-aware camera effects
             (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`; default ``"auto"``: the seed
             set's); None: the patch is the frame.
+        pose_sampling: ``"uniform"`` (the paper) or ``"fitted"`` (around each seed's fitted pose; see
+            :class:`~synthaug.data.synthetic.SyntheticObjectDataset`).
 
     Returns:
         Float patches ``(count, 1, P, P)`` in [0, 1].
@@ -935,7 +931,7 @@ def synthetic_positives(
     ds = SyntheticObjectDataset(
         mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
         effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
-        seed_geometry=seed_geometry,
+        seed_geometry=seed_geometry, pose_sampling=pose_sampling,  # type: ignore[arg-type]
     )
     out = []
     for start in range(0, count, batch):
@@ -1221,6 +1217,7 @@ def train_from_videos(
     mesh: str | None = None,
     synthetic_ratio: float = 0.0,
     perturb_copies: int = 0,
+    pose_sampling: str = "uniform",
     options: TrainOptions = TrainOptions(),
     work_dir: str | Path | None = None,
     ingest_seed: int = 0,
@@ -1260,6 +1257,8 @@ def train_from_videos(
             given the seed set's folder once it exists that returns that file (e.g. fits it).
         mesh: mesh of the synthetic object (default: the fit's, else the built-in quadcopter).
         synthetic_ratio: synthetic patches per real seed (needs ``params``).
+        pose_sampling: poses of the synthetic positives: ``"uniform"`` (the paper) or ``"fitted"``
+            (around each seed's fitted pose).
         perturb_copies: perturbed copies of every real positive added to the positives (the
             paper's Table 1 baseline, :func:`~synthaug.effects.perturb.perturb_patches`).
         options: budgets (:class:`TrainOptions`).
@@ -1376,10 +1375,11 @@ def train_from_videos(
         n_syn = int(round(synthetic_ratio * len(ss)))  # type: ignore[arg-type]
         if n_syn:
             ts = time.perf_counter()
-            syn = synthetic_positives(ss, mesh, params, n_syn, seed=seed + 2)
+            syn = synthetic_positives(ss, mesh, params, n_syn, seed=seed + 2, pose_sampling=pose_sampling)
             pos = torch.cat([pos, syn])
             say(f"synthetic: {n_syn} patches from {params} ({time.perf_counter() - ts:.0f}s)")
-        synthetic_info = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn}
+        synthetic_info = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
+                          "pose_sampling": pose_sampling}
     t_data = time.perf_counter() - t0
     say(f"training set: {pos.shape[0]} positives, {neg.shape[0]} negatives ({t_data:.0f}s)")
 

@@ -39,7 +39,8 @@ from typing import Any, Sequence
 
 import numpy as np
 import torch
-from torchvision.ops import box_convert, box_iou
+
+from synthaug.data.boxes import box_iou, xywh_to_xyxy
 
 
 @dataclass
@@ -95,23 +96,6 @@ def _json_float(x: float) -> float | None:
     return None if math.isnan(x) else float(x)
 
 
-def _iou_xywh_as_xyxy(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Pairwise IoU, ``(K, 4) x (M, 4) -> (K, M)`` float64, of ``[x, y, w, h]`` boxes.
-
-    The input edge of the evaluation: the boxes become XYXY
-    (:func:`torchvision.ops.box_convert`) and the IoU is
-    :func:`torchvision.ops.box_iou`, the one of detection, in float64. A pair
-    of empty boxes (0/0) has IoU 0.
-
-    Example:
-        >>> _iou_xywh_as_xyxy(np.array([[0, 0, 2, 2]]), np.array([[1, 0, 2, 2], [5, 5, 1, 1]])).round(4)
-        array([[0.3333, 0.    ]])
-    """
-    a_t = box_convert(torch.as_tensor(np.asarray(a, dtype=np.float64).reshape(-1, 4)), "xywh", "xyxy")
-    b_t = box_convert(torch.as_tensor(np.asarray(b, dtype=np.float64).reshape(-1, 4)), "xywh", "xyxy")
-    return torch.nan_to_num(box_iou(a_t, b_t), nan=0.0).numpy()
-
-
 def match_detections(
     detections: Sequence[np.ndarray | None],
     ground_truth: Sequence[np.ndarray | None],
@@ -142,7 +126,7 @@ def match_detections(
         n_frames += 1
         d = np.asarray(detections[f], dtype=np.float64).reshape(-1, 5)
         g = np.zeros((0, 4)) if ground_truth[f] is None else np.asarray(ground_truth[f], dtype=np.float64).reshape(-1, 4)
-        ious[f] = _iou_xywh_as_xyxy(d[:, :4], g)
+        ious[f] = box_iou(xywh_to_xyxy(d[:, :4]), xywh_to_xyxy(g))  # XYWH at the file edge, XYXY inside
         n_gt += g.shape[0]
         entries.extend((float(d[k, 4]), f, k) for k in range(d.shape[0]))
     entries.sort(key=lambda e: -e[0])  # sort is stable: frame order on ties

@@ -115,6 +115,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
+from synthaug.data.boxes import box_iou, xywh_to_xyxy, xyxy_to_xywh
 from synthaug.evaluate.stats import (
     Interval,
     PairedDifference,
@@ -486,23 +487,9 @@ def split_videos(protocol: Protocol, which: str = "test", *, split_file: str | P
 
 
 # =========================================================================== per-video matching
-def _xyxy(boxes_xywh: np.ndarray) -> np.ndarray:
-    import torch
-    from torchvision.ops import box_convert
-
-    return box_convert(torch.as_tensor(np.asarray(boxes_xywh, dtype=np.float64).reshape(-1, 4)), "xywh", "xyxy").numpy()
-
-
 def _longest_side(xyxy: np.ndarray) -> np.ndarray:
     b = np.asarray(xyxy, dtype=np.float64).reshape(-1, 4)
     return np.maximum(b[:, 2] - b[:, 0], b[:, 3] - b[:, 1])
-
-
-def _iou(a_xyxy: np.ndarray, b_xyxy: np.ndarray) -> np.ndarray:
-    import torch
-    from torchvision.ops import box_iou
-
-    return torch.nan_to_num(box_iou(torch.as_tensor(a_xyxy), torch.as_tensor(b_xyxy)), nan=0.0).numpy()
 
 
 def _iou_index(thresholds: Sequence[float], iou: float) -> int:
@@ -614,13 +601,13 @@ def match_video(
         n_frames += 1
         d = np.asarray(detections[f], dtype=np.float64).reshape(-1, 5)
         g = np.zeros((0, 4)) if ground_truth[f] is None else np.asarray(ground_truth[f], dtype=np.float64).reshape(-1, 4)
-        d_xyxy, g_xyxy = _xyxy(d[:, :4]), _xyxy(g)
+        d_xyxy, g_xyxy = xywh_to_xyxy(d[:, :4]), xywh_to_xyxy(g)
         gs = _longest_side(g_xyxy)
         gt_size.append(gs)
         raw_scores.append(d[:, 4])
         det_size.append(_longest_side(d_xyxy))
         if g.shape[0] and d.shape[0]:
-            iou = _iou(d_xyxy, g_xyxy)
+            iou = box_iou(d_xyxy, g_xyxy)
             j = np.argmax(iou, axis=1)
             best_iou.append(iou[np.arange(d.shape[0]), j])
             best_size.append(gs[j])
@@ -1107,17 +1094,14 @@ def scale_eval_set(eval_set: Any, scale: float) -> Any:
     ``(T, H, W)`` uint8; ``boxes``: per video, per frame ``(G, 4)`` XYWH or None); a copy of the
     same type is returned (the frames take ``scale²`` times the memory).
     """
-    from torchvision.ops import box_convert
-    import torch
-
     frames, boxes = [], []
     for vf, vb in zip(eval_set.frames, eval_set.boxes):
         out_f, out_b = [], []
         for f, b in zip(vf, vb):
-            bx = None if b is None else box_convert(torch.as_tensor(np.asarray(b, np.float64).reshape(-1, 4)), "xywh", "xyxy").numpy()
+            bx = None if b is None else xywh_to_xyxy(b)
             sf, sb = scale_frame(f, bx, scale)
             out_f.append(sf)
-            out_b.append(None if sb is None else box_convert(torch.as_tensor(sb), "xyxy", "xywh").numpy())
+            out_b.append(None if sb is None else xyxy_to_xywh(sb))
         frames.append(np.stack(out_f) if out_f else np.asarray(vf))
         boxes.append(out_b)
     return replace(eval_set, frames=frames, boxes=boxes)
@@ -1235,7 +1219,7 @@ def patch_eval_set(
             if labs.boxes[f] is None:
                 continue
             boxes = np.asarray(labs.boxes[f], dtype=np.float64).reshape(-1, 4)
-            boxes_xyxy = _xyxy(boxes)
+            boxes_xyxy = xywh_to_xyxy(boxes)
             for box in boxes:
                 patch, crop = crop_patch(frames[f], box=box, patch_size=ps.patch_size, object_fraction=ps.object_fraction)
                 patches.append(patch)
