@@ -278,3 +278,29 @@ def test_labels_of_another_video_are_an_error_naming_both(tmp_path):
     dets.write_text(json.dumps({"video": "frames", "input": "images", "detections": [[]]}))
     label.write_text(json.dumps(_labels("V_DRONE_002.mp4", [None])))
     assert pair_files([dets], [label]) == [(dets, label)]
+
+
+def test_evaluate_reads_label_files_with_the_ingest_reader_rules(tmp_path):
+    """Issue 17: `synthaug evaluate` and ingestion read a label file with one reader
+    (synthaug.data.video.read_labels). The evaluation's own copy accepted two files the shared
+    halmstad format does not allow, which ingestion refused: one without a ``class`` and one whose
+    ``boxes`` list is empty (it labels no frame, so it silently evaluated nothing). Both are errors now."""
+    from synthaug.data.video import read_labels
+    from synthaug.evaluate.cli import load_labels
+
+    no_class = tmp_path / "V_DRONE_001.json"
+    no_class.write_text(json.dumps({"video": "V_DRONE_001.mp4", "box_format": "xywh_pixels", "boxes": [[1, 1, 4, 4]]}))
+    empty = tmp_path / "V_DRONE_002.json"
+    empty.write_text(json.dumps(_labels("V_DRONE_002.mp4", [])))
+    for bad, match in ((no_class, "missing 'class'"), (empty, "holds no per-frame boxes")):
+        with pytest.raises(ValueError, match=match):
+            read_labels(bad)
+        with pytest.raises(ValueError, match=match):
+            load_labels(bad)
+    # the evaluation's extensions stay: several boxes in a frame, [] for none; a file without "video" is its stem
+    ok = tmp_path / "V_DRONE_003.json"
+    ok.write_text(json.dumps({"class": "drone", "box_format": "xywh_pixels", "boxes": [[[1, 1, 4, 4], [9, 9, 2, 2]], [], None]}))
+    video, frames = load_labels(ok)
+    assert video == "V_DRONE_003" and frames[0].shape == (2, 4) and frames[1] is None and frames[2] is None
+    # ingestion keeps one box per frame (the shared format): a two-box entry is a NaN box for clip_boxes to drop
+    assert np.isnan(read_labels(ok).boxes[0]).all()

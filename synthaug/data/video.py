@@ -96,13 +96,56 @@ class VideoLabels:
         path: the label file.
         video: video file name from the label file (may be empty).
         class_name: object class (``"drone"``).
-        boxes: one entry per frame, ``None`` or a float64 ``[x, y, w, h]`` array.
+        boxes: one entry per frame, ``None`` or a float64 ``[x, y, w, h]`` array (the shared
+            format's one box per frame; anything else is kept as a NaN box for
+            :func:`clip_boxes` to count and drop).
+        entries: the file's per-frame entries as read, for :meth:`ground_truth`.
     """
 
     path: Path
     video: str
     class_name: str
     boxes: list[np.ndarray | None]
+    entries: list[Any] = field(default_factory=list, repr=False)
+
+    def ground_truth(self) -> list[np.ndarray | None]:
+        """The boxes as evaluation's ground truth: per frame a float64 ``(G, 4)`` XYWH array or ``None``.
+
+        An entry may be ``null`` / ``[]`` (no object), one ``[x, y, w, h]`` box, or a list of them (more
+        than one object in a frame). Boxes of zero or negative width or height are left out (a
+        :class:`UserWarning` names the file and frames): no detection could match them.
+
+        Raises:
+            IngestInputError: naming the file and frame, for a malformed entry or a non-finite box.
+        """
+        import warnings
+
+        frames: list[np.ndarray | None] = []
+        degenerate: list[int] = []
+        for i, entry in enumerate(self.entries):
+            if entry is None or (isinstance(entry, list) and len(entry) == 0):
+                frames.append(None)
+                continue
+            try:
+                arr = np.asarray(entry, dtype=np.float64)
+            except (ValueError, TypeError):
+                arr = np.zeros((0, 0))
+            if arr.ndim == 1:
+                arr = arr[None]
+            if arr.ndim != 2 or arr.shape[1] != 4:
+                raise IngestInputError(f"{self.path}: frame {i} box must be [x, y, w, h] or a list of them, got {entry!r}")
+            if not np.isfinite(arr).all():
+                raise IngestInputError(f"{self.path}: frame {i} has a non-finite box: {entry!r}")
+            keep = (arr[:, 2:] > 0).all(axis=1)
+            if not keep.all():
+                degenerate.append(i)
+                arr = arr[keep]
+            frames.append(arr if len(arr) else None)
+        if degenerate:
+            warnings.warn(f"{self.path}: {len(degenerate)} frame(s) have boxes of zero or negative width/height, left "
+                          f"out of the ground truth (frames {degenerate[:5]}{' ...' if len(degenerate) > 5 else ''})",
+                          stacklevel=2)
+        return frames
 
     @property
     def stem(self) -> str:
@@ -189,7 +232,7 @@ def read_labels(path: str | os.PathLike, *, classes: Sequence[str] | None = None
     if classes is not None and class_name not in classes:
         raise IngestInputError(f"label file {path}: unknown class {class_name!r}; known: {sorted(classes)}")
     return VideoLabels(path=path, video=str(doc.get("video", "")), class_name=class_name,
-                       boxes=[_parse_box(b) for b in boxes])
+                       boxes=[_parse_box(b) for b in boxes], entries=list(boxes))
 
 
 def read_video(path: str | os.PathLike, *, max_frames: int | None = None, colour: bool = False) -> np.ndarray:

@@ -30,7 +30,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -48,51 +47,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def load_labels(path: Path) -> tuple[str, list[np.ndarray | None]]:
     """Read one label file: ``(video name, per-frame (G, 4) boxes or None)``.
 
-    Accepts ``boxes`` entries that are None, one ``[x, y, w, h]`` box, or a list of boxes. Boxes of zero or
-    negative width or height are left out (a :class:`UserWarning` names the file and frames): they are no
-    ground truth a detection could match.
+    The file is read by :func:`synthaug.data.video.read_labels` (the one reader of the shared
+    halmstad format: a JSON object with ``class`` and a non-empty ``boxes`` list) and its boxes taken
+    by :meth:`~synthaug.data.video.VideoLabels.ground_truth` (entries None, one ``[x, y, w, h]`` box or a
+    list of boxes; boxes of zero or negative width or height left out with a :class:`UserWarning`).
 
     Raises:
         ValueError: naming the file, for a malformed file, a non-finite box or an unsupported ``box_format``.
     """
-    try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, json.JSONDecodeError) as e:
-        raise ValueError(f"cannot read label file {path}: {e}") from e
-    if not isinstance(data, dict) or "boxes" not in data:
-        raise ValueError(f"{path} is not a label file (expected a JSON object with 'boxes')")
-    fmt = data.get("box_format", "xywh_pixels")
-    if fmt != "xywh_pixels":
-        raise ValueError(f"{path}: unsupported box_format {fmt!r} (expected 'xywh_pixels')")
-    if not isinstance(data["boxes"], list):
-        raise ValueError(f"{path}: 'boxes' must be a list with one entry per frame, got {type(data['boxes']).__name__}")
-    frames: list[np.ndarray | None] = []
-    degenerate: list[int] = []
-    for i, entry in enumerate(data["boxes"]):
-        if entry is None or (isinstance(entry, list) and len(entry) == 0):
-            frames.append(None)
-            continue
-        try:
-            arr = np.asarray(entry, dtype=np.float64)
-        except (ValueError, TypeError):
-            arr = np.zeros((0, 0))
-        if arr.ndim == 1:
-            arr = arr[None]
-        if arr.ndim != 2 or arr.shape[1] != 4:
-            raise ValueError(f"{path}: frame {i} box must be [x, y, w, h] or a list of them, got {entry!r}")
-        if not np.isfinite(arr).all():
-            raise ValueError(f"{path}: frame {i} has a non-finite box: {entry!r}")
-        # a box of zero or negative size is no ground truth (nothing could match it): left out, with a warning
-        keep = (arr[:, 2:] > 0).all(axis=1)
-        if not keep.all():
-            degenerate.append(i)
-            arr = arr[keep]
-        frames.append(arr if len(arr) else None)
-    if degenerate:
-        warnings.warn(f"{path}: {len(degenerate)} frame(s) have boxes of zero or negative width/height, left out "
-                      f"of the ground truth (frames {degenerate[:5]}{' ...' if len(degenerate) > 5 else ''})",
-                      stacklevel=2)
-    return str(data.get("video", Path(path).stem)), frames
+    from synthaug.data.video import read_labels
+
+    labels = read_labels(path)
+    return labels.video or Path(path).stem, labels.ground_truth()
 
 
 def load_detections(path: Path) -> tuple[str, list[np.ndarray | None]]:
