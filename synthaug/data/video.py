@@ -31,9 +31,10 @@ from __future__ import annotations
 import json
 import logging
 import os
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
@@ -42,6 +43,8 @@ __all__ = [
     "BoxCleanup",
     "VideoLabels",
     "CocoImage",
+    "iter_frames",
+    "video_frame_size",
     "read_labels",
     "read_video",
     "read_video_with_labels",
@@ -235,6 +238,71 @@ def read_labels(path: str | os.PathLike, *, classes: Sequence[str] | None = None
                        boxes=[_parse_box(b) for b in boxes], entries=list(boxes))
 
 
+def iter_frames(path: str | os.PathLike, *, wanted: Callable[[int], bool] | None = None, stop: int | None = None,
+                colour: bool = False) -> Iterator[tuple[int, np.ndarray | None]]:
+    """Decode a video with OpenCV frame by frame: the one frame loop of the package.
+
+    Args:
+        path: the video file.
+        wanted: which frame indices to decode (``None``: all); the others are only grabbed
+            (no decoding cost) and yielded as ``(index, None)``.
+        stop: stop before this frame index (``None``: at the end of the video).
+        colour: RGB frames ``(H, W, 3)`` (a gray video is replicated) instead of gray ``(H, W)``;
+            both uint8.
+
+    Yields:
+        ``(index, frame)`` for every frame up to ``stop`` or the end of the video.
+
+    Raises:
+        IngestInputError: OpenCV cannot open the file.
+    """
+    import cv2
+
+    with _capture(path) as cap:
+        index = 0
+        while stop is None or index < stop:
+            if wanted is not None and not wanted(index):
+                if not cap.grab():
+                    break
+                yield index, None
+            else:
+                ok, frame = cap.read()
+                if not ok or frame is None:
+                    break
+                if colour:
+                    frame = cv2.cvtColor(frame, cv2.COLOR_BGR2RGB if frame.ndim == 3 else cv2.COLOR_GRAY2RGB)
+                elif frame.ndim == 3:
+                    frame = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+                yield index, frame
+            index += 1
+
+
+def video_frame_size(path: str | os.PathLike) -> tuple[int, int]:
+    """``(width, height)`` of a video as OpenCV reports it (``(0, 0)`` when unknown).
+
+    Raises:
+        IngestInputError: OpenCV cannot open the file.
+    """
+    import cv2
+
+    with _capture(path) as cap:
+        return int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
+
+
+@contextmanager
+def _capture(path: str | os.PathLike) -> Iterator[Any]:
+    """An opened ``cv2.VideoCapture``, released on exit."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(path))
+    try:
+        if not cap.isOpened():
+            raise IngestInputError(f"video {path} cannot be opened (not a video OpenCV can decode?)")
+        yield cap
+    finally:
+        cap.release()
+
+
 def read_video(path: str | os.PathLike, *, max_frames: int | None = None, colour: bool = False) -> np.ndarray:
     """Decode a video with OpenCV into 8-bit grayscale (or RGB) frames.
 
@@ -250,27 +318,10 @@ def read_video(path: str | os.PathLike, *, max_frames: int | None = None, colour
     Raises:
         IngestInputError: the file is missing or no frame can be decoded.
     """
-    import cv2
-
     path = Path(path)
     if not path.is_file():
         raise IngestInputError(f"video not found: {path}")
-    cap = cv2.VideoCapture(str(path))
-    frames: list[np.ndarray] = []
-    try:
-        if not cap.isOpened():
-            raise IngestInputError(f"video {path} cannot be opened (not a video OpenCV can decode?)")
-        while max_frames is None or len(frames) < max_frames:
-            ok, frame = cap.read()
-            if not ok or frame is None:
-                break
-            if colour:
-                frame = cv2.cvtColor(frame, cv2.COLOR_BGR2RGB if frame.ndim == 3 else cv2.COLOR_GRAY2RGB)
-            elif frame.ndim == 3:
-                frame = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-            frames.append(frame)
-    finally:
-        cap.release()
+    frames = [f for _, f in iter_frames(path, stop=max_frames, colour=colour)]
     if not frames:
         raise IngestInputError(f"video {path} is unreadable: no frame could be decoded")
     return np.stack(frames)

@@ -71,29 +71,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def iter_video_frames(path: Path, *, frame_stride: int = 1, max_frames: int | None = None) -> Iterator[tuple[int, np.ndarray | None]]:
     """Yield ``(index, gray float32 frame in [0, 1])`` for processed frames, ``(index, None)`` for skipped ones.
 
+    The frames are :func:`synthaug.data.video.iter_frames`' (skipped frames are only grabbed).
+
     Raises:
         ValueError: if OpenCV cannot open the file.
     """
-    import cv2
+    from synthaug.data.video import iter_frames
 
-    cap = cv2.VideoCapture(str(path))
-    if not cap.isOpened():
-        raise ValueError(f"cannot open video {path} with OpenCV")
-    try:
-        index = 0
-        while max_frames is None or index < max_frames:
-            if index % frame_stride:
-                if not cap.grab():
-                    break
-                yield index, None
-            else:
-                ok, frame = cap.read()
-                if not ok:
-                    break
-                yield index, _to_gray_float(frame)
-            index += 1
-    finally:
-        cap.release()
+    for index, frame in iter_frames(path, wanted=lambda i: i % frame_stride == 0, stop=max_frames):
+        yield index, None if frame is None else _to_gray_float(frame)
 
 
 def iter_image_frames(folder: Path, *, frame_stride: int = 1, max_frames: int | None = None) -> Iterator[tuple[int, np.ndarray | None]]:

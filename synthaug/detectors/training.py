@@ -395,42 +395,23 @@ class VideoFrames:
             yield from self._video(stem, stem in self.positive)
 
     def _video(self, stem: str, positive: bool) -> Iterator[MiningFrame]:
-        import cv2
-
-        from synthaug.data.video import clip_boxes, read_labels
+        from synthaug.data.video import clip_boxes, iter_frames, read_labels, video_frame_size
 
         path = _find_video(self.videos_dir, stem)
         if path is None:
             raise ValueError(f"no video file for {stem!r} in {self.videos_dir}")
         labels = read_labels(self.labels_dir / f"{stem}.json")
-        cap = cv2.VideoCapture(str(path))
-        if not cap.isOpened():
-            raise ValueError(f"cannot open video {path} with OpenCV")
-        try:
-            w, h = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
-            boxes = labels.boxes
-            if w > 0 and h > 0:
-                boxes, _ = clip_boxes(boxes, width=w, height=h)
-            need = [i for i in range(0, len(boxes), self.stride)
-                    if not positive or self.null_frames or boxes[i] is not None]
-            wanted = set(need)
-            last = max(need) if need else -1
-            i = 0
-            while i <= last:
-                if i not in wanted:
-                    if not cap.grab():
-                        break
-                else:
-                    ok, frame = cap.read()
-                    if not ok or frame is None:
-                        break
-                    if frame.ndim == 3:
-                        frame = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-                    b = boxes[i] if positive else None
-                    yield MiningFrame(frame, None if b is None else np.asarray(b, np.float64).reshape(-1, 4), stem, i)
-                i += 1
-        finally:
-            cap.release()
+        w, h = video_frame_size(path)
+        boxes = labels.boxes
+        if w > 0 and h > 0:
+            boxes, _ = clip_boxes(boxes, width=w, height=h)
+        need = [i for i in range(0, len(boxes), self.stride)
+                if not positive or self.null_frames or boxes[i] is not None]
+        wanted = set(need)
+        for i, frame in iter_frames(path, wanted=wanted.__contains__, stop=max(need) + 1 if need else 0):
+            if frame is not None:
+                b = boxes[i] if positive else None
+                yield MiningFrame(frame, None if b is None else np.asarray(b, np.float64).reshape(-1, 4), stem, i)
 
 
 def _as_item(item: Any) -> MiningFrame:
