@@ -268,3 +268,57 @@ def test_identical_bytes_across_processes_and_persistent_workers(tmp_path):
         outs.append(proc.stdout.split())
     assert len(outs[0]) == 4 and outs[0][1] != outs[0][3]  # the epoch reaches the workers: new poses
     assert outs[0] == outs[1] == outs[2]
+
+
+def test_jittered_pose_is_the_fitted_rotation_turned_in_the_objects_frame():
+    """Euler angles of R(α, β, γ)·exp([v]x), against scipy (R = Rz(γ) Ry(β) Rx(α) is scipy's extrinsic 'xyz')."""
+    from scipy.spatial.transform import Rotation
+
+    from synthaug.data.synthetic import jittered_pose
+
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        a, b, c = rng.uniform(-np.pi, np.pi), rng.uniform(-1.5, 1.5), rng.uniform(-np.pi, np.pi)
+        v = rng.normal(size=3) * 0.4
+        ref = Rotation.from_euler("xyz", [a, b, c]) * Rotation.from_rotvec(v)
+        got = Rotation.from_euler("xyz", jittered_pose(a, b, c, v))
+        assert (ref.inv() * got).magnitude() < 1e-9
+        a2, b2, c2 = jittered_pose(a, b, c, v)
+        assert -np.pi <= a2 <= np.pi and -np.pi / 2 <= b2 <= np.pi / 2 and -np.pi <= c2 <= np.pi
+    assert jittered_pose(0.3, -0.2, 1.0, np.zeros(3)) == pytest.approx((0.3, -0.2, 1.0), abs=1e-12)
+
+
+def test_fitted_pose_sampling_draws_around_each_seeds_fitted_pose(backgrounds, small_cache):
+    from scipy.spatial.transform import Rotation
+
+    fit = CaptureParams.sample(4, generator=torch.Generator().manual_seed(9))
+    exact = make(backgrounds, small_cache, params=fit, pose_sampling="fitted", pose_jitter_deg=0.0, length=40)
+    for i in range(len(exact)):
+        _, t = exact[i]
+        s = int(t["seed_index"])
+        # theta = (alpha, beta, gamma, t_x, t_y, capture...): the seed's fitted rotation, exactly
+        want = Rotation.from_euler("xyz", [float(getattr(fit, n)[s]) for n in ("alpha", "beta", "gamma")])
+        assert (want.inv() * Rotation.from_euler("xyz", t["theta"][:3].double().numpy())).magnitude() < 1e-5
+    # with a jitter: the angle to the fitted rotation is |v|, v ~ N(0, s^2 I3): a chi(3) of mean 2 s sqrt(2/pi)
+    sigma = 20.0
+    ds = make(backgrounds, small_cache, params=fit, pose_sampling="fitted", pose_jitter_deg=sigma, length=400)
+    angles = []
+    for i in range(len(ds)):
+        _, t = ds[i]
+        if int(t["labels"]) == 1:
+            s = int(t["seed_index"])
+            want = Rotation.from_euler("xyz", [float(getattr(fit, n)[s]) for n in ("alpha", "beta", "gamma")])
+            angles.append((want.inv() * Rotation.from_euler("xyz", t["theta"][:3].double().numpy())).magnitude())
+    mean = np.degrees(np.mean(angles))
+    assert len(angles) > 100 and mean == pytest.approx(2 * sigma * np.sqrt(2 / np.pi), rel=0.15)
+    # the default stays the paper's draw: every item its own rotation, spread over the whole range, whatever the fit
+    default = make(backgrounds, small_cache, params=fit, length=40)
+    poses = np.array([default[i][1]["theta"][:3].numpy() for i in range(len(default))])
+    assert len(np.unique(poses.round(6), axis=0)) == 40 and np.ptp(poses[:, 2]) > 4.0
+    assert len(np.unique(np.array([exact[i][1]["theta"][:3].numpy() for i in range(40)]).round(5), axis=0)) <= 4
+    with pytest.raises(ValueError, match="give params"):
+        make(backgrounds, small_cache, pose_sampling="fitted")
+    with pytest.raises(ValueError, match="pose_sampling"):
+        make(backgrounds, small_cache, params=fit, pose_sampling="kde")
+    with pytest.raises(ValueError, match="pose_jitter_deg"):
+        make(backgrounds, small_cache, params=fit, pose_sampling="fitted", pose_jitter_deg=-1.0)

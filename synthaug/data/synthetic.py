@@ -53,14 +53,16 @@ from typing import Any, Literal
 
 import numpy as np
 import torch
+from scipy.spatial.transform import Rotation
 from torch.utils.data import Dataset, Sampler
 from torchvision import tv_tensors
 
 from synthaug.effects.pipeline import simulate
 from synthaug.effects.registry import ordered
 from synthaug.params import POSE_NAMES, POSE_SPECS, CaptureParams, fitted_object_scales
+from synthaug.render.pose import rotation_matrix
 
-__all__ = ["SyntheticObjectDataset", "EpochSampler", "collate_detection", "item_generator"]
+__all__ = ["SyntheticObjectDataset", "EpochSampler", "collate_detection", "item_generator", "jittered_pose"]
 
 Mode = Literal["patch", "frame"]
 
@@ -82,6 +84,21 @@ def item_seed(seed: int, epoch: int, index: int) -> int:
     tenth of the time budget of a sample.)
     """
     return _splitmix64(_splitmix64(_splitmix64(int(seed) & _MASK64) ^ (int(epoch) & _MASK64)) ^ (int(index) & _MASK64))
+
+
+def jittered_pose(alpha: float, beta: float, gamma: float, rotvec: np.ndarray) -> tuple[float, float, float]:
+    """The Euler angles of ``R(α, β, γ) · exp([rotvec]×)``: a pose turned by a small rotation in the object's frame.
+
+    ``R = Rz(γ) Ry(β) Rx(α)`` (:func:`synthaug.render.pose.rotation_matrix`); the rotation of
+    rotation vector ``rotvec`` (axis · angle, radians) is applied first, in the object's own
+    frame, so the jitter does not depend on where the pose sits in Euler angles (no gimbal bias).
+    Returns ``(α, β, γ)`` with α, γ in (-π, π] and β in [-π/2, π/2].
+    """
+    r = rotation_matrix(alpha, beta, gamma) @ Rotation.from_rotvec(np.asarray(rotvec, dtype=np.float64)).as_matrix()
+    b = math.asin(max(-1.0, min(1.0, -r[2, 0])))
+    a = math.atan2(r[2, 1], r[2, 2])
+    c = math.atan2(r[1, 0], r[0, 0])
+    return a, b, c
 
 
 def item_generator(seed: int, epoch: int, index: int) -> torch.Generator:
@@ -267,6 +284,14 @@ class SyntheticObjectDataset(Dataset):
             lens distortion, the JPEG block grid). ``"auto"`` (default): the seed
             set's own when ``backgrounds`` is a seed set, else None; None: the
             patch is taken as the frame. The paper's four effects do not read it.
+        pose_sampling: ``"uniform"`` (default: α, β, γ uniform over their sampling ranges, every
+            view equally likely) or ``"fitted"`` (each item's rotation is its seed's *fitted*
+            rotation composed with a random rotation of axis uniform on the sphere and angle
+            ~ N(0, ``pose_jitter_deg``) per axis component: the views the real seeds show, and
+            views near them; needs ``params`` from a fit). t_x, t_y are drawn as with
+            ``"uniform"``.
+        pose_jitter_deg: spread of the random rotation of ``"fitted"`` (degrees, per component of
+            the rotation vector).
         transforms: a callable ``(image, target) -> (image, target)`` applied to
             every item, real and synthetic alike, as torchvision datasets take
             one (e.g. ``transforms.v2.Compose([...])``: frame-mode boxes are
@@ -300,6 +325,8 @@ class SyntheticObjectDataset(Dataset):
         capture_sampling: Literal["seed", "kde", "uniform"] = "seed",
         seed_geometry: Mapping[str, Any] | Literal["auto"] | None = "auto",
         transforms: Any = None,
+        pose_sampling: Literal["uniform", "fitted"] = "uniform",
+        pose_jitter_deg: float = 20.0,
     ) -> None:
         super().__init__()
         if transforms is not None and not callable(transforms):
@@ -348,6 +375,14 @@ class SyntheticObjectDataset(Dataset):
         self.params, scales = self._load_params(params, n_seeds)
         if object_scale is None and scales is not None:
             self.seed_scales = scales
+        if pose_sampling not in ("uniform", "fitted"):
+            raise ValueError(f"pose_sampling must be 'uniform' or 'fitted', got {pose_sampling!r}")
+        if pose_sampling == "fitted" and self.params is None:
+            raise ValueError("pose_sampling='fitted' draws around each seed's fitted pose: give params (a fit)")
+        if not (math.isfinite(pose_jitter_deg) and pose_jitter_deg >= 0):
+            raise ValueError(f"pose_jitter_deg must be finite and >= 0, got {pose_jitter_deg}")
+        self.pose_sampling = pose_sampling
+        self.pose_jitter_deg = float(pose_jitter_deg)
         if self.params is None:  # "for now sampled": one row per seed from the default ranges
             g = torch.Generator().manual_seed(self.seed)
             self.params = CaptureParams.sample(n_seeds, generator=g, channels=channels)
@@ -596,6 +631,10 @@ class SyntheticObjectDataset(Dataset):
         d["fields"] = fields
         if self._density is not None:
             d["capture"] = self._density.sample(1, generator=g)[0]
+        if self.pose_sampling == "fitted":  # drawn last: the uniform pose's draws above stay as they were
+            rotvec = torch.randn(3, generator=g, dtype=torch.float64).numpy() * math.radians(self.pose_jitter_deg)
+            fitted = [float(getattr(self.params, n)[seed_index]) for n in ("alpha", "beta", "gamma")]
+            pose.update(zip(("alpha", "beta", "gamma"), jittered_pose(*fitted, rotvec)))
         return d
 
     def _layers(self, pose: dict[str, torch.Tensor], size: int, object_scale: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:

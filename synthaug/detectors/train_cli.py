@@ -50,6 +50,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mesh", help="mesh of the synthetic object (default: the fit's mesh, else the built-in quadcopter)")
     parser.add_argument("--synthetic-ratio", type=float, default=None,
                         help="synthetic patches per real seed with --params (default 10 when --params is given, else 0)")
+    parser.add_argument("--pose-sampling", choices=["uniform", "fitted"], default="uniform",
+                        help="poses of the synthetic positives: uniform (the paper) or around each seed's fitted pose")
     parser.add_argument("--perturb-copies", type=int, default=0,
                         help="perturbed copies (rotation, shift, mirror, blur, noise) of every real positive: the paper's baseline")
     parser.add_argument("--seed", type=int, default=0, help="training seed: initialisation, negative sampling, the automatic split")
@@ -123,7 +125,7 @@ def main(args: argparse.Namespace) -> int:
             args.detector, args.class_name, args.videos, args.labels, out=args.out, split=args.split, seed=args.seed,
             seed_count=100 if args.seed_counts is None else args.seed_counts, all_frames=args.all_frames,
             frame_step=args.frame_step, seedset=args.seedset, params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
-            perturb_copies=args.perturb_copies, options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
+            perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling, options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,
             command={k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if not k.startswith("_")},

@@ -82,6 +82,8 @@ class Condition:
         fit_options: other :class:`~synthaug.fit.fitting.FitConfig` fields of that fit, as
             ``(name, value)`` pairs (default: ``synthaug fit``'s).
         perturb_copies: perturbed copies of every real positive (the paper's baseline).
+        pose_sampling: poses of the synthetic positives (``"uniform"``: the paper; ``"fitted"``: around
+            each seed's fitted pose).
     """
 
     name: str
@@ -95,6 +97,7 @@ class Condition:
     fit_distance: str | None = None
     fit_options: tuple[tuple[str, Any], ...] = ()
     perturb_copies: int = 0
+    pose_sampling: str = "uniform"
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -103,8 +106,8 @@ class Condition:
             d["seed_count"] = None
         else:
             d["frame_step"] = None
-        for k in ("fit_distance", "fit_options", "perturb_copies"):  # added later: absent at their defaults (older cells keep their keys)
-            if d[k] in (None, 0, ()):
+        for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling"):  # added later: absent at their
+            if d[k] in (None, 0, (), "uniform"):                                    # defaults (older cells keep their keys)
                 d.pop(k)
         return d
 
@@ -233,7 +236,8 @@ class ProtocolRunner:
             condition.kind, self.class_name, self.paths.videos_dir, self.paths.labels_dir,
             split=self.paths.split_file, seed=seed, seed_count=condition.seed_count, all_frames=condition.all_frames,
             frame_step=condition.frame_step, params=self.params_for(condition, seed), mesh=condition.mesh,
-            synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies, options=options,
+            synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies,
+            pose_sampling=condition.pose_sampling, options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
         t_train = time.perf_counter() - t0
@@ -395,7 +399,8 @@ def _positives(res: ProtocolResult) -> float:
 def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
                          synthetic_ratios: Sequence[float] = (), fit_distance: str | Mapping[str, str] | None = None,
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
-                         fit_options: Mapping[str, Any] | None = None, seeds: Sequence[int] | None = None,
+                         fit_options: Mapping[str, Any] | None = None, pose_sampling: Sequence[str] = ("uniform",),
+                         seeds: Sequence[int] | None = None,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -404,7 +409,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     over the same seed sets, negatives and initialisations. Synthetic positives come from a fit
     of *each training seed's own* seed set: ``params`` (a path that may hold ``{seed}``) or, when
     it is missing, a fit made on the fly with ``fit_distance`` (a name, or detector -> name) and
-    ``fit_options`` (other :class:`~synthaug.fit.fitting.FitConfig` fields).
+    ``fit_options`` (other :class:`~synthaug.fit.fitting.FitConfig` fields); each ratio once per
+    ``pose_sampling`` (``"uniform"``: the paper's poses; ``"fitted"``: around each seed's fitted pose).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -414,10 +420,11 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         conds = [Condition(base, kind, seed_count=seed_count)]
-        conds += [Condition(f"{base} + {r:g}x synthetic ({dist or Path(str(params)).stem})", kind, seed_count=seed_count,
+        conds += [Condition(f"{base} + {r:g}x synthetic ({dist or Path(str(params)).stem}"
+                            f"{'' if ps == 'uniform' else f', {ps} poses'})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
-                            fit_options=tuple(sorted((fit_options or {}).items())) if dist else ())
-                  for r in synthetic_ratios]
+                            fit_options=tuple(sorted((fit_options or {}).items())) if dist else (), pose_sampling=ps)
+                  for r in synthetic_ratios for ps in pose_sampling]
         conds += [Condition(f"{base} + {c}x perturbed", kind, seed_count=seed_count, perturb_copies=int(c))
                   for c in perturb_copies]
         for c in conds:
@@ -483,6 +490,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                     help="fit missing --params files with this distance (default: each detector's own: hog, wl_learned, cnn)")
     sy.add_argument("--mesh", default=None, help="mesh of the synthetic object (default: the fit's)")
     sy.add_argument("--perturb-copies", type=int, nargs="*", default=[], help="perturbed copies per real positive")
+    sy.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=["uniform", "fitted"],
+                    help="poses of the synthetic positives: uniform (the paper), fitted (around each seed's fitted pose)")
     args = p.parse_args(argv)
     import torch
 
@@ -502,7 +511,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         dist = args.fit_distance or (None if args.params else OWN_DISTANCE)
         synthetic_comparison(runner, detectors=args.detectors, seed_count=args.seed_counts,
                              synthetic_ratios=args.synthetic_ratios, fit_distance=dist, params=args.params,
-                             perturb_copies=args.perturb_copies, mesh=args.mesh, seeds=args.seeds, out=args.out)
+                             perturb_copies=args.perturb_copies, mesh=args.mesh, pose_sampling=args.pose_sampling,
+                             seeds=args.seeds, out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
