@@ -175,7 +175,7 @@ def test_uniform_sampling_is_capture_density_uniform():
     ref = dens.to_params(dens.sample(5, generator=g))
     torch.testing.assert_close(draw["theta"].to_vector(), ref.to_vector(), **EXACT)
     assert (draw["row"] == -1).all()
-    with pytest.raises(ValueError, match="synthaug.fit"):
+    with pytest.raises(ValueError, match="synthaug.data"):
         CaptureEffects(fitted, sampling="kde")
 
 
