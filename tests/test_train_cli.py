@@ -118,8 +118,9 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
 
     calls = []
 
-    def fake(seedset: Any, mesh: Any, fit_file: Any, count: int, *, seed: int = 0, **_: Any) -> torch.Tensor:
-        calls.append((len(seedset), str(mesh), count, seed))
+    def fake(seedset: Any, mesh: Any, fit_file: Any, count: int, *, seed: int = 0, pose_sampling: str = "uniform",
+             **_: Any) -> torch.Tensor:
+        calls.append((len(seedset), str(mesh), count, seed, pose_sampling))
         return torch.rand(count, 1, 40, 40, generator=torch.Generator().manual_seed(seed))
 
     monkeypatch.setattr(training, "synthetic_positives", fake)
@@ -130,8 +131,15 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     assert _train(ws, out, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
                   "--mining-rounds", "0") == 0
     meta = json.loads(out.with_suffix(".json").read_text())
-    assert calls == [(8, "quadcopter", 24, 2)]
-    assert meta["synthetic"] == {"params": str(fit), "mesh": "quadcopter", "ratio": 3.0, "count": 24}
+    assert calls == [(8, "quadcopter", 24, 2, "uniform")]
+    assert meta["synthetic"] == {"params": str(fit), "mesh": "quadcopter", "ratio": 3.0, "count": 24, "pose_sampling": "uniform"}
+    # --pose-sampling reaches the synthetic positives and the metadata; --perturb-copies adds perturbed real ones
+    out2 = ws["root"] / "runs" / "hog_syn_fitted.pt"
+    assert _train(ws, out2, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
+                  "--pose-sampling", "fitted", "--perturb-copies", "2", "--mining-rounds", "0") == 0
+    meta2 = json.loads(out2.with_suffix(".json").read_text())
+    assert calls[-1] == (8, "quadcopter", 24, 2, "fitted") and meta2["synthetic"]["pose_sampling"] == "fitted"
+    assert meta2["perturbed"] == {"copies": 2, "count": 16}
 
 
 @pytest.mark.parametrize(
