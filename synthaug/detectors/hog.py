@@ -331,13 +331,7 @@ def block_features(cells: Tensor, config: HOGConfig = DEFAULT_HOG, dilation: int
         - output: (B, C * b * b * O, Hc - (b - 1) * dilation, Wc - (b - 1) * dilation)
     """
     n, b = config.orientations, config.block_size
-    if cells.dim() != 4 or cells.shape[1] % n:
-        raise ValueError(f"cells must be (B, C*{n}, Hc, Wc), got shape {tuple(cells.shape)}")
-    batch, cn, hc, wc = cells.shape
-    span = (b - 1) * dilation
-    if hc <= span or wc <= span:
-        raise ValueError(f"a cell map of size {(hc, wc)} holds no {b}x{b} block (dilation {dilation})")
-    hb, wb = hc - span, wc - span
+    batch, cn, hc, wc, hb, wb = _block_map_shape(cells, config, dilation)
     grouped = cells.reshape(batch, cn // n, n, hc, wc)
     parts = [grouped[..., i * dilation : i * dilation + hb, j * dilation : j * dilation + wb] for i in range(b) for j in range(b)]
     blocks = torch.stack(parts, dim=2)  # (B, C, b*b, O, Hb, Wb)
@@ -405,6 +399,18 @@ def dense_block_map(image: Tensor, config: HOGConfig = DEFAULT_HOG, stride: int 
     return _dense_block_features(cells, config, dilation=config.cell_size // stride)
 
 
+def _block_map_shape(cells: Tensor, config: HOGConfig, dilation: int) -> tuple[int, int, int, int, int, int]:
+    """``(B, C*O, Hc, Wc, Hb, Wb)`` of a cell map and its block map; ValueError for a map that holds no block."""
+    n, b = config.orientations, config.block_size
+    if cells.dim() != 4 or cells.shape[1] % n:
+        raise ValueError(f"cells must be (B, C*{n}, Hc, Wc), got shape {tuple(cells.shape)}")
+    batch, cn, hc, wc = cells.shape
+    span = (b - 1) * dilation
+    if hc <= span or wc <= span:
+        raise ValueError(f"a cell map of size {(hc, wc)} holds no {b}x{b} block (dilation {dilation})")
+    return batch, cn, hc, wc, hc - span, wc - span
+
+
 def _dense_block_features(cells: Tensor, config: HOGConfig, dilation: int) -> Tensor:
     """:func:`block_features` without autograd, for dense maps (equal up to float rounding).
 
@@ -414,13 +420,7 @@ def _dense_block_features(cells: Tensor, config: HOGConfig, dilation: int) -> Te
     map is memory-bound on a full frame.
     """
     n, b = config.orientations, config.block_size
-    if cells.dim() != 4 or cells.shape[1] % n:
-        raise ValueError(f"cells must be (B, C*{n}, Hc, Wc), got shape {tuple(cells.shape)}")
-    batch, cn, hc, wc = cells.shape
-    span = (b - 1) * dilation
-    if hc <= span or wc <= span:
-        raise ValueError(f"a cell map of size {(hc, wc)} holds no {b}x{b} block (dilation {dilation})")
-    hb, wb = hc - span, wc - span
+    batch, cn, hc, wc, hb, wb = _block_map_shape(cells, config, dilation)
     grouped = cells.reshape(batch, cn // n, n, hc, wc)
     offsets = [(i * dilation, j * dilation) for i in range(b) for j in range(b)]
     cell_sq = (grouped * grouped).sum(2)  # (B, C, Hc, Wc)

@@ -860,10 +860,9 @@ def real_positives(seedset: Any) -> Tensor:
 def perturbed_positives(seedset: Any, copies: int, *, seed: int = 0) -> Tensor:
     """Real patches plus ``copies`` perturbed versions of each (the paper's Table 1 baseline,
     :func:`~synthaug.effects.perturb.perturb_patches`)."""
-    from synthaug.effects.perturb import perturb_patches
+    from synthaug.effects.perturb import with_perturbed_copies
 
-    real = real_positives(seedset)
-    return torch.cat([real, perturb_patches(real, copies, generator=torch.Generator().manual_seed(seed))])
+    return with_perturbed_copies(real_positives(seedset), copies, seed=seed)
 
 
 def synthetic_positives(
@@ -1332,15 +1331,15 @@ def train_from_videos(
         positives_info = {"mode": "all_frames", "frame_step": frame_step, "count": int(pos.shape[0])}
     perturb_info = None
     if perturb_copies:
-        from synthaug.effects.perturb import perturb_patches
+        from synthaug.effects.perturb import with_perturbed_copies
 
-        real = pos
-        pos = torch.cat([real, perturb_patches(real, perturb_copies, generator=torch.Generator().manual_seed(seed + 3))])
-        perturb_info = {"copies": perturb_copies, "count": int(pos.shape[0] - real.shape[0])}
-        say(f"perturbed: {perturb_info['count']} copies of the {real.shape[0]} real positives")
+        n_real = pos.shape[0]
+        pos = with_perturbed_copies(pos, perturb_copies, seed=seed + 3)
+        perturb_info = {"copies": perturb_copies, "count": int(pos.shape[0] - n_real)}
+        say(f"perturbed: {perturb_info['count']} copies of the {n_real} real positives")
     synthetic_info = None
-    if params is not None and callable(params):
-        params = params(Path(ss.path)) if ss is not None else params
+    if callable(params):  # ss exists: a fit without a seed set was refused above
+        params = params(Path(ss.path))  # type: ignore[union-attr]
     if params is not None:
         from synthaug.params import CaptureParams
 

@@ -22,7 +22,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-__all__ = ["perturb_patches"]
+__all__ = ["perturb_patches", "with_perturbed_copies"]
 
 
 def perturb_patches(
@@ -89,3 +89,9 @@ def perturb_patches(
     xb = F.conv2d(F.pad(xb, (0, 0, radius, radius), mode="replicate"), kc[:, None, :, None], groups=m * c)
     x = xb.reshape(m, c, h, w) + noise * noise_sigma[:, None, None, None].to(x.dtype)
     return x.clamp(0.0, 1.0)
+
+
+def with_perturbed_copies(patches: Tensor, copies: int, *, seed: int) -> Tensor:
+    """``patches`` followed by ``copies`` perturbed versions of each (:func:`perturb_patches`, its
+    generator seeded with ``seed``): the positives of the paper's perturbation baseline."""
+    return torch.cat([patches, perturb_patches(patches, copies, generator=torch.Generator().manual_seed(seed))])

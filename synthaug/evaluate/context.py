@@ -35,7 +35,7 @@ from synthaug.detectors.training import (
     synthetic_positives,
     train_detector,
 )
-from synthaug.effects.perturb import perturb_patches
+from synthaug.effects.perturb import with_perturbed_copies
 from synthaug.evaluate.videos import EvalSet, evaluate_on_videos, load_eval_set
 from synthaug.fit.fitting import FitConfig, fit_seedset
 
@@ -214,7 +214,7 @@ class ExperimentContext:
         def build() -> dict[str, Any]:
             d = self.real_build(n)()
             copies = int(round(ratio))
-            d["positives"] = torch.cat([d["positives"], perturb_patches(d["positives"], copies, generator=torch.Generator().manual_seed(self.seed + 1))])
+            d["positives"] = with_perturbed_copies(d["positives"], copies, seed=self.seed + 1)
             return d
         return build
 

@@ -319,28 +319,41 @@ def learning_curve(runner: ProtocolRunner, *, detectors: Sequence[str], seed_cou
             conds.append(Condition(f"{kind} / all training frames", kind, seed_count=None, all_frames=True,
                                    frame_step=frame_step))
         for c in conds:
-            for s, res in runner.run(c, seeds).items():
-                results.setdefault(kind if s == 1.0 else f"{kind} x{s:g}", {})[c.name] = res
-            for s, res in runner.run(c, seeds, window_boxes=True).items():  # item 5: AP before the box mapping
-                results.setdefault(kind if s == 1.0 else f"{kind} x{s:g}", {})[res.condition] = res
+            _run_into(results, runner, c, seeds)
+            _run_into(results, runner, c, seeds, window_boxes=True)  # item 5: AP before the box mapping
     if out is not None:
         write_learning_curve(results, Path(out), baseline_count=max(seed_counts) if seed_counts else None)
     return results
 
 
+def _run_into(results: dict[str, dict[str, ProtocolResult]], runner: ProtocolRunner, condition: Condition,
+              seeds: Sequence[int] | None, *, window_boxes: bool = False) -> None:
+    """``runner.run(condition)`` filed as ``results[<kind>[ x<scale>]][<row label>]``."""
+    for s, res in runner.run(condition, seeds, window_boxes=window_boxes).items():
+        group = condition.kind if s == 1.0 else f"{condition.kind} x{s:g}"
+        results.setdefault(group, {})[res.condition] = res
+
+
 def write_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], out: Path, *,
                          baseline_count: int | None) -> None:
+    _write_tables(results, out, "learning_curve.md", "# Learning curve (real data only)", baseline_count)
+    _plot_learning_curve(results, out / "learning_curve.png")
+
+
+def _write_tables(results: Mapping[str, Mapping[str, ProtocolResult]], out: Path, name: str, title: str,
+                  baseline_count: int | None) -> None:
+    """One JSON per result and ``out/name``: a :func:`report_table` per group, paired against the row
+    ``... / <baseline_count> seeds`` (none when absent)."""
     from synthaug.params import atomic_write_text
 
     out.mkdir(parents=True, exist_ok=True)
-    lines = ["# Learning curve (real data only)", ""]
+    lines = [title, ""]
     for group, conds in results.items():
-        for name, res in conds.items():
-            res.save(out / f"{_slug(name)}{'' if res.scale == 1.0 else f'_x{res.scale:g}'}.json")
+        for label, res in conds.items():
+            res.save(out / f"{_slug(label)}{'' if res.scale == 1.0 else f'_x{res.scale:g}'}.json")
         base = next((n for n in conds if baseline_count is not None and n.endswith(f"/ {baseline_count} seeds")), None)
         lines += [f"## {group}", "", report_table(dict(conds), baseline=base), ""]
-    atomic_write_text(out / "learning_curve.md", "\n".join(lines) + "\n")
-    _plot_learning_curve(results, out / "learning_curve.png")
+    atomic_write_text(out / name, "\n".join(lines) + "\n")
 
 
 def _slug(name: str) -> str:
@@ -428,20 +441,10 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         conds += [Condition(f"{base} + {c}x perturbed", kind, seed_count=seed_count, perturb_copies=int(c))
                   for c in perturb_copies]
         for c in conds:
-            for s, res in runner.run(c, seeds).items():
-                results.setdefault(kind if s == 1.0 else f"{kind} x{s:g}", {})[c.name] = res
+            _run_into(results, runner, c, seeds)
     if out is not None:
-        from synthaug.params import atomic_write_text
-
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        lines = ["# Real seeds vs + synthetic vs + perturbed (paired against real only)", ""]
-        for group, conds_ in results.items():
-            for name, res in conds_.items():
-                res.save(out / f"{_slug(name)}{'' if res.scale == 1.0 else f'_x{res.scale:g}'}.json")
-            base = next((n for n in conds_ if n.endswith(f"/ {seed_count} seeds")), None)
-            lines += [f"## {group}", "", report_table(dict(conds_), baseline=base), ""]
-        atomic_write_text(out / "comparison.md", "\n".join(lines) + "\n")
+        _write_tables(results, Path(out), "comparison.md",
+                      "# Real seeds vs + synthetic vs + perturbed (paired against real only)", seed_count)
     return results
 
 
