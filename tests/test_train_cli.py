@@ -153,6 +153,7 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
         ("params_rows", "--params"),
         ("ratio_without_params", "--synthetic-ratio"),
         ("params_with_all_frames", "--params"),
+        ("negative_perturb_copies", "--perturb-copies"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -179,6 +180,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--synthetic-ratio", "5"]
     elif case == "params_with_all_frames":
         extra = ["--all-frames", "--params", str(fit3)]
+    elif case == "negative_perturb_copies":
+        extra += ["--perturb-copies", "-1"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
     capsys.readouterr()
@@ -192,3 +195,5 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         assert "1000" in err and "24 labelled frames" in err
     if case == "no_class":
         assert "'cat'" in err and "drone" in err
+    if case == "negative_perturb_copies":
+        assert "must be >= 0, got -1" in err
