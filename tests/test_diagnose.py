@@ -316,3 +316,62 @@ def test_colour_seed_set_and_rgb_render_against_gray_references(tmp_path):
     torch.testing.assert_close(given_values(data, wb, rgb=True)["white_balance"]["wb_gain"],
                                torch.tensor([[0.8, 1.0, 1.25]]))
     assert given_values(data, wb)["white_balance"]["wb_gain"] == pytest.approx(0.299 * 0.8 + 0.587 + 0.114 / 0.8)
+
+
+# ----------------------------------------------------------------- single-channel data (issue 20, item 5)
+def test_is_single_channel_by_hand():
+    from synthaug.diagnose.residuals import is_single_channel
+
+    g = np.full((3, 5, 5, 3), 100, np.uint8)
+    assert is_single_channel(g)
+    g[1, 2, 2, 0] += 2  # codec rounding: 2 levels of chroma is still gray
+    assert is_single_channel(g)
+    g[1, 2, 2, 2] -= 3  # |B - G| = 3: colour
+    assert not is_single_channel(g)
+    with pytest.raises(ValueError, match="RGB"):
+        is_single_channel(np.zeros((4, 4)))
+
+
+def test_gray_rgb_data_skips_colour_statistics_without_runtime_warnings(tmp_path):
+    """A seed set whose RGB patches are gray (R = G = B, e.g. gray videos decoded to RGB): the colour channel of
+    haze / white_balance / chromatic_aberration is skipped and said so, never screened on an all-zero chroma
+    (which divided by zero and reported z 37 with a null gain), and no RuntimeWarning is raised anywhere."""
+    import warnings
+
+    from synthaug.data.seedset import SeedSet
+    from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
+    from synthaug.diagnose.report import diagnose
+    from synthaug.diagnose.screening import COLOUR_CANDIDATES
+    from synthaug.effects.registry import PAPER_EFFECTS
+    from synthaug.params import CaptureParams
+
+    p = make_measured_seedset(tmp_path / "m", n_seeds=12, colour=True, frame_size=(96, 128), object_px=(16, 20),
+                              view_step_deg=30, sprite_size=48, seed=4)
+    s = SeedSet.load(p)
+    gray3 = lambda a: np.repeat(np.asarray(a)[..., None], 3, -1)  # noqa: E731
+    np.savez(p / "colour.npz", patches_rgb=gray3(s.patches), backgrounds_rgb=gray3(s.backgrounds))
+    truth, textra, _ = load_truth(p)
+    theta = CaptureParams({k: v for k, v in truth.as_dict().items()}, effects=PAPER_EFFECTS)
+    extra = [{"distance": 1.0, "generator_seed": 7 + i, "object_scale": float(e["object_scale"])}
+             for i, e in enumerate(textra)]
+    theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        report = diagnose(p, "quadcopter", tmp_path / "fit.json", k=3, out_dir=tmp_path / "out", plots=False)
+    assert report["colour"]["screened"] is False and "single-channel" in report["colour"]["note"]
+    rows = {r["effect"]: r for r in report["screened"]}
+    for name in COLOUR_CANDIDATES:
+        assert rows[name]["colour_skipped"] and rows[name]["gain_colour"] is None, rows[name]
+        assert rows[name]["channel"] != "distance:colour" and rows[name]["score"] is not None
+        assert rows[name]["gain"] is not None
+    assert report["residuals"]["colour"]["skipped"]
+    md = (tmp_path / "out" / "report.md").read_text()
+    assert "Colour statistics skipped (single-channel data" in md
+    # a true colour seed set keeps its colour channel (the same scenes, tinted skies)
+    q = make_measured_seedset(tmp_path / "c", n_seeds=12, colour=True, frame_size=(96, 128), object_px=(16, 20),
+                              view_step_deg=30, sprite_size=48, seed=4)
+    from synthaug.diagnose.residuals import load_diagnosis_data
+
+    theta.save(tmp_path / "fit_c.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
+    data = load_diagnosis_data(q, tmp_path / "fit_c.json", "quadcopter")
+    assert data.real_rgb is not None and data.colour_note is None

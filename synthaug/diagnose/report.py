@@ -288,6 +288,7 @@ def diagnose(
                         "setting_pixel": r["screen"]["pixel"]["setting"],
                         "setting_colour": r["screen"]["colour"]["setting"] if "colour" in r["screen"] else None,
                         "gain_colour": r["screen"]["colour"]["gain"] if "colour" in r["screen"] else None,
+                        "colour_skipped": r["screen"].get("colour_skipped"),
                         "gain_feature": r["screen"]["feature"]["gain"], "gain_pixel": r["screen"]["pixel"]["gain"],
                         "absorption": r["absorption"]} for r in rows],
         "residuals": structure,
@@ -296,6 +297,7 @@ def diagnose(
             "note": "mean over seeds of |HOG block(real) - HOG block(synthetic)| at each block position of the "
                     "object-centred patch: where the detector sees the difference"},
         "hinted_candidates": hinted,
+        "colour": {"screened": data.real_rgb is not None, "note": data.colour_note},
         "parameter_dependence": [d for d in dependence if d["significant"]],
         "noise_level_function": nlf,
         "realism": {"accuracy_base": acc_base,
@@ -445,6 +447,12 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
         lines.append(f"| {r['effect']} | {'yes' if r['significant'] else ''} | {r['channel']} | {z:.1f} | "
                      f"{100 * (r['gain_feature'] or 0):.2f} % | {100 * (r['gain_pixel'] or 0):.2f} % | "
                      + (f"{100 * gc:.2f} % |" if gc is not None else "|"))
+    col = report.get("colour") or {}
+    if col and not col.get("screened"):
+        skipped = [r["effect"] for r in report["screened"] if r.get("colour_skipped")]
+        lines += ["", f"Colour statistics skipped ({col.get('note')})"
+                  + (f": {', '.join(skipped)} screened in gray only (feature and pixel distances)." if skipped
+                     else ".")]
     lines += ["", f"Real-vs-synthetic classifier accuracy (fitted model): "
               f"{100 * report['realism']['accuracy_base']:.0f} % (50 % = indistinguishable).", ""]
     if report.get("gap"):

@@ -62,6 +62,8 @@ __all__ = [
     "within_groups",
     "seed_groups",
     "feature_residual_map",
+    "is_single_channel",
+    "GRAY_CHROMA_LEVELS",
 ]
 
 
@@ -106,6 +108,7 @@ class DiagnosisData:
     noise_levels: list[dict[str, np.ndarray]] | None = None  # per seed: its frame's noise level function
     real_rgb: torch.Tensor | None = None  # (N, 3, P, P) the RGB seed patches, when the seed set has them
     background_rgb: torch.Tensor | None = None  # (N, 3, P, P)
+    colour_note: str | None = None  # why there is no colour channel (gray or single-channel data)
 
     def __len__(self) -> int:
         return int(self.real.shape[0])
@@ -123,7 +126,7 @@ class DiagnosisData:
             resample_sigma=take(self.resample_sigma), object_px=take(self.object_px),
             frame_brightness=take(self.frame_brightness),
             noise_levels=None if self.noise_levels is None else [self.noise_levels[int(i)] for i in idx_t],
-            real_rgb=take(self.real_rgb), background_rgb=take(self.background_rgb))
+            real_rgb=take(self.real_rgb), background_rgb=take(self.background_rgb), colour_note=self.colour_note)
 
 
 def _rotor_layers(cache_body: Any, theta: Any, size: int, scale: torch.Tensor, cov: torch.Tensor) -> torch.Tensor:
@@ -208,12 +211,36 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         **_colour_patches(seeds))
 
 
-def _colour_patches(seeds: Any) -> dict[str, torch.Tensor]:
-    """``real_rgb``/``background_rgb`` (N, 3, P, P) float32 when the seed set has RGB patches."""
+# Largest |R - G| or |B - G| (grey levels) of RGB seed patches that still count as single-channel: a gray
+# video decoded to RGB carries +-1-2 levels of chroma from the codec's YUV rounding, no colour.
+GRAY_CHROMA_LEVELS = 2
+
+
+def is_single_channel(rgb: np.ndarray, *, tol: int = GRAY_CHROMA_LEVELS) -> bool:
+    """Whether uint8 RGB images (..., 3) carry no colour: every |R - G| and |B - G| at most ``tol`` levels.
+
+    Example:
+        >>> g = np.full((2, 4, 4, 3), 120, np.uint8); g[..., 2] += 1
+        >>> is_single_channel(g), is_single_channel(np.dstack([g[0, ..., :2], g[0, ..., :1] + 9]))
+        (True, False)
+    """
+    a = np.asarray(rgb).astype(np.int16)
+    if a.shape[-1] != 3:
+        raise ValueError(f"expected RGB images (..., 3), got shape {a.shape}")
+    return bool(a.size == 0 or max(int(np.abs(a[..., 0] - a[..., 1]).max()),
+                                   int(np.abs(a[..., 2] - a[..., 1]).max())) <= tol)
+
+
+def _colour_patches(seeds: Any) -> dict[str, Any]:
+    """``real_rgb``/``background_rgb`` (N, 3, P, P) float32 when the seed set has RGB patches with colour;
+    ``colour_note`` says why the colour channel is off otherwise."""
     col = seeds.colour()
     if col is None:
-        return {}
+        return {"colour_note": "grayscale seed set (no RGB patches)"}
     rgb, bg = col
+    if is_single_channel(rgb) and is_single_channel(bg):
+        return {"colour_note": f"single-channel data: the RGB patches carry no colour (|R-G|, |B-G| <= "
+                               f"{GRAY_CHROMA_LEVELS} grey levels)"}
     to_t = lambda a: torch.from_numpy(a).permute(0, 3, 1, 2).float() / 255.0  # noqa: E731
     return {"real_rgb": to_t(rgb), "background_rgb": to_t(bg)}
 
@@ -605,7 +632,9 @@ def structure_measures(data: DiagnosisData, syn: torch.Tensor, *, rng: np.random
         keep = (rot.flatten(1).sum(1) > 3).numpy()
         mean, t, pv = t_test(d[keep])
         put("rotor_parts", mean, pv, f"residual on the rotor discs minus on the body: {mean:+.4f}")
-    out["colour"] = {"value": 0.0, "p": 1.0, "description": "grayscale seed set: colour channels not applicable"}
+    out["colour"] = {"value": 0.0, "p": 1.0, "skipped": True,
+                     "description": (f"{data.colour_note}: colour statistics skipped" if data.colour_note else
+                                     "colour: screened in chroma by the screening's colour channel")}
     n_tests = len(out)
     for k, v in out.items():
         floor = EFFECT_FLOORS.get(k, 0.0)

@@ -137,8 +137,8 @@ def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], bas
     """Held-out gain of ``effect`` in the chroma distance (RGB seed sets only; None otherwise)."""
     from synthaug.diagnose.residuals import chroma_distance, render_rgb, solve_albedo_rgb
 
-    if effect not in COLOUR_CANDIDATES or data.real_rgb is None:
-        return None
+    if effect not in COLOUR_CANDIDATES or data.real_rgb is None or not float(np.mean(base)) > 0:
+        return None  # no colour (or a base model that already matches the chroma exactly): nothing to screen
     grid = CANDIDATE_GRIDS[effect]
     ext_all = []
     for setting in grid:
@@ -254,6 +254,8 @@ def _cv_gain(base: np.ndarray, ext: np.ndarray, folds: list[np.ndarray], penalty
     gains = np.full(n, np.nan)
     chosen = []
     scale = float(np.mean(base))
+    if not scale > 0:  # a base that matches every seed exactly: no gain to measure
+        return gains, [0] * len(folds)
     for held in folds:
         train = np.setdiff1d(np.arange(n), held)
         g = int(np.argmin(ext[:, train].mean(1)))
@@ -266,6 +268,8 @@ def _one_sided(g: np.ndarray) -> tuple[float, float, float]:
     from scipy import stats
 
     g = g[np.isfinite(g)]
+    if len(g) == 0:  # no seed measured anything: no evidence
+        return 0.0, 0.0, 1.0
     m = float(g.mean())
     s = float(g.std(ddof=1)) if len(g) > 1 else 0.0
     if s == 0:
@@ -474,6 +478,8 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         if progress:
             progress(name)
         sc = screen_one(data, name, folds, base, penalty=penalty, given=given)
+        if name in COLOUR_CANDIDATES and base_colour is None:
+            sc["colour_skipped"] = data.colour_note or "no colour channel"
         ab = absorption_gain(data, name, w0.numpy(), folds, rng)
         channels = []
         for space, other in (("feature", "pixel"), ("pixel", "feature")):
