@@ -1,10 +1,12 @@
-"""Atomic file writes: readers never see a half-written file (one home for the whole package)."""
+"""File helpers for the whole package (one home each): atomic writes, versioned headers, fingerprints."""
 
 from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
@@ -27,6 +29,81 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     """:func:`atomic_write_bytes` of UTF-8 text."""
     atomic_write_bytes(path, text.encode("utf-8"))
+
+
+# ------------------------------------------------------------ versioned headers
+# Every file synthaug writes for itself to read back carries a format name and a version; its reader refuses
+# anything else with a message naming the file, what was found and what this synthaug reads.
+
+def check_header(doc: Any, *, format: str | int | None, version: Any, what: str,
+                 source: str | os.PathLike | None = None, format_key: str = "format",
+                 version_key: str | None = "version") -> dict[str, Any]:
+    """``doc`` if it is a mapping whose ``format_key`` is ``format`` and whose ``version_key`` is ``version``.
+
+    Args:
+        doc: the parsed document (a JSON object, a checkpoint's payload dict).
+        format: the expected format name; None: not checked (files that only carry a version).
+        version: the expected version; ignored when ``version_key`` is None.
+        what: the kind of file, for messages ("seed set", "detector checkpoint").
+        source: the file (or a description) the document came from, named first in messages.
+        format_key: the field holding the format name.
+        version_key: the field holding the version (``"result_version"``); None: not checked.
+
+    Returns:
+        ``doc`` as a ``dict``, for chaining.
+
+    Raises:
+        ValueError: ``"<source> is not a synthaug <what> (format 'x', expected 'y')"`` for something else (also
+            when ``doc`` is no mapping), ``"<source>: unsupported version 2 of a synthaug <what> (this synthaug
+            reads 1)"`` for another version.
+
+    Example:
+        >>> check_header({"format": "synthaug.split", "version": 1}, format="synthaug.split", version=1,
+        ...              what="split file")["version"]
+        1
+        >>> check_header({"format": "synthaug.split", "version": 2}, format="synthaug.split", version=1,
+        ...              what="split file", source="s.json")
+        Traceback (most recent call last):
+        ...
+        ValueError: s.json: unsupported version 2 of a synthaug split file (this synthaug reads 1)
+    """
+    named = "" if source is None else f"{source} "
+    if not isinstance(doc, Mapping):
+        raise ValueError(f"{named}is not a synthaug {what} (expected a mapping with a {format_key!r} field, "
+                         f"got {type(doc).__name__})")
+
+    def found(key: str) -> str:
+        return repr(doc[key]) if key in doc else f"no {key!r} field"
+
+    if format is not None and doc.get(format_key) != format:
+        raise ValueError(f"{named}is not a synthaug {what} ({format_key} {found(format_key)}, expected {format!r})")
+    if version_key is not None and doc.get(version_key) != version:
+        prefix = "" if source is None else f"{source}: "
+        raise ValueError(f"{prefix}unsupported {version_key} {found(version_key)} of a synthaug {what} "
+                         f"(this synthaug reads {version!r})")
+    return dict(doc)
+
+
+def read_versioned_json(path: str | os.PathLike, *, format: str | int | None, version: Any, what: str,
+                        format_key: str = "format", version_key: str | None = "version") -> dict[str, Any]:
+    """Read a JSON file and :func:`check_header` it; every error names ``path``.
+
+    Raises:
+        FileNotFoundError: ``"<what> not found: <path>"``.
+        ValueError: ``"<path> is not a JSON <what> (...)"`` for text that does not parse, else as
+            :func:`check_header`.
+    """
+    import json
+
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{what} not found: {path}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise ValueError(f"{path} is not a JSON {what} ({e})") from None
+    return check_header(doc, format=format, version=version, what=what, source=path, format_key=format_key,
+                        version_key=version_key)
 
 
 # ------------------------------------------------------------ fingerprints

@@ -36,6 +36,7 @@ from typing import Any, Iterable, Mapping, Sequence
 import torch
 
 from synthaug._io import atomic_write_text  # noqa: F401  (re-exported: used by other modules)
+from synthaug._io import check_header, read_versioned_json
 
 FORMAT_NAME = "synthaug.capture_params"
 FORMAT_VERSION = 1
@@ -531,21 +532,11 @@ class CaptureParams:
     @classmethod
     def load_with_extra(cls, path: str | os.PathLike) -> tuple["CaptureParams", list[dict[str, Any]], dict[str, Any]]:
         path = Path(path)
-        try:
-            doc = json.loads(path.read_text())
-        except FileNotFoundError:
-            raise FileNotFoundError(f"capture-parameter file not found: {path}") from None
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise ValueError(f"{path}: not a JSON capture-parameter file ({e})") from None
-        if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
-            raise ValueError(f"{path}: not a synthaug capture-parameter file (format != {FORMAT_NAME!r})")
-        if doc.get("version") != FORMAT_VERSION:
-            raise ValueError(f"{path}: unsupported version {doc.get('version')} (this synthaug reads {FORMAT_VERSION})")
+        doc = read_versioned_json(path, format=FORMAT_NAME, version=FORMAT_VERSION, what="capture-parameter file")
         meta = doc.get("metadata", {})
         if isinstance(meta, dict) and meta.get("result_format") == FIT_RESULT_FORMAT:
-            if meta.get("result_version") != FIT_RESULT_VERSION:
-                raise ValueError(f"{path}: unsupported fit result_version {meta.get('result_version')!r} "
-                                 f"(this synthaug reads {FIT_RESULT_VERSION})")
+            check_header(meta, format=FIT_RESULT_FORMAT, version=FIT_RESULT_VERSION, what="fit result",
+                         source=path, format_key="result_format", version_key="result_version")
         rows = doc.get("rows") or []
         if not rows:
             raise ValueError(f"{path}: the file holds no rows")

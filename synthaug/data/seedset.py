@@ -56,7 +56,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from synthaug._io import atomic_write_bytes
+from synthaug._io import atomic_write_bytes, read_versioned_json
 
 __all__ = [
     "FORMAT_NAME",
@@ -433,14 +433,7 @@ class SeedSet:
         head = path / HEADER
         if not head.is_file():
             raise FileNotFoundError(f"not a seed set (no {HEADER}): {path}")
-        try:
-            header = json.loads(head.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise ValueError(f"{head}: not a JSON seed-set header ({e})") from None
-        if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
-            raise ValueError(f"{head}: not a synthaug seed set (format != {FORMAT_NAME!r})")
-        if header.get("version") != FORMAT_VERSION:
-            raise ValueError(f"{head}: unsupported version {header.get('version')} (this synthaug reads {FORMAT_VERSION})")
+        header = read_versioned_json(head, format=FORMAT_NAME, version=FORMAT_VERSION, what="seed set")
         if not isinstance(header.get("records"), list):
             raise ValueError(f"{head}: the header has no 'records' list")
         arrays = load_npz(path / ARRAYS, ARRAY_KEYS)

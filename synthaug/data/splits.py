@@ -39,6 +39,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from synthaug._io import atomic_write_text, read_versioned_json
+
 __all__ = ["SPLITS", "VideoSplit", "make_video_split", "load_split", "save_split"]
 
 SPLITS: tuple[str, ...] = ("train", "val", "test")
@@ -139,8 +141,6 @@ def make_video_split(
 
 def save_split(split: VideoSplit, path: str | os.PathLike) -> None:
     """Write a split file (atomically)."""
-    from synthaug.params import atomic_write_text
-
     atomic_write_text(path, json.dumps(split.to_json(), indent=1) + "\n")
 
 
@@ -150,16 +150,7 @@ def load_split(path: str | os.PathLike) -> VideoSplit:
     A video listed in two splits is an error (it would leak between them).
     """
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise FileNotFoundError(f"split file not found: {path}") from None
-    except json.JSONDecodeError as e:
-        raise ValueError(f"split file {path} is not valid JSON ({e})") from None
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
-        raise ValueError(f"{path}: not a synthaug split file (format != {FORMAT_NAME!r})")
-    if doc.get("version") != FORMAT_VERSION:
-        raise ValueError(f"{path}: unsupported split version {doc.get('version')}")
+    doc = read_versioned_json(path, format=FORMAT_NAME, version=FORMAT_VERSION, what="split file")
     videos = {s: list(doc.get(s, [])) for s in SPLITS}
     hard = {s: list(doc.get("hard_negatives", {}).get(s, [])) for s in SPLITS}
     seen: dict[str, str] = {}

@@ -29,6 +29,8 @@ from typing import Any, ClassVar, TypeVar
 import torch
 from torch import Tensor
 
+from synthaug._io import check_header
+
 FORMAT_NAME = "synthaug.detector"
 FORMAT_VERSION = 1
 
@@ -347,12 +349,7 @@ def load_detector(path: str | Path, *, map_location: str | torch.device = "cpu")
         from synthaug._checks import torch_load_error
 
         raise ValueError(f"{path} is not a readable synthaug detector checkpoint ({torch_load_error(e)})") from e
-    if not isinstance(payload, dict) or payload.get("format") != FORMAT_NAME:
-        got = payload.get("format") if isinstance(payload, dict) else type(payload).__name__
-        raise ValueError(f"{path} is not a synthaug detector checkpoint (format {got!r}, expected {FORMAT_NAME!r})")
-    version = payload.get("version")
-    if version != FORMAT_VERSION:
-        raise ValueError(f"{path}: unsupported detector checkpoint version {version!r} (this synthaug reads {FORMAT_VERSION})")
+    payload = check_header(payload, format=FORMAT_NAME, version=FORMAT_VERSION, what="detector checkpoint", source=path)
     kind = payload.get("kind")
     try:
         cls = get_detector_class(kind)

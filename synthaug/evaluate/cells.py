@@ -39,6 +39,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from synthaug._io import read_versioned_json
+
 __all__ = ["CellCache", "cell_key", "canonical_json"]
 
 CELL_FORMAT = 1
@@ -80,9 +82,7 @@ class CellCache:
         p = self.path(identity)
         if not p.is_file():
             return None
-        doc = json.loads(p.read_text())
-        if doc.get("format") != CELL_FORMAT:
-            raise ValueError(f"{p}: cell format {doc.get('format')!r}, this version reads {CELL_FORMAT}")
+        doc = read_versioned_json(p, format=None, version=CELL_FORMAT, version_key="format", what="experiment cell")
         if canonical_json(doc["identity"]) != canonical_json(identity):  # a hash collision or a hand-edited file
             raise ValueError(f"{p}: stored identity differs from the requested one")
         return doc["result"]

@@ -115,6 +115,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
+from synthaug._io import check_header, read_versioned_json
 from synthaug.data.boxes import box_iou, xywh_to_xyxy, xyxy_to_xywh
 from synthaug.evaluate.stats import (
     Interval,
@@ -834,11 +835,9 @@ class ProtocolResult:
         }
 
     @classmethod
-    def from_json(cls, d: Mapping[str, Any]) -> "ProtocolResult":
-        if not isinstance(d, Mapping) or d.get("format") != RESULT_FORMAT:
-            raise ValueError(f"not a {RESULT_FORMAT} document")
-        if d.get("version") != RESULT_VERSION:
-            raise ValueError(f"unsupported {RESULT_FORMAT} version {d.get('version')}")
+    def from_json(cls, d: Mapping[str, Any], *, source: str | Path | None = None) -> "ProtocolResult":
+        """Rebuild a result from :meth:`to_json`'s document; ``source`` (a file) is named in errors."""
+        d = check_header(d, format=RESULT_FORMAT, version=RESULT_VERSION, what="protocol result", source=source)
         proto = Protocol.from_dict(d["protocol"], source="result's protocol")
         if d.get("fingerprint") not in (None, proto.fingerprint()):
             raise ValueError(f"result's protocol fingerprint {d.get('fingerprint')} != its protocol's {proto.fingerprint()}")
@@ -859,7 +858,8 @@ class ProtocolResult:
 
     @classmethod
     def load(cls, path: str | Path) -> "ProtocolResult":
-        return cls.from_json(json.loads(Path(path).read_text()))
+        return cls.from_json(read_versioned_json(path, format=RESULT_FORMAT, version=RESULT_VERSION,
+                                                 what="protocol result"), source=path)
 
 
 # =========================================================================== summaries and the table

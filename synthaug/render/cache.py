@@ -35,6 +35,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from synthaug._io import read_versioned_json
 from synthaug.render.mesh import load_mesh, mesh_fingerprint
 from synthaug.render.pose import rotation_matrices
 
@@ -224,9 +225,7 @@ class ViewCache:
 
     @classmethod
     def _load(cls, folder: Path) -> "ViewCache":
-        meta = json.loads((folder / "meta.json").read_text())
-        if meta.get("version") != CACHE_VERSION:
-            raise ValueError("cache version mismatch")
+        meta = read_versioned_json(folder / "meta.json", format=None, version=CACHE_VERSION, what="view cache")
         try:
             os.utime(folder / "meta.json")  # "recently used", for prune_cache
         except OSError:
