@@ -2,7 +2,9 @@
 
 :mod:`synthaug.diagnose.reference_camera` — the measured-data simulator: seed
 sets rendered through a richer camera with chosen effects hidden, the truth
-stored beside them. (Residual analysis, model extension and the
+stored beside them, optionally with nuisances that are not camera effects
+(:class:`~synthaug.diagnose.nuisances.Nuisances`: material, light, real mesh,
+a moving scene). (Residual analysis, model extension and the
 ``synthaug diagnose`` report build on it.)
 """
 
@@ -11,7 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 __all__ = ["make_measured_seedset", "seed_geometry", "load_truth", "REALISTIC_STRENGTHS", "REALISTIC_RANGES",
-           "OUTSIDE_EFFECTS"]
+           "OUTSIDE_EFFECTS", "Nuisances"]
 
 
 def __getattr__(name: str) -> Any:

@@ -64,6 +64,8 @@ from synthaug.data.seedset import seed_geometry  # re-exported (it lives next to
 from synthaug.effects import camera_functional as Cx
 from synthaug.effects.camera import CAMERA_EFFECTS
 from synthaug.effects.functional import gaussian_blur_fft
+from synthaug.diagnose.nuisances import Nuisances, SeedNuisance, drift_scene, shade_object  # noqa: F401
+from synthaug.effects.material import TEXTURE_PAD, texture_field
 from synthaug.effects.pipeline import apply_effects
 from synthaug.effects.registry import PAPER_EFFECTS, RenderState, get_effect
 from synthaug.effects import functional as Fx
@@ -82,6 +84,7 @@ __all__ = [
     "resolve_hidden",
     "seed_geometry",
     "load_truth",
+    "Nuisances",
 ]
 
 Strength = float | tuple[float, float]
@@ -320,13 +323,19 @@ def _pinned(mesh: Any, lo: np.ndarray, hi: np.ndarray):
     return trimesh.Trimesh(vertices=v, faces=f, process=False)
 
 
-def _real_object(mesh: Any, perturbation: float, seed: int) -> tuple[Any, Any | None, str]:
-    """(full mesh, mesh without rotors or None, description)."""
+def _real_object(mesh: Any, perturbation: float, seed: int, *, rotor_scale: float = 1.0,
+                 sections: int = 16) -> tuple[Any, Any | None, str]:
+    """(full mesh, mesh without rotors or None, description). ``rotor_scale`` and ``sections`` change the
+    built-in quadcopter's propeller radius and cylinder sections (the real object is not the model)."""
     from synthaug.render.mesh import load_mesh, normalize_mesh
 
     if isinstance(mesh, str) and mesh == "quadcopter":
-        full, rotor = quadcopter_parts()
-        desc = "quadcopter"
+        if rotor_scale == 1.0 and sections == 16:
+            full, rotor = quadcopter_parts()
+            desc = "quadcopter"
+        else:
+            full, rotor = quadcopter_parts(rotor_radius=0.17 * rotor_scale, sections=int(sections))
+            desc = f"quadcopter (rotors x{rotor_scale:.3g}, {int(sections)} sections)"
     else:
         full, rotor = load_mesh(mesh), None
         desc = str(mesh) if isinstance(mesh, (str, os.PathLike)) else "<Trimesh>"
@@ -452,6 +461,7 @@ def make_measured_seedset(
     view_step_deg: float = 10.0,
     sprite_size: int = 64,
     colour: bool = False,
+    nuisances: "Nuisances | None" = None,
 ) -> Path:
     """Write a measured seed set through the reference camera (see the module docstring).
 
@@ -492,6 +502,13 @@ def make_measured_seedset(
             sky's colour). The seed set's patches and
             frames are then the Rec. 601 luma of the RGB capture, and ``colour.npz`` holds the RGB
             patches (``patches_rgb``, ``backgrounds_rgb``: (N, P, P, 3) uint8).
+        nuisances: variation that is not a camera effect (:class:`~synthaug.diagnose.nuisances.Nuisances`:
+            material and shading, each video's light, the real mesh, a scene that moves between the frame and
+            its background), e.g. ``Nuisances.draw(np.random.default_rng(k))``. None or
+            ``Nuisances.none()``: the fit's own model (the same bytes as before nuisances existed). Per-seed
+            values come from :meth:`~synthaug.diagnose.nuisances.Nuisances.draw_seed`; the header's
+            ``reference_camera.nuisances``, each record's ``truth.nuisance`` and ``truth.json``'s metadata
+            store them. The camera's noise and the scene's Θ draws are unchanged by them.
 
     Returns:
         the seed-set folder.
@@ -520,13 +537,25 @@ def make_measured_seedset(
     if bad_pv:
         raise ValueError(f"per_video: unknown parameter(s) {bad_pv}; known: {sorted(PAPER_RANGES)}")
     settings = resolve_hidden(hidden)
+    nz = Nuisances.none() if nuisances is None else nuisances
+    if not isinstance(nz, Nuisances):
+        raise ValueError(f"nuisances must be a Nuisances record or None, got {type(nuisances).__name__}")
+    if nz.mesh_perturbation > 0 and mesh_perturbation > 0:
+        raise ValueError(f"give the mesh perturbation once: mesh_perturbation={mesh_perturbation} and "
+                         f"nuisances.mesh_perturbation={nz.mesh_perturbation}")
+    mesh_perturbation = max(mesh_perturbation, nz.mesh_perturbation)
+    if not nz.mesh_is_model and not (isinstance(mesh, str) and mesh == "quadcopter") and \
+            (nz.rotor_scale != 1.0 or nz.mesh_sections != 16):
+        raise ValueError("nuisances.rotor_scale / mesh_sections apply to the built-in 'quadcopter' only, "
+                         f"got mesh {mesh!r}")
     ranges = dict(PAPER_RANGES)
     bad = sorted(set(paper_ranges or {}) - set(ranges))
     if bad:
         raise ValueError(f"paper_ranges: unknown parameter(s) {bad}; known: {sorted(ranges)}")
     ranges.update({k: (float(v[0]), float(v[1])) for k, v in dict(paper_ranges or {}).items()})
 
-    full_mesh, body_mesh, mesh_desc = _real_object(mesh, mesh_perturbation, seed)
+    full_mesh, body_mesh, mesh_desc = _real_object(mesh, mesh_perturbation, seed, rotor_scale=nz.rotor_scale,
+                                                   sections=nz.mesh_sections)
     cache = ViewCache.build(full_mesh, step_deg=view_step_deg, sprite_size=sprite_size)
     body_cache = None if body_mesh is None else ViewCache.build(body_mesh, step_deg=view_step_deg,
                                                                  sprite_size=sprite_size)
@@ -571,6 +600,7 @@ def make_measured_seedset(
         x0 = int(rng.integers(1, w_f - crop_side - 1))
         y0 = int(rng.integers(1, h_f - crop_side - 1))
         gen = torch.Generator().manual_seed(int(rng.integers(2 ** 62)))
+        seed_nz = nz.draw_seed(seed=seed, index=i, video=i % n_videos)  # own streams: nothing above changes
 
         pose = [torch.tensor([float(v)]) for v in (alpha, beta, gamma, 0.0, 0.0)]
         cov, nrm = cache.layers(*pose, size=crop_side, object_scale=size_px / crop_side, dtype=torch.float64)
@@ -610,20 +640,34 @@ def make_measured_seedset(
         # object physics on the crop, at frame scale (σ in frame px)
         scene = torch.from_numpy(scenes[i])[None]
         scene = scene[None] if scene.ndim == 3 else scene  # (1, C, H, W)
-        bg_crop = scene[..., y0:y0 + crop_side, x0:x0 + crop_side]
+        # the scene when the frame was taken (B_i is the scene of the background estimate: a nuisance moves it)
+        shot = torch.from_numpy(drift_scene(scenes[i], seed_nz))[None]
+        shot = shot[None] if shot.ndim == 3 else shot
+        bg_crop = shot[..., y0:y0 + crop_side, x0:x0 + crop_side]
         values: dict[str, Any] = {
             "w_d": paper["w_d"], "sigma_s": paper["sigma_s"] * frame_scale, "sigma_u": paper["sigma_u"] * frame_scale,
             "sigma_v": paper["sigma_v"] * frame_scale, "alpha_m": paper["alpha_m"], "sigma_n": paper["sigma_n"],
         }
         for eff in object_effects:
             values.update({s.name: cam[eff][s.name] for s in get_effect(eff).params})
-        obj_names = ("material", "motion_blur") + tuple(object_effects)
+        own_shading = not nz.shading_is_model
+        obj_names = (() if own_shading else ("material",)) + ("motion_blur",) + tuple(object_effects)
         theta = CaptureParams(values, effects=PAPER_EFFECTS + tuple(object_effects), validate=False)
         extras = {} if rotor is None else {"part_rotor": rotor}
         obj_noise = torch.randn(bg_crop[:, :1].shape, generator=gen, dtype=torch.float64)
-        frame_lin = scene.clone()
+        if own_shading:  # the real material under this video's light (the model's Lambert is not applied)
+            texture = None
+            if nz.albedo_texture_amp > 0:
+                white = torch.randn((1, 1, crop_side + 2 * TEXTURE_PAD, crop_side + 2 * TEXTURE_PAD),
+                                    generator=torch.Generator().manual_seed(seed_nz.texture_seed), dtype=torch.float64)
+                texture = texture_field(white, torch.tensor([nz.albedo_texture_px], dtype=torch.float64),
+                                        (crop_side, crop_side))
+            colour0 = shade_object(nrm, cov, paper["w_d"], nz, seed_nz, texture=texture)
+        else:
+            colour0 = Fx.diffuse_material(nrm, cov, torch.tensor([[0.5]], dtype=torch.float64))
+        frame_lin = shot.clone()
         for c in range(scene.shape[1]):  # a neutral object: the same layers over each channel's background
-            state = RenderState(object_color=Fx.diffuse_material(nrm, cov, torch.tensor([[0.5]], dtype=torch.float64)),
+            state = RenderState(object_color=colour0,
                                 coverage=cov, normals=nrm, background=bg_crop[:, c:c + 1], extras=extras,
                                 fields={"noise": obj_noise})
             state = apply_effects(state, theta.to(torch.float64), obj_names, clamp=False)
@@ -677,11 +721,13 @@ def make_measured_seedset(
             "truth": {"theta": theta_patch, "hidden": cam, "hidden_model": hidden_model, "object_px": size_px,
                       "object_scale": size_px / side, "render_centre": list(render_c), "origin": origin,
                       "frame_scale": frame_scale, "alpha_requested": float(alpha), "beta_requested": float(beta),
-                      "sigma_frame": {k: values[k] for k in ("sigma_s", "sigma_u", "sigma_v")}},
+                      "sigma_frame": {k: values[k] for k in ("sigma_s", "sigma_u", "sigma_v")},
+                      **({} if nz.is_none() else {"nuisance": seed_nz.as_dict()})},
         })
 
     hidden_model_effects = tuple(e for e in settings if e in CAMERA_EFFECTS)
-    truth_bytes = _truth_file(truth_rows, truth_extra, hidden_model_effects)
+    truth_bytes = _truth_file(truth_rows, truth_extra, hidden_model_effects,
+                              None if nz.is_none() else nz.as_dict())
     meta = {
         "patch_size": patch_size, "object_fraction": object_fraction, "frame_size": [w_f, h_f],
         "source": {"generator": _FORMAT, "version": _VERSION},
@@ -694,6 +740,7 @@ def make_measured_seedset(
             "whole_frame": [e for e in settings if e in WHOLE_FRAME_EFFECTS],
             "object_only": [e for e in settings if e in OBJECT_ONLY_EFFECTS],
             "truth_file": "truth.json",
+            **({} if nz.is_none() else {"nuisances": nz.as_dict()}),
         },
     }
     return write_seedset(out_dir, patches=np.stack(patches), backgrounds=np.stack(bg_patches), boxes=boxes,
@@ -718,7 +765,8 @@ def _model_units(cam: dict[str, dict[str, float]], frame_scale: float) -> dict[s
     return out
 
 
-def _truth_file(rows: list[dict[str, Any]], extra: list[dict[str, Any]], effects: tuple[str, ...]) -> bytes:
+def _truth_file(rows: list[dict[str, Any]], extra: list[dict[str, Any]], effects: tuple[str, ...],
+                nuisances: dict[str, Any] | None = None) -> bytes:
     names = PAPER_EFFECTS + effects
     specs = {s.name: s for e in names for s in get_effect(e).params}
     values: dict[str, list[float]] = {}
@@ -731,7 +779,8 @@ def _truth_file(rows: list[dict[str, Any]], extra: list[dict[str, Any]], effects
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "truth.json"
         theta.save(path, extra=extra, metadata={"generator": _FORMAT, "version": _VERSION,
-                                                "note": "true Θ per seed in patch units (σ in patch px)"})
+                                                "note": "true Θ per seed in patch units (σ in patch px)",
+                                                **({} if nuisances is None else {"nuisances": nuisances})})
         return path.read_bytes()
 
 

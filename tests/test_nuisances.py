@@ -1,0 +1,163 @@
+"""Nuisances of the reference camera (issue 20, item 1): variation that is not a camera effect."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from synthaug.diagnose.nuisances import (
+    DRAW_RANGES,
+    MODEL_AMBIENT,
+    MODEL_LIGHT,
+    Nuisances,
+    SeedNuisance,
+    drift_scene,
+    shade_object,
+    smooth_normals,
+)
+
+FAST = dict(n_seeds=6, frame_size=(96, 128), object_px=(16.0, 24.0), view_step_deg=30.0, sprite_size=48, seed=5,
+            n_videos=3)
+
+
+def _unit_normals(shape, seed):
+    g = torch.Generator().manual_seed(seed)
+    n = torch.randn(shape, generator=g, dtype=torch.float64)
+    n[:, 2] = n[:, 2].abs() + 0.2  # facing the camera
+    return n / n.norm(dim=1, keepdim=True)
+
+
+def test_none_shades_exactly_like_the_fits_material():
+    from synthaug.effects.functional import diffuse_material
+
+    nrm = _unit_normals((2, 3, 9, 9), 0)
+    cov = torch.ones(2, 1, 9, 9, dtype=torch.float64)
+    cov[..., :2, :] = 0
+    none = Nuisances.none()
+    assert none.is_none() and none.shading_is_model and none.mesh_is_model
+    seed_nz = none.draw_seed(seed=1, index=0, video=0)
+    assert seed_nz.light_dir == pytest.approx(MODEL_LIGHT) and seed_nz.light_strength == 1.0
+    assert seed_nz.drift == (0.0, 0.0) and seed_nz.flicker == 0.0
+    w = torch.tensor([0.3, 0.6], dtype=torch.float64)
+    torch.testing.assert_close(shade_object(nrm, cov, w, none, seed_nz), diffuse_material(nrm, cov, w[:, None]))
+
+
+def test_shade_object_by_hand():
+    """One pixel, numpy by hand: strength · [w_d · (1 + amp·F) · (a + (1 - a) max(0, n·l)) + ks (n·h)^s]."""
+    nz = Nuisances(ambient=0.3, specular_ks=0.2, specular_shininess=12.0, albedo_texture_amp=0.1)
+    light = np.array([0.3, 0.4, math.sqrt(1 - 0.25)])
+    sn = SeedNuisance(light_dir=tuple(light), light_strength=0.9, drift=(0.0, 0.0), flicker=0.0, texture_seed=0)
+    n = np.array([0.1, -0.2, 1.0])
+    n /= np.linalg.norm(n)
+    nrm = torch.from_numpy(n).reshape(1, 3, 1, 1)
+    cov = torch.ones(1, 1, 1, 1, dtype=torch.float64)
+    tex = torch.full((1, 1, 1, 1), -0.5, dtype=torch.float64)
+    h = (light + [0, 0, 1]) / np.linalg.norm(light + [0, 0, 1])
+    ref = 0.9 * (0.4 * (1 + 0.1 * -0.5) * (0.3 + 0.7 * max(0.0, n @ light)) + 0.2 * max(0.0, n @ h) ** 12.0)
+    assert float(shade_object(nrm, cov, 0.4, nz, sn, texture=tex)) == pytest.approx(ref, rel=1e-9)
+
+
+def test_smooth_normals_against_scipy_normalised_convolution():
+    from scipy import ndimage
+
+    nrm = _unit_normals((1, 3, 32, 32), 3)
+    cov = torch.zeros(1, 1, 32, 32, dtype=torch.float64)
+    cov[..., 6:26, 8:24] = 1.0
+    nrm = nrm * cov
+    out = smooth_normals(nrm, cov, 1.2)
+    w = cov[0, 0].numpy()
+    num = np.stack([ndimage.gaussian_filter(nrm[0, c].numpy() * w, 1.2, mode="constant", truncate=6) for c in range(3)])
+    den = ndimage.gaussian_filter(w, 1.2, mode="constant", truncate=6)
+    inside = w > 0
+    ref = num[:, inside] / den[inside]
+    ref /= np.linalg.norm(ref, axis=0, keepdims=True)
+    np.testing.assert_allclose(out[0].numpy()[:, inside], ref, atol=2e-3)
+    assert float(out[0].norm(dim=0)[torch.from_numpy(inside)].min()) == pytest.approx(1.0)
+    assert (out[0][:, ~torch.from_numpy(inside)] == 0).all()
+    # a plane's normals are left as they are
+    flat = torch.zeros(1, 3, 16, 16, dtype=torch.float64)
+    flat[:, 2] = 1.0
+    torch.testing.assert_close(smooth_normals(flat, torch.ones(1, 1, 16, 16, dtype=torch.float64), 1.5), flat)
+
+
+def test_drift_scene_moves_a_ramp_by_hand():
+    yy, xx = np.mgrid[0:20, 0:30].astype(np.float64)
+    ramp = 0.2 + 0.01 * xx + 0.02 * yy
+    sn = SeedNuisance(light_dir=MODEL_LIGHT, light_strength=1.0, drift=(0.6, -0.3), flicker=0.01, texture_seed=0)
+    out = drift_scene(ramp, sn)
+    # content moved by (+0.6, -0.3): out(x, y) = ramp(x - 0.6, y + 0.3), times 1.01 (interior: no edge effect)
+    ref = (0.2 + 0.01 * (xx - 0.6) + 0.02 * (yy + 0.3)) * 1.01
+    np.testing.assert_allclose(out[2:-2, 2:-2], ref[2:-2, 2:-2], atol=1e-12)
+    rgb = np.stack([ramp, ramp * 0.9, ramp * 0.8])
+    np.testing.assert_allclose(drift_scene(rgb, sn)[1], drift_scene(ramp * 0.9, sn))
+    still = SeedNuisance(light_dir=MODEL_LIGHT, light_strength=1.0, drift=(0.0, 0.0), flicker=0.0, texture_seed=0)
+    assert drift_scene(ramp, still) is ramp
+
+
+def test_draw_is_explicitly_seeded_in_range_and_validated():
+    a = Nuisances.draw(np.random.default_rng(7))
+    assert a == Nuisances.draw(np.random.default_rng(7)) and a != Nuisances.draw(np.random.default_rng(8))
+    many = [Nuisances.draw(np.random.default_rng(k)) for k in range(40)]
+    for name, (lo, hi) in DRAW_RANGES.items():
+        vals = [getattr(n, name) for n in many]
+        assert lo <= min(vals) and max(vals) <= hi, name
+    assert {n.normal_smoothing_px == 0 for n in many} == {True, False}  # flat and smooth both drawn
+    assert Nuisances.from_dict(json.loads(json.dumps(a.as_dict()))) == a
+    with pytest.raises(ValueError, match="specular_ks must be in"):
+        Nuisances(specular_ks=-0.1)
+    with pytest.raises(ValueError, match="mesh_sections"):
+        Nuisances(mesh_sections=3)
+    with pytest.raises(ValueError, match="unknown nuisance field"):
+        Nuisances.from_dict({"glare": 1.0})
+    with pytest.raises(ValueError, match="numpy.random.Generator"):
+        Nuisances.draw(0)  # type: ignore[arg-type]
+
+
+def test_draw_seed_light_is_per_video_and_tilted_within_the_spread():
+    nz = Nuisances(light_spread_deg=30.0, light_strength_spread=0.2, background_drift_px=1.0)
+    a, b, c = (nz.draw_seed(seed=2, index=i, video=v) for i, v in ((0, 0), (3, 0), (1, 1)))
+    assert a.light_dir == b.light_dir and a.light_strength == b.light_strength  # the same video's light
+    assert a.light_dir != c.light_dir and a.drift != b.drift  # another video; another frame
+    for s in (a, c):
+        ang = math.degrees(math.acos(np.clip(np.dot(s.light_dir, MODEL_LIGHT), -1, 1)))
+        assert ang <= 30.0 + 1e-9 and 0.8 <= s.light_strength <= 1.2
+        assert math.hypot(*s.drift) <= 1.0
+
+
+def test_reference_camera_with_nuisances(tmp_path):
+    from synthaug.data.seedset import SeedSet
+    from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
+
+    base = SeedSet.load(make_measured_seedset(tmp_path / "base", **FAST))
+    none = SeedSet.load(make_measured_seedset(tmp_path / "none", nuisances=Nuisances.none(), **FAST))
+    np.testing.assert_array_equal(base.patches, none.patches)
+    assert (tmp_path / "base" / "seedset.json").read_bytes() == (tmp_path / "none" / "seedset.json").read_bytes()
+    assert "nuisances" not in base.metadata["reference_camera"]
+
+    nz = Nuisances(ambient=0.3, specular_ks=0.15, normal_smoothing_px=1.0, albedo_texture_amp=0.1,
+                   light_spread_deg=30.0, light_strength_spread=0.15, rotor_scale=1.15, mesh_sections=24,
+                   mesh_perturbation=0.02, background_drift_px=1.0, background_flicker=0.01)
+    s = SeedSet.load(make_measured_seedset(tmp_path / "nz", nuisances=nz, **FAST))
+    rc = s.metadata["reference_camera"]
+    assert Nuisances.from_dict(rc["nuisances"]) == nz and "rotors x1.15" in rc["mesh"]
+    load_truth(s.path)  # still a valid truth file
+    meta = json.loads((s.path / "truth.json").read_text())
+    assert Nuisances.from_dict(meta["metadata"]["nuisances"]) == nz
+    for i, rec in enumerate(s.records):
+        want = nz.draw_seed(seed=FAST["seed"], index=i, video=i % FAST["n_videos"])
+        assert rec["truth"]["nuisance"] == json.loads(json.dumps(want.as_dict()))
+    # the scene's draws are the same (pose, place, Θ): the object is in the same crop, its look differs
+    assert (np.abs(s.crops[:, :2] - base.crops[:, :2]) <= 0.1 * s.crops[:, 2:3]).all()
+    assert np.abs(s.patches.astype(int) - base.patches.astype(int)).mean() > 1.0
+    # the background estimate is the still scene through the same camera: unchanged by the nuisances
+    for i in range(len(s)):
+        np.testing.assert_array_equal(s.background_frame(i), base.background_frame(i))
+    with pytest.raises(ValueError, match="mesh perturbation once"):
+        make_measured_seedset(tmp_path / "x", nuisances=Nuisances(mesh_perturbation=0.02), mesh_perturbation=0.02,
+                              **FAST)
+    with pytest.raises(ValueError, match="Nuisances record"):
+        make_measured_seedset(tmp_path / "x", nuisances={"ambient": 0.3}, **FAST)  # type: ignore[arg-type]
