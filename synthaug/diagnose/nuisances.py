@@ -280,7 +280,11 @@ def shade_object(normals: torch.Tensor, coverage: torch.Tensor, w_d: torch.Tenso
 
 def drift_scene(scene: np.ndarray, seed_nuisance: SeedNuisance) -> np.ndarray:
     """The frame's scene as it was when the frame was taken: the background's scene moved by ``drift`` px
-    (bilinear, edges replicated) and its brightness changed by ``flicker``. Identity without drift or flicker.
+    and its brightness changed by ``flicker``. Identity without drift or flicker.
+
+    The move is a Fourier (sinc) shift of the scene, reflect-padded so the frame's edges do not wrap:
+    a moving scene is not a blurrier one, and a bilinear shift would low-pass the frame's scene against
+    the background's (a false "defocus").
 
     Shape:
         (H, W) or (C, H, W) float in [0, 1] -> the same.
@@ -288,8 +292,16 @@ def drift_scene(scene: np.ndarray, seed_nuisance: SeedNuisance) -> np.ndarray:
     dx, dy = seed_nuisance.drift
     if dx == 0 and dy == 0 and seed_nuisance.flicker == 0:
         return scene
-    from scipy import ndimage
-
-    shift = (dy, dx) if scene.ndim == 2 else (0.0, dy, dx)
-    out = ndimage.shift(scene, shift, order=1, mode="nearest") if (dx or dy) else scene
+    out = np.asarray(scene, np.float64)
+    if dx or dy:
+        pad = 16 + int(math.ceil(max(abs(dx), abs(dy))))
+        planes = out[None] if out.ndim == 2 else out
+        moved = []
+        for plane in planes:
+            a = np.pad(plane, pad, mode="reflect")
+            fy = np.fft.fftfreq(a.shape[0])[:, None]
+            fx = np.fft.fftfreq(a.shape[1])[None, :]
+            f = np.fft.fft2(a) * np.exp(-2j * np.pi * (fx * dx + fy * dy))
+            moved.append(np.real(np.fft.ifft2(f))[pad:-pad, pad:-pad])
+        out = moved[0] if out.ndim == 2 else np.stack(moved)
     return np.clip(out * (1.0 + seed_nuisance.flicker), 0.0, 1.0)
