@@ -16,7 +16,7 @@ machine. Measured:
   batches after one warm-up batch; ``getitems_cpu`` the same per second of
   the process's CPU time (less sensitive to other jobs on a shared machine);
 - ``loader_patch`` / ``loader_frame``: ``synthaug bench render --mode patch
-  --size 64 --workers 2`` and ``--mode frame`` (640×512, 2 workers).
+  --patch-size 64 --workers 2`` and ``--mode frame`` (640×512, 2 workers).
 
 Also an equivalence check: the same 256 patch items and 32 frames (same seed,
 epoch and indices) from both variants, max |new - baseline| (float rounding,
@@ -94,7 +94,7 @@ def _run(code_or_args: list[str], pythonpath: str) -> str:
 
 def _loader(mode: str, workers: int, batches: int, pythonpath: str) -> float:
     out = _run(["-c", "import sys; from synthaug.cli import main; sys.exit(main())", "bench", "render",
-                "--mode", mode, "--size", "64", "--workers", str(workers), "--repeats", "3",
+                "--mode", mode, "--patch-size", "64", "--workers", str(workers), "--repeats", "3",
                 "--batches", str(batches)], pythonpath)
     return float(json.loads(out)["results"][0]["samples_per_s_median"])
 

@@ -19,11 +19,11 @@ import math
 import os
 import re
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, Sequence
 
 __all__ = ["positive_int", "nonneg_int", "positive_float", "nonneg_float", "unit_float", "open_unit_float",
            "finite_float", "float_in", "int_at_least", "check_output_file", "check_output_dir",
-           "check_seedset_dir", "first_line"]
+           "check_seedset_dir", "first_line", "add_option", "dataclass_defaults"]
 
 
 def _number(text: str, kind: type) -> float | int:
@@ -144,7 +144,7 @@ def check_output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
     return path
 
 
-def check_seedset_dir(path: str | os.PathLike, option: str = "--seeds") -> Path:
+def check_seedset_dir(path: str | os.PathLike, option: str = "--seed-set") -> Path:
     """``path`` is a seed-set folder (it holds ``seedset.json``); its contents are checked when it is loaded.
 
     Raises:
@@ -156,6 +156,59 @@ def check_seedset_dir(path: str | os.PathLike, option: str = "--seeds") -> Path:
             "holds no seedset.json"
         raise FileNotFoundError(f"{option}: {path} is not a seed set: it {why} (`synthaug ingest` makes one)")
     return path
+
+
+# ------------------------------------------------------------ one CLI vocabulary (issue 17)
+# Every subcommand spells a concept the same way (--seed-set, --seed-counts, --params, --frame-stride,
+# --patch-size, --no-progress, ...). An old spelling stays accepted for one release as a hidden alias: the
+# same dest, type and choices, absent from --help, printing nothing extra.
+
+def add_option(container: argparse._ActionsContainer, name: str, *, aliases: Sequence[str] = (),
+               **kwargs: Any) -> argparse.Action:
+    """``container.add_argument(name, **kwargs)``, with ``aliases`` (old spellings) accepted but hidden.
+
+    An alias parses exactly as ``name`` (same ``dest``, ``type``, ``nargs``, ``choices``; a flag stays a flag)
+    and is left out of ``--help`` and the usage line. A ``required`` option with aliases becomes a required
+    group of itself and its aliases, so either spelling satisfies it (argparse names only ``name`` when
+    neither is given); giving both is an error. ``container`` may itself be a mutually exclusive group.
+
+    Example:
+        >>> p = argparse.ArgumentParser()
+        >>> _ = add_option(p, "--seed-set", aliases=["--seeds"], required=True, help="seed-set folder")
+        >>> p.parse_args(["--seeds", "d"]) == p.parse_args(["--seed-set", "d"])
+        True
+        >>> "--seeds" in p.format_help()
+        False
+    """
+    aliases = list(aliases)
+    if aliases and kwargs.get("required"):
+        if not isinstance(container, argparse._MutuallyExclusiveGroup):
+            container = container.add_mutually_exclusive_group(required=True)
+        kwargs["required"] = False
+    action = container.add_argument(name, **kwargs)
+    if not aliases:
+        return action
+    hidden: dict[str, Any] = {"dest": action.dest, "default": argparse.SUPPRESS, "help": argparse.SUPPRESS}
+    if action.nargs == 0:  # a flag: store_true / store_false / store_const
+        hidden.update(action="store_const", const=action.const)
+    else:
+        hidden.update(type=action.type, nargs=action.nargs, choices=action.choices, metavar=action.metavar)
+    container.add_argument(*aliases, **hidden)
+    return action
+
+
+def dataclass_defaults(cls: type) -> dict[str, Any]:
+    """``{field name: default}`` of a dataclass (``default_factory`` called), for a CLI that must not retype
+    them: ``parser.add_argument("--budget", default=dataclass_defaults(FitConfig)["budget"])``."""
+    import dataclasses
+
+    out = {}
+    for f in dataclasses.fields(cls):
+        if f.default is not dataclasses.MISSING:
+            out[f.name] = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            out[f.name] = f.default_factory()
+    return out
 
 
 def first_line(message: object, limit: int = 300) -> str:

@@ -15,7 +15,7 @@ import sys
 # name -> (module, one-line help)
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("synthaug.demo", "the whole method on generated data: ingest, fit, generate, train, evaluate"),
-    "preview": ("synthaug.data.preview", "PNG grid of synthetic samples (real beside synthetic with --seeds)"),
+    "preview": ("synthaug.data.preview", "PNG grid of synthetic samples (real beside synthetic with --seed-set)"),
     "bench": ("synthaug.data.bench", "benchmarks: `synthaug bench render` prints JSON samples/s"),
     "ingest": ("synthaug.data.ingest_cli", "videos + boxes (or images + COCO) -> seed set with backgrounds"),
     "fit": ("synthaug.fit.cli", "seed set + mesh + distance -> fitted capture parameters per seed"),

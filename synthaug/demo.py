@@ -35,19 +35,21 @@ import torch
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from synthaug._checks import int_at_least, positive_float, positive_int
+    from synthaug._checks import add_option, int_at_least, positive_float, positive_int
 
     # numbers are checked as they are parsed (a bad one exits 2 at once, naming the option)
     parser.add_argument("--out", default="outputs/demo", help="output folder")
     parser.add_argument("--videos", type=int_at_least(2), default=8,
                         help="generated videos (about 60%% train, 40%% test; >= 2)")
     parser.add_argument("--frames", type=int_at_least(10), default=90, help="frames per video (>= 10)")
-    parser.add_argument("--seeds", type=positive_int, default=25, help="seed images drawn from the train videos")
+    add_option(parser, "--seed-counts", aliases=["--seeds"], type=positive_int, default=25,
+               help="seed images drawn from the train videos")
     parser.add_argument("--budget", type=int_at_least(10), default=800, help="fit evaluations per seed (>= 10)")
     parser.add_argument("--ratio", type=positive_float, default=20, help="synthetic patches per real seed (> 0)")
     parser.add_argument("--detector", default="hog", choices=["hog", "adaboost", "cnn"],
                         help="detector trained on real seeds only and on real + synthetic")
-    parser.add_argument("--stride", type=positive_int, default=3, help="score every k-th test frame")
+    add_option(parser, "--frame-stride", aliases=["--stride"], type=positive_int, default=3,
+               help="score every k-th test frame")
     parser.add_argument("--seed", type=int, default=0, help="seeds everything: videos, fits, training")
     parser.add_argument("--fit-init", default="grid", choices=["grid", "uniform"], help="how each fit starts")
     parser.add_argument("--hidden", default="rotor_blur",
@@ -163,8 +165,8 @@ def _run(args: argparse.Namespace) -> int:
 
     t = time.perf_counter()
     ingest_videos(data / "videos", data / "labels", out / "ingest", split=data / "split.json",
-                  seed_counts=(args.seeds,), progress=False, workers=2)
-    seed_dir = out / "ingest" / "seedsets" / f"drone_{args.seeds}"
+                  seed_counts=(args.seed_counts,), progress=False, workers=2)
+    seed_dir = out / "ingest" / "seedsets" / f"drone_{args.seed_counts}"
     seeds = SeedSet.load(seed_dir)
     timings["ingest"] = time.perf_counter() - t
 
@@ -175,7 +177,7 @@ def _run(args: argparse.Namespace) -> int:
     timings["fit"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    eval_set = load_eval_set(split["test"], data / "videos", data / "labels", stride_k=args.stride)
+    eval_set = load_eval_set(split["test"], data / "videos", data / "labels", stride_k=args.frame_stride)
     real = real_positives(seeds)
     negatives = negative_pool(seeds, extra=1000, seed=args.seed)
     synthetic = synthetic_positives(seeds, "quadcopter", fit_path, int(args.ratio * len(seeds)), seed=args.seed)
@@ -194,8 +196,8 @@ def _run(args: argparse.Namespace) -> int:
 
     from synthaug.data.preview import main as preview_main
 
-    preview_main(argparse.Namespace(out=str(out / "preview.png"), mesh="quadcopter", seeds=str(seed_dir),
-                                    params=str(fit_path), n=8, per_seed=4, mode="patch", size=40, zoom=3,
+    preview_main(argparse.Namespace(out=str(out / "preview.png"), mesh="quadcopter", seed_set=str(seed_dir),
+                                    params=str(fit_path), n=8, per_seed=4, mode="patch", patch_size=40, zoom=3,
                                     effects=None, seed=args.seed, step_deg=5.0))
     plot_fitted_pairs(seeds, {"hog": fit_path}, out / "fitted_pairs.png", n=8)
     plot_joint_histograms(fit_path, out / "joint_histograms.png")
@@ -267,7 +269,7 @@ def _write_report(out: Path, args: argparse.Namespace, rows: list, timings: dict
         f"Generated measured data: {args.videos} panning videos x {args.frames} frames (320x256), quadcopter "
         f"rendered with per-video capture parameters; train videos {split['train']}, test videos {split['test']}.",
         f"Seeds: {n_seeds} from the train videos; Θ fitted per seed in HOG space ({args.budget} evaluations).",
-        f"Detector: {args.detector}; AP at IoU >= 0.5 on one test frame in {args.stride}.",
+        f"Detector: {args.detector}; AP at IoU >= 0.5 on one test frame in {args.frame_stride}.",
         "",
         "| training positives | count | AP (IoU 0.5) | AP (IoU 0.3) | max recall |",
         "|---|---|---|---|---|",

@@ -66,10 +66,10 @@ def inputs(tmp_path):
 DEMO = ["demo", "--out", "{new}"]
 EXPERIMENT = ["experiment", "fig11_ratio", "--out", "{new}"]
 INGEST = ["ingest", "--videos", "{videos}", "--labels", "{labels}", "--no-progress"]
-FIT = ["fit", "--seeds", "{seeds}", "--no-progress"]
+FIT = ["fit", "--seed-set", "{seeds}", "--no-progress"]
 DETECT = ["detect", "--video", "{video}", "--checkpoint", "{ckpt}"]
 EVALUATE = ["evaluate", "--detections", "{dets}", "--labels", "{labels}"]
-DIAGNOSE = ["diagnose", "--seeds", "{seeds}", "--fit", "{fit}", "--quiet"]
+DIAGNOSE = ["diagnose", "--seed-set", "{seeds}", "--params", "{fit}", "--no-progress"]
 PREVIEW = ["preview"]
 
 # (id, argv, text the error must hold: the option it names)
@@ -82,9 +82,9 @@ CASES = [
     ("demo-hidden-unknown", DEMO + ["--hidden", "rainbow"], "--hidden"),
     ("demo-videos-1", DEMO + ["--videos", "1"], "--videos"),
     ("demo-frames-0", DEMO + ["--frames", "0"], "--frames"),
-    ("demo-seeds-0", DEMO + ["--seeds", "0"], "--seeds"),
+    ("demo-seed-counts-0", DEMO + ["--seed-counts", "0"], "--seed-counts"),
     ("demo-budget-5", DEMO + ["--budget", "5"], "--budget"),
-    ("demo-stride-0", DEMO + ["--stride", "0"], "--stride"),
+    ("demo-frame-stride-0", DEMO + ["--frame-stride", "0"], "--frame-stride"),
     ("demo-diagnosis-seeds-2", DEMO + ["--diagnosis-seeds", "2"], "--diagnosis-seeds"),
     ("demo-out-is-a-file", ["demo", "--out", "{file}"], "--out"),
     ("demo-out-under-a-file", ["demo", "--out", "{under_file}"], "--out"),
@@ -92,7 +92,7 @@ CASES = [
     ("experiment-ratios-negative", EXPERIMENT + ["--ratios", "1", "-1"], "--ratios"),
     ("experiment-ratios-nan", EXPERIMENT + ["--ratios", "nan"], "--ratios"),
     ("experiment-seed-counts-0", EXPERIMENT + ["--seed-counts", "0"], "--seed-counts"),
-    ("experiment-stride-k-0", EXPERIMENT + ["--stride-k", "0"], "--stride-k"),
+    ("experiment-frame-stride-0", EXPERIMENT + ["--frame-stride", "0"], "--frame-stride"),
     ("experiment-scales-0", EXPERIMENT + ["--scales", "0"], "--scales"),
     ("experiment-fit-budget-3", EXPERIMENT + ["--fit-budget", "3"], "--fit-budget"),
     ("experiment-threads-0", EXPERIMENT + ["--threads", "0"], "--threads"),
@@ -104,7 +104,7 @@ CASES = [
     ("ingest-patch-size-4", INGEST + ["--out", "{new}", "--patch-size", "4"], "--patch-size"),
     ("ingest-object-fraction-0", INGEST + ["--out", "{new}", "--object-fraction", "0"], "--object-fraction"),
     ("ingest-object-fraction-1.5", INGEST + ["--out", "{new}", "--object-fraction", "1.5"], "--object-fraction"),
-    ("ingest-seeds-0", INGEST + ["--out", "{new}", "--seeds", "12", "0"], "--seeds"),
+    ("ingest-seed-counts-0", INGEST + ["--out", "{new}", "--seed-counts", "12", "0"], "--seed-counts"),
     ("ingest-per-video-0", INGEST + ["--out", "{new}", "--per-video", "0"], "--per-video"),
     ("ingest-workers-0", INGEST + ["--out", "{new}", "--workers", "0"], "--workers"),
     ("ingest-limit-negative", INGEST + ["--out", "{new}", "--limit", "-1"], "--limit"),
@@ -118,13 +118,13 @@ CASES = [
     ("fit-workers-0", FIT + ["--out", "{new}", "--workers", "0"], "--workers"),
     ("fit-distance-unknown", FIT + ["--out", "{new}", "--distance", "bogus"], "--distance"),
     ("fit-effects-unknown", FIT + ["--out", "{new}", "--effects", "rainbow"], "--effects"),
-    ("fit-seeds-not-a-seed-set", ["fit", "--seeds", "{dir}", "--out", "{new}"], "--seeds"),
+    ("fit-seed-set-not-a-seed-set", ["fit", "--seed-set", "{dir}", "--out", "{new}"], "--seed-set"),
     ("fit-dask-nobody-listens", FIT + ["--out", "{new}", "--dask", "tcp://127.0.0.1:1"], "--dask"),
     ("fit-dask-not-an-address", FIT + ["--out", "{new}", "--dask", "scheduler"], "--dask"),
     # synthaug detect: --out must be a file; checked before the checkpoint is loaded
     ("detect-out-is-a-dir", DETECT + ["--out", "{dir}"], "--out"),
     ("detect-out-under-a-file", DETECT + ["--out", "{under_file}"], "--out"),
-    ("detect-stride-0", DETECT + ["--out", "{new}", "--stride", "0"], "--stride"),
+    ("detect-frame-stride-0", DETECT + ["--out", "{new}", "--frame-stride", "0"], "--frame-stride"),
     ("detect-nms-iou-2", DETECT + ["--out", "{new}", "--nms-iou", "2"], "--nms-iou"),
     ("detect-scales-0", DETECT + ["--out", "{new}", "--scales", "1", "0"], "--scales"),
     ("detect-max-detections-0", DETECT + ["--out", "{new}", "--max-detections", "0"], "--max-detections"),
@@ -151,15 +151,15 @@ CASES = [
     ("diagnose-extended-fit-is-a-dir", DIAGNOSE + ["--out", "{new}", "--extended-fit", "{dir}"], "--extended-fit"),
     # synthaug preview: checked before the view cache is built
     ("preview-n-0", PREVIEW + ["--out", "{tmp}/p.png", "--n", "0"], "--n"),
-    ("preview-size-4", PREVIEW + ["--out", "{tmp}/p.png", "--size", "4"], "--size"),
+    ("preview-patch-size-4", PREVIEW + ["--out", "{tmp}/p.png", "--patch-size", "4"], "--patch-size"),
     ("preview-step-deg-90", PREVIEW + ["--out", "{tmp}/p.png", "--step-deg", "90"], "--step-deg"),
     ("preview-out-is-a-dir", PREVIEW + ["--out", "{dir}"], "--out"),
     ("preview-out-not-an-image", PREVIEW + ["--out", "{tmp}/p.txt"], "--out"),
     ("preview-effects-unknown", PREVIEW + ["--out", "{tmp}/p.png", "--effects", "rainbow"], "--effects"),
-    ("preview-seeds-not-a-seed-set", PREVIEW + ["--out", "{tmp}/p.png", "--seeds", "{dir}"], "--seeds"),
+    ("preview-seed-set-not-a-seed-set", PREVIEW + ["--out", "{tmp}/p.png", "--seed-set", "{dir}"], "--seed-set"),
     # synthaug bench render
     ("bench-batch-size-0", ["bench", "render", "--batch-size", "0"], "--batch-size"),
-    ("bench-size-4", ["bench", "render", "--size", "4"], "--size"),
+    ("bench-patch-size-4", ["bench", "render", "--patch-size", "4"], "--patch-size"),
     ("bench-step-deg-negative", ["bench", "render", "--step-deg", "-5"], "--step-deg"),
 ]
 

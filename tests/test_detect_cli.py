@@ -115,8 +115,8 @@ def test_detect_errors_are_clear(workspace: dict[str, Path], capsys: pytest.Capt
     assert "bad.pt" in capsys.readouterr().err
     rc = cli_main(["detect", "--checkpoint", str(workspace["ckpt"]), "--video", str(workspace["root"] / "none.mp4"), "--out", str(workspace["root"] / "x.json")])
     assert rc == 2 and "none.mp4" in capsys.readouterr().err
-    rc = cli_main(["detect", "--checkpoint", str(workspace["ckpt"]), "--video", str(workspace["video"]), "--out", str(workspace["root"] / "x.json"), "--stride", "0"])
-    assert rc == 2 and "--stride" in capsys.readouterr().err
+    rc = cli_main(["detect", "--checkpoint", str(workspace["ckpt"]), "--video", str(workspace["video"]), "--out", str(workspace["root"] / "x.json"), "--frame-stride", "0"])
+    assert rc == 2 and "--frame-stride" in capsys.readouterr().err
 
 
 def test_evaluate_pairing_errors(workspace: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:

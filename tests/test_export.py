@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 
@@ -57,7 +58,7 @@ def _dataset(seeds_dir, cache, count, negative_fraction=0.0, seed=0):
 
 
 def _export(fmt, seeds_dir, out, count, *extra) -> int:
-    return main(["export", "--format", fmt, "--seeds", str(seeds_dir), "--count", str(count), "--out", str(out),
+    return main(["export", "--format", fmt, "--seed-set", str(seeds_dir), "--count", str(count), "--out", str(out),
                  *FAST, *extra])
 
 
@@ -190,7 +191,7 @@ def test_two_runs_give_byte_identical_files(seeds_dir, tmp_path):
         assert len(first) == (5 + 3 + 1 if fmt == "coco" else 2 * (5 + 3) + 1)
 
 
-@pytest.mark.parametrize("case", ["format", "count", "seeds", "params", "out"])
+@pytest.mark.parametrize("case", ["format", "count", "seed-set", "params", "out"])
 def test_errors_exit_2_name_the_option_and_write_nothing(case, seeds_dir, tmp_path, capsys):
     out = tmp_path / "out"
     fmt, count, seeds, extra = "coco", 3, seeds_dir, []
@@ -198,7 +199,7 @@ def test_errors_exit_2_name_the_option_and_write_nothing(case, seeds_dir, tmp_pa
         fmt = "voc"
     elif case == "count":
         count = 0
-    elif case == "seeds":
+    elif case == "seed-set":
         seeds = tmp_path / "no_such_seedset"
     elif case == "params":
         p = tmp_path / "fit.json"
@@ -284,8 +285,8 @@ def test_api_errors(seeds_dir, small_cache, tmp_path):
 def test_every_option_has_a_help_text_with_its_default():
     sub = next(a for a in build_parser("export")._actions if a.dest == "command")
     parser = sub.choices["export"]
-    opts = [a for a in parser._actions if a.option_strings and a.dest != "help"]
-    assert {"--format", "--seeds", "--params", "--mesh", "--count", "--out", "--include-real", "--seed",
+    opts = [a for a in parser._actions if a.option_strings and a.dest != "help" and a.help != argparse.SUPPRESS]
+    assert {"--format", "--seed-set", "--params", "--mesh", "--count", "--out", "--include-real", "--seed",
             "--object-size", "--negative-fraction", "--class-name", "--overwrite"} <= {a.option_strings[0] for a in opts}
     for a in opts:
         assert a.help and ("(default:" in a.help or "(required)" in a.help), a.option_strings

@@ -2,7 +2,7 @@
 
 Prints one JSON object. Example::
 
-    synthaug bench render --mode patch --size 64 --workers 2
+    synthaug bench render --mode patch --patch-size 64 --workers 2
     synthaug bench render --mode frame --workers 2
 """
 
@@ -17,14 +17,14 @@ import time
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from synthaug._checks import float_in, int_at_least, nonneg_int, positive_int
+    from synthaug._checks import add_option, float_in, int_at_least, nonneg_int, positive_int
 
     sub = parser.add_subparsers(dest="bench", metavar="WHAT", required=True)
     p = sub.add_parser("render", help="rendering throughput of SyntheticObjectDataset",
                        formatter_class=parser.formatter_class)
     p.add_argument("--mode", choices=["patch", "frame", "both"], default="both", help="what to time")
     p.add_argument("--mesh", default="quadcopter", help="mesh path or built-in name")
-    p.add_argument("--size", type=int_at_least(8), default=64, help="patch side (patch mode)")
+    add_option(p, "--patch-size", aliases=["--size"], type=int_at_least(8), default=64, help="patch side (patch mode)")
     p.add_argument("--frame-size", type=int_at_least(16), nargs=2, default=(512, 640), metavar=("H", "W"),
                    help="frame height and width (frame mode)")
     p.add_argument("--workers", type=nonneg_int, default=2, help="DataLoader worker processes")
@@ -43,14 +43,14 @@ def run_render(mode: str, args: argparse.Namespace) -> dict:
     from synthaug.data.synthetic import SyntheticObjectDataset
 
     if mode == "patch":
-        bgs = sky_backgrounds(16, (max(args.size * 2, 96), max(args.size * 2, 96)), seed=args.seed)
+        bgs = sky_backgrounds(16, (max(args.patch_size * 2, 96), max(args.patch_size * 2, 96)), seed=args.seed)
         bs = args.batch_size
     else:
         bgs = sky_backgrounds(8, tuple(args.frame_size), seed=args.seed)
         bs = max(1, args.batch_size // 8)
     n_items = bs * args.batches
     t0 = time.perf_counter()
-    ds = SyntheticObjectDataset(args.mesh, bgs, length=n_items, mode=mode, patch_size=args.size,
+    ds = SyntheticObjectDataset(args.mesh, bgs, length=n_items, mode=mode, patch_size=args.patch_size,
                                 negative_fraction=0.0, seed=args.seed,
                                 cache_options={"step_deg": args.step_deg})
     setup_s = time.perf_counter() - t0
@@ -72,7 +72,7 @@ def run_render(mode: str, args: argparse.Namespace) -> dict:
     peak_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
     return {
         "mode": mode,
-        "size": args.size if mode == "patch" else list(args.frame_size),
+        "size": args.patch_size if mode == "patch" else list(args.frame_size),
         "effects": list(ds.effects),
         "workers": args.workers,
         "batch_size": bs,

@@ -24,11 +24,11 @@ byte-identical files. The output is written into a temporary folder beside
 
 Examples::
 
-    synthaug export --format coco --seeds data/halmstad/seedsets/drone_100 \\
+    synthaug export --format coco --seed-set data/halmstad/seedsets/drone_100 \\
         --params fits/drone_100_hog.json --mesh ../shared/data/meshes/quadcopter.glb \\
         --count 5000 --include-real --out exports/drone_coco
 
-    synthaug export --format yolo --seeds data/halmstad/seedsets/drone_100 --count 5000 \\
+    synthaug export --format yolo --seed-set data/halmstad/seedsets/drone_100 --count 5000 \\
         --object-size 12 48 --negative-fraction 0.1 --class-name drone --out exports/drone_yolo
 
 Python::
@@ -334,12 +334,14 @@ def export_dataset(
 
 # ------------------------------------------------------------------ command line
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from synthaug._checks import add_option
+
     parser.add_argument("--format", required=True, metavar="{coco,yolo}",
                         help="output layout: coco (images/ + annotations.json) or yolo (images/ + labels/ + "
                              "data.yaml, the ultralytics layout) (required)")
-    parser.add_argument("--seeds", required=True,
-                        help="seed-set folder (synthaug ingest): its background frames are the backgrounds, "
-                             "one per seed (required)")
+    add_option(parser, "--seed-set", aliases=["--seeds"], required=True,
+               help="seed-set folder (synthaug ingest): its background frames are the backgrounds, "
+                    "one per seed (required)")
     parser.add_argument("--params", default=None,
                         help="capture-parameter file, one row per seed (synthaug fit's output) "
                              "(default: none, one row per seed sampled from the default ranges with --seed)")
@@ -398,16 +400,16 @@ def main(args: argparse.Namespace) -> int:
     from synthaug.data.seedset import SeedSet
     from synthaug.params import CaptureParams
 
-    seeds_dir = Path(args.seeds)
+    seeds_dir = Path(args.seed_set)
     if not seeds_dir.is_dir():
-        return _fail(f"--seeds: seed-set folder not found: {seeds_dir}" if not seeds_dir.exists()
-                     else f"--seeds: not a folder: {seeds_dir}")
+        return _fail(f"--seed-set: seed-set folder not found: {seeds_dir}" if not seeds_dir.exists()
+                     else f"--seed-set: not a folder: {seeds_dir}")
     try:
         seeds = SeedSet.load(seeds_dir)
     except (FileNotFoundError, ValueError, OSError) as e:
-        return _fail(f"--seeds: {e}")
+        return _fail(f"--seed-set: {e}")
     if len(seeds) == 0:
-        return _fail(f"--seeds: {seeds_dir} holds no seeds")
+        return _fail(f"--seed-set: {seeds_dir} holds no seeds")
     params = None
     if args.params is not None:
         try:
@@ -415,7 +417,7 @@ def main(args: argparse.Namespace) -> int:
         except (FileNotFoundError, ValueError, OSError) as e:
             return _fail(f"--params: {e}")
         if params.batch_size != len(seeds):
-            return _fail(f"--params: {args.params} has {params.batch_size} rows but the seed set {args.seeds} "
+            return _fail(f"--params: {args.params} has {params.batch_size} rows but the seed set {args.seed_set} "
                          f"has {len(seeds)} seeds (one row per seed)")
     if args.mesh not in _builtin_meshes() and not Path(args.mesh).is_file():
         return _fail(f"--mesh: mesh file not found: {args.mesh} (built-in names: {sorted(_builtin_meshes())})")

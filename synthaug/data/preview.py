@@ -1,9 +1,9 @@
-"""``synthaug preview``: a PNG grid of synthetic samples (real beside synthetic with ``--seeds``).
+"""``synthaug preview``: a PNG grid of synthetic samples (real beside synthetic with ``--seed-set``).
 
 Examples::
 
     synthaug preview --out preview.png                      # built-in quadcopter on generated skies
-    synthaug preview --mesh plane.glb --seeds seeds/drone --params fit.json --out preview.png
+    synthaug preview --mesh plane.glb --seed-set seeds/drone --params fit.json --out preview.png
 """
 
 from __future__ import annotations
@@ -20,15 +20,18 @@ import torch
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from synthaug._checks import add_option
+
     parser.add_argument("--out", default="preview.png", help="output PNG")
     parser.add_argument("--mesh", default="quadcopter", help="mesh file or built-in name (default: quadcopter)")
-    parser.add_argument("--seeds", default=None, help="seed-set folder: show real seeds beside synthetic samples")
+    add_option(parser, "--seed-set", aliases=["--seeds"], default=None,
+               help="seed-set folder: show real seeds beside synthetic samples")
     parser.add_argument("--params", default=None, help="capture-parameter file (one row per seed)")
-    parser.add_argument("--n", type=int, default=48, help="samples (without --seeds) or seeds shown (with)")
-    parser.add_argument("--per-seed", type=int, default=4, help="synthetic samples per real seed (with --seeds)")
+    parser.add_argument("--n", type=int, default=48, help="samples (without --seed-set) or seeds shown (with)")
+    parser.add_argument("--per-seed", type=int, default=4, help="synthetic samples per real seed (with --seed-set)")
     parser.add_argument("--mode", choices=["patch", "frame"], default="patch",
                         help="patches (classifier input) or whole frames with the object composited")
-    parser.add_argument("--size", type=int, default=40, help="patch side")
+    add_option(parser, "--patch-size", aliases=["--size"], type=int, default=40, help="patch side")
     parser.add_argument("--zoom", type=int, default=3, help="nearest-neighbour upscaling of each tile")
     parser.add_argument("--effects", nargs="*", default=None, help="effects to apply (default: all)")
     parser.add_argument("--step-deg", type=float, default=5.0, help="view-cache grid step (degrees)")
@@ -93,11 +96,11 @@ def main(args: argparse.Namespace) -> int:
     cache = ViewCache.build(args.mesh, step_deg=args.step_deg, sprite_size=96 if args.mode == "patch" else 128)
     if seeds is None:
         if args.mode == "patch":
-            bgs = sky_backgrounds(8, (args.size * 2, args.size * 2), seed=args.seed)
+            bgs = sky_backgrounds(8, (args.patch_size * 2, args.patch_size * 2), seed=args.seed)
         else:
             bgs = sky_backgrounds(4, (256, 320), seed=args.seed)
         params = loaded[0] if loaded else None
-        ds = SyntheticObjectDataset(args.mesh, bgs, params, length=args.n, mode=args.mode, patch_size=args.size,
+        ds = SyntheticObjectDataset(args.mesh, bgs, params, length=args.n, mode=args.mode, patch_size=args.patch_size,
                                     negative_fraction=0.0, effects=args.effects, seed=args.seed, cache=cache)
         tiles = [_u8(img) for img, _ in ds.__getitems__(list(range(len(ds))))]
         cols = 8 if args.mode == "patch" else 2
@@ -146,23 +149,23 @@ def _validate(args: argparse.Namespace) -> tuple[Path, Any, tuple | None]:
     for name in ("n", "per_seed", "zoom"):
         if getattr(args, name) < 1:
             raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
-    if args.size < 8:
-        raise ValueError(f"--size must be >= 8, got {args.size}")
+    if args.patch_size < 8:
+        raise ValueError(f"--patch-size must be >= 8, got {args.patch_size}")
     if not (math.isfinite(args.step_deg) and 0.1 <= args.step_deg <= 45):
         raise ValueError(f"--step-deg must be in [0.1, 45], got {args.step_deg}")
     out = check_output_file(args.out)
     if out.suffix.lower() not in Image.registered_extensions():
         raise ValueError(f"--out: {out} has no image extension PIL can write (e.g. .png)")
     seeds = None
-    if args.seeds is not None:
+    if args.seed_set is not None:
         from synthaug.data.seedset import SeedSet
 
-        seeds = SeedSet.load(check_seedset_dir(args.seeds))
+        seeds = SeedSet.load(check_seedset_dir(args.seed_set))
         if len(seeds) == 0:
-            raise ValueError(f"--seeds: {args.seeds} holds no seeds")
+            raise ValueError(f"--seed-set: {args.seed_set} holds no seeds")
     loaded = CaptureParams.load_with_extra(args.params) if args.params else None
     if loaded is not None and seeds is not None and loaded[0].batch_size != len(seeds):
-        raise ValueError(f"--params: {args.params} has {loaded[0].batch_size} rows but {args.seeds} has "
+        raise ValueError(f"--params: {args.params} has {loaded[0].batch_size} rows but {args.seed_set} has "
                          f"{len(seeds)} seeds")
     if args.effects:
         known = loaded[0].effects if loaded else CaptureParams.sample(1, generator=torch.Generator()).effects

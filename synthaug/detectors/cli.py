@@ -2,7 +2,7 @@
 
 Usage::
 
-    synthaug detect --checkpoint runs/hog.pt --video V_DRONE_001.mp4 --out dets.json --stride 5
+    synthaug detect --checkpoint runs/hog.pt --video V_DRONE_001.mp4 --out dets.json --frame-stride 5
 
 The output file::
 
@@ -46,12 +46,15 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from synthaug._checks import add_option
+
     src = parser.add_mutually_exclusive_group(required=True)
     src.add_argument("--video", type=Path, help="video file readable by OpenCV")
     src.add_argument("--images", type=Path, help="folder of frames (png/jpg/...), processed in sorted name order")
     parser.add_argument("--checkpoint", type=Path, required=True, help="detector file written by save_detector")
     parser.add_argument("--out", type=Path, required=True, help="detections JSON to write")
-    parser.add_argument("--stride", "--frame-stride", dest="frame_stride", type=int, default=1, help="process every K-th frame (others are null)")
+    add_option(parser, "--frame-stride", aliases=["--stride"], type=int, default=1,
+               help="process every K-th frame (others are null)")
     parser.add_argument("--max-frames", type=int, default=None, help="stop after this many source frames")
     parser.add_argument(
         "--scales", type=float, nargs="+", default=None, help="image pyramid resize factors (default: synthaug.detectors.sliding.DEFAULT_SCALES)"
@@ -65,7 +68,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=1,
         help="torch intra-op threads (default 1: per-frame ops are small, and extra threads slow down badly on a busy CPU; run one process per video to use more cores)",
     )
-    parser.add_argument("--quiet", action="store_true", help="no progress line on stderr")
+    add_option(parser, "--no-progress", aliases=["--quiet"], action="store_true", help="no progress line on stderr")
 
 
 def iter_video_frames(path: Path, *, frame_stride: int = 1, max_frames: int | None = None) -> Iterator[tuple[int, np.ndarray | None]]:
@@ -172,7 +175,7 @@ def _run(args: argparse.Namespace) -> int:
         args.scales = list(DEFAULT_SCALES)
 
     if args.frame_stride < 1:
-        raise ValueError(f"--stride must be >= 1, got {args.frame_stride}")
+        raise ValueError(f"--frame-stride must be >= 1, got {args.frame_stride}")
     if args.max_frames is not None and args.max_frames < 0:
         raise ValueError(f"--max-frames must be >= 0, got {args.max_frames}")
     if args.threads < 1:
@@ -207,7 +210,7 @@ def _run(args: argparse.Namespace) -> int:
         score_threshold=args.score_threshold,
         nms_iou=args.nms_iou,
         max_detections=args.max_detections,
-        progress=not args.quiet,
+        progress=not args.no_progress,
     )
     payload = {
         "format": FORMAT_NAME,

@@ -33,6 +33,10 @@ _DETECTORS = ("hog", "adaboost", "cnn")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from synthaug._checks import add_option, dataclass_defaults
+    from synthaug.detectors.training import TrainOptions
+
+    d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
     parser.add_argument("--detector", required=True, help=f"detector family: {' | '.join(_DETECTORS)}")
     parser.add_argument("--class", dest="class_name", required=True, help="class to detect (the label files' 'class', e.g. drone)")
     parser.add_argument("--videos", type=Path, required=True, help="folder of videos <stem>.mp4 (any stems, any numbering)")
@@ -44,7 +48,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     pos.add_argument("--seed-counts", type=int, default=None,
                      help="real seed frames drawn from the training videos the way `synthaug ingest` draws them (default 100)")
     pos.add_argument("--all-frames", action="store_true", help="every labelled frame of the training videos (see --frame-step)")
-    pos.add_argument("--seedset", type=Path, help="use this seed set (`synthaug ingest` output) instead of drawing seeds")
+    add_option(pos, "--seed-set", aliases=["--seedset"], type=Path,
+               help="use this seed set (`synthaug ingest` output) instead of drawing seeds")
     parser.add_argument("--frame-step", type=int, default=1, help="with --all-frames: every K-th labelled frame")
     parser.add_argument("--params", type=Path, help="`synthaug fit` output made on the seed set: adds synthetic positives")
     parser.add_argument("--mesh", help="mesh of the synthetic object (default: the fit's mesh, else the built-in quadcopter)")
@@ -59,25 +64,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--val-fraction", type=float, default=0.2, help="share of the class's videos kept for validation without --split")
     parser.add_argument("--negative-classes", nargs="*", default=["bird"],
                         help="classes whose videos never show the class: mined whole for hard negatives")
-    parser.add_argument("--mining-rounds", type=int, default=3, help="hard-negative mining rounds at most (0: none)")
-    parser.add_argument("--mining-stride", type=int, default=30, help="mine every K-th frame of every training video")
-    parser.add_argument("--mining-per-frame", type=int, default=5, help="false positives kept per mined frame")
-    parser.add_argument("--val-stride", type=int, default=30, help="validation false positives counted on every K-th validation frame")
+    parser.add_argument("--mining-rounds", type=int, default=d["mining_rounds"], help="hard-negative mining rounds at most (0: none)")
+    parser.add_argument("--mining-stride", type=int, default=d["mining_stride"], help="mine every K-th frame of every training video")
+    parser.add_argument("--mining-per-frame", type=int, default=d["mining_per_frame"], help="false positives kept per mined frame")
+    add_option(parser, "--val-frame-stride", aliases=["--val-stride"], type=int, default=d["val_stride"],
+               help="validation false positives counted on every K-th validation frame")
     parser.add_argument("--scales", type=float, nargs="+", default=None,
                         help="pyramid of mining and validation (default: synthaug.detectors.sliding.DEFAULT_SCALES)")
-    parser.add_argument("--hog-components", type=int, default=3, help="HOG mixture components")
-    parser.add_argument("--hog-mining-rounds", type=int, default=2, help="HOG's own cache-mining rounds per training")
-    parser.add_argument("--ada-rounds", type=int, default=100, help="AdaBoost boosting rounds")
-    parser.add_argument("--ada-candidates", type=int, default=2000, help="AdaBoost weak-learner candidates")
-    parser.add_argument("--cnn-epochs", type=int, default=12, help="CNN passes over the patches")
-    parser.add_argument("--cnn-max-steps", type=int, default=1200, help="cap on CNN optimiser steps")
-    parser.add_argument("--cnn-shift", type=int, default=0,
+    parser.add_argument("--hog-components", type=int, default=d["hog_components"], help="HOG mixture components")
+    parser.add_argument("--hog-mining-rounds", type=int, default=d["hog_mining_rounds"],
+                        help="HOG's own cache-mining rounds per training")
+    parser.add_argument("--ada-rounds", type=int, default=d["ada_rounds"], help="AdaBoost boosting rounds")
+    parser.add_argument("--ada-candidates", type=int, default=d["ada_candidates"], help="AdaBoost weak-learner candidates")
+    parser.add_argument("--cnn-epochs", type=int, default=d["cnn_epochs"], help="CNN passes over the patches")
+    parser.add_argument("--cnn-max-steps", type=int, default=d["cnn_max_steps"], help="cap on CNN optimiser steps")
+    parser.add_argument("--cnn-shift", type=int, default=d["cnn_shift"],
                         help="CNN positives moved by random whole-pixel offsets up to this (0: off)")
     parser.add_argument("--extra-negatives", type=int, default=3000, help="object-free crops of the seed frames added to the seed set's negatives")
     parser.add_argument("--work", type=Path, help="ingest folder for --seed-counts (default: <out>.work)")
     parser.add_argument("--workers", type=int, default=2, help="ingest worker processes")
     parser.add_argument("--threads", type=int, default=None, help="torch intra-op threads (default: torch's)")
-    parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    add_option(parser, "--no-progress", aliases=["--quiet"], action="store_true", help="no progress lines on stderr")
 
 
 def _err(message: str) -> int:
@@ -89,7 +96,7 @@ def main(args: argparse.Namespace) -> int:
     if args.detector not in _DETECTORS:
         return _err(f"--detector: unknown detector {args.detector!r}; choose from {list(_DETECTORS)}")
     for opt, value, low in (("--frame-step", args.frame_step, 1), ("--mining-stride", args.mining_stride, 1),
-                            ("--mining-per-frame", args.mining_per_frame, 1), ("--val-stride", args.val_stride, 1),
+                            ("--mining-per-frame", args.mining_per_frame, 1), ("--val-frame-stride", args.val_frame_stride, 1),
                             ("--mining-rounds", args.mining_rounds, 0), ("--workers", args.workers, 1)):
         if value < low:
             return _err(f"{opt}: must be >= {low}, got {value}")
@@ -112,19 +119,19 @@ def main(args: argparse.Namespace) -> int:
                                ada_rounds=args.ada_rounds, ada_candidates=args.ada_candidates, cnn_epochs=args.cnn_epochs,
                                cnn_max_steps=args.cnn_max_steps, cnn_shift=args.cnn_shift, mining_rounds=args.mining_rounds,
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
-                               val_stride=args.val_stride, scales=None if args.scales is None else tuple(args.scales))
+                               val_stride=args.val_frame_stride, scales=None if args.scales is None else tuple(args.scales))
     except ValueError as e:
         return _err(str(e))
 
     def log(msg: str) -> None:
-        if not args.quiet:
+        if not args.no_progress:
             print(f"[{time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
 
     try:
         det, meta = train_from_videos(
             args.detector, args.class_name, args.videos, args.labels, out=args.out, split=args.split, seed=args.seed,
             seed_count=100 if args.seed_counts is None else args.seed_counts, all_frames=args.all_frames,
-            frame_step=args.frame_step, seedset=args.seedset, params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
+            frame_step=args.frame_step, seedset=args.seed_set, params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
             perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling, options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

@@ -1277,7 +1277,7 @@ def train_from_videos(
     if params is not None and not callable(params) and not Path(params).is_file():
         raise TrainingInputError("--params", f"file not found: {params}")
     if seedset is not None and not (Path(seedset) / "seedset.json").is_file():
-        raise TrainingInputError("--seedset", f"not a seed set folder (no seedset.json): {seedset}")
+        raise TrainingInputError("--seed-set", f"not a seed set folder (no seedset.json): {seedset}")
     t_start = time.perf_counter()
     vs = discover_videos(videos_dir, labels_dir)
     sp = split_by_video(vs, class_name, split=split, seed=seed, val_fraction=val_fraction, block=split_block,
@@ -1286,7 +1286,7 @@ def train_from_videos(
         f"{len(sp['negative_train'])} negative-class training videos ({sp['source']} split)")
     if params is not None and all_frames and seedset is None:
         raise TrainingInputError("--params", "synthetic positives need the seed set the fit was made on: use --seed-counts N "
-                                             "(or --seedset DIR), not --all-frames")
+                                             "(or --seed-set DIR), not --all-frames")
     if not all_frames and seedset is None:
         available = _labelled_frames(vs.labels_dir, sp["train"])
         if seed_count > available:  # type: ignore[operator]

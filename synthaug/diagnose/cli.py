@@ -2,8 +2,8 @@
 
 Example::
 
-    synthaug diagnose --seeds data/halmstad/seedsets/drone_100 --mesh ../shared/data/meshes/quadcopter.glb \\
-        --fit fits/drone_100_hog.json --distance hog --out results/diagnose/drone_100 \\
+    synthaug diagnose --seed-set data/halmstad/seedsets/drone_100 --mesh ../shared/data/meshes/quadcopter.glb \\
+        --params fits/drone_100_hog.json --distance hog --out results/diagnose/drone_100 \\
         --extended-fit fits/drone_100_hog_extended.json
 """
 
@@ -15,9 +15,12 @@ import sys
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seeds", required=True, help="seed-set folder")
+    from synthaug._checks import add_option
+
+    add_option(parser, "--seed-set", aliases=["--seeds"], required=True, help="seed-set folder")
     parser.add_argument("--mesh", default="quadcopter", help="the mesh the fit used (file or built-in name)")
-    parser.add_argument("--fit", required=True, help="fit file (synthaug fit output)")
+    add_option(parser, "--params", aliases=["--fit"], required=True,
+               help="fitted capture-parameter file (synthaug fit output)")
     parser.add_argument("--distance", default="hog", help="the detector's distance (normally the fit's)")
     parser.add_argument("--out", required=True, help="output folder (report.json, report.md, plots)")
     parser.add_argument("--candidates", nargs="*", default=None, help="candidate effects (default: all 14)")
@@ -25,7 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seeds folds, permutations and renders")
     parser.add_argument("--alpha", type=float, default=0.01, help="family-wise significance level")
     parser.add_argument("--no-plots", action="store_true", help="write report.json/report.md without the PNG figures")
-    parser.add_argument("--quiet", action="store_true", help="print nothing but the final JSON summary")
+    add_option(parser, "--no-progress", aliases=["--quiet"], action="store_true",
+               help="no progress lines: print nothing but the final JSON summary")
     parser.add_argument("--extended-fit", default=None, metavar="PATH",
                         help="also write the fit extended by the first finding's effect (per-seed patch units); "
                              "nothing is written when there is no candidate-effect finding")
@@ -52,15 +56,15 @@ def _validate(args: argparse.Namespace) -> None:
         raise ValueError(f"--alpha must be in (0, 1), got {args.alpha}")
     if args.folds < 2:
         raise ValueError(f"--folds must be >= 2, got {args.folds}")
-    check_seedset_dir(args.seeds)
+    check_seedset_dir(args.seed_set)
     check_distance(args.distance)
     check_output_dir(args.out)
     if args.extended_fit:
         check_output_file(args.extended_fit, "--extended-fit")
-    _, _, meta = CaptureParams.load_with_extra(args.fit)  # a missing / corrupt fit is named now
+    _, _, meta = CaptureParams.load_with_extra(args.params)  # a missing / corrupt fit is named now
     fitted = (meta.get("config") or {}).get("distance") if isinstance(meta.get("config"), dict) else None
     if isinstance(fitted, str) and fitted != args.distance:
-        print(f"synthaug diagnose: warning: {args.fit} was fitted with distance {fitted!r} but --distance is "
+        print(f"synthaug diagnose: warning: {args.params} was fitted with distance {fitted!r} but --distance is "
               f"{args.distance!r}; the residuals are measured in {args.distance!r} space", file=sys.stderr)
 
 
@@ -94,11 +98,11 @@ def main(args: argparse.Namespace) -> int:
 
     try:
         _validate(args)
-        report = diagnose(args.seeds, args.mesh, args.fit, distance=args.distance, out_dir=args.out,
+        report = diagnose(args.seed_set, args.mesh, args.params, distance=args.distance, out_dir=args.out,
                           candidates=args.candidates, k=args.folds, seed=args.seed, alpha=args.alpha,
                           plots=not args.no_plots, gap=getattr(args, "gap", 0),
                           gap_detectors=gap_detectors(args) or None,
-                          progress=None if args.quiet else (lambda s: print(s, file=sys.stderr)))
+                          progress=None if args.no_progress else (lambda s: print(s, file=sys.stderr)))
     except (ValueError, FileNotFoundError) as e:
         print(f"synthaug diagnose: {e}", file=sys.stderr)
         return 2
@@ -107,7 +111,7 @@ def main(args: argparse.Namespace) -> int:
         from synthaug.diagnose.extend import extend_fit
 
         try:
-            extended = str(extend_fit(args.fit, args.seeds, report, args.extended_fit, mesh=args.mesh))
+            extended = str(extend_fit(args.params, args.seed_set, report, args.extended_fit, mesh=args.mesh))
         except ValueError as e:  # no candidate-effect finding: the report stands, no extension is written
             print(f"synthaug diagnose: --extended-fit not written: {e}", file=sys.stderr)
     print(json.dumps({"out": args.out, "significant": report["significant"],

@@ -13,7 +13,7 @@ resumes).
 Usage::
 
     python -m synthaug.diagnose.gain --class drone --report results/diagnose/drone_100/report.json \\
-        --fit results/paper/fits/drone_100_hog.json --training-seeds 0 1 2 --use-top-screened \\
+        --params results/paper/fits/drone_100_hog.json --training-seeds 0 1 2 --use-top-screened \\
         --out results/diagnose/drone_100
 """
 
@@ -28,6 +28,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 import torch
+
+from synthaug._checks import add_option
 
 __all__ = ["run_gain", "main"]
 
@@ -207,27 +209,34 @@ def _markdown(nb: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``python -m synthaug.diagnose.gain``."""
     p = argparse.ArgumentParser(prog="python -m synthaug.diagnose.gain", description=__doc__.split("\n\n")[0])
     p.add_argument("--class", dest="class_name", required=True, help="drone or airplane")
     p.add_argument("--report", default=None, help="diagnosis report.json (required without --extended-fit)")
-    p.add_argument("--fit", required=True, help="the base fit the diagnosis ran on")
+    add_option(p, "--params", aliases=["--fit"], required=True,
+               help="the base capture-parameter file (fit) the diagnosis ran on")
     p.add_argument("--out", required=True, help="output folder (extended_fit.json, gain.json, gain.md, cells)")
-    p.add_argument("--n-seeds", type=int, default=100)
+    add_option(p, "--seed-counts", aliases=["--n-seeds"], type=int, default=100, help="real seeds per training set")
     p.add_argument("--training-seeds", type=int, nargs="+", default=[0, 1, 2])
     p.add_argument("--ratio", type=float, default=None, help="synthetic per real (default: chosen on validation)")
     p.add_argument("--use-top-screened", action="store_true",
                    help="without a significant finding, extend with the top-screened candidate")
     p.add_argument("--effect", default=None, help="extend with this screened candidate (default: the first finding)")
     p.add_argument("--cells", default=None, help="cell cache (default <out>/cells.json)")
-    p.add_argument("--seedsets", default="data/halmstad/seedsets")
+    add_option(p, "--seed-sets", aliases=["--seedsets"], default="data/halmstad/seedsets",
+               help="folder of <class>_<n> seed sets")
     p.add_argument("--mesh", default=None)
-    p.add_argument("--stride-k", type=int, default=15)
+    add_option(p, "--frame-stride", aliases=["--stride-k"], type=int, default=15, help="score every k-th test frame")
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--extended-fit", default=None,
-                   help="compare --fit with this fitted file (a refit with an extension) instead of extending --fit "
+                   help="compare --params with this fitted file (a refit with an extension) instead of extending --params "
                         "by a diagnosis finding; --report is then not needed")
-    args = p.parse_args(argv)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
     if args.report is None and args.extended_fit is None:
         print("gain: --report is required without --extended-fit", file=sys.stderr)
         return 2
@@ -240,10 +249,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"[{time.strftime('%H:%M:%S')}] {msg}", flush=True)
 
     try:
-        nb = run_gain(args.class_name, args.report, args.fit, args.out, n_seeds=args.n_seeds,
+        nb = run_gain(args.class_name, args.report, args.params, args.out, n_seeds=args.seed_counts,
                       training_seeds=args.training_seeds, ratio=args.ratio, use_top_screened=args.use_top_screened,
-                      effect=args.effect, cells=args.cells, seedsets=args.seedsets, mesh=args.mesh,
-                      stride_k=args.stride_k, log=log, extended_fit=args.extended_fit)
+                      effect=args.effect, cells=args.cells, seedsets=args.seed_sets, mesh=args.mesh,
+                      stride_k=args.frame_stride, log=log, extended_fit=args.extended_fit)
     except (ValueError, FileNotFoundError) as e:
         print(f"gain: error: {e}", file=sys.stderr)
         return 2

@@ -78,8 +78,8 @@ class ExperimentContext:
     videos_dir: Path = Path("../shared/data/halmstad/videos")
     labels_dir: Path = Path("../shared/data/halmstad/labels")
     split_file: Path = Path("configs/splits/halmstad.json")
-    stride_k: int = 10
-    val_stride_k: int = 20
+    stride_k: int = 15  # the values `synthaug experiment` has always run with (it read 15 / 30 while these said 10 / 20)
+    val_stride_k: int = 30
     max_test_videos: int | None = None
     max_val_videos: int | None = None
     scales: tuple[float, ...] | None = None

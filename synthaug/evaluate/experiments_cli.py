@@ -3,7 +3,7 @@
 Usage::
 
     python -m synthaug.evaluate.experiments_cli baselines --class drone --out results/baselines \\
-        --cells results/cells_drone.json --stride-k 15
+        --cells results/cells_drone.json --frame-stride 15
 
     python -m synthaug.evaluate.experiments_cli fig11_ratio table1_perturbation --class drone \\
         --out results/paper/drone --cells results/cells_drone.json --detectors cnn hog
@@ -13,8 +13,10 @@ Each experiment writes ``<name>.md`` (table), ``<name>.png`` (plot) and
 ("cells") are cached in ``--cells`` so that a rerun resumes and experiments
 share cells. Ratios of synthetic to real images are chosen on the validation
 videos by ``fig11_ratio`` (``<out>/chosen_ratio.json``) and used by the
-experiments that follow. Capture-parameter fits missing from ``--fits`` are
-made on the fly (``synthaug fit`` defaults, CMA-ES).
+experiments that follow. Capture-parameter fits missing from ``--params-dir`` are
+made on the fly (``synthaug fit`` defaults, CMA-ES). Defaults are
+:class:`~synthaug.evaluate.context.ExperimentContext`'s and
+:class:`~synthaug.detectors.training.TrainOptions`'.
 """
 
 from __future__ import annotations
@@ -27,26 +29,34 @@ from pathlib import Path
 
 import torch
 
-from synthaug._checks import check_output_dir, int_at_least, nonneg_float, nonneg_int, positive_float, positive_int
+from synthaug._checks import (add_option, check_output_dir, dataclass_defaults, int_at_least, nonneg_float, nonneg_int,
+                              positive_float, positive_int)
 from synthaug.detectors.training import TrainOptions
 from synthaug.evaluate.context import ExperimentContext
 from synthaug.evaluate.experiments import EXPERIMENTS
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    d = dataclass_defaults(ExperimentContext)  # defaults read from the dataclasses: they cannot drift
+    t = dataclass_defaults(TrainOptions)
     # numbers are checked as they are parsed: a bad one exits 2 at once, naming the option (not after fitting)
     parser.add_argument("experiments", nargs="+", choices=[*EXPERIMENTS, "all"], help="experiments to run, in order")
-    parser.add_argument("--class", dest="class_name", default="drone", help="object class (selects videos and seed sets)")
+    parser.add_argument("--class", dest="class_name", default=d["class_name"],
+                        help="object class (selects videos and seed sets)")
     parser.add_argument("--out", type=Path, required=True, help="results folder")
     parser.add_argument("--cells", type=Path, default=None, help="cell cache JSON (default <out>/cells.json)")
-    parser.add_argument("--seedsets", type=Path, default=Path("data/halmstad/seedsets"), help="folder of <class>_<n> seed sets")
+    add_option(parser, "--seed-sets", aliases=["--seedsets"], type=Path, default=d["seedsets_dir"],
+               help="folder of <class>_<n> seed sets")
     parser.add_argument("--mesh", default=None, help="mesh (default: quadcopter for drone, twin_prop_airplane for airplane)")
-    parser.add_argument("--fits", type=Path, default=None, help="folder of capture-parameter fits (default <out>/fits)")
-    parser.add_argument("--videos", type=Path, default=Path("../shared/data/halmstad/videos"), help="folder of videos")
-    parser.add_argument("--labels", type=Path, default=Path("../shared/data/halmstad/labels"), help="folder of per-video label JSON files")
-    parser.add_argument("--split", type=Path, default=Path("configs/splits/halmstad.json"), help="split JSON (by video)")
-    parser.add_argument("--stride-k", type=positive_int, default=15, help="score every k-th test frame")
-    parser.add_argument("--val-stride-k", type=positive_int, default=30, help="every k-th validation frame (model selection)")
+    add_option(parser, "--params-dir", aliases=["--fits"], type=Path, default=d["fits_dir"],
+               help="folder of capture-parameter files <class>_<n>_<distance>.json (default <out>/fits)")
+    parser.add_argument("--videos", type=Path, default=d["videos_dir"], help="folder of videos")
+    parser.add_argument("--labels", type=Path, default=d["labels_dir"], help="folder of per-video label JSON files")
+    parser.add_argument("--split", type=Path, default=d["split_file"], help="split JSON (by video)")
+    add_option(parser, "--frame-stride", aliases=["--stride-k"], type=positive_int, default=d["stride_k"],
+               help="score every k-th test frame")
+    add_option(parser, "--val-frame-stride", aliases=["--val-stride-k"], type=positive_int, default=d["val_stride_k"],
+               help="every k-th validation frame (model selection)")
     parser.add_argument("--max-test-videos", type=positive_int, default=None, help="use at most this many test videos (quick look; None: all)")
     parser.add_argument("--max-val-videos", type=positive_int, default=None, help="use at most this many validation videos (None: all)")
     parser.add_argument("--scales", type=positive_float, nargs="+", default=None, help="pyramid factors (default: sliding.DEFAULT_SCALES)")
@@ -58,16 +68,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frame-step", type=positive_int, default=1, help="baselines: use every n-th labelled training frame")
     parser.add_argument("--refit", action="store_true", help="fig9: refit Θ without each effect (the paper) instead of dropping it at generation")
     parser.add_argument("--report-only", action="store_true", help="train nothing: rewrite the tables from the cell cache (missing cells show '–')")
-    parser.add_argument("--seed", type=int, default=0, help="training seed of every cell")
+    parser.add_argument("--seed", type=int, default=d["seed"], help="training seed of every cell")
     parser.add_argument("--threads", type=positive_int, default=1, help="torch threads")
-    parser.add_argument("--fit-workers", type=positive_int, default=2, help="processes fitting Θ")
-    parser.add_argument("--fit-budget", type=int_at_least(10), default=1500, help="objective evaluations per seed fit")
-    parser.add_argument("--cnn-epochs", type=positive_int, default=12, help="CNN training epochs")
-    parser.add_argument("--cnn-max-steps", type=positive_int, default=1200, help="cap on CNN optimiser steps")
-    parser.add_argument("--ada-rounds", type=positive_int, default=100, help="AdaBoost boosting rounds")
-    parser.add_argument("--ada-candidates", type=positive_int, default=2000, help="weak-learner candidates scored per round")
-    parser.add_argument("--hog-components", type=positive_int, default=3, help="HOG mixture components (aspect clusters)")
-    parser.add_argument("--hog-mining-rounds", type=nonneg_int, default=2, help="HOG hard-negative mining rounds")
+    parser.add_argument("--fit-workers", type=positive_int, default=d["fit_workers"], help="processes fitting Θ")
+    parser.add_argument("--fit-budget", type=int_at_least(10), default=d["fit_budget"],
+                        help="objective evaluations per seed fit")
+    parser.add_argument("--cnn-epochs", type=positive_int, default=t["cnn_epochs"], help="CNN training epochs")
+    parser.add_argument("--cnn-max-steps", type=positive_int, default=t["cnn_max_steps"], help="cap on CNN optimiser steps")
+    parser.add_argument("--ada-rounds", type=positive_int, default=t["ada_rounds"], help="AdaBoost boosting rounds")
+    parser.add_argument("--ada-candidates", type=positive_int, default=t["ada_candidates"],
+                        help="weak-learner candidates scored per round")
+    parser.add_argument("--hog-components", type=positive_int, default=t["hog_components"],
+                        help="HOG mixture components (aspect clusters)")
+    parser.add_argument("--hog-mining-rounds", type=nonneg_int, default=t["hog_mining_rounds"],
+                        help="HOG hard-negative mining rounds")
 
 
 DEFAULT_MESH = {"drone": "../shared/data/meshes/quadcopter.glb", "airplane": "../shared/data/meshes/twin_prop_airplane.glb"}
@@ -96,9 +110,9 @@ def main(args: argparse.Namespace) -> int:
             unknown = [d for d in args.distances if d not in list_distances()]
             if unknown:
                 raise ValueError(f"--distances: unknown {unknown}; registered: {list_distances()}")
-        ctx = ExperimentContext(out_dir=args.out, class_name=args.class_name, seedsets_dir=args.seedsets, mesh=mesh, fits_dir=args.fits,
-                                videos_dir=args.videos, labels_dir=args.labels, split_file=args.split, stride_k=args.stride_k,
-                                val_stride_k=args.val_stride_k, max_test_videos=args.max_test_videos, max_val_videos=args.max_val_videos,
+        ctx = ExperimentContext(out_dir=args.out, class_name=args.class_name, seedsets_dir=args.seed_sets, mesh=mesh, fits_dir=args.params_dir,
+                                videos_dir=args.videos, labels_dir=args.labels, split_file=args.split, stride_k=args.frame_stride,
+                                val_stride_k=args.val_frame_stride, max_test_videos=args.max_test_videos, max_val_videos=args.max_val_videos,
                                 scales=None if args.scales is None else tuple(args.scales), options=opts, seed=args.seed,
                                 fit_workers=args.fit_workers, fit_budget=args.fit_budget, log=log, cells_path=args.cells,
                                 cached_only=args.report_only)

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from synthaug._checks import add_option
 from synthaug.detectors.training import TrainOptions, train_from_videos
 from synthaug.evaluate.cells import CellCache
 from synthaug.evaluate.protocol import (
@@ -453,7 +454,8 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--class", dest="class_name", default="drone", help="class to detect")
     q.add_argument("--detectors", nargs="+", default=["hog", "adaboost", "cnn"], choices=["hog", "adaboost", "cnn"],
                    help="detector families")
-    q.add_argument("--seeds", type=int, nargs="*", default=None, help="training seeds (default: the protocol's count)")
+    add_option(q, "--training-seeds", aliases=["--seeds"], type=int, nargs="*", default=None,
+               help="training seeds (default: the protocol's count)")
     q.add_argument("--protocol", default="configs/protocol/halmstad_v1.json", help="protocol file")
     q.add_argument("--videos", default=DataPaths.videos_dir, help="folder of videos (shared format)")
     q.add_argument("--labels", default=DataPaths.labels_dir, help="folder of label JSON files")
@@ -471,7 +473,8 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--out", required=True, help="output folder")
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``python -m synthaug.evaluate.runner`` (subcommands ``learning-curve`` and ``synthetic``)."""
     p = argparse.ArgumentParser(prog="python -m synthaug.evaluate.runner",
                                 description="Experiments under the evaluation protocol (cached cells).",
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
@@ -495,7 +498,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     sy.add_argument("--perturb-copies", type=int, nargs="*", default=[], help="perturbed copies per real positive")
     sy.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=["uniform", "fitted"],
                     help="poses of the synthetic positives: uniform (the paper), fitted (around each seed's fitted pose)")
-    args = p.parse_args(argv)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
     import torch
 
     torch.set_num_threads(args.threads)
@@ -509,13 +516,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     t0 = time.perf_counter()
     if args.what == "learning-curve":
         learning_curve(runner, detectors=args.detectors, seed_counts=args.seed_counts, all_frames=args.all_frames,
-                       frame_step=args.frame_step, seeds=args.seeds, out=args.out)
+                       frame_step=args.frame_step, seeds=args.training_seeds, out=args.out)
     else:
         dist = args.fit_distance or (None if args.params else OWN_DISTANCE)
         synthetic_comparison(runner, detectors=args.detectors, seed_count=args.seed_counts,
                              synthetic_ratios=args.synthetic_ratios, fit_distance=dist, params=args.params,
                              perturb_copies=args.perturb_copies, mesh=args.mesh, pose_sampling=args.pose_sampling,
-                             seeds=args.seeds, out=args.out)
+                             seeds=args.training_seeds, out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
