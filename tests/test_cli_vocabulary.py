@@ -156,10 +156,11 @@ def test_fit_reaches_every_fitconfig_field_with_its_default():
     # and each newly reachable field arrives in the config
     args = parser.parse_args(["--seed-set", "S", "--out", "f.json", "--translation", "0.2", "--init-fraction", "0.5",
                               "--init-starts", "2", "--scale-range", "0.5", "1.5", "--bounds", "sigma_n=0,0.05",
-                              "blur=0.1,1", "--distance-kwargs", '{"cell": 4}', "--no-fit-scale", "--init", "uniform"])
+                              "blur=0.1,1", "--distance-kwargs", '{"cell": 4}', "--no-fit-scale", "--init", "uniform",
+                              "--object-noise", "measured"])
     cfg = config_from_args(args)
-    assert (cfg.translation, cfg.init_fraction, cfg.init_starts, cfg.scale_range, cfg.fit_scale, cfg.init) == \
-        (0.2, 0.5, 2, (0.5, 1.5), False, "uniform")
+    assert (cfg.translation, cfg.init_fraction, cfg.init_starts, cfg.scale_range, cfg.fit_scale, cfg.init, cfg.object_noise) == \
+        (0.2, 0.5, 2, (0.5, 1.5), False, "uniform", "measured")
     assert cfg.bounds == {"sigma_n": (0.0, 0.05), "blur": (0.1, 1.0)} and cfg.distance_kwargs == {"cell": 4}
     assert config_from_args(parser.parse_args(["--seed-set", "S", "--out", "f", "--bounds"])).bounds == {}
 

@@ -45,7 +45,7 @@ def _json_object(text: str) -> dict:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug._checks import (add_option, dataclass_defaults, float_in, int_at_least, nonneg_float,
                                   open_unit_float, positive_float, positive_int)
-    from synthaug.fit.fitting import INITS, FitConfig
+    from synthaug.fit.fitting import INITS, OBJECT_NOISE, FitConfig
     from synthaug.fit.optimizers import list_optimizers
 
     d = dataclass_defaults(FitConfig)  # every FitConfig field is an option here, with the dataclass's default
@@ -71,6 +71,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="share of the budget the grid start spends, in (0, 1)")
     parser.add_argument("--init-starts", type=positive_int, default=d["init_starts"],
                         help="distinct start poses handed to the optimiser (first run + restarts)")
+    parser.add_argument("--object-noise", default=d["object_noise"], choices=list(OBJECT_NOISE),
+                        help="'fit': σ_n searched (the paper); 'measured': σ_n of each seed pinned at its patch's "
+                             "noise level (no speckle bought by the distance)")
     parser.add_argument("--object-scale", type=float_in(0, 1.5, low_open=True), default=d["object_scale"],
                         help="mesh size / patch side (default: the seed set's object_fraction)")
     parser.add_argument("--effects", nargs="*", default=d["effects"], help="effects in Θ (default: the paper's four)")
@@ -103,7 +106,7 @@ def config_from_args(args: argparse.Namespace) -> FitConfig:
                      translation=args.translation, step_deg=args.step_deg, sprite_size=args.sprite_size,
                      distance_kwargs=dict(args.distance_kwargs), fit_scale=args.fit_scale,
                      scale_range=tuple(args.scale_range), bounds=dict(args.bounds), init=args.init,
-                     init_fraction=args.init_fraction, init_starts=args.init_starts)
+                     init_fraction=args.init_fraction, init_starts=args.init_starts, object_noise=args.object_noise)
 
 
 def main(args: argparse.Namespace) -> int:

@@ -40,11 +40,12 @@ from synthaug._io import digest, sha256_file
 from synthaug.data.seedset import seed_geometry
 from synthaug.params import FIT_RESULT_FORMAT as RESULT_FORMAT
 from synthaug.params import FIT_RESULT_VERSION as RESULT_VERSION
-from synthaug.params import CaptureParams, atomic_write_text
+from synthaug.params import CaptureParams, atomic_write_text, effect_param_specs
 
 log = logging.getLogger("synthaug.fit")
 
 INITS = ("uniform", "grid")
+OBJECT_NOISE = ("fit", "measured")
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,11 @@ class FitConfig:
             73° / 95° to 17° / 8°, at the same cost per seed.
         init_fraction: share of the budget the grid stage spends (grid and refinement).
         init_starts: number of distinct poses handed to the optimiser (first run + restarts).
+        object_noise: ``"fit"`` (the paper: σ_n searched like the other parameters) or
+            ``"measured"``: σ_n of each seed pinned at its real patch's noise level
+            (:func:`~synthaug.fit.noise_level.noise_sigma`, clipped to the σ_n bounds) and not
+            searched. A feature distance otherwise buys the gradient energy the coarse render
+            lacks with object noise (speckle) that the real patches do not have.
     """
 
     distance: str = "hog"
@@ -100,6 +106,7 @@ class FitConfig:
     init: str = "grid"
     init_fraction: float = 0.35
     init_starts: int = 3
+    object_noise: str = "fit"
 
     def __post_init__(self) -> None:
         if self.budget < 10:
@@ -110,6 +117,8 @@ class FitConfig:
             raise ValueError(f"init_fraction must be in (0, 1), got {self.init_fraction}")
         if self.init_starts < 1:
             raise ValueError(f"init_starts must be >= 1, got {self.init_starts}")
+        if self.object_noise not in OBJECT_NOISE:
+            raise ValueError(f"unknown object_noise {self.object_noise!r}; choose from {list(OBJECT_NOISE)}")
 
         if self.object_scale is not None and not 0 < self.object_scale <= 1.5:
             raise ValueError(f"object_scale must be in (0, 1.5], got {self.object_scale}")
@@ -176,11 +185,20 @@ def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance
     from synthaug.fit.objective import FitSpace, RenderObjective
     from synthaug.fit.optimizers import get_optimizer
 
-    space = space or FitSpace.default(channels=target.shape[1], effects=cfg.effects, translation=cfg.translation,
-                             bounds={k: tuple(v) for k, v in cfg.bounds.items()
-                                     if k in CaptureParams.vector_names(effects=cfg.effects)},
-                             scale_range=(cfg.scale_range[0] * object_scale, cfg.scale_range[1] * object_scale)
-                             if cfg.fit_scale else None)
+    if space is None:
+        names = CaptureParams.vector_names(effects=cfg.effects)
+        bounds = {k: tuple(v) for k, v in cfg.bounds.items() if k in names}
+        fixed = None
+        if cfg.object_noise == "measured" and "sigma_n" in names:
+            from synthaug.fit.noise_level import noise_sigma
+
+            spec = next(sp for sp in effect_param_specs(cfg.effects) if sp.name == "sigma_n")
+            lo, hi = bounds.get("sigma_n", (spec.low, spec.high))
+            fixed = {"sigma_n": float(np.clip(float(noise_sigma(target)[0]), lo, hi))}
+        space = FitSpace.default(channels=target.shape[1], effects=cfg.effects, translation=cfg.translation,
+                                 bounds=bounds, fixed=fixed,
+                                 scale_range=(cfg.scale_range[0] * object_scale, cfg.scale_range[1] * object_scale)
+                                 if cfg.fit_scale else None)
     geo = geometry or {}
     objective = RenderObjective(target, background, cache, distance, space, object_scale=object_scale,
                                 noise_seed=seed, origin=geo.get("origin"), frame_size=geo.get("frame_size"),
@@ -387,6 +405,8 @@ def _fit_index(index: int, seeds_path: str, mesh: Any, cfg: FitConfig, distance:
 def _cfg_json(cfg: FitConfig) -> dict[str, Any]:
     d = asdict(cfg)
     d["effects"] = list(cfg.effects) if cfg.effects is not None else None
+    if d["object_noise"] == "fit":  # added later: absent at the paper's setting, so earlier fits stay current
+        d.pop("object_noise")
     return d
 
 
