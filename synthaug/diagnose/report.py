@@ -180,6 +180,7 @@ def diagnose(
         seed_metadata,
         structure_measures,
     )
+    from synthaug.diagnose.calibration import describe as describe_floors, rule_text
     from synthaug.diagnose.screening import CANDIDATE_GRIDS, base_render, kfold, realism_accuracy
 
     t0 = time.perf_counter()
@@ -290,7 +291,7 @@ def diagnose(
                         "gain_colour": r["screen"]["colour"]["gain"] if "colour" in r["screen"] else None,
                         "colour_skipped": r["screen"].get("colour_skipped"),
                         "gain_feature": r["screen"]["feature"]["gain"], "gain_pixel": r["screen"]["pixel"]["gain"],
-                        "absorption": r["absorption"]} for r in rows],
+                        "absorption": r["absorption"], "channels": r["channels"]} for r in rows],
         "residuals": structure,
         "feature_residuals": None if fmap is None else {
             "mean_per_block": fmap["mean"], "block_stride_px": fmap["cell_px"], "share_centre": fmap["share_centre"],
@@ -298,6 +299,7 @@ def diagnose(
                     "object-centred patch: where the detector sees the difference"},
         "hinted_candidates": hinted,
         "colour": {"screened": data.real_rgb is not None, "note": data.colour_note},
+        "significance": {"rule": rule_text(), "calibration": describe_floors()["source"]},
         "parameter_dependence": [d for d in dependence if d["significant"]],
         "noise_level_function": nlf,
         "realism": {"accuracy_base": acc_base,
@@ -387,6 +389,8 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
     lines = ["# Diagnosis of the fitted simulation", "",
              f"Seeds `{inp['seeds']}` ({inp['n_seeds']}), mesh `{inp['mesh']}`, fit `{inp['fit']}`, "
              f"distance `{inp['distance']}`, {inp['k_folds']}-fold held-out screening, α = {inp['alpha']}.", ""]
+    if report.get("significance"):
+        lines += [report["significance"]["rule"], ""]
     if not report["findings"]:
         lines += ["**Nothing significant**: the residual between the real seeds and their fitted synthetic images "
                   "reads as fitting noise, and no candidate effect improves held-out seeds.", ""]

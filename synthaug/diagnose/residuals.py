@@ -46,6 +46,7 @@ from typing import Any, Sequence
 import numpy as np
 import torch
 
+from synthaug.diagnose.calibration import HAND_FLOORS, structure_significant
 from synthaug.diagnose.stats import permutation_spearman, t_test, within_groups  # noqa: F401  (re-exported)
 
 __all__ = [
@@ -67,14 +68,9 @@ __all__ = [
 ]
 
 
-# Smallest effect size a structure measure must reach to count (besides p < α): the approximations every
-# fit makes (a coarse view grid, the crop's resampling blur, a mesh that is not the object) leave a small
-# systematic residual that is not a missing camera effect.
-EFFECT_FLOORS: dict[str, float] = {
-    "interior_bias": 0.03, "boundary_bias": 0.03, "background_bias": 0.03, "radial": 0.5, "tone_curve": 0.3,
-    "noise_vs_signal": 0.02, "high_frequency": 0.7, "block_8x8": 0.3, "motion_direction": 0.5,
-    "periodic_rows": 0.7, "periodic_columns": 0.7, "rotor_parts": 0.05,
-}
+# The hand-set effect-size floors of the structure measures (kept as the fallback of statistics without a null
+# calibration): the calibrated rule is synthaug.diagnose.calibration's.
+EFFECT_FLOORS = HAND_FLOORS
 
 
 # ------------------------------------------------------------------ data
@@ -636,10 +632,11 @@ def structure_measures(data: DiagnosisData, syn: torch.Tensor, *, rng: np.random
                      "description": (f"{data.colour_note}: colour statistics skipped" if data.colour_note else
                                      "colour: screened in chroma by the screening's colour channel")}
     n_tests = len(out)
-    for k, v in out.items():
-        floor = EFFECT_FLOORS.get(k, 0.0)
-        v["significant"] = bool(v["p"] < alpha / n_tests and abs(v["value"]) >= floor)
-        v["floor"] = floor
+    for k, v in out.items():  # the rule of synthaug.diagnose.calibration: p < α / m and outside the clean null
+        if v.get("skipped"):
+            v["significant"], v["floor"] = False, None
+            continue
+        v["significant"], v["floor"] = structure_significant(k, v["value"], v["p"], alpha / n_tests)
     return out
 
 

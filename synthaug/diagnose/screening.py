@@ -15,8 +15,9 @@ Gain on held-out seeds: k-fold over seeds, φ chosen on the training folds
 penalty ``λ · (number of φ)`` is subtracted from every ``g_i``, then a
 one-sided t-test over seeds, Bonferroni-corrected over candidates and the
 two distance spaces (the detector's, pixels), decides significance; a
-finding must also reach ``min_gain`` (2 %) and must not make the other space
-worse on held-out seeds. Both the detector's distance (e.g. HOG) and the
+finding must also exceed its floor measured on clean nuisance-varied data
+(:mod:`synthaug.diagnose.calibration`), reach ``min_gain`` (2 %: worth
+having) and must not make the other space worse on held-out seeds. Both the detector's distance (e.g. HOG) and the
 pixel distance are screened: HOG is nearly blind to intensity effects, pixels
 to some shape effects. Every model, base and extended, includes the seed
 patches' known crop-resampling blur (:func:`~synthaug.data.seedset.crop_resampling_sigma`).
@@ -57,6 +58,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import torch
 
+from synthaug.diagnose.calibration import HAND_MIN_GAIN, gain_floor
 from synthaug.diagnose.noise import NOISE_CANDIDATES, SLOPE_FLOOR, noise_channel
 from synthaug.diagnose.residuals import (
     DiagnosisData,
@@ -371,8 +373,10 @@ def noise_level_channel(effect: str, nc: dict[str, Any] | None, n_tests: int, al
     p_one = nc["p"] / 2 if nc["slope"] * sign > 0 else 1.0 - nc["p"] / 2
     p_adj = min(1.0, p_one * n_tests)
     z = _z(p_one)
-    big = abs(nc["slope"]) >= SLOPE_FLOOR
+    floor = gain_floor(effect, "noise_level")  # calibrated: the slope in the candidate's direction on clean data
+    big = nc["slope"] * sign > floor if floor is not None else abs(nc["slope"]) >= SLOPE_FLOOR
     return {"channel": "noise_level", "p_adjusted": p_adj, "z": z, "gain": nc["gain"], "slope": nc["slope"],
+            "floor": floor if floor is not None else SLOPE_FLOOR,
             "significant": bool(p_adj < alpha and nc["slope"] * sign > 0 and big and nc["gain"] > 0)}
 
 
@@ -426,7 +430,7 @@ def realism_accuracy(data: DiagnosisData, syn: torch.Tensor, folds: list[np.ndar
 
 
 def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = None, *, k: int = 5, seed: int = 0,
-                      alpha: float = 0.01, penalty: float = 0.005, min_gain: float = 0.02,
+                      alpha: float = 0.01, penalty: float = 0.005, min_gain: float = HAND_MIN_GAIN,
                       progress: Callable[[str], None] | None = None, given: dict[str, Setting] | None = None,
                       n_tests: int | None = None) -> list[dict[str, Any]]:
     """Screen candidate effects on held-out seeds; return them ranked, each with its evidence.
@@ -438,9 +442,10 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         seed: seed of the folds and permutation tests.
         alpha: family-wise significance level (Bonferroni over candidates and channels).
         penalty: subtracted from each held-out relative gain per extra parameter.
-        min_gain: a significant distance gain must also reach this relative size
-            (a real difference, not a statistically detectable sliver), and the
-            other distance space must not get worse on held-out seeds.
+        min_gain: a significant distance gain must also reach this raw relative size (an extension worth
+            having, not a detectable sliver); besides, every channel must exceed its floor measured on clean
+            nuisance-varied data (:mod:`synthaug.diagnose.calibration`), and the other distance space must
+            not get worse on held-out seeds.
         given: extensions already accepted, ``{effect: setting}``: the base
             model includes them and every candidate is screened on top of them
             (the conditional gain of forward selection).
@@ -489,16 +494,21 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
             # ... and the other space must not get worse (unpenalised held-out gain >= 0): an "extension"
             # that buys pixel distance by erasing detail the detector sees is not more realistic
             other_ok = sc[other]["gain"] + penalty * sc["n_params"] >= 0.0
+            floor = gain_floor(name, f"distance:{space}")  # above what clean data give, and worth having
+            big = s["raw_gain_all"] >= min_gain and (floor is None or s["gain"] > floor)
             channels.append({"channel": f"distance:{space}", "p_adjusted": p_adj, "z": z, "gain": s["gain"],
-                             "other_space_gain": sc[other]["gain"],
-                             "significant": bool(p_adj < alpha and s["gain"] > 0 and s["raw_gain_all"] >= min_gain
-                                                 and other_ok)})
+                             "other_space_gain": sc[other]["gain"], "raw_gain_all": s["raw_gain_all"],
+                             "floor": floor, "significant": bool(p_adj < alpha and s["gain"] > 0 and big
+                                                                 and other_ok)})
         if ab is not None:
             p_adj = min(1.0, ab["p"] * n_tests)
             n = len(data)
             z = abs(math.atanh(max(min(ab["rho"], 0.999999), -0.999999))) * math.sqrt(max(n - 3, 1))
+            floor = gain_floor(name, "absorbed")
             channels.append({"channel": "absorbed", "p_adjusted": p_adj, "z": z if ab["sign_ok"] else -z,
-                             "gain": ab["gain"], "significant": p_adj < alpha and ab["sign_ok"] and ab["gain"] > 0})
+                             "gain": ab["gain"], "rho": ab["rho"], "floor": floor,
+                             "significant": bool(p_adj < alpha and ab["sign_ok"] and ab["gain"] > max(floor or 0.0,
+                                                                                                      0.0))})
         nl = noise_level_channel(name, nc, n_tests, alpha)
         if nl is not None:
             channels.append(nl)
@@ -507,7 +517,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         if col is not None:
             sc["colour"] = col
             p_adj = min(1.0, col["p"] * n_tests)
-            channels.append({"channel": "distance:colour", "p_adjusted": p_adj,
+            channels.append({"channel": "distance:colour", "p_adjusted": p_adj, "raw_gain_all": col["raw_gain_all"],
                              "z": _z(col["p"]),
                              "gain": col["gain"], "significant": bool(p_adj < alpha and col["gain"] > 0
                                                                       and col["raw_gain_all"] >= min_gain)})

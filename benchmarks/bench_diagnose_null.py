@@ -1,0 +1,203 @@
+"""Null calibration of the diagnosis (issue 20, item 3): clean, nuisance-varied measured data, one command.
+
+Makes ``--cases`` clean measured seed sets (nothing hidden) from the reference camera, each with its own
+nuisances drawn at random (:meth:`synthaug.diagnose.nuisances.Nuisances.draw`: material, light per video,
+real mesh, a scene that moves between frame and background), fits each, runs ``diagnose`` on each, and
+prints JSON: the false-alarm rate (a clean case with any finding) with its Wilson 95 % interval, the
+findings per case, and the null distribution of every statistic that can raise a finding (residual
+structure measures; each candidate's screening channels). Everything is a pure function of the seeds.
+
+Usage::
+
+    python benchmarks/bench_diagnose_null.py --cases 24 --out results/diagnose/null/null.json
+    # derive the significance floors from the null distributions (writes synthaug/diagnose/null_floors.py):
+    python benchmarks/bench_diagnose_null.py --cases 24 --write-floors synthaug/diagnose/null_floors.py
+
+Case ``k`` uses reference-camera seed ``--base-seed + k`` and nuisances ``Nuisances.draw(default_rng([base,
+k]))``. Sizes follow the diagnosis tests (``tests/test_diagnose.py``: 192x256 frames, objects 20-32 px, w_d
+0.3-0.45 per video) at ``--seeds 60``; ``--fit converged`` is the tests' fit (per-seed CMA-ES, budget 250,
+from the true pose; view grid 20 deg, sprites 48 px), ``--fit full`` the demo's ``synthaug fit`` (random
+start, ``--budget``, ``--step-deg``, ``--sprite-size``). Seed sets and fits are kept in ``--workdir`` and
+reused (the diagnosis is always rerun), so calibrations before and after a change of rules see the same data.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+
+def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion k / n."""
+    if n == 0:
+        return 0.0, 1.0
+    p = k / n
+    d = 1 + z * z / n
+    c = (p + z * z / (2 * n)) / d
+    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
+    return max(0.0, c - h), min(1.0, c + h)
+
+
+def make_case(work: Path, k: int, a: argparse.Namespace) -> tuple[Path, Path, dict[str, Any], float]:
+    import numpy as np
+
+    from synthaug.diagnose.nuisances import Nuisances
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+
+    case = work / f"case_{k:03d}"
+    seeds, fit = case / "seeds", case / "fit.json"
+    nz = Nuisances.none() if a.no_nuisances else Nuisances.draw(np.random.default_rng([a.base_seed, k]))
+    key = {"k": k, "base_seed": a.base_seed, "seeds": a.seeds, "fit": a.fit, "budget": a.budget,
+           "step_deg": a.step_deg, "sprite_size": a.sprite_size, "nuisances": nz.as_dict()}
+    stamp = case / "case.json"
+    if stamp.exists() and json.loads(stamp.read_text()).get("key") == key and fit.exists():
+        return seeds, fit, json.loads(stamp.read_text()), 0.0
+    t = time.perf_counter()
+    step, sprite = (20.0, 48) if a.fit == "converged" else (a.step_deg, a.sprite_size)
+    make_measured_seedset(seeds, n_seeds=a.seeds, hidden=None, nuisances=nz, frame_size=(192, 256),
+                          object_px=(20.0, 32.0), view_step_deg=step, sprite_size=sprite, seed=a.base_seed + k,
+                          paper_ranges={"w_d": (0.3, 0.45)})
+    if a.fit == "converged":
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+        from test_diagnose import converged_fit  # the diagnosis tests' fit (per-seed CMA-ES from the truth)
+
+        converged_fit(seeds, fit)
+    else:
+        from synthaug.fit.fitting import FitConfig, fit_seedset
+
+        fit_seedset(seeds, "quadcopter", fit, FitConfig(distance="hog", budget=a.budget, seed=k,
+                                                        step_deg=a.step_deg, sprite_size=a.sprite_size), workers=1)
+    prep = time.perf_counter() - t
+    info = {"key": key, "prep_seconds": prep}
+    stamp.write_text(json.dumps(info, indent=1))
+    return seeds, fit, info, prep
+
+
+def case_statistics(report: dict[str, Any]) -> dict[str, Any]:
+    """The statistics of one report that can raise a finding, flat: ``{name: {value, p, significant}}``."""
+    out: dict[str, Any] = {}
+    for name, m in report["residuals"].items():
+        if m.get("skipped") or name == "colour":
+            continue
+        out[f"residual:{name}"] = {"value": m["value"], "p": m["p"], "significant": m["significant"]}
+    for row in report["screened"]:
+        for ch in row.get("channels") or []:
+            key = f"screen:{row['effect']}:{ch['channel']}"
+            v = {"gain": ch.get("gain"), "p_adjusted": ch.get("p_adjusted"), "z": ch.get("z"),
+                 "significant": ch.get("significant")}
+            for extra in ("raw_gain_all", "rho", "slope"):
+                if extra in ch:
+                    v[extra] = ch[extra]
+            out[key] = v
+    return out
+
+
+def summarise(stats: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per statistic over cases: n, mean, sd, quantiles of its value (residual: value; screening: gain and
+    raw_gain_all), and how often it was significant."""
+    import numpy as np
+
+    names = sorted({k for s in stats for k in s})
+    out = {}
+    for name in names:
+        rows = [s[name] for s in stats if name in s]
+        entry: dict[str, Any] = {"n": len(rows), "significant": int(sum(bool(r.get("significant")) for r in rows))}
+        for field in ("value", "gain", "raw_gain_all", "rho", "slope", "p", "p_adjusted"):
+            vals = np.array([r[field] for r in rows if r.get(field) is not None], np.float64)
+            vals = vals[np.isfinite(vals)]
+            if len(vals) == 0:
+                continue
+            entry[field] = {"mean": float(vals.mean()), "sd": float(vals.std(ddof=1)) if len(vals) > 1 else 0.0,
+                            "min": float(vals.min()), "q05": float(np.quantile(vals, 0.05)),
+                            "median": float(np.median(vals)), "q95": float(np.quantile(vals, 0.95)),
+                            "max": float(vals.max()), "values": [round(float(v), 6) for v in vals]}
+        out[name] = entry
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--cases", type=int, default=24)
+    ap.add_argument("--seeds", type=int, default=60)
+    ap.add_argument("--base-seed", type=int, default=2000)
+    ap.add_argument("--fit", choices=("converged", "full"), default="converged")
+    ap.add_argument("--budget", type=int, default=800)
+    ap.add_argument("--step-deg", type=float, default=10.0)
+    ap.add_argument("--sprite-size", type=int, default=64)
+    ap.add_argument("--no-nuisances", action="store_true", help="the fit's own model (the old reference camera)")
+    ap.add_argument("--workdir", default="outputs/bench_diagnose_null")
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--rules", choices=("calibrated", "hand"), default="calibrated",
+                    help="significance floors: the calibrated ones (synthaug/diagnose/null_floors.py, when present) "
+                         "or the hand-set ones they replaced")
+    ap.add_argument("--out", default=None, help="also write the JSON here")
+    ap.add_argument("--write-floors", default=None, metavar="PY",
+                    help="derive the significance floors from these null distributions and write them as a module")
+    a = ap.parse_args()
+    if a.cases < 1 or a.seeds < 10:
+        ap.error(f"need --cases >= 1 and --seeds >= 10, got {a.cases} and {a.seeds}")
+    import torch
+
+    torch.set_num_threads(a.threads)
+    from synthaug.diagnose import calibration
+    from synthaug.diagnose.report import diagnose
+
+    work = Path(a.workdir)
+    work.mkdir(parents=True, exist_ok=True)
+    t_all = time.perf_counter()
+    cases, stats, prep_s, diag_s = [], [], [], []
+    for k in range(a.cases):
+        seeds, fit, info, prep = make_case(work, k, a)
+        t = time.perf_counter()
+        with (calibration.hand_set() if a.rules == "hand" else contextlib.nullcontext()):
+            rep = diagnose(seeds, "quadcopter", fit, out_dir=None, plots=False, seed=0)
+        diag_s.append(time.perf_counter() - t)
+        prep_s.append(prep)
+        st = case_statistics(rep)
+        stats.append(st)
+        found = [f"{f['effect']} ({f['channel']})" if f["effect"] != "unexplained"
+                 else "unexplained: " + ", ".join(f["structure"]) for f in rep["findings"]]
+        cases.append({"case": k, "findings": found, "diagnosis_seconds": diag_s[-1],
+                      "nuisances": info["key"]["nuisances"]})
+        print(f"case {k}: {found or 'nothing'} ({diag_s[-1]:.0f} s diagnosis, {prep:.0f} s data+fit)",
+              file=sys.stderr, flush=True)
+    n_alarm = sum(bool(c["findings"]) for c in cases)
+    lo, hi = wilson(n_alarm, len(cases))
+
+    result = {
+        "bench": "diagnose_null", "command": " ".join(["python"] + sys.argv), "cases": len(cases),
+        "seeds": a.seeds, "fit": a.fit, "nuisances": not a.no_nuisances, "base_seed": a.base_seed,
+        "rules": a.rules,
+        "floors_in_use": (calibration.describe() if a.rules == "calibrated" else {"source": "hand-set"}),
+        "false_alarm_rate": n_alarm / len(cases), "false_alarms": n_alarm, "wilson95": [lo, hi],
+        "by_finding": _count([f for c in cases for f in c["findings"]]),
+        "wall_seconds": time.perf_counter() - t_all, "diagnosis_seconds_median": sorted(diag_s)[len(diag_s) // 2],
+        "diagnosis_seconds_max": max(diag_s), "prep_seconds_total": sum(prep_s),
+        "per_case": cases, "null_distributions": summarise(stats),
+    }
+    text = json.dumps(result, indent=1)
+    if a.out:
+        Path(a.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(a.out).write_text(text)
+    if a.write_floors:
+        calibration.write_floors_module(a.write_floors, stats, command=result["command"], n_cases=len(cases),
+                                        n_seeds=a.seeds)
+    print(json.dumps({k: v for k, v in result.items() if k not in ("per_case", "null_distributions")}))
+    return 0
+
+
+def _count(items: list[str]) -> dict[str, int]:
+    out: dict[str, int] = {}
+    for x in items:
+        out[x] = out.get(x, 0) + 1
+    return out
+
+
+if __name__ == "__main__":
+    sys.exit(main())
