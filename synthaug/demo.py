@@ -51,6 +51,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_option(parser, "--frame-stride", aliases=["--stride"], type=positive_int, default=3,
                help="score every k-th test frame")
     parser.add_argument("--seed", type=int, default=0, help="seeds everything: videos, fits, training")
+    parser.add_argument("--training-seeds", type=positive_int, default=3,
+                        help="detectors trained per condition (seeds --seed, --seed + 1, ...): the comparison is "
+                             "paired over them")
     parser.add_argument("--fit-init", default="grid", choices=["grid", "uniform"], help="how each fit starts")
     parser.add_argument("--hidden", default="rotor_blur",
                         help="camera effect hidden in the diagnosis step's measured data (issue 6); 'none' skips "
@@ -148,8 +151,8 @@ def main(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from synthaug.data.ingest import ingest_videos
     from synthaug.data.seedset import SeedSet
-    from synthaug.detectors.training import negative_pool, real_positives, synthetic_positives, train_detector
-    from synthaug.evaluate.videos import evaluate_on_videos, load_eval_set
+    from synthaug.detectors.training import real_positives
+    from synthaug.evaluate.videos import load_eval_set
     from synthaug.fit.fitting import FitConfig, fit_seedset
     from synthaug.fit.plots import plot_fitted_pairs, plot_joint_histograms
     from synthaug.render.cache import ViewCache
@@ -179,19 +182,14 @@ def _run(args: argparse.Namespace) -> int:
     t = time.perf_counter()
     eval_set = load_eval_set(split["test"], data / "videos", data / "labels", stride_k=args.frame_stride)
     real = real_positives(seeds)
-    negatives = negative_pool(seeds, extra=1000, seed=args.seed)
-    synthetic = synthetic_positives(seeds, "quadcopter", fit_path, int(args.ratio * len(seeds)), seed=args.seed)
     from synthaug.detectors.base import box_in_window_from_boxes
 
     biw = box_in_window_from_boxes(torch.as_tensor(seeds.boxes), window=seeds.patch_size,
                                    object_fraction=float(seeds.object_fraction))
-    rows = []
-    for name, pos in (("real seeds only", real), (f"real + {args.ratio:g}x synthetic (ours)", torch.cat([real, synthetic]))):
-        det = train_detector(args.detector, pos, negatives, seed=args.seed, box_in_window=biw)
-        res = evaluate_on_videos(det, eval_set)
-        rows.append((name, len(pos), res))
-        slug = "real" if name.startswith("real seeds") else "ours"
-        _plot_pr(res, out / f"pr_{slug}.png", title=f"{args.detector}: {name}")
+    names = ("real seeds only", f"real + {args.ratio:g}x synthetic (ours)")
+    results, first = _train_and_score(args, seeds, fit_path, real, biw, eval_set, names)
+    for (name, slug) in zip(names, ("real", "ours")):
+        _plot_pr(first[name], out / f"pr_{slug}.png", title=f"{args.detector}: {name} (training seed 0)")
     timings["train + evaluate"] = time.perf_counter() - t
 
     from synthaug.data.preview import main as preview_main
@@ -210,8 +208,12 @@ def _run(args: argparse.Namespace) -> int:
                                      budget=args.budget, seed=args.seed))
         timings["diagnosis"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t0
-    _write_report(out, args, rows, timings, len(seeds), split, diagnosis)
-    summary = {"out": str(out), **{n: round(r.ap, 4) for n, _, r in rows}}
+    counts = {names[0]: len(real), names[1]: len(real) + int(args.ratio * len(seeds))}
+    table, verdict, summaries = _comparison(results, names)
+    _write_report(out, args, counts, table, verdict, timings, len(seeds), split, diagnosis)
+    summary = {"out": str(out), **{n: round(summaries[n].ap[0.5].estimate, 4) for n in names},
+               "difference": summaries[names[1]].paired.difference.to_json() if summaries[names[1]].paired else None,
+               "verdict": verdict}
     if diagnosis is not None:
         summary["diagnosis"] = {"hidden": args.hidden, "findings": [f["effect"] for f in diagnosis[0]["findings"]],
                                 "clean_findings": [f["effect"] for f in diagnosis[1]["findings"]]}
@@ -241,6 +243,70 @@ def diagnose_hidden(out: Path, *, hidden: str | None, n_seeds: int, budget: int,
     return diagnose(seeds, "quadcopter", out / "fit_hog.json", out_dir=out, k=5 if n_seeds >= 10 else 2)
 
 
+def demo_protocol(frame_stride: int, training_seeds: int) -> Any:
+    """The evaluation protocol of the demo's generated test videos: ``halmstad_v1``'s rules (AP at IoU 0.5 and
+    0.3, video bootstrap, paired differences) on the demo's split, every ``frame_stride``-th frame."""
+    from synthaug.evaluate.protocol import Protocol, example_protocol_dict
+
+    stride = {"frame_stride": int(frame_stride)}
+    return Protocol.from_dict(example_protocol_dict(
+        name="synthaug_demo", split_file=None, description="synthaug demo: its generated test videos",
+        test={"split": "test", **stride}, val={"split": "val", **stride}, min_training_seeds=int(training_seeds),
+        scale_check=[]))
+
+
+def _train_and_score(args: argparse.Namespace, seeds: Any, fit_path: Path, real: torch.Tensor, biw: Any,
+                     eval_set: Any, names: tuple[str, str]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Both conditions trained with each training seed (its own negatives, synthetic draw and initialisation)
+    and matched on the test videos: ``{name: ProtocolResult}`` and training seed 0's pooled PR curve per name."""
+    from synthaug.detectors.training import negative_pool, synthetic_positives, train_detector
+    from synthaug.evaluate.ap import evaluate_detections
+    from synthaug.evaluate.protocol import ProtocolResult, match_videos
+    from synthaug.evaluate.videos import detect_on_eval_set
+
+    proto = demo_protocol(args.frame_stride, args.training_seeds)
+    results = {n: ProtocolResult(n, proto) for n in names}
+    first: dict[str, Any] = {}
+    for seed in range(args.training_seeds):
+        s = args.seed + seed
+        negatives = negative_pool(seeds, extra=1000, seed=s)
+        synthetic = synthetic_positives(seeds, "quadcopter", fit_path, int(args.ratio * len(seeds)), seed=s)
+        for name, pos in zip(names, (real, torch.cat([real, synthetic]))):
+            det = train_detector(args.detector, pos, negatives, seed=s, box_in_window=biw)
+            dets = detect_on_eval_set(det, eval_set, nms_iou=proto.detection.nms_iou,
+                                      max_detections=proto.detection.max_detections)
+            results[name].add_seed(seed, videos=match_videos(eval_set.stems, dets, eval_set.boxes, proto))
+            if seed == 0:
+                first[name] = evaluate_detections([d for v in dets for d in v], [b for v in eval_set.boxes for b in v],
+                                                  proto.main_iou)
+    return results, first
+
+
+def _comparison(results: dict[str, Any], names: tuple[str, str]) -> tuple[str, str, dict[str, Any]]:
+    """The protocol's table (AP with video-bootstrap CIs, the paired difference) and one plain sentence on it."""
+    from synthaug.evaluate.protocol import report_table, summarize_conditions
+
+    summaries = summarize_conditions(results, baseline=names[0])
+    table = report_table(results, baseline=names[0])
+    paired = summaries[names[1]].paired
+    n = len(summaries[names[1]].seeds)
+    if paired is None:
+        verdict = f"No paired comparison ({summaries[names[1]].paired_note})."
+    else:
+        d = paired.difference
+        ci = f"{d.estimate:+.3f} [{d.low:+.3f}, {d.high:+.3f}]"
+        unit = f"paired over {n} training seeds, 95 % interval from resampling the {summaries[names[0]].n_videos} test videos"
+        if d.low > 0:
+            verdict = f"Synthetic data raised AP@0.5 by {ci} ({unit}): the gain the method exists for."
+        elif d.high < 0:
+            verdict = (f"Synthetic data LOWERED AP@0.5 by {ci} ({unit}): this run does not show the gain the "
+                       "method exists for.")
+        else:
+            verdict = (f"No significant change in AP@0.5: {ci} ({unit}); the interval includes 0, so this run does "
+                       "not show a gain from synthetic data.")
+    return table, verdict, summaries
+
+
 def _plot_pr(res: Any, path: Path, *, title: str) -> None:
     import matplotlib
 
@@ -260,22 +326,26 @@ def _plot_pr(res: Any, path: Path, *, title: str) -> None:
     plt.close(fig)
 
 
-def _write_report(out: Path, args: argparse.Namespace, rows: list, timings: dict[str, float], n_seeds: int,
-                  split: dict[str, list[str]], diagnosis: tuple[dict[str, Any], dict[str, Any]] | None = None
-                  ) -> None:
+def _write_report(out: Path, args: argparse.Namespace, counts: dict[str, int], table: str, verdict: str,
+                  timings: dict[str, float], n_seeds: int, split: dict[str, list[str]],
+                  diagnosis: tuple[dict[str, Any], dict[str, Any]] | None = None) -> None:
     lines = [
         "# synthaug demo",
         "",
         f"Generated measured data: {args.videos} panning videos x {args.frames} frames (320x256), quadcopter "
         f"rendered with per-video capture parameters; train videos {split['train']}, test videos {split['test']}.",
         f"Seeds: {n_seeds} from the train videos; Θ fitted per seed in HOG space ({args.budget} evaluations).",
-        f"Detector: {args.detector}; AP at IoU >= 0.5 on one test frame in {args.frame_stride}.",
+        f"Detector: {args.detector}, trained with {args.training_seeds} training seeds per condition; AP on one test "
+        f"frame in {args.frame_stride}.",
         "",
-        "| training positives | count | AP (IoU 0.5) | AP (IoU 0.3) | max recall |",
-        "|---|---|---|---|---|",
+        "| training positives | count |",
+        "|---|---|",
+        *(f"| {name} | {n} |" for name, n in counts.items()),
+        "",
+        f"**{verdict}**",
+        "",
+        table,
     ]
-    for name, n, res in rows:
-        lines.append(f"| {name} | {n} | {res.ap:.3f} | {res.ap_iou03:.3f} | {res.max_recall:.3f} |")
     lines += ["", "Figures: `preview.png` (real | background | synthetic from the fit), `fitted_pairs.png`,",
               "`joint_histograms.png`, `pr_real.png`, `pr_ours.png`.", "",
               ]

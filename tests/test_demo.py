@@ -39,6 +39,12 @@ def test_demo_runs_end_to_end(demo):
     report = (out / "README.md").read_text()
     n_seeds = len(json.loads((out / "fit_hog.json").read_text())["rows"])  # the tiny videos give fewer than 25
     assert 10 <= n_seeds <= 25 and f"| real seeds only | {n_seeds} |" in report
+    # the comparison is paired over 3 training seeds with a video-bootstrap interval, and said in words (issue 16)
+    d = summary["difference"]
+    assert d["low"] <= d["estimate"] <= d["high"] and d["estimate"] == pytest.approx(aps[1] - aps[0], abs=2e-4)
+    assert summary["verdict"] in report and "Δ AP@0.5 vs real seeds only" in report
+    word = "raised" if d["low"] > 0 else "LOWERED" if d["high"] < 0 else "No significant change"
+    assert word in summary["verdict"]
     # the closing diagnosis (issue 6): a report on measured data with an effect hidden
     assert summary["diagnosis"]["hidden"] == "rotor_blur"
     assert "## Diagnosis" in report and (out / "diagnosis" / "report.md").exists()
