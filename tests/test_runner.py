@@ -133,10 +133,11 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     fit_opts = {"budget": 40, "step_deg": 30.0, "sprite_size": 32, "init": "uniform"}
     res = R.synthetic_comparison(make_runner(ws), detectors=["hog"], seed_count=6,
                                  synthetic_ratios=[2], fit_distance="eucl", fit_options=fit_opts,
-                                 perturb_copies=[2], seeds=[0, 1], out=out)
+                                 perturb_copies=[2], copy_paste_ratios=[2], seeds=[0, 1], out=out)
     group = res["hog"]
     syn, per = "hog / 6 seeds + 2x synthetic (eucl)", "hog / 6 seeds + 2x perturbed"
-    assert list(group) == ["hog / 6 seeds", syn, per]
+    cp = "hog / 6 seeds + 2x copy-paste (eucl silhouettes)"
+    assert list(group) == ["hog / 6 seeds", syn, per, cp]
     # the real-only cells are the learning curve's (same key): identical results, nothing retrained
     assert group["hog / 6 seeds"].to_json() == curve["results"]["hog"]["hog / 6 seeds"].to_json()
     fits = Path(ws["paths"].work_dir) / "fits"
@@ -159,6 +160,12 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     cond_per = R.Condition(per, "hog", seed_count=6, perturb_copies=2)
     cell = cache.get_or_compute(runner.identity(cond_per, 0), lambda: pytest.fail("perturbed cell not cached"))
     assert cell["train"]["perturbed"] == {"copies": 2, "count": 12}
+    cond_cp = R.Condition(cp, "hog", seed_count=6, fit_distance="eucl", fit_options=tuple(sorted(fit_opts.items())),
+                          copy_paste_ratio=2.0)
+    cell = cache.get_or_compute(runner.identity(cond_cp, 1), lambda: pytest.fail("copy-paste cell not cached"))
+    assert cell["train"]["synthetic"]["copy_paste"] == {"ratio": 2.0, "count": 12}
+    assert cell["train"]["synthetic"]["count"] == 0 and cell["train"]["synthetic"]["params"].endswith("drone_6_seed1_eucl.json")
+    assert "copy_paste_ratio" not in R.Condition("r", "hog", seed_count=6).identity()
     # a given fit file is part of the key by its bytes; the new fields leave older keys unchanged
     given = R.Condition("g", "hog", seed_count=6, params=str(fits / "drone_6_seed{seed}_eucl.json"), synthetic_ratio=2.0)
     k0 = runner.identity(given, 0)["condition"]["params_sha256"]

@@ -136,10 +136,12 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     # --pose-sampling reaches the synthetic positives and the metadata; --perturb-copies adds perturbed real ones
     out2 = ws["root"] / "runs" / "hog_syn_fitted.pt"
     assert _train(ws, out2, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
-                  "--pose-sampling", "fitted", "--perturb-copies", "2", "--mining-rounds", "0") == 0
+                  "--pose-sampling", "fitted", "--perturb-copies", "2", "--copy-paste-ratio", "1.5",
+                  "--mining-rounds", "0") == 0
     meta2 = json.loads(out2.with_suffix(".json").read_text())
     assert calls[-1] == (8, "quadcopter", 24, 2, "fitted") and meta2["synthetic"]["pose_sampling"] == "fitted"
     assert meta2["perturbed"] == {"copies": 2, "count": 16}
+    assert meta2["synthetic"]["copy_paste"] == {"ratio": 1.5, "count": 12}  # the copy-paste baseline, cut with the fit
 
 
 @pytest.mark.parametrize(
@@ -154,6 +156,8 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
         ("ratio_without_params", "--synthetic-ratio"),
         ("params_with_all_frames", "--params"),
         ("negative_perturb_copies", "--perturb-copies"),
+        ("negative_copy_paste", "--copy-paste-ratio"),
+        ("copy_paste_without_params", "--copy-paste-ratio"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -182,6 +186,10 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra = ["--all-frames", "--params", str(fit3)]
     elif case == "negative_perturb_copies":
         extra += ["--perturb-copies", "-1"]
+    elif case == "negative_copy_paste":
+        extra += ["--copy-paste-ratio", "-1"]
+    elif case == "copy_paste_without_params":
+        extra += ["--copy-paste-ratio", "2"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
     capsys.readouterr()
@@ -195,5 +203,7 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         assert "1000" in err and "24 labelled frames" in err
     if case == "no_class":
         assert "'cat'" in err and "drone" in err
-    if case == "negative_perturb_copies":
+    if case in ("negative_perturb_copies", "negative_copy_paste"):
         assert "must be >= 0, got -1" in err
+    if case == "copy_paste_without_params":
+        assert "--params" in err

@@ -1198,6 +1198,7 @@ def train_from_videos(
     synthetic_ratio: float = 0.0,
     perturb_copies: int = 0,
     pose_sampling: str = "uniform",
+    copy_paste_ratio: float = 0.0,
     options: TrainOptions = TrainOptions(),
     work_dir: str | Path | None = None,
     ingest_seed: int = 0,
@@ -1241,6 +1242,9 @@ def train_from_videos(
             (around each seed's fitted pose).
         perturb_copies: perturbed copies of every real positive added to the positives (the
             paper's Table 1 baseline, :func:`~synthaug.effects.perturb.perturb_patches`).
+        copy_paste_ratio: copy-paste patches per real seed (needs ``params``: the seeds' objects cut
+            out with their fitted silhouettes and pasted on other seeds' backgrounds,
+            :func:`~synthaug.data.copypaste.copy_paste_positives`; a user's baseline).
         options: budgets (:class:`TrainOptions`).
         work_dir: ingest output folder (default: ``<out>.work``; a temporary folder when ``out`` is None).
         ingest_seed: ``synthaug ingest --seed`` of the seed draw (0: the same seed set as a
@@ -1274,6 +1278,11 @@ def train_from_videos(
         raise TrainingInputError("--seed-counts", f"must be >= 1, got {seed_count}")
     if perturb_copies < 0:
         raise TrainingInputError("--perturb-copies", f"must be >= 0, got {perturb_copies}")
+    if copy_paste_ratio < 0:
+        raise TrainingInputError("--copy-paste-ratio", f"must be >= 0, got {copy_paste_ratio}")
+    if copy_paste_ratio > 0 and params is None:
+        raise TrainingInputError("--copy-paste-ratio", "copy-paste cuts objects with their fitted silhouettes: give "
+                                                       "--params FIT.json")
     if params is not None and not callable(params) and not Path(params).is_file():
         raise TrainingInputError("--params", f"file not found: {params}")
     if seedset is not None and not (Path(seedset) / "seedset.json").is_file():
@@ -1360,6 +1369,14 @@ def train_from_videos(
             say(f"synthetic: {n_syn} patches from {params} ({time.perf_counter() - ts:.0f}s)")
         synthetic_info = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
                           "pose_sampling": pose_sampling}
+        n_cp = int(round(copy_paste_ratio * len(ss)))  # type: ignore[arg-type]
+        if n_cp:
+            from synthaug.data.copypaste import copy_paste_positives
+
+            ts = time.perf_counter()
+            pos = torch.cat([pos, copy_paste_positives(ss, params, n_cp, seed=seed + 4, mesh=mesh)])
+            say(f"copy-paste: {n_cp} patches cut with the silhouettes of {params} ({time.perf_counter() - ts:.0f}s)")
+            synthetic_info["copy_paste"] = {"ratio": copy_paste_ratio, "count": n_cp}
     t_data = time.perf_counter() - t0
     say(f"training set: {pos.shape[0]} positives, {neg.shape[0]} negatives ({t_data:.0f}s)")
 

@@ -85,6 +85,8 @@ class Condition:
         perturb_copies: perturbed copies of every real positive (the paper's baseline).
         pose_sampling: poses of the synthetic positives (``"uniform"``: the paper; ``"fitted"``: around
             each seed's fitted pose).
+        copy_paste_ratio: copy-paste patches per real seed (the real objects cut out with the fit's
+            silhouettes, pasted on other seeds' backgrounds; a user's baseline).
     """
 
     name: str
@@ -99,6 +101,7 @@ class Condition:
     fit_options: tuple[tuple[str, Any], ...] = ()
     perturb_copies: int = 0
     pose_sampling: str = "uniform"
+    copy_paste_ratio: float = 0.0
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -107,8 +110,8 @@ class Condition:
             d["seed_count"] = None
         else:
             d["frame_step"] = None
-        for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling"):  # added later: absent at their
-            if d[k] in (None, 0, (), "uniform"):                                    # defaults (older cells keep their keys)
+        for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling", "copy_paste_ratio"):  # added later:
+            if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         return d
 
@@ -238,7 +241,7 @@ class ProtocolRunner:
             split=self.paths.split_file, seed=seed, seed_count=condition.seed_count, all_frames=condition.all_frames,
             frame_step=condition.frame_step, params=self.params_for(condition, seed), mesh=condition.mesh,
             synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies,
-            pose_sampling=condition.pose_sampling, options=options,
+            pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio, options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
         t_train = time.perf_counter() - t0
@@ -414,7 +417,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          synthetic_ratios: Sequence[float] = (), fit_distance: str | Mapping[str, str] | None = None,
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
                          fit_options: Mapping[str, Any] | None = None, pose_sampling: Sequence[str] = ("uniform",),
-                         seeds: Sequence[int] | None = None,
+                         copy_paste_ratios: Sequence[float] = (), seeds: Sequence[int] | None = None,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -425,6 +428,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     it is missing, a fit made on the fly with ``fit_distance`` (a name, or detector -> name) and
     ``fit_options`` (other :class:`~synthaug.fit.fitting.FitConfig` fields); each ratio once per
     ``pose_sampling`` (``"uniform"``: the paper's poses; ``"fitted"``: around each seed's fitted pose).
+    ``copy_paste_ratios``: the copy-paste baseline (the seeds' objects cut out with the same fit's
+    silhouettes, pasted on other seeds' backgrounds), one condition per ratio.
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -441,6 +446,11 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                   for r in synthetic_ratios for ps in pose_sampling]
         conds += [Condition(f"{base} + {c}x perturbed", kind, seed_count=seed_count, perturb_copies=int(c))
                   for c in perturb_copies]
+        conds += [Condition(f"{base} + {r:g}x copy-paste ({dist or Path(str(params)).stem} silhouettes)", kind,
+                            seed_count=seed_count, params=params, mesh=mesh, fit_distance=dist,
+                            fit_options=tuple(sorted((fit_options or {}).items())) if dist else (),
+                            copy_paste_ratio=float(r))
+                  for r in copy_paste_ratios]
         for c in conds:
             _run_into(results, runner, c, seeds)
     if out is not None:
@@ -498,6 +508,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--perturb-copies", type=int, nargs="*", default=[], help="perturbed copies per real positive")
     sy.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=["uniform", "fitted"],
                     help="poses of the synthetic positives: uniform (the paper), fitted (around each seed's fitted pose)")
+    sy.add_argument("--copy-paste-ratios", type=float, nargs="*", default=[],
+                    help="copy-paste baseline: patches per real seed, the seeds' objects cut out with the fit's "
+                         "silhouettes and pasted on other seeds' backgrounds")
     return p
 
 
@@ -522,7 +535,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         synthetic_comparison(runner, detectors=args.detectors, seed_count=args.seed_counts,
                              synthetic_ratios=args.synthetic_ratios, fit_distance=dist, params=args.params,
                              perturb_copies=args.perturb_copies, mesh=args.mesh, pose_sampling=args.pose_sampling,
-                             seeds=args.training_seeds, out=args.out)
+                             copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds, out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
