@@ -261,7 +261,8 @@ def _train_and_score(args: argparse.Namespace, seeds: Any, fit_path: Path, real:
     and matched on the test videos: ``{name: ProtocolResult}`` and training seed 0's pooled PR curve per name."""
     from synthaug.detectors.training import negative_pool, synthetic_positives, train_detector
     from synthaug.evaluate.ap import evaluate_detections
-    from synthaug.evaluate.protocol import ProtocolResult, match_videos
+    from synthaug.evaluate.matching import match_videos
+    from synthaug.evaluate.results import ProtocolResult
     from synthaug.evaluate.videos import detect_on_eval_set
 
     proto = demo_protocol(args.frame_stride, args.training_seeds)
@@ -284,7 +285,7 @@ def _train_and_score(args: argparse.Namespace, seeds: Any, fit_path: Path, real:
 
 def _comparison(results: dict[str, Any], names: tuple[str, str]) -> tuple[str, str, dict[str, Any]]:
     """The protocol's table (AP with video-bootstrap CIs, the paired difference) and one plain sentence on it."""
-    from synthaug.evaluate.protocol import report_table, summarize_conditions
+    from synthaug.evaluate.summary import report_table, summarize_conditions
 
     summaries = summarize_conditions(results, baseline=names[0])
     table = report_table(results, baseline=names[0])

@@ -147,7 +147,7 @@ def test_detector_checkpoint_refuses_other_format_and_version(tmp_path):
 
 
 def test_protocol_result_refuses_other_format_and_version(tmp_path):
-    from synthaug.evaluate.protocol import RESULT_FORMAT, RESULT_VERSION, ProtocolResult
+    from synthaug.evaluate.results import RESULT_FORMAT, RESULT_VERSION, ProtocolResult
 
     good = {"format": RESULT_FORMAT, "version": RESULT_VERSION}
     _refuses(ProtocolResult.load, tmp_path / "r.json", good, what="protocol result")

@@ -15,27 +15,21 @@ import numpy as np
 import pytest
 
 from synthaug.evaluate.ap import evaluate_detections, match_detections
+from synthaug.evaluate.matching import match_video, match_videos
+from synthaug.evaluate.patches import PatchVideoScores, patch_eval_set, patch_metrics, score_patch_set
 from synthaug.evaluate.protocol import (
     DEFAULT_PROTOCOL,
     BootstrapSpec,
-    PatchVideoScores,
     Protocol,
     ProtocolError,
-    ProtocolResult,
     SizeBucket,
     example_protocol_dict,
     load_protocol,
-    match_video,
-    match_videos,
-    patch_eval_set,
-    patch_metrics,
-    report_table,
-    scale_eval_set,
-    scale_frame,
-    score_patch_set,
     split_videos,
-    summarize_conditions,
 )
+from synthaug.evaluate.results import ProtocolResult
+from synthaug.evaluate.summary import report_table, summarize_conditions
+from synthaug.evaluate.videos import scale_eval_set, scale_frame
 
 REPO = Path(__file__).resolve().parents[1]
 

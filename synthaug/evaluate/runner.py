@@ -12,7 +12,7 @@ protocol's fingerprint, the condition, the seed, the training budgets, the
 pyramid scales and :data:`TRAINING_VERSION`; several processes may run the
 same experiment at once (each cell is computed once).
 
-Results are :class:`~synthaug.evaluate.protocol.ProtocolResult`: bootstrap CIs
+Results are :class:`~synthaug.evaluate.results.ProtocolResult`: bootstrap CIs
 over test videos, paired differences between conditions (same seeds, same
 resamples), AP by object size. The learning curve (issue 15, item 7) is
 :func:`learning_curve`::
@@ -38,18 +38,12 @@ import numpy as np
 from synthaug._checks import add_option
 from synthaug.detectors.training import TrainOptions, train_from_videos
 from synthaug.evaluate.cells import CellCache
-from synthaug.evaluate.protocol import (
-    Protocol,
-    ProtocolResult,
-    load_protocol,
-    match_videos,
-    patch_eval_set,
-    report_table,
-    scale_eval_set,
-    score_patch_set,
-    split_videos,
-)
-from synthaug.evaluate.videos import detect_on_eval_set, load_eval_set, refine_detections
+from synthaug.evaluate.matching import match_videos
+from synthaug.evaluate.patches import patch_eval_set, score_patch_set
+from synthaug.evaluate.protocol import Protocol, load_protocol, split_videos
+from synthaug.evaluate.results import ProtocolResult
+from synthaug.evaluate.summary import report_table, summarize
+from synthaug.evaluate.videos import detect_on_eval_set, load_eval_set, refine_detections, scale_eval_set
 
 __all__ = ["TRAINING_VERSION", "OWN_DISTANCE", "Condition", "DataPaths", "ProtocolRunner", "learning_curve",
            "synthetic_comparison", "main"]
@@ -372,8 +366,6 @@ def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], pa
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from synthaug.evaluate.protocol import summarize
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for group, conds in results.items():

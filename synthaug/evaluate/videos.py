@@ -4,8 +4,12 @@ An :class:`EvalSet` is every k-th frame of some labelled videos (uint8 grayscale
 decoded by :func:`synthaug.data.video.read_video`) with their boxes;
 :func:`detect_on_eval_set` runs multi-scale sliding-window detection on every
 frame (the detections a protocol runner feeds to
-:func:`synthaug.evaluate.protocol.match_videos`), and :func:`evaluate_on_videos`
+:func:`synthaug.evaluate.matching.match_videos`), and :func:`evaluate_on_videos`
 pools them into one PR curve (:class:`EvalResult`).
+
+**Scale check** (the protocol's ``scale_check``): :func:`scale_frame` /
+:func:`scale_eval_set` resize test frames by ``s`` (``cv2.INTER_AREA`` down,
+``INTER_LINEAR`` up) and their boxes with them.
 
 Example:
     >>> es = EvalSet(["v"], [np.zeros((2, 8, 8), np.uint8)], [[0, 5]], [[None, np.array([[1.0, 1, 4, 4]])]], 5)
@@ -17,20 +21,22 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
 import torch
 
+from synthaug.data.boxes import xywh_to_xyxy, xyxy_to_xywh
 from synthaug.data.video import VIDEO_EXTENSIONS, read_video
 from synthaug.evaluate.cli import load_labels
 
 # synthaug.detectors.sliding and synthaug.evaluate.ap are imported where used: both import torchvision
 # (~1.4 s on top of torch), which would double the cost of importing this module and experiments.py.
 
-__all__ = ["EvalSet", "EvalResult", "load_eval_set", "detect_on_eval_set", "evaluate_on_videos"]
+__all__ = ["EvalSet", "EvalResult", "load_eval_set", "scale_frame", "scale_eval_set", "detect_on_eval_set",
+           "evaluate_on_videos"]
 
 
 @dataclass
@@ -118,6 +124,62 @@ def load_eval_set(
         out.frame_indices.append(idx)
         out.boxes.append([gts[j] for j in idx])
     return out
+
+
+def scale_frame(frame: np.ndarray, boxes: np.ndarray | None, scale: float) -> tuple[np.ndarray, np.ndarray | None]:
+    """Resize a frame by ``scale`` and its XYXY boxes with it.
+
+    ``cv2.INTER_AREA`` when shrinking, ``cv2.INTER_LINEAR`` when enlarging; the new size is
+    ``round(W * scale) x round(H * scale)`` and boxes are multiplied by the actual per-axis
+    factors ``W'/W``, ``H'/H`` (pixel edges at integers: an edge at ``x`` moves to ``x W'/W``).
+
+    Args:
+        frame: ``(H, W)`` or ``(H, W, C)`` image.
+        boxes: ``(G, 4)`` ``[x1, y1, x2, y2]`` or None.
+        scale: the factor (> 0).
+
+    Returns:
+        ``(frame, boxes)`` resized (copies; ``scale == 1`` returns copies unchanged).
+
+    Example:
+        >>> f, b = scale_frame(np.zeros((10, 20), np.uint8), np.array([[2.0, 2.0, 6.0, 4.0]]), 2.0)
+        >>> f.shape, b.tolist()
+        ((20, 40), [[4.0, 4.0, 12.0, 8.0]])
+    """
+    import cv2
+
+    if not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
+        raise ValueError(f"scale must be a positive number, got {scale!r}")
+    h, w = frame.shape[:2]
+    out_boxes = None if boxes is None else np.asarray(boxes, dtype=np.float64).reshape(-1, 4).copy()
+    if scale == 1.0:
+        return frame.copy(), out_boxes
+    nw, nh = max(1, int(round(w * scale))), max(1, int(round(h * scale)))
+    interp = cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR
+    out = cv2.resize(frame, (nw, nh), interpolation=interp)
+    if out_boxes is not None:
+        out_boxes *= np.array([nw / w, nh / h, nw / w, nh / h])
+    return out, out_boxes
+
+
+def scale_eval_set(eval_set: EvalSet, scale: float) -> EvalSet:
+    """The scale check's test set: every frame of an ``EvalSet`` resized by ``scale``, boxes with it.
+
+    ``eval_set`` is an :class:`synthaug.evaluate.videos.EvalSet` (``frames``: per video
+    ``(T, H, W)`` uint8; ``boxes``: per video, per frame ``(G, 4)`` XYWH or None); a copy of the
+    same type is returned (the frames take ``scale²`` times the memory).
+    """
+    frames, boxes = [], []
+    for vf, vb in zip(eval_set.frames, eval_set.boxes):
+        out_f, out_b = [], []
+        for f, b in zip(vf, vb):
+            bx = None if b is None else xywh_to_xyxy(b)
+            sf, sb = scale_frame(f, bx, scale)
+            out_f.append(sf)
+            out_b.append(None if sb is None else xyxy_to_xywh(sb))
+        frames.append(np.stack(out_f) if out_f else np.asarray(vf))
+        boxes.append(out_b)
+    return replace(eval_set, frames=frames, boxes=boxes)
 
 
 @dataclass

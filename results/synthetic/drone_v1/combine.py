@@ -10,7 +10,8 @@ from pathlib import Path
 
 from synthaug.detectors.training import TrainOptions
 from synthaug.evaluate.cells import CellCache
-from synthaug.evaluate.protocol import load_protocol, report_table
+from synthaug.evaluate.protocol import load_protocol
+from synthaug.evaluate.summary import report_table
 from synthaug.evaluate.runner import Condition, DataPaths, ProtocolRunner
 
 MESH = "../shared/data/meshes/quadcopter.glb"
