@@ -139,7 +139,14 @@ def main() -> int:
     ap.add_argument("--out", default=None, help="also write the JSON here")
     ap.add_argument("--write-floors", default=None, metavar="PY",
                     help="derive the significance floors from these null distributions and write them as a module")
+    ap.add_argument("--floors-from", nargs="+", default=None, metavar="JSON",
+                    help="no new cases: pool the null distributions of these earlier outputs (e.g. the tests' fit "
+                         "and the demo's fit) and write --write-floors from them")
     a = ap.parse_args()
+    if a.floors_from:
+        if not a.write_floors:
+            ap.error("--floors-from needs --write-floors")
+        return pool_floors(a)
     if a.cases < 1 or a.seeds < 10:
         ap.error(f"need --cases >= 1 and --seeds >= 10, got {a.cases} and {a.seeds}")
     import torch
@@ -189,6 +196,40 @@ def main() -> int:
         calibration.write_floors_module(a.write_floors, stats, command=result["command"], n_cases=len(cases),
                                         n_seeds=a.seeds)
     print(json.dumps({k: v for k, v in result.items() if k not in ("per_case", "null_distributions")}))
+    return 0
+
+
+def stats_from_output(path: str | Path) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+    """Per-statistic null values of an earlier output as rows for ``calibration.derive_floors`` (which pools
+    values per statistic; the rows need not line up with cases)."""
+    d = json.loads(Path(path).read_text())
+    rows: list[dict[str, Any]] = []
+    for name, entry in d["null_distributions"].items():
+        fields = ("value",) if name.startswith("residual:") else ("slope",) if name.endswith("noise_level") \
+            else ("gain",)
+        for field in fields:
+            for i, v in enumerate((entry.get(field) or {}).get("values", [])):
+                while len(rows) <= i:
+                    rows.append({})
+                rows[i][name] = {field: v}
+    return rows, d
+
+
+def pool_floors(a: argparse.Namespace) -> int:
+    from synthaug.diagnose import calibration
+
+    rows, n_cases, seeds, sources = [], 0, set(), []
+    for path in a.floors_from:
+        r, d = stats_from_output(path)
+        if "slope" not in json.dumps(d["null_distributions"].get("screen:gamma:noise_level", {})):
+            print(f"{path}: no noise-level slopes recorded", file=sys.stderr)
+        rows += r
+        n_cases += d["cases"]
+        seeds.add(d["seeds"])
+        sources.append(f"{d['command']} [{d['fit']} fit, {d['cases']} cases]")
+    command = " ".join(["python"] + sys.argv) + " <- " + " + ".join(sources)
+    calibration.write_floors_module(a.write_floors, rows, command=command, n_cases=n_cases, n_seeds=max(seeds))
+    print(json.dumps({"wrote": a.write_floors, "cases": n_cases, "from": a.floors_from}))
     return 0
 
 
