@@ -415,3 +415,30 @@ def test_diagnose_cli_checks_the_gap_options_first(tmp_path, capsys):
         assert cli.main(parser.parse_args(base + extra)) == 2
         assert message in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("pose_sampling", ["uniform", "fitted"])
+def test_training_samples_are_the_detectors_synthetic_positives(tmp_path, pose_sampling):
+    """The gap is measured on the very patches training uses (same fit, seed and pose sampling)."""
+    from synthaug.data.procedural import sky_backgrounds
+    from synthaug.data.seedset import SeedSet, write_seedset
+    from synthaug.detectors.training import synthetic_positives
+    from synthaug.diagnose.gap import training_samples
+    from synthaug.params import CaptureParams
+
+    n = 4
+    bgs = sky_backgrounds(n, (40, 40), seed=0)
+    write_seedset(tmp_path / "s", patches=bgs, backgrounds=bgs, boxes=[[0, 0, 16, 16]] * n, centres=[[20, 20]] * n,
+                  crops=[[20, 20, 40]] * n, records=[{"video": "v"}] * n, frames=list(sky_backgrounds(n, (64, 64), seed=1)),
+                  background_frames=list(sky_backgrounds(n, (64, 64), seed=1)),
+                  metadata={"patch_size": 40, "object_fraction": 0.7})
+    seeds = SeedSet.load(tmp_path / "s")
+    fit = tmp_path / "fit.json"
+    CaptureParams.sample(n, generator=torch.Generator().manual_seed(0)).save(fit)
+    x, idx = training_samples(seeds, "quadcopter", fit, 6, seed=3, pose_sampling=pose_sampling)
+    ref = synthetic_positives(seeds, "quadcopter", fit, 6, seed=3, pose_sampling=pose_sampling)
+    torch.testing.assert_close(x, ref)
+    assert idx.shape == (6,) and set(idx.tolist()) <= set(range(n))
+    if pose_sampling == "fitted":  # not the uniform draw
+        other, _ = training_samples(seeds, "quadcopter", fit, 6, seed=3)
+        assert not torch.equal(x, other)

@@ -2,6 +2,9 @@
 real seed patches in the detectors' features (HOG; the CNN's own d_CNN network), per training seed.
 
     OMP_NUM_THREADS=1 PYTHONPATH=. python results/synthetic/drone_v1/measure_gap.py   # from the repository root
+    # the object-noise fix: d_HOG fits with σ_n measured vs fitted, in HOG features only
+    OMP_NUM_THREADS=1 PYTHONPATH=. python results/synthetic/drone_v1/measure_gap.py --fits hog hog_measured \
+        --families hog --no-perturbed --pose-sampling uniform fitted --fitted-renders --out results/synthetic/drone_v1/gap_factors
 
 Reads the seed sets the runner's cells drew (data/runs/ingest_drone_seed{s}/seedsets/drone_100) and the fits
 (data/runs/fits/drone_100_seed{s}_{hog,cnn}.json); writes gap_seed{s}.json + figures under
@@ -10,6 +13,7 @@ results/synthetic/drone_v1/gap/ and prints one line per (seed, comparison, famil
 
 from __future__ import annotations
 
+import argparse
 import json
 import time
 from pathlib import Path
@@ -28,28 +32,48 @@ OUT = Path("results/synthetic/drone_v1/gap")
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--fits", nargs="+", default=["hog", "cnn"], help="fit files data/runs/fits/drone_100_seed{s}_<name>.json")
+    ap.add_argument("--families", nargs="+", default=["hog", "cnn"], choices=["hog", "cnn"])
+    ap.add_argument("--no-perturbed", action="store_true", help="leave out the perturbed real patches")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=["uniform", "fitted"],
+                    help="poses of the synthetic samples (each fit once per choice)")
+    ap.add_argument("--fitted-renders", action="store_true",
+                    help="also each fit's own renders S(Θ_i, B_i) (the fitted pose itself: no pose sampling)")
+    ap.add_argument("--out", default=str(OUT))
+    args = ap.parse_args()
+    out = Path(args.out)
     torch.set_num_threads(1)
-    OUT.mkdir(parents=True, exist_ok=True)
-    for s in (0, 1, 2):
+    out.mkdir(parents=True, exist_ok=True)
+    for s in args.seeds:
         t0 = time.perf_counter()
         ss = SeedSet.load(f"data/runs/ingest_drone_seed{s}/seedsets/drone_100")
         n = len(ss)
         real = torch.as_tensor(np.asarray(ss.patches)).float().div(255).unsqueeze(1)
         groups = np.arange(n)
         syn = {}
-        for dist in ("hog", "cnn"):
+        for dist in args.fits:
             fit = Path(f"data/runs/fits/drone_100_seed{s}_{dist}.json")
             if fit.is_file():
                 CaptureParams.load_with_extra(fit)
-                syn[f"synthetic_{dist}"] = training_samples(ss, MESH, fit, 5 * n, seed=s + 2)
-        per = perturb_patches(real, 5, generator=torch.Generator().manual_seed(s + 3))
-        syn["perturbed"] = (per, np.tile(groups, 5))
-        # the CNN family in the features of a network trained on this seed set's real patches (d_CNN's network)
-        neg = torch.as_tensor(np.asarray(ss.negatives)).float().div(255).unsqueeze(1)
-        net = cnn_distance(positives=real, negatives=neg, seed=s).net
-        res = gap_section(real, syn, real_groups=groups, families=("hog", "cnn"), detectors={"cnn": net},
-                          seed=s, out_dir=OUT / f"seed{s}", permutations=100, kid_subsets=50)
-        (OUT / f"gap_seed{s}.json").write_text(json.dumps(res, indent=1) + "\n")
+                for ps in args.pose_sampling:
+                    name = f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
+                    syn[name] = training_samples(ss, MESH, fit, 5 * n, seed=s + 2, pose_sampling=ps)
+                if args.fitted_renders:
+                    from synthaug.fit.render_fit import render_fitted
+
+                    syn[f"fitted_renders_{dist}"] = (render_fitted(ss, fit, MESH)[1].clamp(0, 1), groups)
+        if not args.no_perturbed:
+            per = perturb_patches(real, 5, generator=torch.Generator().manual_seed(s + 3))
+            syn["perturbed"] = (per, np.tile(groups, 5))
+        detectors = {}
+        if "cnn" in args.families:  # the CNN family in the features of a network trained on this seed set's real patches
+            neg = torch.as_tensor(np.asarray(ss.negatives)).float().div(255).unsqueeze(1)
+            detectors["cnn"] = cnn_distance(positives=real, negatives=neg, seed=s).net
+        res = gap_section(real, syn, real_groups=groups, families=tuple(args.families), detectors=detectors,
+                          seed=s, out_dir=out / f"seed{s}", permutations=100, kid_subsets=50)
+        (out / f"gap_seed{s}.json").write_text(json.dumps(res, indent=1) + "\n")
         for name, comp in res["comparisons"].items():
             for fam, r in comp["families"].items():
                 t = r["two_sample"]
