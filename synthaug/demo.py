@@ -151,7 +151,7 @@ def main(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from synthaug.data.ingest import ingest_videos
     from synthaug.data.seedset import SeedSet
-    from synthaug.detectors.training import real_positives
+    from synthaug.detectors.training_sets import real_positives
     from synthaug.evaluate.videos import load_eval_set
     from synthaug.fit.fitting import FitConfig, fit_seedset
     from synthaug.fit.plots import plot_fitted_pairs, plot_joint_histograms
@@ -259,7 +259,8 @@ def _train_and_score(args: argparse.Namespace, seeds: Any, fit_path: Path, real:
                      eval_set: Any, names: tuple[str, str]) -> tuple[dict[str, Any], dict[str, Any]]:
     """Both conditions trained with each training seed (its own negatives, synthetic draw and initialisation)
     and matched on the test videos: ``{name: ProtocolResult}`` and training seed 0's pooled PR curve per name."""
-    from synthaug.detectors.training import negative_pool, synthetic_positives, train_detector
+    from synthaug.detectors.training import train_detector
+    from synthaug.detectors.training_sets import negative_pool, synthetic_positives
     from synthaug.evaluate.ap import evaluate_detections
     from synthaug.evaluate.matching import match_videos
     from synthaug.evaluate.results import ProtocolResult

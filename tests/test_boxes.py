@@ -13,7 +13,7 @@ from torchvision.ops import box_convert, box_iou
 from synthaug.detectors.base import load_detector, save_detector
 from synthaug.detectors.boxes import BoxRegressor, _ridge, decode_deltas, encode_deltas, jitter_boxes
 from synthaug.detectors.sliding import nms
-from synthaug.detectors.training import MiningFrame
+from synthaug.detectors.frames import MiningFrame
 from synthaug.evaluate.videos import EvalSet, detect_on_eval_set, refine_detections
 
 

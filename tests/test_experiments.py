@@ -269,6 +269,7 @@ def test_report_writes_table_plot_json(tmp_path: Path) -> None:
 def test_moved_names_still_importable_from_experiments() -> None:
     """experiments.py re-exports every name that moved to its own module (the same objects)."""
     import synthaug.detectors.training as training
+    import synthaug.detectors.training_sets as training_sets
     import synthaug.evaluate.context as context
     import synthaug.evaluate.experiments as ex
     import synthaug.effects.perturb as perturb
@@ -278,8 +279,9 @@ def test_moved_names_still_importable_from_experiments() -> None:
     homes = {videos: ["EvalSet", "EvalResult", "load_eval_set", "evaluate_on_videos", "detect_on_eval_set"],
              perturb: ["perturb_patches"], context: ["ExperimentContext"],
              reporting: ["_fmt", "_stem", "_write_report", "_plot", "_ap"],
-             training: ["DETECTORS", "TrainOptions", "train_detector", "real_positives", "synthetic_positives",
-                        "frames_training_set", "negative_pool", "mining_frames", "perturbed_positives"]}
+             training: ["DETECTORS", "TrainOptions", "train_detector"],
+             training_sets: ["real_positives", "synthetic_positives", "frames_training_set", "negative_pool",
+                             "mining_frames", "perturbed_positives"]}
     for module, names in homes.items():
         for name in names:
             assert getattr(ex, name) is getattr(module, name), name

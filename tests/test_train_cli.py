@@ -113,7 +113,7 @@ def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], traine
 
 def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> None:
     """--params adds ratio x seeds synthetic patches made on the seed set (the generator itself is tested elsewhere)."""
-    import synthaug.detectors.training as training
+    import synthaug.detectors.video_training as video_training
     from synthaug.params import CaptureParams
 
     calls = []
@@ -123,7 +123,7 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
         calls.append((len(seedset), str(mesh), count, seed, pose_sampling))
         return torch.rand(count, 1, 40, 40, generator=torch.Generator().manual_seed(seed))
 
-    monkeypatch.setattr(training, "synthetic_positives", fake)
+    monkeypatch.setattr(video_training, "synthetic_positives", fake)
     fit = ws["root"] / "fit8.json"
     CaptureParams.sample(8, generator=torch.Generator().manual_seed(0)).save(fit)
     out = ws["root"] / "runs" / "hog_syn.pt"

@@ -1,4 +1,5 @@
-"""Detector training with hard-negative mining at scale (synthaug.detectors.training), on generated data only."""
+"""Detector training with hard-negative mining at scale (synthaug.detectors.training, .mining, .frames,
+.video_training), on generated data only."""
 
 from __future__ import annotations
 
@@ -12,17 +13,10 @@ import pytest
 import torch
 
 from synthaug.detectors.base import PatchDetector
-from synthaug.detectors.training import (
-    MiningFrame,
-    TrainOptions,
-    TrainingInputError,
-    VideoFrames,
-    discover_videos,
-    mine_hard_negatives,
-    split_by_video,
-    train_with_mining,
-    validation_false_positives,
-)
+from synthaug.detectors.frames import MiningFrame, VideoFrames
+from synthaug.detectors.mining import mine_hard_negatives, validation_false_positives
+from synthaug.detectors.training import TrainOptions, train_with_mining
+from synthaug.detectors.video_training import TrainingInputError, discover_videos, split_by_video
 
 GREY = 200
 
@@ -210,7 +204,7 @@ def videos(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.mark.parametrize("kind", ["hog", "adaboost", "cnn"])
 def test_every_family_mines_and_logs(videos: Path, kind: str) -> None:
-    from synthaug.detectors.training import frames_training_set
+    from synthaug.detectors.training_sets import frames_training_set
 
     d = frames_training_set(["V_DRONE_003", "V_DRONE_010"], videos / "videos", videos / "labels", frame_step=2,
                             negatives_per_video=40)

@@ -218,7 +218,7 @@ class BoxRegressor:
         Args:
             frames: items with ``image`` (uint8 or float gray ``(H, W)``), ``boxes``
                 (``(G, 4)`` XYWH labelled boxes, or None) and ``video`` (the CV group),
-                e.g. :class:`~synthaug.detectors.training.VideoFrames` of the training videos.
+                e.g. :class:`~synthaug.detectors.frames.VideoFrames` of the training videos.
             aspect: width / height of the boxes the detector reports (its ``box_in_window``).
             jitters: boxes drawn around each labelled box (:func:`jitter_boxes`).
             seed: seed of the jitter draws.

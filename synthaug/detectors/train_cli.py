@@ -14,7 +14,7 @@ log (negatives added and validation false positives per round) and the synthaug 
 written beside the checkpoint as ``<out>.json``. ``--seed-counts N`` draws N seed frames from
 the training videos exactly as ``synthaug ingest`` does (into ``<out>.work/``, reused by a
 rerun); ``--all-frames`` uses every labelled training frame. The training itself is
-:func:`synthaug.detectors.training.train_from_videos`, the code path of the experiments.
+:func:`synthaug.detectors.video_training.train_from_videos`, the code path of the experiments.
 
 Bad inputs exit with status 2 and a message naming the option.
 """
@@ -113,7 +113,8 @@ def main(args: argparse.Namespace) -> int:
 
     import torch
 
-    from synthaug.detectors.training import TrainingInputError, TrainOptions, train_from_videos
+    from synthaug.detectors.training import TrainOptions
+    from synthaug.detectors.video_training import TrainingInputError, train_from_videos
 
     if args.threads is not None:
         torch.set_num_threads(args.threads)

@@ -26,15 +26,8 @@ from synthaug._io import atomic_write_text
 from synthaug.data.seedset import SeedSet
 from synthaug.data.splits import load_split
 from synthaug.detectors.base import box_in_window_from_boxes
-from synthaug.detectors.training import (
-    TrainOptions,
-    check_kind,
-    mining_frames,
-    negative_pool,
-    real_positives,
-    synthetic_positives,
-    train_detector,
-)
+from synthaug.detectors.training import TrainOptions, check_kind, train_detector
+from synthaug.detectors.training_sets import mining_frames, negative_pool, real_positives, synthetic_positives
 from synthaug.effects.perturb import with_perturbed_copies
 from synthaug.evaluate.videos import EvalSet, evaluate_on_videos, load_eval_set
 from synthaug.fit.fitting import FitConfig, fit_seedset

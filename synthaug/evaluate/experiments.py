@@ -24,7 +24,7 @@ run resumes. Every experiment writes a markdown table (``<name>.md``), a plot
 
 The pieces live by concept; their names stay importable from here:
 
-- detector training and the training sets: :mod:`synthaug.detectors.training`;
+- detector training and the training sets: :mod:`synthaug.detectors.training`, :mod:`synthaug.detectors.training_sets`;
 - evaluation sets, detection on them and AP: :mod:`synthaug.evaluate.videos`;
 - the perturbation baseline: :mod:`synthaug.effects.perturb`;
 - the runner and its cell cache: :mod:`synthaug.evaluate.context`;
@@ -46,17 +46,14 @@ import torch
 from synthaug._io import atomic_write_text
 
 # Names that moved to their own modules stay importable from here (backwards compatibility).
-from synthaug.detectors.training import (  # noqa: F401
-    DETECTORS,
-    DetectorKind,
-    TrainOptions,
+from synthaug.detectors.training import DETECTORS, DetectorKind, TrainOptions, train_detector  # noqa: F401
+from synthaug.detectors.training_sets import (  # noqa: F401
     frames_training_set,
     mining_frames,
     negative_pool,
     perturbed_positives,
     real_positives,
     synthetic_positives,
-    train_detector,
 )
 from synthaug.evaluate.context import ExperimentContext
 from synthaug.effects.perturb import perturb_patches  # noqa: F401

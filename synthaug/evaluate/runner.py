@@ -4,7 +4,7 @@ A *condition* is a detector family and a training set (``real 100 seeds``,
 ``all training frames``, ``100 seeds + 20x synthetic``...). For each training
 seed of the protocol (``min_training_seeds``; the seed drives the seed draw of
 ``synthaug ingest``, the negatives and the initialisation), the detector is
-trained by :func:`synthaug.detectors.training.train_from_videos` — the code
+trained by :func:`synthaug.detectors.video_training.train_from_videos` — the code
 path of ``synthaug train`` — and scored on the protocol's test frames (and,
 optionally, the scale check and the patch protocol). Each (condition, seed) is
 one cell of a :class:`~synthaug.evaluate.cells.CellCache`, keyed by the
@@ -36,7 +36,8 @@ from typing import Any
 import numpy as np
 
 from synthaug._checks import add_option
-from synthaug.detectors.training import TrainOptions, train_from_videos
+from synthaug.detectors.training import TrainOptions
+from synthaug.detectors.video_training import train_from_videos
 from synthaug.evaluate.cells import CellCache
 from synthaug.evaluate.matching import match_videos
 from synthaug.evaluate.patches import patch_eval_set, score_patch_set

@@ -1,0 +1,220 @@
+"""The positive and negative patch sets detectors are trained on.
+
+Positives: a seed set's real patches (:func:`real_positives`), with perturbed
+copies (:func:`perturbed_positives`, the paper's Table 1 baseline), synthetic
+patches generated from a capture-parameter fit (:func:`synthetic_positives`), or
+every labelled frame of some videos (:func:`frames_training_set`). Negatives: the
+seed set's plus object-free crops of its seed frames (:func:`negative_pool`),
+look-alike crops of negative-class videos (:func:`bird_hard_negatives`), and the
+seed frames HOG mines on its own (:func:`mining_frames`). All patches are float
+``(N, 1, P, P)`` in [0, 1].
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from synthaug.detectors.frames import _find_video
+
+__all__ = [
+    "real_positives",
+    "perturbed_positives",
+    "synthetic_positives",
+    "negative_pool",
+    "mining_frames",
+    "frames_training_set",
+    "bird_hard_negatives",
+]
+
+
+def _as_float_patches(x: Any) -> Tensor:
+    t = torch.as_tensor(np.asarray(x)) if not isinstance(x, Tensor) else x
+    if t.dtype == torch.uint8:
+        t = t.float() / 255.0
+    if t.dim() == 3:
+        t = t[:, None]
+    return t.float().contiguous()
+
+
+def real_positives(seedset: Any) -> Tensor:
+    """The seed set's real object patches as float ``(N, 1, P, P)`` in [0, 1]."""
+    return _as_float_patches(seedset.patches)
+
+
+def perturbed_positives(seedset: Any, copies: int, *, seed: int = 0) -> Tensor:
+    """Real patches plus ``copies`` perturbed versions of each (the paper's Table 1 baseline,
+    :func:`~synthaug.effects.perturb.perturb_patches`)."""
+    from synthaug.effects.perturb import with_perturbed_copies
+
+    return with_perturbed_copies(real_positives(seedset), copies, seed=seed)
+
+
+def synthetic_positives(
+    seedset: Any,
+    mesh: Any,
+    fit_file: str | Path,
+    count: int,
+    *,
+    seed: int = 0,
+    effects: Sequence[str] | None = None,
+    capture_sampling: str = "seed",
+    batch: int = 2048,
+    seed_geometry: Mapping[str, Any] | str | None = "auto",
+    pose_sampling: str = "uniform",
+) -> Tensor:
+    """``count`` synthetic object patches generated from a capture-parameter fit.
+
+    Each patch keeps one seed's fitted capture parameters and background and
+    draws a random pose (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`).
+
+    Args:
+        seedset: the seed set the fit was made on (backgrounds).
+        mesh: mesh path or built-in name.
+        fit_file: ``synthaug fit`` output.
+        count: number of patches.
+        seed: the dataset's base seed.
+        effects: effects applied (None: all fitted ones); leaving one out is the ablation.
+        capture_sampling: ``"seed"`` (the paper), ``"uniform"`` (Fig. 10) or ``"kde"``.
+        batch: items built per ``__getitems__`` call.
+        seed_geometry: each seed's place in its frame, for position-aware camera effects
+            (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`; default ``"auto"``: the seed
+            set's); None: the patch is the frame.
+        pose_sampling: ``"uniform"`` (the paper) or ``"fitted"`` (around each seed's fitted pose; see
+            :class:`~synthaug.data.synthetic.SyntheticObjectDataset`).
+
+    Returns:
+        Float patches ``(count, 1, P, P)`` in [0, 1].
+    """
+    from synthaug.data.synthetic import SyntheticObjectDataset
+
+    if count < 0:
+        raise ValueError(f"count must be >= 0, got {count}")
+    p = int(seedset.patches.shape[-1])
+    if count == 0:
+        return torch.zeros(0, 1, p, p)
+    ds = SyntheticObjectDataset(
+        mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
+        effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
+        seed_geometry=seed_geometry, pose_sampling=pose_sampling,  # type: ignore[arg-type]
+    )
+    out = []
+    for start in range(0, count, batch):
+        items = ds.__getitems__(list(range(start, min(count, start + batch))))
+        out.append(torch.stack([img for img, _ in items]))
+    return torch.cat(out).float().clamp(0, 1)
+
+
+def negative_pool(seedset: Any, extra: int = 3000, *, seed: int = 0) -> Tensor:
+    """The seed set's negatives plus ``extra`` object-free crops of its seed frames.
+
+    Crops use the seeds' crop sides (the same scale normalisation as the
+    positives) and never touch the labelled box (grown by a margin).
+    """
+    from synthaug.data.negatives import sample_negatives
+
+    neg = [np.asarray(seedset.negatives, np.uint8)]
+    if extra > 0:
+        n = len(seedset)
+        frames = np.stack([seedset.frame(i) for i in range(n)])
+        boxes = [np.asarray(seedset.boxes[i], np.float64) for i in range(n)]
+        more, _ = sample_negatives(frames, boxes, extra, sides=[float(s) for s in seedset.crops[:, 2]],
+                                   rng=np.random.default_rng(seed), patch_size=int(seedset.patches.shape[-1]))
+        neg.append(more)
+    return _as_float_patches(np.concatenate(neg))
+
+
+def mining_frames(seedset: Any, limit: int = 40) -> tuple[list[Tensor], list[Tensor]]:
+    """Up to ``limit`` seed frames (float ``(H, W)``) and their boxes, for HOG hard-negative mining."""
+    n = min(limit, len(seedset))
+    pick = np.unique(np.linspace(0, len(seedset) - 1, n).round().astype(int))
+    frames = [torch.from_numpy(seedset.frame(int(i))).float() / 255.0 for i in pick]
+    boxes = [torch.as_tensor(seedset.boxes[int(i)], dtype=torch.float32).reshape(1, 4) for i in pick]
+    return frames, boxes
+
+
+def frames_training_set(
+    videos: Sequence[str],
+    videos_dir: str | Path,
+    labels_dir: str | Path,
+    *,
+    frame_step: int = 1,
+    negatives_per_video: int = 60,
+    mining_frames_per_video: int = 1,
+    patch_size: int = 40,
+    object_fraction: float = 0.7,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """Positives from every ``frame_step``-th labelled frame of the training videos (the "plenty of real data" reference).
+
+    Args:
+        videos: training video stems.
+        videos_dir, labels_dir: the shared-format folders.
+        frame_step: 1 = every labelled frame.
+        negatives_per_video: object-free crops drawn per video (seed crop sides).
+        mining_frames_per_video: frames kept (with their boxes) for HOG mining.
+        patch_size, object_fraction: the seed sets' patch geometry.
+        seed: seeds the negative sampling.
+
+    Returns:
+        ``{"positives": (P,1,S,S), "negatives": (N,1,S,S), "boxes": (P,4) frame boxes,
+        "mining_frames": [...], "mining_boxes": [...]}``.
+    """
+    from synthaug.data.negatives import sample_negatives
+    from synthaug.data.seedset import crop_geometry, crop_patch
+    from synthaug.data.video import read_video_with_labels
+
+    rng = np.random.default_rng(seed)
+    videos_dir, labels_dir = Path(videos_dir), Path(labels_dir)
+    pos, neg, boxes_all, mf, mb = [], [], [], [], []
+    for stem in videos:
+        video_file = next((videos_dir / f"{stem}{s}" for s in (".mp4", ".avi", ".mov", ".mkv") if (videos_dir / f"{stem}{s}").is_file()), None)
+        if video_file is None:
+            raise ValueError(f"no video file for {stem!r} in {videos_dir}")
+        frames, labels, _ = read_video_with_labels(video_file, labels_dir / f"{stem}.json")
+        labelled = [i for i, b in enumerate(labels.boxes) if b is not None]
+        sides = []
+        for i in labelled[::frame_step]:
+            box = np.asarray(labels.boxes[i], np.float64).reshape(-1, 4)[0]
+            patch, _ = crop_patch(frames[i], box=box, patch_size=patch_size, object_fraction=object_fraction)
+            pos.append(patch)
+            boxes_all.append(box)
+            sides.append(float(crop_geometry(box, patch_size=patch_size, object_fraction=object_fraction)[2]))
+        if sides and negatives_per_video > 0:
+            n, _ = sample_negatives(frames, labels.boxes, negatives_per_video, sides=sides, rng=rng, patch_size=patch_size)
+            neg.append(n)
+        for i in labelled[:: max(1, len(labelled) // max(mining_frames_per_video, 1))][:mining_frames_per_video]:
+            mf.append(torch.from_numpy(frames[i]).float() / 255.0)
+            mb.append(torch.as_tensor(labels.boxes[i], dtype=torch.float32).reshape(-1, 4))
+    if not pos:
+        raise ValueError(f"no labelled frame in videos {list(videos)[:5]}...")
+    return {
+        "positives": _as_float_patches(np.stack(pos)),
+        "negatives": _as_float_patches(np.concatenate(neg)) if neg else torch.zeros(0, 1, patch_size, patch_size),
+        "boxes": torch.as_tensor(np.stack(boxes_all), dtype=torch.float32),
+        "mining_frames": mf,
+        "mining_boxes": mb,
+    }
+
+
+def bird_hard_negatives(videos: Sequence[str], videos_dir: str | Path, labels_dir: str | Path, *, per_video: int = 16,
+                        patch_size: int = 40, object_fraction: float = 0.7) -> Tensor:
+    """Look-alike crops (:func:`synthaug.data.negatives.hard_negatives`) of negative-class videos, one video in memory at a time."""
+    from synthaug.data.negatives import hard_negatives
+    from synthaug.data.video import read_video_with_labels
+
+    out = []
+    for stem in videos:
+        path = _find_video(Path(videos_dir), stem)
+        if path is None:
+            raise ValueError(f"no video file for {stem!r} in {videos_dir}")
+        frames, labels, _ = read_video_with_labels(path, Path(labels_dir) / f"{stem}.json")
+        p, _ = hard_negatives(frames, labels.boxes, per_video, patch_size=patch_size, object_fraction=object_fraction)
+        out.append(p)
+    if not out:
+        return torch.zeros(0, 1, patch_size, patch_size)
+    return _as_float_patches(np.concatenate(out))

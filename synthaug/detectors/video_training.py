@@ -1,0 +1,551 @@
+"""Labelled videos -> a trained detector: what ``synthaug train`` and the experiments run.
+
+:func:`train_from_videos` takes a folder of videos + labels (any numbering, any
+classes) -> :func:`discover_videos` -> :func:`split_by_video` -> positives (seed
+frames drawn the way ``synthaug ingest`` draws them, or every labelled frame, plus
+synthetic ones from a fit; :mod:`synthaug.detectors.training_sets`) -> negatives ->
+:func:`~synthaug.detectors.training.train_with_mining` -> a detector and its metadata.
+
+**Negatives at scale.** The mining frames are every ``mining_stride``-th frame
+of *every* training video of the class (labelled frames only: a null label does
+not say the object is absent from view, only that it was not drawn, as
+:func:`synthaug.data.negatives.sample_negatives` assumes too; the labelled box,
+grown by ``max(4 px, mining_margin x longest side)`` on every side, is masked:
+a window touching it is never a negative) and of every training video of the
+negative classes (``"bird"``: every frame is free of the class, nothing is
+masked — birds are the look-alikes to learn). HOG keeps its own DPM-style cache
+mining over the negative pool (which now holds the mined windows) and the seed
+frames; AdaBoost and the CNN learn from the mined windows only through this loop.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from synthaug.detectors.frames import VideoFrames, _find_video
+from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mining
+from synthaug.detectors.training_sets import (
+    bird_hard_negatives,
+    frames_training_set,
+    mining_frames,
+    negative_pool,
+    real_positives,
+    synthetic_positives,
+)
+
+__all__ = ["TrainingInputError", "VideoSet", "discover_videos", "split_by_video", "train_from_videos", "METADATA_FORMAT"]
+
+METADATA_FORMAT = "synthaug.trained_detector"
+METADATA_VERSION = 1
+
+
+class TrainingInputError(ValueError):
+    """An input of :func:`train_from_videos` that cannot be used; ``option`` names the CLI option."""
+
+    def __init__(self, option: str, message: str) -> None:
+        super().__init__(f"{option}: {message}")
+        self.option = option
+
+
+@dataclass
+class VideoSet:
+    """The labelled videos of a folder pair: stem -> class, and the files.
+
+    Attributes:
+        videos_dir, labels_dir: the folders.
+        classes: stem -> class name (from the label files), for stems with a video file.
+        missing_video: label files without a video file (not used).
+    """
+
+    videos_dir: Path
+    labels_dir: Path
+    classes: dict[str, str]
+    missing_video: list[str] = field(default_factory=list)
+
+
+def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
+    """Every ``labels/<stem>.json`` with a ``videos/<stem>.<ext>`` (any numbering), and its class.
+
+    Raises:
+        TrainingInputError: a folder is missing (``--videos`` / ``--labels``) or holds no label file.
+    """
+    videos_dir, labels_dir = Path(videos_dir), Path(labels_dir)
+    if not videos_dir.is_dir():
+        raise TrainingInputError("--videos", f"folder not found: {videos_dir}")
+    if not labels_dir.is_dir():
+        raise TrainingInputError("--labels", f"folder not found: {labels_dir}")
+    classes: dict[str, str] = {}
+    missing: list[str] = []
+    for f in sorted(labels_dir.glob("*.json")):
+        try:
+            doc = json.loads(f.read_text())
+        except (OSError, json.JSONDecodeError) as e:
+            raise TrainingInputError("--labels", f"label file {f} is not readable JSON ({e})") from None
+        cls = doc.get("class") if isinstance(doc, dict) else None
+        if not isinstance(cls, str) or not isinstance(doc.get("boxes"), list):
+            continue  # not a label file of the shared format (e.g. a split or report file)
+        if _find_video(videos_dir, f.stem) is None:
+            missing.append(f.stem)
+            continue
+        classes[f.stem] = cls
+    if not classes:
+        raise TrainingInputError("--labels", f"no label file of the shared format with a video in --videos {videos_dir} "
+                                             f"(label files: {labels_dir})")
+    return VideoSet(videos_dir, labels_dir, classes, missing)
+
+
+def split_by_video(
+    vs: VideoSet,
+    class_name: str,
+    *,
+    split: str | Path | None = None,
+    seed: int = 0,
+    val_fraction: float = 0.2,
+    block: int = 1,
+    negative_classes: Sequence[str] = ("bird",),
+) -> dict[str, Any]:
+    """Training / validation videos of a class and the training videos of the negative classes.
+
+    With ``split`` (a ``synthaug.video_split`` file) its ``train`` / ``val`` lists (and
+    ``hard_negatives.train``) are used, restricted to the videos present; without it the
+    videos are split by video with :func:`synthaug.data.splits.make_video_split`
+    (fractions ``1 - val_fraction`` / ``val_fraction`` / 0, per class, blocks of ``block``
+    consecutive numbers, shuffled by ``seed``): deterministic given the folder and ``seed``.
+
+    Returns:
+        ``{"source": "file" | "auto", "train", "val", "negative_train", "negative_val", ...}`` (sorted stems).
+
+    Raises:
+        TrainingInputError: no video of the class (``--class``), a bad split file (``--split``),
+            no training video of the class.
+    """
+    from synthaug.data.splits import load_split, make_video_split
+
+    present = {s for s, c in vs.classes.items() if c == class_name}
+    if not present:
+        found = sorted(set(vs.classes.values()))
+        raise TrainingInputError("--class", f"no video of class {class_name!r} in --labels {vs.labels_dir} (classes found: {found})")
+    neg_present = {s for s, c in vs.classes.items() if c in negative_classes and c != class_name}
+    if split is not None:
+        try:
+            sp = load_split(split)
+        except (ValueError, FileNotFoundError) as e:
+            raise TrainingInputError("--split", str(e)) from None
+        listed = set(sp.classes) | {v for s in sp.videos.values() for v in s} | {v for s in sp.hard_negatives.values() for v in s}
+        out = {"source": "file", "file": str(split),
+               "train": sorted(v for v in sp.videos.get("train", []) if v in present),
+               "val": sorted(v for v in sp.videos.get("val", []) if v in present),
+               "negative_train": sorted(v for v in sp.hard_negatives.get("train", []) + sp.videos.get("train", []) if v in neg_present),
+               "negative_val": sorted(v for v in sp.hard_negatives.get("val", []) + sp.videos.get("val", []) if v in neg_present),
+               "unlisted": sorted((present | neg_present) - listed),
+               "listed_not_in_folder": len({v for v, c in sp.classes.items() if c == class_name} - present)}
+    else:
+        if not 0 <= val_fraction < 1:
+            raise TrainingInputError("--val-fraction", f"must be in [0, 1), got {val_fraction}")
+        classes = {s: vs.classes[s] for s in sorted(present | neg_present)}
+        sp = make_video_split(classes, fractions={"train": 1 - val_fraction, "val": val_fraction, "test": 0.0}, seed=seed,
+                              block=block, hard_negative_classes=tuple(c for c in negative_classes if c != class_name))
+        out = {"source": "auto", "seed": seed, "fractions": {"train": 1 - val_fraction, "val": val_fraction}, "block": block,
+               "rule": "synthaug.data.splits.make_video_split per class (by video, seeded shuffle of blocks of consecutive numbers)",
+               "train": sorted(v for v in sp.videos["train"] if v in present),
+               "val": sorted(v for v in sp.videos["val"] if v in present),
+               "negative_train": sorted(sp.hard_negatives["train"]), "negative_val": sorted(sp.hard_negatives["val"])}
+    if not out["train"]:
+        raise TrainingInputError("--split" if split is not None else "--class",
+                                 f"no training video of class {class_name!r}" + (f" in the split file {split}" if split else ""))
+    out["class"] = class_name
+    out["negative_classes"] = list(negative_classes)
+    return out
+
+
+def _labelled_frames(labels_dir: Path, stems: Sequence[str]) -> int:
+    from synthaug.data.video import read_labels
+
+    return sum(sum(1 for b in read_labels(labels_dir / f"{s}.json").boxes if b is not None) for s in stems)
+
+
+def _seed_set_by_ingest(vs: VideoSet, split: Mapping[str, Any], n: int, work: Path, *, ingest_seed: int, workers: int,
+                        log: Callable[[str], None], negative_classes: Sequence[str]) -> Any:
+    """Seed set of ``n`` seeds drawn from the training videos exactly as ``synthaug ingest`` draws them."""
+    from synthaug.data.ingest import IngestConfig, ingest_videos
+    from synthaug.data.seedset import SeedSet
+    from synthaug.data.splits import VideoSplit
+
+    cls = split["class"]
+    train = list(split["train"])
+    per_video = max(IngestConfig().seeds_per_video, math.ceil(n / len(train)))
+    cfg = IngestConfig(seeds_per_video=per_video, seed=ingest_seed, hard_negative_classes=tuple(negative_classes))
+    only_train = VideoSplit({"train": train, "val": [], "test": []},
+                            {"train": list(split["negative_train"]), "val": [], "test": []},
+                            {s: vs.classes[s] for s in train + list(split["negative_train"])})
+    t0 = time.perf_counter()
+    report = ingest_videos(vs.videos_dir, vs.labels_dir, work, split=only_train, splits=("train",), cfg=cfg, seed_counts=[n],
+                           workers=workers, progress=False)
+    if report["failed"]:
+        log(f"ingest: {len(report['failed'])} video(s) failed: {report['failed']}")
+    log(f"ingest: {report['processed']} videos processed, {report['skipped_current']} reused ({time.perf_counter() - t0:.0f}s)")
+    path = work / "seedsets" / f"{cls}_{n}"
+    if not (path / "seedset.json").is_file():
+        raise TrainingInputError("--seed-counts", f"ingest drew no seed of class {cls!r} from the training videos ({report['failed']})")
+    ss = SeedSet.load(path)
+    if len(ss) < n:
+        raise TrainingInputError("--seed-counts", f"{n} seeds asked but the training videos give only {len(ss)} usable seed frames "
+                                                  f"(box fully inside the frame, longest side >= {cfg.min_box_side:g} px, "
+                                                  f"{per_video} candidates per video); ask for at most {len(ss)} or use --all-frames")
+    return ss
+
+
+def train_from_videos(
+    kind: str,
+    class_name: str,
+    videos_dir: str | Path,
+    labels_dir: str | Path,
+    *,
+    out: str | Path | None = None,
+    split: str | Path | None = None,
+    seed: int = 0,
+    seed_count: int | None = 100,
+    all_frames: bool = False,
+    frame_step: int = 1,
+    seedset: str | Path | None = None,
+    params: str | Path | Callable[[Path], str | Path] | None = None,
+    mesh: str | None = None,
+    synthetic_ratio: float = 0.0,
+    perturb_copies: int = 0,
+    pose_sampling: str = "uniform",
+    copy_paste_ratio: float = 0.0,
+    options: TrainOptions = TrainOptions(),
+    work_dir: str | Path | None = None,
+    ingest_seed: int = 0,
+    ingest_workers: int = 2,
+    negative_classes: Sequence[str] = ("bird",),
+    val_fraction: float = 0.2,
+    split_block: int = 1,
+    extra_negatives: int = 3000,
+    log: Callable[[str], None] | None = None,
+    command: Any = None,
+) -> tuple[Any, dict[str, Any]]:
+    """Videos + labels (+ a fit) -> a trained detector: what ``synthaug train`` runs.
+
+    Steps: :func:`discover_videos` -> :func:`split_by_video` -> positives (``seed_count``
+    seeds drawn by ``synthaug ingest``'s code into ``work_dir`` — its shards are reused by
+    a rerun —, an existing ``seedset``, or with ``all_frames`` every ``frame_step``-th
+    labelled frame of the training videos) + ``synthetic_ratio`` synthetic patches per real
+    seed from ``params`` -> negatives (the seed set's + ``extra_negatives`` object-free crops
+    of the seed frames, or, with ``all_frames``, 60 crops per training video + look-alike
+    crops of the negative-class videos) -> :func:`~synthaug.detectors.training.train_with_mining` over every
+    ``options.mining_stride``-th frame of all training videos (+ negative-class videos),
+    stopped on the validation videos -> ``out`` (:func:`~synthaug.detectors.base.save_detector`)
+    and ``out`` with suffix ``.json`` (the metadata returned here).
+
+    Args:
+        kind: ``"hog"``, ``"adaboost"`` or ``"cnn"``.
+        class_name: the class to detect (the label files' ``class``).
+        videos_dir, labels_dir: the shared-format folders (any stems, any numbering).
+        out: checkpoint to write (None: nothing written).
+        split: a ``synthaug.video_split`` file; None: split by video from ``seed``.
+        seed: training seed (initialisation, negatives, the automatic split).
+        seed_count: real seeds (ignored with ``all_frames`` or ``seedset``).
+        all_frames: every labelled frame of the training videos (every ``frame_step``-th).
+        frame_step: see ``all_frames``.
+        seedset: use this seed set (``synthaug ingest`` output) instead of ingesting.
+        params: ``synthaug fit`` output made on the seed set (one row per seed), or a callable
+            given the seed set's folder once it exists that returns that file (e.g. fits it).
+        mesh: mesh of the synthetic object (default: the fit's, else the built-in quadcopter).
+        synthetic_ratio: synthetic patches per real seed (needs ``params``).
+        pose_sampling: poses of the synthetic positives: ``"uniform"`` (the paper) or ``"fitted"``
+            (around each seed's fitted pose).
+        perturb_copies: perturbed copies of every real positive added to the positives (the
+            paper's Table 1 baseline, :func:`~synthaug.effects.perturb.perturb_patches`).
+        copy_paste_ratio: copy-paste patches per real seed (needs ``params``: the seeds' objects cut
+            out with their fitted silhouettes and pasted on other seeds' backgrounds,
+            :func:`~synthaug.data.copypaste.copy_paste_positives`; a user's baseline).
+        options: budgets (:class:`~synthaug.detectors.training.TrainOptions`).
+        work_dir: ingest output folder (default: ``<out>.work``; a temporary folder when ``out`` is None).
+        ingest_seed: ``synthaug ingest --seed`` of the seed draw (0: the same seed set as a
+            default ``synthaug ingest`` of the training videos).
+        ingest_workers: ingest worker processes.
+        negative_classes: classes whose videos are free of ``class_name`` (mined whole).
+        val_fraction, split_block: the automatic split.
+        extra_negatives: object-free crops of the seed frames added to the seed set's negatives.
+        log: progress printer.
+        command: the command line (or its parsed options), recorded in the metadata.
+
+    Returns:
+        ``(detector, metadata)``.
+
+    Raises:
+        TrainingInputError: an input that cannot be used; ``.option`` names the option.
+    """
+    say = log or (lambda m: None)
+    _check_options(kind, frame_step=frame_step, synthetic_ratio=synthetic_ratio, params=params, all_frames=all_frames,
+                   seedset=seedset, seed_count=seed_count, perturb_copies=perturb_copies,
+                   copy_paste_ratio=copy_paste_ratio)
+    t_start = time.perf_counter()
+    vs = discover_videos(videos_dir, labels_dir)
+    sp = split_by_video(vs, class_name, split=split, seed=seed, val_fraction=val_fraction, block=split_block,
+                        negative_classes=negative_classes)
+    say(f"{class_name}: {len(sp['train'])} training videos, {len(sp['val'])} validation videos, "
+        f"{len(sp['negative_train'])} negative-class training videos ({sp['source']} split)")
+    _check_against_split(vs, sp, class_name, params=params, all_frames=all_frames, seedset=seedset, seed_count=seed_count)
+
+    # ---------------------------------------------------------------- positives and negatives
+    t0 = time.perf_counter()
+    if seedset is not None or not all_frames:
+        ss = _seed_set(vs, sp, seedset=seedset, seed_count=seed_count, work_dir=work_dir, out=out,
+                       ingest_seed=ingest_seed, ingest_workers=ingest_workers, negative_classes=negative_classes, say=say)
+        ts = _seed_set_training_set(ss, seedset, extra_negatives=extra_negatives, seed=seed, options=options,
+                                    ingest_seed=ingest_seed)
+    else:
+        ts = _all_frames_training_set(vs, sp, frame_step=frame_step, seed=seed)
+    perturb_info = _add_perturbed(ts, perturb_copies, seed=seed, say=say)
+    synthetic_info = _add_from_fit(ts, params, mesh=mesh, synthetic_ratio=synthetic_ratio, copy_paste_ratio=copy_paste_ratio,
+                                   pose_sampling=pose_sampling, seed=seed, say=say)
+    t_data = time.perf_counter() - t0
+    say(f"training set: {ts.positives.shape[0]} positives, {ts.negatives.shape[0]} negatives ({t_data:.0f}s)")
+
+    # ---------------------------------------------------------------- training with mining
+    regressor, box_info = _box_regressor(vs, sp, options, ts.box_in_window, seed=seed, say=say)
+    t0 = time.perf_counter()
+    res = _mine_and_train(kind, ts, vs, sp, options, seed=seed, regressor=regressor, say=say)
+    t_train = time.perf_counter() - t0
+    meta = _metadata(kind, class_name, seed, videos_dir, labels_dir, sp, ts, res, options=options,
+                     synthetic_info=synthetic_info, perturb_info=perturb_info, box_info=box_info,
+                     seconds={"data": round(t_data, 1), "training": round(t_train, 1),
+                              "total": round(time.perf_counter() - t_start, 1)},
+                     command=command, out=out)
+    if out is not None:
+        _write_outputs(res.detector, meta, Path(out), say)
+    return res.detector, meta
+
+
+def _check_options(kind: str, *, frame_step: int, synthetic_ratio: float, params: Any, all_frames: bool,
+                   seedset: str | Path | None, seed_count: int | None, perturb_copies: int,
+                   copy_paste_ratio: float) -> None:
+    """:func:`train_from_videos`' arguments on their own; :class:`TrainingInputError` names the option."""
+    if kind not in DETECTORS:
+        raise TrainingInputError("--detector", f"unknown detector {kind!r}; choose from {list(DETECTORS)}")
+    if frame_step < 1:
+        raise TrainingInputError("--frame-step", f"must be >= 1, got {frame_step}")
+    if synthetic_ratio < 0:
+        raise TrainingInputError("--synthetic-ratio", f"must be >= 0, got {synthetic_ratio}")
+    if synthetic_ratio > 0 and params is None:
+        raise TrainingInputError("--synthetic-ratio", "synthetic positives need a fit: give --params FIT.json")
+    if not all_frames and seedset is None and (seed_count is None or seed_count < 1):
+        raise TrainingInputError("--seed-counts", f"must be >= 1, got {seed_count}")
+    if perturb_copies < 0:
+        raise TrainingInputError("--perturb-copies", f"must be >= 0, got {perturb_copies}")
+    if copy_paste_ratio < 0:
+        raise TrainingInputError("--copy-paste-ratio", f"must be >= 0, got {copy_paste_ratio}")
+    if copy_paste_ratio > 0 and params is None:
+        raise TrainingInputError("--copy-paste-ratio", "copy-paste cuts objects with their fitted silhouettes: give "
+                                                       "--params FIT.json")
+    if params is not None and not callable(params) and not Path(params).is_file():
+        raise TrainingInputError("--params", f"file not found: {params}")
+    if seedset is not None and not (Path(seedset) / "seedset.json").is_file():
+        raise TrainingInputError("--seed-set", f"not a seed set folder (no seedset.json): {seedset}")
+
+
+def _check_against_split(vs: VideoSet, sp: Mapping[str, Any], class_name: str, *, params: Any, all_frames: bool,
+                         seedset: str | Path | None, seed_count: int | None) -> None:
+    """The arguments against the videos found: a fit needs a seed set, the seeds asked must exist."""
+    if params is not None and all_frames and seedset is None:
+        raise TrainingInputError("--params", "synthetic positives need the seed set the fit was made on: use --seed-counts N "
+                                             "(or --seed-set DIR), not --all-frames")
+    if not all_frames and seedset is None:
+        available = _labelled_frames(vs.labels_dir, sp["train"])
+        if seed_count > available:  # type: ignore[operator]
+            raise TrainingInputError("--seed-counts", f"{seed_count} seeds asked but the {len(sp['train'])} training videos of "
+                                                      f"{class_name!r} have only {available} labelled frames")
+
+
+@dataclass
+class _TrainingSet:
+    """What :func:`train_from_videos` trains on, and how the positives were made (``info``: the metadata's)."""
+
+    positives: Tensor
+    negatives: Tensor
+    hog_frames: list[Tensor]
+    hog_boxes: list[Tensor]
+    box_in_window: Any
+    info: dict[str, Any]
+    seedset: Any = None
+
+
+def _seed_set(vs: VideoSet, sp: Mapping[str, Any], *, seedset: str | Path | None, seed_count: int | None,
+              work_dir: str | Path | None, out: str | Path | None, ingest_seed: int, ingest_workers: int,
+              negative_classes: Sequence[str], say: Callable[[str], None]) -> Any:
+    """The given seed set, or ``seed_count`` seeds ingested from the training videos into ``work_dir``
+    (default ``<out>.work``, a temporary folder without ``out``)."""
+    from synthaug.data.seedset import SeedSet
+
+    if seedset is not None:
+        return SeedSet.load(seedset)
+    if work_dir is None:
+        if out is None:
+            import tempfile
+
+            work_dir = Path(tempfile.mkdtemp(prefix="synthaug_train_"))
+        else:
+            work_dir = Path(str(out) + ".work")
+    return _seed_set_by_ingest(vs, sp, int(seed_count), Path(work_dir), ingest_seed=ingest_seed,  # type: ignore[arg-type]
+                               workers=ingest_workers, log=say, negative_classes=negative_classes)
+
+
+def _seed_set_training_set(ss: Any, seedset: str | Path | None, *, extra_negatives: int, seed: int,
+                           options: TrainOptions, ingest_seed: int) -> _TrainingSet:
+    """A seed set's real patches, its negatives + object-free crops of its frames, HOG's mining frames."""
+    from synthaug.detectors.base import box_in_window_from_boxes
+
+    if seedset is not None:
+        info = {"mode": "seedset", "seedset": str(seedset), "count": len(ss)}
+    else:
+        info = {"mode": "seeds", "count": len(ss), "seedset": str(ss.path), "ingest_seed": ingest_seed,
+                "drawn_as": "synthaug ingest (select_spread over the training videos' candidates)"}
+    pos = real_positives(ss)
+    neg = negative_pool(ss, extra_negatives, seed=seed)
+    hog_frames, hog_boxes = mining_frames(ss, options.hog_mining_frames)
+    box_in_window = box_in_window_from_boxes(torch.as_tensor(np.asarray(ss.boxes), dtype=torch.float32),
+                                             window=int(ss.patch_size), object_fraction=float(ss.object_fraction))
+    return _TrainingSet(pos, neg, hog_frames, hog_boxes, box_in_window, info, ss)
+
+
+def _all_frames_training_set(vs: VideoSet, sp: Mapping[str, Any], *, frame_step: int, seed: int) -> _TrainingSet:
+    """Every ``frame_step``-th labelled frame of the training videos; crops of them + of the negative-class videos."""
+    from synthaug.detectors.base import box_in_window_from_boxes
+
+    d = frames_training_set(sp["train"], vs.videos_dir, vs.labels_dir, frame_step=frame_step, seed=seed)
+    birds = bird_hard_negatives(sp["negative_train"], vs.videos_dir, vs.labels_dir)
+    pos, neg = d["positives"], torch.cat([d["negatives"], birds])
+    info = {"mode": "all_frames", "frame_step": frame_step, "count": int(pos.shape[0])}
+    return _TrainingSet(pos, neg, d["mining_frames"], d["mining_boxes"], box_in_window_from_boxes(d["boxes"]), info)
+
+
+def _add_perturbed(ts: _TrainingSet, copies: int, *, seed: int, say: Callable[[str], None]) -> dict[str, Any] | None:
+    """``copies`` perturbed copies of every real positive added to ``ts`` (the paper's Table 1 baseline)."""
+    if not copies:
+        return None
+    from synthaug.effects.perturb import with_perturbed_copies
+
+    n_real = ts.positives.shape[0]
+    ts.positives = with_perturbed_copies(ts.positives, copies, seed=seed + 3)
+    info = {"copies": copies, "count": int(ts.positives.shape[0] - n_real)}
+    say(f"perturbed: {info['count']} copies of the {n_real} real positives")
+    return info
+
+
+def _add_from_fit(ts: _TrainingSet, params: Any, *, mesh: str | None, synthetic_ratio: float, copy_paste_ratio: float,
+                  pose_sampling: str, seed: int, say: Callable[[str], None]) -> dict[str, Any] | None:
+    """Synthetic (and copy-paste) positives made from the fit ``params`` of the seed set, added to ``ts``."""
+    ss = ts.seedset
+    if callable(params):  # ss exists: a fit without a seed set was refused before
+        params = params(Path(ss.path))
+    if params is None:
+        return None
+    from synthaug.params import CaptureParams
+
+    try:
+        theta, _, fit_meta = CaptureParams.load_with_extra(params)
+    except (ValueError, FileNotFoundError) as e:
+        raise TrainingInputError("--params", str(e)) from None
+    if theta.batch_size != len(ss):
+        raise TrainingInputError("--params", f"{params} has {theta.batch_size} rows but the seed set has {len(ss)} seeds "
+                                             f"({ts.info.get('seedset')}): a fit holds one row per seed of the seed set "
+                                             f"it was made on")
+    mesh = mesh or fit_meta.get("mesh") or "quadcopter"
+    n_syn = int(round(synthetic_ratio * len(ss)))
+    if n_syn:
+        t0 = time.perf_counter()
+        syn = synthetic_positives(ss, mesh, params, n_syn, seed=seed + 2, pose_sampling=pose_sampling)
+        ts.positives = torch.cat([ts.positives, syn])
+        say(f"synthetic: {n_syn} patches from {params} ({time.perf_counter() - t0:.0f}s)")
+    info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
+                            "pose_sampling": pose_sampling}
+    n_cp = int(round(copy_paste_ratio * len(ss)))
+    if n_cp:
+        from synthaug.data.copypaste import copy_paste_positives
+
+        t0 = time.perf_counter()
+        ts.positives = torch.cat([ts.positives, copy_paste_positives(ss, params, n_cp, seed=seed + 4, mesh=mesh)])
+        say(f"copy-paste: {n_cp} patches cut with the silhouettes of {params} ({time.perf_counter() - t0:.0f}s)")
+        info["copy_paste"] = {"ratio": copy_paste_ratio, "count": n_cp}
+    return info
+
+
+def _box_regressor(vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, box_in_window: Any, *, seed: int,
+                   say: Callable[[str], None]) -> tuple[Any, dict[str, Any] | None]:
+    """The box regressor fitted on the training videos (``options.box_regression``), and its metadata."""
+    if not (options.box_regression and sp["train"]):
+        return None, None
+    from synthaug.detectors.boxes import BoxRegressor
+
+    t0 = time.perf_counter()
+    reg_src = VideoFrames(vs.videos_dir, vs.labels_dir, positive=sp["train"], stride=options.box_stride)
+    regressor = BoxRegressor.fit(reg_src, aspect=float(box_in_window[2]) / float(box_in_window[3]), seed=seed)
+    box_info = dict(regressor.meta or {}, ridge=regressor.ridge, seconds=round(time.perf_counter() - t0, 1))
+    say(f"box regression: {box_info['samples']} jittered boxes of {box_info['videos']} training videos, ridge "
+        f"{regressor.ridge:g} by grouped CV ({box_info['seconds']:.0f}s)")
+    return regressor, box_info
+
+
+def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, *,
+                    seed: int, regressor: Any, say: Callable[[str], None]) -> Any:
+    """:func:`~synthaug.detectors.training.train_with_mining` on ``ts``, mining every ``options.mining_stride``-th
+    frame of the training videos (+ negative-class videos), stopped on the validation videos."""
+    mine_src = VideoFrames(vs.videos_dir, vs.labels_dir, positive=sp["train"], negative=sp["negative_train"],
+                           stride=options.mining_stride)
+    val_src = VideoFrames(vs.videos_dir, vs.labels_dir, positive=sp["val"], stride=options.val_stride, null_frames=True) \
+        if sp["val"] else None
+    return train_with_mining(kind, ts.positives, ts.negatives, seed, box_in_window=ts.box_in_window,
+                             mining_frames=ts.hog_frames, mining_boxes=ts.hog_boxes, options=options,
+                             mining_source=mine_src if options.mining_rounds else None, val_frames=val_src, log=say,
+                             box_regressor=regressor)
+
+
+def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, labels_dir: str | Path,
+              sp: Mapping[str, Any], ts: _TrainingSet, res: Any, *, options: TrainOptions,
+              synthetic_info: dict[str, Any] | None, perturb_info: dict[str, Any] | None,
+              box_info: dict[str, Any] | None, seconds: dict[str, float], command: Any,
+              out: str | Path | None) -> dict[str, Any]:
+    """The metadata :func:`train_from_videos` returns and writes beside the checkpoint."""
+    import synthaug
+
+    meta = {
+        "format": METADATA_FORMAT, "version": METADATA_VERSION, "synthaug_version": synthaug.__version__,
+        "detector": kind, "class": class_name, "seed": seed,
+        "videos_dir": str(Path(videos_dir).resolve()), "labels_dir": str(Path(labels_dir).resolve()),
+        "split": sp, "positives": ts.info, "synthetic": synthetic_info, "perturbed": perturb_info,
+        "negatives": {"initial": int(ts.negatives.shape[0]), "final": int(res.negatives.shape[0]),
+                      "initial_source": ("seed set negatives + object-free crops of the seed frames"
+                                         if ts.seedset is not None
+                                         else "object-free crops of the training videos + look-alike crops of "
+                                              "negative-class videos")},
+        "box_in_window": [float(v) for v in ts.box_in_window],
+        "box_regression": box_info,
+        "options": asdict(options), "mining": res.log,
+        "seconds": seconds,
+        "command": command,
+        "checkpoint": None if out is None else str(out),
+    }
+    if not sp["val"]:
+        meta["warnings"] = ["no validation video: the mining ran every round without the stopping rule"]
+    return meta
+
+
+def _write_outputs(detector: Any, meta: Mapping[str, Any], out: Path, say: Callable[[str], None]) -> None:
+    """The checkpoint at ``out`` and the metadata at ``out`` with suffix ``.json``."""
+    from synthaug.detectors.base import save_detector
+    from synthaug.params import atomic_write_text
+
+    save_detector(detector, out)
+    atomic_write_text(out.with_suffix(".json"), json.dumps(meta, indent=1, default=str) + "\n")
+    say(f"wrote {out} and {out.with_suffix('.json')}")
