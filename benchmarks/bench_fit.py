@@ -52,6 +52,47 @@ def _generated_seeds(tmp: Path, n: int) -> Path:
     return path
 
 
+def _profile(seeds, cache, dist, cfg, scale, args) -> dict:
+    """Where one CMA-ES fit's time goes: cProfile's top functions by own time, and the objective's cost per
+    evaluation by batch size (a fixed cost per call shows as a falling curve)."""
+    import cProfile
+    import pstats
+
+    import numpy as np
+
+    from synthaug.fit.fitting import fit_one, patches_tensor, seed_seed
+    from synthaug.fit.objective import FitSpace, RenderObjective
+    from synthaug.fit.optimizers import get_optimizer
+
+    space = FitSpace.default(bounds=dict(cfg.bounds), scale_range=(0.25 * scale, 1.25 * scale))
+    obj = RenderObjective(patches_tensor(seeds.patches[:1]), patches_tensor(seeds.backgrounds[:1]), cache, dist, space,
+                          object_scale=scale, noise_seed=seed_seed(0, 0))
+    rng = np.random.default_rng(0)
+    per_eval = {}
+    for b in (1, 12, 24, 48, 96):
+        u = rng.random((b, space.dim))
+        obj(u)
+        ts = []
+        for _ in range(7):
+            t = time.perf_counter()
+            obj(u)
+            ts.append(time.perf_counter() - t)
+        per_eval[str(b)] = round(1e3 * statistics.median(ts) / b, 4)
+    prof = cProfile.Profile()
+    prof.enable()
+    if args.fit_path:
+        fit_one(obj.target, obj.background, cache, dist, cfg, seed=seed_seed(0, 0), object_scale=scale)
+    else:
+        get_optimizer("cmaes").minimize(obj, space.dim, x0=rng.random(space.dim), seed=0, budget=args.budget)
+    prof.disable()
+    st = pstats.Stats(prof)
+    total = st.total_tt
+    rows = sorted(st.stats.items(), key=lambda kv: -kv[1][2])[: args.profile]
+    return {"objective_ms_per_evaluation_by_batch": per_eval, "fit_seconds_profiled": round(total, 3),
+            "top_own_time": [{"function": f"{Path(k[0]).name}:{k[1]}({k[2]})", "own_s": round(v[2], 4),
+                              "share": round(v[2] / total, 3), "calls": v[1]} for k, v in rows]}
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", default="data/halmstad/seedsets/drone_25")
@@ -61,6 +102,12 @@ def main() -> int:
     parser.add_argument("--budget", type=int, default=3500, help="CMA-ES (and equal-budget annealing) evaluations")
     parser.add_argument("--reference-budget", type=int, default=None,
                         help="evaluations of the reference annealing run (default 10x --budget)")
+    parser.add_argument("--fit-path", action="store_true",
+                        help="time `synthaug fit`'s own path for CMA-ES (fit_one with FitConfig(distance, budget): the "
+                             "rotation-grid start) instead of CMA-ES from the uniform look")
+    parser.add_argument("--profile", type=int, default=0, metavar="K",
+                        help="also profile the CMA-ES fit of the first seed (cProfile) and report the K functions "
+                             "with the most own time, and the objective's cost per evaluation by batch size")
     args = parser.parse_args()
 
     import numpy as np
@@ -68,7 +115,7 @@ def main() -> int:
 
     torch.set_num_threads(1)
     from synthaug.data.seedset import SeedSet
-    from synthaug.fit.fitting import FitConfig, build_distance, patches_tensor, seed_seed
+    from synthaug.fit.fitting import FitConfig, build_distance, fit_one, patches_tensor, seed_seed
     from synthaug.fit.objective import FitSpace, RenderObjective
     from synthaug.fit.optimizers import get_optimizer
     from synthaug.render.cache import ViewCache
@@ -91,6 +138,11 @@ def main() -> int:
         for name, opt, budget in (("cmaes", "cmaes", args.budget), ("anneal", "anneal", args.budget),
                                   ("anneal_10x", "anneal", args.reference_budget or 10 * args.budget)):
             t = time.perf_counter()
+            if name == "cmaes" and args.fit_path:
+                f = fit_one(obj.target, obj.background, cache, dist, cfg, seed=s, object_scale=scale)
+                res[name] = {"distance": f["distance"], "seconds": time.perf_counter() - t,
+                             "evals": f["stats"]["n_evals"]}
+                continue
             r = get_optimizer(opt).minimize(obj, space.dim, x0=x0, seed=s, budget=budget)
             res[name] = {"distance": r.fun, "seconds": time.perf_counter() - t, "evals": r.n_evals}
         res["cmaes_within_5pct_of_anneal_10x"] = bool(res["cmaes"]["distance"] <= 1.05 * res["anneal_10x"]["distance"])
@@ -111,7 +163,11 @@ def main() -> int:
         "cmaes_within_5pct_of_anneal_10x": sum(r["cmaes_within_5pct_of_anneal_10x"] for r in rows),
         "ratio_anneal_over_cmaes_distance_equal_budget_median": round(statistics.median(
             r["anneal"]["distance"] / max(r["cmaes"]["distance"], 1e-12) for r in rows), 3),
+        "cmaes_path": "synthaug fit (fit_one, rotation-grid start)" if args.fit_path else "CMA-ES from the uniform look",
+        "per_seed": [{k: v for k, v in r.items()} for r in rows],
     }
+    if args.profile:
+        out["profile"] = _profile(seeds, cache, dist, cfg, scale, args)
     print(json.dumps(out, indent=1))
     return 0
 
