@@ -52,6 +52,7 @@ __all__ = [
     "read_coco",
     "read_image_gray",
     "VIDEO_EXTENSIONS",
+    "find_video",
 ]
 
 VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".avi", ".mov", ".mkv", ".m4v")
@@ -476,6 +477,20 @@ def read_coco(
     return out
 
 
+def find_video(video_dir: str | os.PathLike, stem: str) -> Path | None:
+    """The video file ``video_dir/<stem><ext>`` for the first of :data:`VIDEO_EXTENSIONS` that exists, else None.
+
+    Example:
+        >>> import tempfile
+        >>> with tempfile.TemporaryDirectory() as d:
+        ...     _ = (Path(d) / "V_1.avi").write_bytes(b"")
+        ...     find_video(d, "V_1").name, find_video(d, "V_2")
+        ('V_1.avi', None)
+    """
+    video_dir = Path(video_dir)
+    return next((video_dir / f"{stem}{ext}" for ext in VIDEO_EXTENSIONS if (video_dir / f"{stem}{ext}").is_file()), None)
+
+
 def iter_video_label_pairs(video_dir: str | os.PathLike, label_dir: str | os.PathLike) -> Iterator[tuple[str, Path, Path]]:
     """``(stem, video_path, label_path)`` for every label file, matched to a video by stem.
 
@@ -484,10 +499,4 @@ def iter_video_label_pairs(video_dir: str | os.PathLike, label_dir: str | os.Pat
     """
     video_dir, label_dir = Path(video_dir), Path(label_dir)
     for label in sorted(label_dir.glob("*.json")):
-        video = video_dir / f"{label.stem}.mp4"
-        for ext in VIDEO_EXTENSIONS:
-            cand = video_dir / f"{label.stem}{ext}"
-            if cand.is_file():
-                video = cand
-                break
-        yield label.stem, video, label
+        yield label.stem, find_video(video_dir, label.stem) or video_dir / f"{label.stem}.mp4", label

@@ -36,12 +36,6 @@ class MiningFrame(NamedTuple):
     index: int = -1
 
 
-def _find_video(videos_dir: Path, stem: str) -> Path | None:
-    from synthaug.data.video import VIDEO_EXTENSIONS
-
-    return next((videos_dir / f"{stem}{s}" for s in VIDEO_EXTENSIONS if (videos_dir / f"{stem}{s}").is_file()), None)
-
-
 @dataclass
 class VideoFrames:
     """A re-iterable, memory-bounded stream of every ``stride``-th frame of some labelled videos.
@@ -105,9 +99,9 @@ class VideoFrames:
             yield from self._video(stem, stem in self.positive)
 
     def _video(self, stem: str, positive: bool) -> Iterator[MiningFrame]:
-        from synthaug.data.video import clip_boxes, iter_frames, read_labels, video_frame_size
+        from synthaug.data.video import clip_boxes, find_video, iter_frames, read_labels, video_frame_size
 
-        path = _find_video(self.videos_dir, stem)
+        path = find_video(self.videos_dir, stem)
         if path is None:
             raise ValueError(f"no video file for {stem!r} in {self.videos_dir}")
         labels = read_labels(self.labels_dir / f"{stem}.json")

@@ -19,7 +19,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from synthaug.detectors.frames import _find_video
+from synthaug.data.video import find_video
 
 __all__ = [
     "real_positives",
@@ -172,7 +172,7 @@ def frames_training_set(
     videos_dir, labels_dir = Path(videos_dir), Path(labels_dir)
     pos, neg, boxes_all, mf, mb = [], [], [], [], []
     for stem in videos:
-        video_file = next((videos_dir / f"{stem}{s}" for s in (".mp4", ".avi", ".mov", ".mkv") if (videos_dir / f"{stem}{s}").is_file()), None)
+        video_file = find_video(videos_dir, stem)
         if video_file is None:
             raise ValueError(f"no video file for {stem!r} in {videos_dir}")
         frames, labels, _ = read_video_with_labels(video_file, labels_dir / f"{stem}.json")
@@ -209,7 +209,7 @@ def bird_hard_negatives(videos: Sequence[str], videos_dir: str | Path, labels_di
 
     out = []
     for stem in videos:
-        path = _find_video(Path(videos_dir), stem)
+        path = find_video(videos_dir, stem)
         if path is None:
             raise ValueError(f"no video file for {stem!r} in {videos_dir}")
         frames, labels, _ = read_video_with_labels(path, Path(labels_dir) / f"{stem}.json")

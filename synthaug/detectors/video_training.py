@@ -31,7 +31,8 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from synthaug.detectors.frames import VideoFrames, _find_video
+from synthaug.data.video import find_video
+from synthaug.detectors.frames import VideoFrames
 from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mining
 from synthaug.detectors.training_sets import (
     bird_hard_negatives,
@@ -93,7 +94,7 @@ def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
         cls = doc.get("class") if isinstance(doc, dict) else None
         if not isinstance(cls, str) or not isinstance(doc.get("boxes"), list):
             continue  # not a label file of the shared format (e.g. a split or report file)
-        if _find_video(videos_dir, f.stem) is None:
+        if find_video(videos_dir, f.stem) is None:
             missing.append(f.stem)
             continue
         classes[f.stem] = cls

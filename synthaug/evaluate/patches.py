@@ -27,6 +27,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from synthaug.data.boxes import xywh_to_xyxy
+from synthaug.data.video import VIDEO_EXTENSIONS, find_video
 from synthaug.evaluate.protocol import BootstrapSpec, Protocol, split_videos
 from synthaug.evaluate.stats import Interval, PooledRanking, bootstrap_seed_mean
 
@@ -66,12 +67,10 @@ class PatchSet:
 
 
 def _find_video(videos_dir: Path, stem: str) -> Path:
-    from synthaug.data.video import VIDEO_EXTENSIONS
-
-    for ext in VIDEO_EXTENSIONS:
-        if (videos_dir / f"{stem}{ext}").is_file():
-            return videos_dir / f"{stem}{ext}"
-    raise ValueError(f"no video file for {stem!r} in {videos_dir} (tried {list(VIDEO_EXTENSIONS)})")
+    path = find_video(videos_dir, stem)
+    if path is None:
+        raise ValueError(f"no video file for {stem!r} in {videos_dir} (tried {list(VIDEO_EXTENSIONS)})")
+    return path
 
 
 def _disjoint(cx: float, cy: float, side: float, boxes_xyxy: np.ndarray) -> bool:

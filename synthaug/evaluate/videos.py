@@ -29,7 +29,7 @@ import numpy as np
 import torch
 
 from synthaug.data.boxes import xywh_to_xyxy, xyxy_to_xywh
-from synthaug.data.video import VIDEO_EXTENSIONS, read_video
+from synthaug.data.video import find_video, read_video
 from synthaug.evaluate.cli import load_labels
 
 # synthaug.detectors.sliding and synthaug.evaluate.ap are imported where used: both import torchvision
@@ -111,7 +111,7 @@ def load_eval_set(
         label_file = labels_dir / f"{stem}.json"
         if not label_file.is_file():
             raise ValueError(f"no label file {label_file} for video {stem!r}")
-        video_file = next((videos_dir / f"{stem}{s}" for s in VIDEO_EXTENSIONS if (videos_dir / f"{stem}{s}").is_file()), None)
+        video_file = find_video(videos_dir, stem)
         if video_file is None:
             raise ValueError(f"no video file for {stem!r} in {videos_dir}")
         _, gts = load_labels(label_file)
