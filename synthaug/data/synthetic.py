@@ -231,6 +231,53 @@ def _is_integral(x: Any) -> bool:
     return isinstance(x, (float, np.floating)) and math.isfinite(x) and float(x).is_integer()
 
 
+def _check_arguments(*, transforms: Any, mode: str, render: str, channels: int, patch_size: Any,
+                     synthetic_per_real: Any, length: Any, real: Any, object_scale: float | None,
+                     negative_fraction: float | None, object_size: tuple[float, float]) -> float:
+    """:class:`SyntheticObjectDataset`'s plain arguments on their own; returns the negative fraction
+    (default 0.5 in patch mode, 0 in frame mode)."""
+    if transforms is not None and not callable(transforms):
+        raise ValueError(f"transforms must be a callable on (image, target), got {type(transforms).__name__}")
+    if mode not in ("patch", "frame"):
+        raise ValueError(f"mode must be 'patch' or 'frame', got {mode!r}")
+    if render not in ("cache", "exact"):
+        raise ValueError(f"render must be 'cache' or 'exact', got {render!r}")
+    if channels not in (1, 3):
+        raise ValueError(f"channels must be 1 or 3, got {channels}")
+    if not _is_integral(patch_size) or patch_size < 8:
+        raise ValueError(f"patch_size must be an integer >= 8, got {patch_size!r}")
+    # checked whether or not real is given: a bad value is a mistake either way, never silently ignored
+    if isinstance(synthetic_per_real, (bool, np.bool_)) or not isinstance(synthetic_per_real, numbers.Real) or \
+            not math.isfinite(synthetic_per_real) or synthetic_per_real < 0:
+        raise ValueError(f"synthetic_per_real must be a finite number >= 0, got {synthetic_per_real!r}")
+    if length is not None and (not _is_integral(length) or length < 0):
+        raise ValueError(f"length must be an integer >= 0, got {length!r}")
+    if real is not None and length is not None:
+        raise ValueError("give length (synthetic items alone) or real (mixed with synthetic_per_real), not both")
+    if object_scale is not None and not 0 < object_scale <= 1.5:
+        raise ValueError(f"object_scale must be in (0, 1.5], got {object_scale}")
+    neg = (0.5 if mode == "patch" else 0.0) if negative_fraction is None else float(negative_fraction)
+    if not 0.0 <= neg <= 1.0:
+        raise ValueError(f"negative_fraction must be in [0, 1], got {negative_fraction}")
+    lo_sz, hi_sz = object_size
+    if not (0 < lo_sz <= hi_sz):
+        raise ValueError(f"object_size must be (min, max) with 0 < min <= max, got {object_size}")
+    return neg
+
+
+def _pose_ranges(overrides: Mapping[str, tuple[float, float]] | None) -> dict[str, tuple[float, float]]:
+    """The pose sampling ranges (α, β, γ, t_x, t_y), with ``overrides`` checked and applied."""
+    ranges = {s.name: s.sampling_range for s in POSE_SPECS}
+    for k, v in dict(overrides or {}).items():
+        if k not in ranges:
+            raise ValueError(f"pose_ranges: unknown pose parameter {k!r}; known: {list(POSE_NAMES)}")
+        lo, hi = float(v[0]), float(v[1])
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+            raise ValueError(f"pose_ranges[{k!r}] must be finite (low, high) with low <= high, got {v}")
+        ranges[k] = (lo, hi)
+    return ranges
+
+
 class SyntheticObjectDataset(Dataset):
     """Synthetic object samples (the paper's generator), optionally mixed with real ones.
 
@@ -329,45 +376,34 @@ class SyntheticObjectDataset(Dataset):
         pose_jitter_deg: float = 20.0,
     ) -> None:
         super().__init__()
-        if transforms is not None and not callable(transforms):
-            raise ValueError(f"transforms must be a callable on (image, target), got {type(transforms).__name__}")
+        neg = _check_arguments(transforms=transforms, mode=mode, render=render, channels=channels, patch_size=patch_size,
+                               synthetic_per_real=synthetic_per_real, length=length, real=real,
+                               object_scale=object_scale, negative_fraction=negative_fraction, object_size=object_size)
         self.transforms = transforms
-        if mode not in ("patch", "frame"):
-            raise ValueError(f"mode must be 'patch' or 'frame', got {mode!r}")
-        if render not in ("cache", "exact"):
-            raise ValueError(f"render must be 'cache' or 'exact', got {render!r}")
-        if channels not in (1, 3):
-            raise ValueError(f"channels must be 1 or 3, got {channels}")
-        if not _is_integral(patch_size) or patch_size < 8:
-            raise ValueError(f"patch_size must be an integer >= 8, got {patch_size!r}")
-        # checked whether or not real is given: a bad value is a mistake either way, never silently ignored
-        if isinstance(synthetic_per_real, (bool, np.bool_)) or not isinstance(synthetic_per_real, numbers.Real) or \
-                not math.isfinite(synthetic_per_real) or synthetic_per_real < 0:
-            raise ValueError(f"synthetic_per_real must be a finite number >= 0, got {synthetic_per_real!r}")
-        if length is not None and (not _is_integral(length) or length < 0):
-            raise ValueError(f"length must be an integer >= 0, got {length!r}")
-        if real is not None and length is not None:
-            raise ValueError("give length (synthetic items alone) or real (mixed with synthetic_per_real), not both")
-        if object_scale is not None and not 0 < object_scale <= 1.5:
-            raise ValueError(f"object_scale must be in (0, 1.5], got {object_scale}")
-        neg = (0.5 if mode == "patch" else 0.0) if negative_fraction is None else float(negative_fraction)
-        if not 0.0 <= neg <= 1.0:
-            raise ValueError(f"negative_fraction must be in [0, 1], got {negative_fraction}")
-        lo_sz, hi_sz = object_size
-        if not (0 < lo_sz <= hi_sz):
-            raise ValueError(f"object_size must be (min, max) with 0 < min <= max, got {object_size}")
         self.mode: Mode = mode
         self.channels = channels
         self.patch_size = int(patch_size)
         self.object_scale = 0.7 if object_scale is None else float(object_scale)
         self.seed_scales: torch.Tensor | None = None
         self.negative_fraction = neg
-        self.object_size = (float(lo_sz), float(hi_sz))
+        self.object_size = (float(object_size[0]), float(object_size[1]))
         self.seed = int(seed)
         self.epoch = 0
         self.label = int(label)
         self.render = render
+        self._set_up_capture(backgrounds, params, effects=effects, object_scale=object_scale,
+                             capture_sampling=capture_sampling, seed_geometry=seed_geometry,
+                             pose_sampling=pose_sampling, pose_jitter_deg=pose_jitter_deg)
+        self.pose_ranges = _pose_ranges(pose_ranges)
+        self._set_up_mixing(real, synthetic_per_real, length)
+        self._set_up_renderer(mesh, cache, cache_options)
 
+    # ----------------------------------------------------------- set-up
+    def _set_up_capture(self, backgrounds: Any, params: CaptureParams | str | os.PathLike | None, *,
+                        effects: Sequence[str] | None, object_scale: float | None, capture_sampling: str,
+                        seed_geometry: Mapping[str, Any] | str | None, pose_sampling: str,
+                        pose_jitter_deg: float) -> None:
+        """One background and one row of capture parameters per seed, the effects, and how items draw them."""
         self.backgrounds = self._load_backgrounds(backgrounds)
         n_seeds = len(self.backgrounds)
         if n_seeds == 0:
@@ -385,7 +421,7 @@ class SyntheticObjectDataset(Dataset):
         self.pose_jitter_deg = float(pose_jitter_deg)
         if self.params is None:  # "for now sampled": one row per seed from the default ranges
             g = torch.Generator().manual_seed(self.seed)
-            self.params = CaptureParams.sample(n_seeds, generator=g, channels=channels)
+            self.params = CaptureParams.sample(n_seeds, generator=g, channels=self.channels)
         self.effects = tuple(self.params.effects if effects is None else effects)
         missing = [e for e in self.effects if e not in self.params.effects]
         if missing:
@@ -411,16 +447,8 @@ class SyntheticObjectDataset(Dataset):
             self._density = CaptureDensity(self.params, kind=capture_sampling)
         self._random_effects = [e for e in ordered(list(self.effects)) if e.is_random]
 
-        ranges = {s.name: s.sampling_range for s in POSE_SPECS}
-        for k, v in dict(pose_ranges or {}).items():
-            if k not in ranges:
-                raise ValueError(f"pose_ranges: unknown pose parameter {k!r}; known: {list(POSE_NAMES)}")
-            lo, hi = float(v[0]), float(v[1])
-            if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
-                raise ValueError(f"pose_ranges[{k!r}] must be finite (low, high) with low <= high, got {v}")
-            ranges[k] = (lo, hi)
-        self.pose_ranges = ranges
-
+    def _set_up_mixing(self, real: Dataset | None, synthetic_per_real: float, length: int | None) -> None:
+        """How many real and synthetic items the dataset holds."""
         self.real = real
         if real is not None:
             if synthetic_per_real < 0 or not math.isfinite(synthetic_per_real):
@@ -433,17 +461,19 @@ class SyntheticObjectDataset(Dataset):
             self.n_real = 0
             self.n_synthetic = int(length)
 
+    def _set_up_renderer(self, mesh: Any, cache: Any, cache_options: Mapping[str, Any] | None) -> None:
+        """The view cache (built now unless given) or the exact renderer (its GL subprocess starts lazily)."""
         self._mesh = mesh
         self._cache = cache
         self._cache_options = dict(cache_options or {})
         self._renderer = None
-        if render == "cache" and self._cache is None:
+        if self.render == "cache" and self._cache is None:
             # built here (in the main process, through a GL subprocess), memory-mapped by workers
             from synthaug.render.cache import ViewCache
 
-            opts = {"sprite_size": 96 if mode == "patch" else 128, **self._cache_options}
+            opts = {"sprite_size": 96 if self.mode == "patch" else 128, **self._cache_options}
             self._cache = ViewCache.build(mesh, **opts)
-        elif render == "exact":
+        elif self.render == "exact":
             from synthaug.render.server import Renderer
 
             self._renderer = Renderer(mesh)  # starts its GL subprocess lazily, per process
