@@ -416,8 +416,6 @@ def estimate_background(
     Shape:
         frames ``(T, H, W)`` uint8 -> background ``(H, W)`` uint8.
     """
-    import cv2
-
     if frames.ndim != 3 or frames.dtype != np.uint8:
         raise ValueError(f"frames must be uint8 (T, H, W), got {frames.dtype} {frames.shape}")
     if len(boxes) != len(frames):
@@ -436,101 +434,30 @@ def estimate_background(
     if len(tboxes) == 0:
         return BackgroundResult(target.copy(), "none", 0.0, np.zeros((h, w), bool),
                                 background_rgb=None if target_rgb is None else target_rgb.copy())
-    region = object_mask((h, w), tboxes, margin_fraction=margin_fraction, min_margin=min_margin)
-    ring_w = int(max(6, min_margin, margin_fraction * tboxes[:, 2:].max()))
-    ring = _ring(region, ring_w)
-    ys, xs = np.nonzero(region | ring)
-    y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
-    reg_roi, ring_roi = region[y0:y1, x0:x1], ring[y0:y1, x0:x1]
-    tgt_roi = target[y0:y1, x0:x1].astype(np.float32)
+    win = _object_window((h, w), tboxes, margin_fraction=margin_fraction, min_margin=min_margin)
+    region = win.region
     aligner = aligner if aligner is not None else FrameAligner(frames, boxes)
-    T = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1]], dtype=np.float64)
+    nb = _aligned_neighbours(frames, boxes, index, offsets, aligner, win, colour_frames=colour_frames,
+                             min_samples=min_samples, max_neighbours=max_neighbours, margin_fraction=margin_fraction,
+                             min_margin=min_margin, max_residual=max_residual)
 
-    samples: list[np.ndarray] = []
-    samples_rgb: list[np.ndarray] = []
-    used: list[int] = []
-    residuals: list[float] = []
-    tried = 0
-    for off in offsets:
-        j = index + int(off)
-        if not 0 <= j < len(frames) or j == index or len(_box_list(boxes[j])) == 0:
-            continue
-        tried += 1
-        H = aligner.homography(j, index)
-        if H is None:
-            continue
-        M = T @ H
-        warped = cv2.warpPerspective(frames[j].astype(np.float32), M, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
-                                     borderMode=cv2.BORDER_CONSTANT, borderValue=float("nan"))
-        nmask = object_mask((h, w), _box_list(boxes[j]), margin_fraction=margin_fraction,
-                            min_margin=min_margin).astype(np.uint8)
-        nmask_w = cv2.warpPerspective(nmask, M, (x1 - x0, y1 - y0), flags=cv2.INTER_NEAREST,
-                                      borderMode=cv2.BORDER_CONSTANT, borderValue=1) > 0
-        warped[nmask_w] = np.nan
-        ring_ok = ring_roi & np.isfinite(warped)
-        if ring_ok.sum() < 0.5 * ring_roi.sum():
-            continue
-        diff = tgt_roi[ring_ok] - warped[ring_ok]
-        offset = float(np.median(diff))
-        resid = float(np.median(np.abs(diff - offset)))
-        if resid > max_residual:
-            continue
-        samples.append(warped + offset)
-        if target_rgb is not None:
-            wc = cv2.warpPerspective(colour_frames[j].astype(np.float32), M, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
-                                     borderMode=cv2.BORDER_CONSTANT, borderValue=(float("nan"),) * 3)
-            wc[~np.isfinite(warped)] = np.nan
-            t_rgb = target_rgb[y0:y1, x0:x1].astype(np.float32)
-            samples_rgb.append(wc + np.median(t_rgb[ring_ok] - wc[ring_ok], axis=0))  # each channel's offset
-        used.append(int(off))
-        residuals.append(resid)
-        if len(samples) >= max_neighbours:
-            break
-        if len(samples) >= min_samples:
-            counts = np.isfinite(np.stack(samples))[:, reg_roi].sum(axis=0)
-            if counts.min() >= min_samples:
-                break
-
-    ring_vals = tgt_roi[ring_roi]
-    details: dict[str, Any] = {"offsets_used": used, "neighbour_residuals": [round(r, 3) for r in residuals],
+    ring_vals = win.crop(target).astype(np.float32)[win.ring_roi]
+    details: dict[str, Any] = {"offsets_used": nb.used, "neighbour_residuals": [round(r, 3) for r in nb.residuals],
                                "ring_spread": round(_robust_spread(ring_vals), 3)}
-    method, fill, inpainted_fraction = "inpaint", None, 1.0
+    method, fill, fill_rgb, inpainted_fraction = "inpaint", None, None, 1.0
     quality = _robust_spread(ring_vals)
-    if samples:
-        stack = np.stack(samples)
-        finite = np.isfinite(stack)
-        counts = finite.sum(axis=0)
-        with np.errstate(all="ignore"):
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                med = np.nanmedian(stack, axis=0)
-        enough = (counts >= min_samples) & reg_roi
-        frac_missing = 1.0 - enough.sum() / max(reg_roi.sum(), 1)
-        if frac_missing <= max_inpainted_fraction:
-            ring_med = ring_roi & (counts >= 1)
-            ring_resid = (float(np.median(np.abs(tgt_roi[ring_med] - med[ring_med]))) if ring_med.any()
-                          else _robust_spread(ring_vals))
-            composite = target.copy()
-            roi = composite[y0:y1, x0:x1]
-            roi[enough] = np.clip(np.rint(med[enough]), 0, 255).astype(np.uint8)
-            holes = np.zeros((h, w), bool)
-            holes[y0:y1, x0:x1] = reg_roi & ~enough
-            if holes.any():
-                composite = inpaint_region(composite, holes, radius=inpaint_radius, method=inpaint_method)
-            if target_rgb is not None:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", RuntimeWarning)
-                    med_rgb = np.nanmedian(np.stack(samples_rgb), axis=0)
-                fill_rgb = target_rgb.copy()
-                fill_rgb[y0:y1, x0:x1][enough] = np.clip(np.rint(med_rgb[enough]), 0, 255).astype(np.uint8)
-                if holes.any():
-                    fill_rgb = _inpaint_rgb(fill_rgb, holes, radius=inpaint_radius, method=inpaint_method)
+    if nb.samples:
+        median = _median_fill(target, target_rgb, win, nb, min_samples=min_samples,
+                              max_inpainted_fraction=max_inpainted_fraction, inpaint_radius=inpaint_radius,
+                              inpaint_method=inpaint_method)
+        if median is not None:
             # No leak test against the inpainted fill is made here: it fires on textured
             # scenes where inpainting is the worse estimate. The object cannot leak
             # because every neighbour's own (grown) object region is excluded, and a
             # mislabelled neighbour is outvoted by the median of >= min_samples samples.
+            fill, fill_rgb, holes, ring_resid = median
             details["ring_residual"] = round(ring_resid, 3)
-            fill, inpainted_fraction = composite, float(holes.sum() / max(region.sum(), 1))
+            inpainted_fraction = float(holes.sum() / max(region.sum(), 1))
             method = "median" if not holes.any() else "median+inpaint"
             quality = ring_resid
     background = fill if fill is not None else inpaint_region(target, region, radius=inpaint_radius, method=inpaint_method)
@@ -541,9 +468,175 @@ def estimate_background(
     in_box = object_mask((h, w), tboxes, margin_fraction=0, min_margin=0)
     details["object_contrast"] = round(float(np.mean(np.abs(background[in_box].astype(np.float32) - target[in_box]))), 3)
     return BackgroundResult(background=background, method=method, quality=float(quality), region=region,
-                            n_aligned=len(samples) if method != "inpaint" else 0, n_tried=tried,
+                            n_aligned=len(nb.samples) if method != "inpaint" else 0, n_tried=nb.tried,
                             inpainted_fraction=float(inpainted_fraction), details=details,
                             background_rgb=background_rgb)
+
+
+@dataclass
+class _ObjectWindow:
+    """A seed's object region (its grown boxes), the ring of background around it, and the window
+    ``[y0:y1, x0:x1]`` holding both (where neighbours are warped to)."""
+
+    region: np.ndarray
+    ring: np.ndarray
+    y0: Any
+    y1: Any
+    x0: Any
+    x1: Any
+
+    @property
+    def size(self) -> tuple[Any, Any]:
+        """``(width, height)`` of the window (OpenCV's ``dsize``)."""
+        return (self.x1 - self.x0, self.y1 - self.y0)
+
+    @property
+    def reg_roi(self) -> np.ndarray:
+        return self.region[self.y0:self.y1, self.x0:self.x1]
+
+    @property
+    def ring_roi(self) -> np.ndarray:
+        return self.ring[self.y0:self.y1, self.x0:self.x1]
+
+    def crop(self, image: np.ndarray) -> np.ndarray:
+        return image[self.y0:self.y1, self.x0:self.x1]
+
+    def shift(self) -> np.ndarray:
+        """Frame pixels -> window pixels (a homography)."""
+        return np.array([[1, 0, -self.x0], [0, 1, -self.y0], [0, 0, 1]], dtype=np.float64)
+
+
+def _object_window(shape: tuple[int, int], tboxes: np.ndarray, *, margin_fraction: float,
+                   min_margin: float) -> _ObjectWindow:
+    region = object_mask(shape, tboxes, margin_fraction=margin_fraction, min_margin=min_margin)
+    ring_w = int(max(6, min_margin, margin_fraction * tboxes[:, 2:].max()))
+    ring = _ring(region, ring_w)
+    ys, xs = np.nonzero(region | ring)
+    return _ObjectWindow(region, ring, ys.min(), ys.max() + 1, xs.min(), xs.max() + 1)
+
+
+@dataclass
+class _Neighbours:
+    """The aligned neighbours of a seed frame: window samples (brightness-matched, NaN where unknown)."""
+
+    samples: list[np.ndarray] = field(default_factory=list)
+    samples_rgb: list[np.ndarray] = field(default_factory=list)
+    used: list[int] = field(default_factory=list)
+    residuals: list[float] = field(default_factory=list)
+    tried: int = 0
+
+
+def _aligned_neighbours(frames: np.ndarray, boxes: Sequence[Any], index: int, offsets: Sequence[int],
+                        aligner: FrameAligner, win: _ObjectWindow, *, colour_frames: np.ndarray | None,
+                        min_samples: int, max_neighbours: int, margin_fraction: float, min_margin: float,
+                        max_residual: float) -> _Neighbours:
+    """Neighbours at ``offsets`` (with a box) aligned onto the seed's window, until every object pixel has
+    ``min_samples`` samples or ``max_neighbours`` were used (see :func:`estimate_background`)."""
+    nb = _Neighbours()
+    reg_roi = win.reg_roi
+    for off in offsets:
+        j = index + int(off)
+        if not 0 <= j < len(frames) or j == index or len(_box_list(boxes[j])) == 0:
+            continue
+        nb.tried += 1
+        H = aligner.homography(j, index)
+        if H is None:
+            continue
+        sample = _neighbour_sample(frames, boxes, j, index, win.shift() @ H, win, colour_frames=colour_frames,
+                                   margin_fraction=margin_fraction, min_margin=min_margin, max_residual=max_residual)
+        if sample is None:
+            continue
+        gray, rgb, resid = sample
+        nb.samples.append(gray)
+        if rgb is not None:
+            nb.samples_rgb.append(rgb)
+        nb.used.append(int(off))
+        nb.residuals.append(resid)
+        if len(nb.samples) >= max_neighbours:
+            break
+        if len(nb.samples) >= min_samples:
+            counts = np.isfinite(np.stack(nb.samples))[:, reg_roi].sum(axis=0)
+            if counts.min() >= min_samples:
+                break
+    return nb
+
+
+def _neighbour_sample(frames: np.ndarray, boxes: Sequence[Any], j: int, index: int, M: np.ndarray,
+                      win: _ObjectWindow, *, colour_frames: np.ndarray | None, margin_fraction: float,
+                      min_margin: float, max_residual: float) -> tuple[np.ndarray, np.ndarray | None, float] | None:
+    """Frame ``j`` warped by ``M`` onto the window, its own object region masked (NaN), brightness-matched
+    to the seed on the ring: ``(gray, rgb or None, ring residual)``; None when the ring is mostly unseen
+    or the residual exceeds ``max_residual``."""
+    import cv2
+
+    h, w = frames.shape[1:]
+    ring_roi = win.ring_roi
+    tgt_roi = win.crop(frames[index]).astype(np.float32)
+    warped = cv2.warpPerspective(frames[j].astype(np.float32), M, win.size, flags=cv2.INTER_LINEAR,
+                                 borderMode=cv2.BORDER_CONSTANT, borderValue=float("nan"))
+    nmask = object_mask((h, w), _box_list(boxes[j]), margin_fraction=margin_fraction,
+                        min_margin=min_margin).astype(np.uint8)
+    nmask_w = cv2.warpPerspective(nmask, M, win.size, flags=cv2.INTER_NEAREST,
+                                  borderMode=cv2.BORDER_CONSTANT, borderValue=1) > 0
+    warped[nmask_w] = np.nan
+    ring_ok = ring_roi & np.isfinite(warped)
+    if ring_ok.sum() < 0.5 * ring_roi.sum():
+        return None
+    diff = tgt_roi[ring_ok] - warped[ring_ok]
+    offset = float(np.median(diff))
+    resid = float(np.median(np.abs(diff - offset)))
+    if resid > max_residual:
+        return None
+    rgb = None
+    if colour_frames is not None:
+        wc = cv2.warpPerspective(colour_frames[j].astype(np.float32), M, win.size, flags=cv2.INTER_LINEAR,
+                                 borderMode=cv2.BORDER_CONSTANT, borderValue=(float("nan"),) * 3)
+        wc[~np.isfinite(warped)] = np.nan
+        t_rgb = win.crop(colour_frames[index]).astype(np.float32)
+        rgb = wc + np.median(t_rgb[ring_ok] - wc[ring_ok], axis=0)  # each channel's offset
+    return warped + offset, rgb, resid
+
+
+def _median_fill(target: np.ndarray, target_rgb: np.ndarray | None, win: _ObjectWindow, nb: _Neighbours, *,
+                 min_samples: int, max_inpainted_fraction: float, inpaint_radius: int,
+                 inpaint_method: str) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, float] | None:
+    """The seed frame with its object region replaced by the neighbours' median where ``min_samples`` agree,
+    inpainted elsewhere: ``(gray, rgb or None, holes inpainted, ring residual)``; None when more than
+    ``max_inpainted_fraction`` of the region lacks samples."""
+    h, w = target.shape
+    reg_roi, ring_roi = win.reg_roi, win.ring_roi
+    tgt_roi = win.crop(target).astype(np.float32)
+    stack = np.stack(nb.samples)
+    finite = np.isfinite(stack)
+    counts = finite.sum(axis=0)
+    with np.errstate(all="ignore"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            med = np.nanmedian(stack, axis=0)
+    enough = (counts >= min_samples) & reg_roi
+    frac_missing = 1.0 - enough.sum() / max(reg_roi.sum(), 1)
+    if frac_missing > max_inpainted_fraction:
+        return None
+    ring_med = ring_roi & (counts >= 1)
+    ring_resid = (float(np.median(np.abs(tgt_roi[ring_med] - med[ring_med]))) if ring_med.any()
+                  else _robust_spread(tgt_roi[ring_roi]))
+    composite = target.copy()
+    roi = win.crop(composite)
+    roi[enough] = np.clip(np.rint(med[enough]), 0, 255).astype(np.uint8)
+    holes = np.zeros((h, w), bool)
+    holes[win.y0:win.y1, win.x0:win.x1] = reg_roi & ~enough
+    if holes.any():
+        composite = inpaint_region(composite, holes, radius=inpaint_radius, method=inpaint_method)
+    fill_rgb = None
+    if target_rgb is not None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            med_rgb = np.nanmedian(np.stack(nb.samples_rgb), axis=0)
+        fill_rgb = target_rgb.copy()
+        win.crop(fill_rgb)[enough] = np.clip(np.rint(med_rgb[enough]), 0, 255).astype(np.uint8)
+        if holes.any():
+            fill_rgb = _inpaint_rgb(fill_rgb, holes, radius=inpaint_radius, method=inpaint_method)
+    return composite, fill_rgb, holes, ring_resid
 
 
 def estimate_background_single(image: np.ndarray, boxes: Any, *, margin_fraction: float = 0.25,
