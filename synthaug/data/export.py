@@ -256,46 +256,18 @@ def export_dataset(
         (tmp / "images").mkdir()
         if fmt == "yolo":
             (tmp / "labels").mkdir()
-        images: list[dict[str, Any]] = []
-        annotations: list[dict[str, Any]] = []
-        n_negative = n_boxes = 0
-
-        def write(stem: str, image: Any, target: Any, synthetic: bool) -> None:
-            nonlocal n_negative, n_boxes
-            a = _image_u8(image, stem)
-            h, w = a.shape[:2]
-            boxes = _clip(_boxes_xyxy(target, stem), w, h)
-            n_negative += len(boxes) == 0
-            n_boxes += len(boxes)
-            extra = {}
-            seed_index = target.get("seed_index") if isinstance(target, Mapping) else None
-            if seed_index is not None and int(_plain(seed_index)) >= 0:
-                extra["seed_index"] = int(_plain(seed_index))  # which seed's background / frame
-            (tmp / "images" / f"{stem}.png").write_bytes(_png_bytes(a))
-            image_id = len(images) + 1
-            images.append({"id": image_id, "file_name": f"{stem}.png", "width": int(w), "height": int(h),
-                           "synthetic": synthetic, **extra})
-            if fmt == "coco":
-                for x0, y0, x1, y1 in boxes.tolist():
-                    bw, bh = x1 - x0, y1 - y0
-                    annotations.append({"id": len(annotations) + 1, "image_id": image_id, "category_id": 1,
-                                        "bbox": [x0, y0, bw, bh], "area": bw * bh, "iscrowd": 0})
-            else:
-                d = YOLO_DECIMALS
-                lines = [f"0 {(x0 + x1) / 2 / w:.{d}f} {(y0 + y1) / 2 / h:.{d}f} {(x1 - x0) / w:.{d}f} "
-                         f"{(y1 - y0) / h:.{d}f}\n" for x0, y0, x1, y1 in boxes.tolist()]
-                (tmp / "labels" / f"{stem}.txt").write_text("".join(lines))
-
+        writer = _ExportWriter(tmp, fmt)
         for start in range(0, count, batch_size):
             idx = list(range(start, min(start + batch_size, count)))
             items = dataset.__getitems__(idx) if hasattr(dataset, "__getitems__") else [dataset[i] for i in idx]
             for i, (image, target) in zip(idx, items):
                 syn = _is_synthetic(target)
-                write(f"{'syn' if syn else 'real_item'}_{i:06d}", image, target, syn)
+                writer.write(f"{'syn' if syn else 'real_item'}_{i:06d}", image, target, syn)
+        images = writer.images
         n_syn = sum(im["synthetic"] for im in images)
         for k in range(len(real) if real is not None else 0):
             image, target = real[k]
-            write(f"real_{k:06d}", image, target, False)
+            writer.write(f"real_{k:06d}", image, target, False)
 
         meta = {
             "description": f"synthaug export: {count} dataset frames"
@@ -306,20 +278,7 @@ def export_dataset(
             "epoch": getattr(dataset, "epoch", None),
             **dict(info or {}),
         }
-        if fmt == "coco":
-            doc = {"info": meta, "images": images, "annotations": annotations,
-                   "categories": [{"id": 1, "name": class_name, "supercategory": class_name}]}
-            (tmp / "annotations.json").write_bytes(_json_bytes(doc))
-        else:
-            yaml = (f"# written by synthaug {synthaug.__version__}: "
-                    f"{json.dumps(meta, sort_keys=True, allow_nan=False)}\n"
-                    f"# val: the same images (replace with a real validation set)\n"
-                    f"path: {_yaml_str(str(out.resolve()))}\n"
-                    f"train: images\n"
-                    f"val: images\n"
-                    f"names:\n"
-                    f"  0: {_yaml_str(class_name)}\n")
-            (tmp / "data.yaml").write_text(yaml)
+        writer.write_index(meta, class_name, out)
         os.chmod(tmp, 0o755)
         from synthaug.data.seedset import replace_dir
 
@@ -329,7 +288,62 @@ def export_dataset(
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return {"out": str(out), "format": fmt, "images": len(images), "synthetic": n_syn,
-            "real": len(images) - n_syn, "boxes": n_boxes, "negatives": n_negative}
+            "real": len(images) - n_syn, "boxes": writer.n_boxes, "negatives": writer.n_negative}
+
+
+class _ExportWriter:
+    """Writes one image at a time into ``tmp`` (``images/<stem>.png``, YOLO ``labels/<stem>.txt``) and
+    collects the COCO records; :meth:`write_index` writes ``annotations.json`` / ``data.yaml`` at the end."""
+
+    def __init__(self, tmp: Path, fmt: str) -> None:
+        self.tmp, self.fmt = tmp, fmt
+        self.images: list[dict[str, Any]] = []
+        self.annotations: list[dict[str, Any]] = []
+        self.n_negative = self.n_boxes = 0
+
+    def write(self, stem: str, image: Any, target: Any, synthetic: bool) -> None:
+        a = _image_u8(image, stem)
+        h, w = a.shape[:2]
+        boxes = _clip(_boxes_xyxy(target, stem), w, h)
+        self.n_negative += len(boxes) == 0
+        self.n_boxes += len(boxes)
+        extra = {}
+        seed_index = target.get("seed_index") if isinstance(target, Mapping) else None
+        if seed_index is not None and int(_plain(seed_index)) >= 0:
+            extra["seed_index"] = int(_plain(seed_index))  # which seed's background / frame
+        (self.tmp / "images" / f"{stem}.png").write_bytes(_png_bytes(a))
+        image_id = len(self.images) + 1
+        self.images.append({"id": image_id, "file_name": f"{stem}.png", "width": int(w), "height": int(h),
+                            "synthetic": synthetic, **extra})
+        if self.fmt == "coco":
+            for x0, y0, x1, y1 in boxes.tolist():
+                bw, bh = x1 - x0, y1 - y0
+                self.annotations.append({"id": len(self.annotations) + 1, "image_id": image_id, "category_id": 1,
+                                         "bbox": [x0, y0, bw, bh], "area": bw * bh, "iscrowd": 0})
+        else:
+            d = YOLO_DECIMALS
+            lines = [f"0 {(x0 + x1) / 2 / w:.{d}f} {(y0 + y1) / 2 / h:.{d}f} {(x1 - x0) / w:.{d}f} "
+                     f"{(y1 - y0) / h:.{d}f}\n" for x0, y0, x1, y1 in boxes.tolist()]
+            (self.tmp / "labels" / f"{stem}.txt").write_text("".join(lines))
+
+    def write_index(self, meta: Mapping[str, Any], class_name: str, out: Path) -> None:
+        """COCO ``annotations.json`` (``meta`` as its ``info``) or YOLO ``data.yaml`` (``meta`` in its header)."""
+        import synthaug
+
+        if self.fmt == "coco":
+            doc = {"info": meta, "images": self.images, "annotations": self.annotations,
+                   "categories": [{"id": 1, "name": class_name, "supercategory": class_name}]}
+            (self.tmp / "annotations.json").write_bytes(_json_bytes(doc))
+        else:
+            yaml = (f"# written by synthaug {synthaug.__version__}: "
+                    f"{json.dumps(meta, sort_keys=True, allow_nan=False)}\n"
+                    f"# val: the same images (replace with a real validation set)\n"
+                    f"path: {_yaml_str(str(out.resolve()))}\n"
+                    f"train: images\n"
+                    f"val: images\n"
+                    f"names:\n"
+                    f"  0: {_yaml_str(class_name)}\n")
+            (self.tmp / "data.yaml").write_text(yaml)
 
 
 # ------------------------------------------------------------------ command line
