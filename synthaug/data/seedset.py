@@ -302,8 +302,6 @@ def write_seedset(
     Returns:
         The final folder path.
     """
-    import cv2
-
     path = Path(path)
     meta = dict(metadata or {})
     if "patch_size" not in meta or "object_fraction" not in meta:
@@ -337,31 +335,7 @@ def write_seedset(
     tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.tmp-"))
     try:
         (tmp / "frames").mkdir()
-        recs = []
-        for i, rec in enumerate(records):
-            rec = dict(rec)
-            for key, src, suffix in (("frame_file", frames[i], "frame"),
-                                     ("background_file", background_frames[i], "background"),
-                                     ("neighbour_file", neighbours[i], "neighbour")):
-                if src is None and key == "neighbour_file":
-                    rec.pop(key, None)
-                    continue
-                name = f"frames/{i:05d}_{suffix}.png"
-                dst = tmp / name
-                if isinstance(src, np.ndarray):
-                    if src.dtype != np.uint8 or src.ndim != 2:
-                        raise ValueError(f"{key} {i} must be uint8 (H, W), got {src.dtype} {src.shape}")
-                    ok, buf = cv2.imencode(".png", src, [cv2.IMWRITE_PNG_COMPRESSION, 1])
-                    if not ok:
-                        raise RuntimeError(f"cannot encode {key} {i} as PNG")
-                    dst.write_bytes(buf.tobytes())
-                else:
-                    try:
-                        os.link(src, dst)
-                    except OSError:
-                        shutil.copyfile(src, dst)
-                rec[key] = name
-            recs.append(rec)
+        recs = _write_frames(tmp, records, frames, background_frames, neighbours)
         with open(tmp / ARRAYS, "wb") as f:
             np.savez(f, patches=patches, backgrounds=backgrounds, boxes=boxes, centres=centres, crops=crops,
                      negatives=negatives)
@@ -380,6 +354,40 @@ def write_seedset(
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return path
+
+
+def _write_frames(tmp: Path, records: Sequence[Mapping[str, Any]], frames: Sequence[Any],
+                  background_frames: Sequence[Any], neighbours: Sequence[Any]) -> list[dict[str, Any]]:
+    """Each seed's frame, background frame and neighbour frame (if any) as ``frames/NNNNN_<kind>.png`` in
+    ``tmp`` (arrays encoded, paths hard-linked or copied); the records with their file names."""
+    import cv2
+
+    recs = []
+    for i, rec in enumerate(records):
+        rec = dict(rec)
+        for key, src, suffix in (("frame_file", frames[i], "frame"),
+                                 ("background_file", background_frames[i], "background"),
+                                 ("neighbour_file", neighbours[i], "neighbour")):
+            if src is None and key == "neighbour_file":
+                rec.pop(key, None)
+                continue
+            name = f"frames/{i:05d}_{suffix}.png"
+            dst = tmp / name
+            if isinstance(src, np.ndarray):
+                if src.dtype != np.uint8 or src.ndim != 2:
+                    raise ValueError(f"{key} {i} must be uint8 (H, W), got {src.dtype} {src.shape}")
+                ok, buf = cv2.imencode(".png", src, [cv2.IMWRITE_PNG_COMPRESSION, 1])
+                if not ok:
+                    raise RuntimeError(f"cannot encode {key} {i} as PNG")
+                dst.write_bytes(buf.tobytes())
+            else:
+                try:
+                    os.link(src, dst)
+                except OSError:
+                    shutil.copyfile(src, dst)
+            rec[key] = name
+        recs.append(rec)
+    return recs
 
 
 def _jsonable(x: Any) -> Any:
