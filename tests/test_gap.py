@@ -422,7 +422,7 @@ def test_training_samples_are_the_detectors_synthetic_positives(tmp_path, pose_s
     """The gap is measured on the very patches training uses (same fit, seed and pose sampling)."""
     from synthaug.data.procedural import sky_backgrounds
     from synthaug.data.seedset import SeedSet, write_seedset
-    from synthaug.detectors.training import synthetic_positives
+    from synthaug.detectors.training_sets import synthetic_positives
     from synthaug.diagnose.gap import training_samples
     from synthaug.params import CaptureParams
 

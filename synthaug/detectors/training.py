@@ -47,9 +47,6 @@ from torch import Tensor
 from synthaug.detectors.frames import _as_item
 from synthaug.detectors.mining import mine_hard_negatives, validation_false_positives
 
-# diagnose/gain.py (a file under concurrent edit) still imports synthetic_positives from here
-from synthaug.detectors.training_sets import synthetic_positives  # noqa: F401
-
 __all__ = [
     "DETECTORS",
     "TrainOptions",

@@ -47,7 +47,7 @@ def _synthetic_build(ctx: Any, n: int, ratio: float, fit: Path) -> Callable[[], 
     grid, ...) act as in the diagnosis; the paper's effects do not read it (the base arm is Table 1's).
     """
     from synthaug.diagnose.reference_camera import seed_geometry
-    from synthaug.detectors.training import synthetic_positives
+    from synthaug.detectors.training_sets import synthetic_positives
 
     def build() -> dict[str, Any]:
         d = ctx.real_build(n)()

@@ -1136,7 +1136,7 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
                      seed: int = 0, pose_sampling: str = "uniform") -> tuple[Tensor, np.ndarray]:
     """``count`` synthetic training patches of a fit, and the seed each one comes from.
 
-    The dataset of :func:`synthaug.detectors.training.synthetic_positives` (same arguments, same patches:
+    The dataset of :func:`synthaug.detectors.training_sets.synthetic_positives` (same arguments, same patches:
     one seed's fitted parameters and background, a random pose — ``pose_sampling="fitted"``: around the seed's
     fitted pose), keeping each item's ``seed_index`` so the two-sample test can hold a seed's real and synthetic
     patches out together.
