@@ -54,13 +54,15 @@ def make_case(work: Path, k: int, a: argparse.Namespace) -> tuple[Path, Path, di
     seeds, fit = case / "seeds", case / "fit.json"
     nz = Nuisances.none() if a.no_nuisances else Nuisances.draw(np.random.default_rng([a.base_seed, k]))
     key = {"k": k, "base_seed": a.base_seed, "seeds": a.seeds, "fit": a.fit, "budget": a.budget,
-           "step_deg": a.step_deg, "sprite_size": a.sprite_size, "nuisances": nz.as_dict()}
+           "step_deg": a.step_deg, "sprite_size": a.sprite_size, "nuisances": nz.as_dict(),
+           **({"hidden": a.hidden} if a.hidden else {})}
     stamp = case / "case.json"
     if stamp.exists() and json.loads(stamp.read_text()).get("key") == key and fit.exists():
         return seeds, fit, json.loads(stamp.read_text()), 0.0
     t = time.perf_counter()
     step, sprite = (20.0, 48) if a.fit == "converged" else (a.step_deg, a.sprite_size)
-    make_measured_seedset(seeds, n_seeds=a.seeds, hidden=None, nuisances=nz, frame_size=(192, 256),
+    make_measured_seedset(seeds, n_seeds=a.seeds, hidden=[a.hidden] if a.hidden else None, nuisances=nz,
+                          frame_size=(192, 256),
                           object_px=(20.0, 32.0), view_step_deg=step, sprite_size=sprite, seed=a.base_seed + k,
                           paper_ranges={"w_d": (0.3, 0.45)})
     if a.fit == "converged":
@@ -131,6 +133,9 @@ def main() -> int:
     ap.add_argument("--step-deg", type=float, default=10.0)
     ap.add_argument("--sprite-size", type=int, default=64)
     ap.add_argument("--no-nuisances", action="store_true", help="the fit's own model (the old reference camera)")
+    ap.add_argument("--hidden", default=None, metavar="EFFECT",
+                    help="not a null run: hide this effect (realistic strength) in every case and report how often "
+                         "it is named first and significant (the power at these floors)")
     ap.add_argument("--workdir", default="outputs/bench_diagnose_null")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--rules", choices=("calibrated", "hand"), default="calibrated",
@@ -176,13 +181,22 @@ def main() -> int:
               file=sys.stderr, flush=True)
     n_alarm = sum(bool(c["findings"]) for c in cases)
     lo, hi = wilson(n_alarm, len(cases))
+    power = None
+    if a.hidden:
+        first = [c["findings"][0].split(" ")[0] if c["findings"] else None for c in cases]
+        named = sum(f == a.hidden for f in first)
+        wrong = sum(f is not None and f != a.hidden for f in first)
+        power = {"hidden": a.hidden, "named_first": named, "misnamed_first": wrong, "missed": first.count(None),
+                 "named_first_rate": named / len(cases), "wilson95": list(wilson(named, len(cases)))}
 
     result = {
         "bench": "diagnose_null", "command": " ".join(["python"] + sys.argv), "cases": len(cases),
         "seeds": a.seeds, "fit": a.fit, "nuisances": not a.no_nuisances, "base_seed": a.base_seed,
         "rules": a.rules,
         "floors_in_use": (calibration.describe() if a.rules == "calibrated" else {"source": "hand-set"}),
-        "false_alarm_rate": n_alarm / len(cases), "false_alarms": n_alarm, "wilson95": [lo, hi],
+        "hidden": a.hidden, "power": power,
+        "false_alarm_rate": None if a.hidden else n_alarm / len(cases), "false_alarms": None if a.hidden else n_alarm,
+        "wilson95": None if a.hidden else [lo, hi],
         "by_finding": _count([f for c in cases for f in c["findings"]]),
         "wall_seconds": time.perf_counter() - t_all, "diagnosis_seconds_median": sorted(diag_s)[len(diag_s) // 2],
         "diagnosis_seconds_max": max(diag_s), "prep_seconds_total": sum(prep_s),
