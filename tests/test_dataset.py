@@ -274,7 +274,7 @@ def test_jittered_pose_is_the_fitted_rotation_turned_in_the_objects_frame():
     """Euler angles of R(α, β, γ)·exp([v]x), against scipy (R = Rz(γ) Ry(β) Rx(α) is scipy's extrinsic 'xyz')."""
     from scipy.spatial.transform import Rotation
 
-    from synthaug.data.synthetic import jittered_pose
+    from synthaug.data.poses import jittered_pose
 
     rng = np.random.default_rng(3)
     for _ in range(50):

@@ -8,7 +8,12 @@ ones, the rest synthetic, so a shuffling sampler mixes them at the chosen
 ``synthetic_per_real`` ratio.
 
 Every item is a pure function of ``(seed, epoch, index)``: the same bytes with
-any ``num_workers`` and across runs. New poses every epoch, the PyTorch way: an
+any ``num_workers`` and across runs. Drawing and rendering are two steps, as
+torchvision's ``make_params`` / ``transform``: :meth:`SyntheticObjectDataset.make_params`
+draws an item's random choices into a frozen :class:`ItemParams` (seed, pose,
+crop, noise fields, capture parameters) and :meth:`SyntheticObjectDataset.render`
+turns params into items without drawing (``render(make_params(i))`` is
+``ds[i]``). The pose comes from a pose sampler (:mod:`synthaug.data.poses`). New poses every epoch, the PyTorch way: an
 :class:`EpochSampler` yields ``(epoch, index)`` pairs, so the epoch reaches the
 DataLoader workers even when they are persistent (or under a
 ``DistributedSampler``, which it wraps); Lightning calls its ``set_epoch``.
@@ -44,25 +49,26 @@ Example:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
 import os
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, overload
 
 import numpy as np
 import torch
-from scipy.spatial.transform import Rotation
 from torch.utils.data import Dataset, Sampler
 from torchvision import tv_tensors
 
+from synthaug.data.poses import FittedPose, PoseSampler, UniformPose, pose_ranges
 from synthaug.effects.pipeline import simulate
 from synthaug.effects.registry import ordered
 from synthaug.params import POSE_NAMES, POSE_SPECS, CaptureParams, fitted_object_scales
-from synthaug.render.pose import rotation_matrix
 
-__all__ = ["SyntheticObjectDataset", "EpochSampler", "collate_detection", "item_generator", "jittered_pose"]
+__all__ = ["SyntheticObjectDataset", "ItemParams", "EpochSampler", "collate_detection", "item_generator"]
 
 Mode = Literal["patch", "frame"]
 
@@ -84,21 +90,6 @@ def item_seed(seed: int, epoch: int, index: int) -> int:
     tenth of the time budget of a sample.)
     """
     return _splitmix64(_splitmix64(_splitmix64(int(seed) & _MASK64) ^ (int(epoch) & _MASK64)) ^ (int(index) & _MASK64))
-
-
-def jittered_pose(alpha: float, beta: float, gamma: float, rotvec: np.ndarray) -> tuple[float, float, float]:
-    """The Euler angles of ``R(α, β, γ) · exp([rotvec]×)``: a pose turned by a small rotation in the object's frame.
-
-    ``R = Rz(γ) Ry(β) Rx(α)`` (:func:`synthaug.render.pose.rotation_matrix`); the rotation of
-    rotation vector ``rotvec`` (axis · angle, radians) is applied first, in the object's own
-    frame, so the jitter does not depend on where the pose sits in Euler angles (no gimbal bias).
-    Returns ``(α, β, γ)`` with α, γ in (-π, π] and β in [-π/2, π/2].
-    """
-    r = rotation_matrix(alpha, beta, gamma) @ Rotation.from_rotvec(np.asarray(rotvec, dtype=np.float64)).as_matrix()
-    b = math.asin(max(-1.0, min(1.0, -r[2, 0])))
-    a = math.atan2(r[2, 1], r[2, 2])
-    c = math.atan2(r[1, 0], r[0, 0])
-    return a, b, c
 
 
 def item_generator(seed: int, epoch: int, index: int) -> torch.Generator:
@@ -265,17 +256,51 @@ def _check_arguments(*, transforms: Any, mode: str, render: str, channels: int, 
     return neg
 
 
-def _pose_ranges(overrides: Mapping[str, tuple[float, float]] | None) -> dict[str, tuple[float, float]]:
-    """The pose sampling ranges (α, β, γ, t_x, t_y), with ``overrides`` checked and applied."""
-    ranges = {s.name: s.sampling_range for s in POSE_SPECS}
-    for k, v in dict(overrides or {}).items():
-        if k not in ranges:
-            raise ValueError(f"pose_ranges: unknown pose parameter {k!r}; known: {list(POSE_NAMES)}")
-        lo, hi = float(v[0]), float(v[1])
-        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
-            raise ValueError(f"pose_ranges[{k!r}] must be finite (low, high) with low <= high, got {v}")
-        ranges[k] = (lo, hi)
-    return ranges
+@dataclass(frozen=True, eq=False)
+class ItemParams:
+    """Every random choice of one item, drawn by :meth:`SyntheticObjectDataset.make_params`.
+
+    :meth:`SyntheticObjectDataset.render` turns it into the item, drawing nothing: the same params give the
+    same bytes (``ds.render(ds.make_params(i)) == ds[i]``), and a changed copy
+    (``dataclasses.replace(p, pose={...})``) renders that change alone.
+
+    Attributes:
+        index, epoch: the item; its draws are a pure function of (dataset seed, epoch, index).
+        real: a real item (index < the number of real items): the user's item, no draws.
+        seed_index: the seed whose background (and, with ``capture_sampling="seed"``, capture parameters)
+            the item uses; -1 for a real item.
+        negative: no object (patch mode: a background patch, label 0; frame mode: the bare frame).
+        pose: ``{"alpha", "beta", "gamma", "t_x", "t_y"}`` (radians; t_x, t_y in units of the crop), from the
+            dataset's pose sampler.
+        crop_xy: (x, y) corner of the patch (patch mode) or of the object's crop (frame mode) in the
+            seed's background.
+        object_px: frame mode: the object's size in pixels (mesh unit length); None in patch mode.
+        capture: the capture parameters drawn from the density over the seeds (``capture_sampling``
+            ``"kde"`` / ``"uniform"``; density's vector order), or None (the seed's own, ``"seed"``).
+        fields: the random effects' noise fields, ``{field name: (1, C, crop, crop) tensor}`` (not JSON: everything
+            else is, ``dataclasses.asdict(p)`` without ``fields``).
+    """
+
+    index: int
+    epoch: int
+    real: bool = False
+    seed_index: int = -1
+    negative: bool = False
+    pose: Mapping[str, float] = field(default_factory=dict)
+    crop_xy: tuple[int, int] | None = None
+    object_px: float | None = None
+    capture: tuple[float, ...] | None = None
+    fields: Mapping[str, torch.Tensor] = field(default_factory=dict)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, ItemParams):
+            return NotImplemented
+        plain = [f.name for f in dataclasses.fields(self) if f.name != "fields"]
+        return (all(getattr(self, n) == getattr(other, n) for n in plain)
+                and self.fields.keys() == other.fields.keys()
+                and all(torch.equal(v, other.fields[k]) for k, v in self.fields.items()))
+
+    __hash__ = None  # type: ignore[assignment]  # holds dicts and tensors
 
 
 class SyntheticObjectDataset(Dataset):
@@ -331,12 +356,16 @@ class SyntheticObjectDataset(Dataset):
             lens distortion, the JPEG block grid). ``"auto"`` (default): the seed
             set's own when ``backgrounds`` is a seed set, else None; None: the
             patch is taken as the frame. The paper's four effects do not read it.
-        pose_sampling: ``"uniform"`` (default: α, β, γ uniform over their sampling ranges, every
-            view equally likely) or ``"fitted"`` (each item's rotation is its seed's *fitted*
+        pose_sampling: ``"uniform"`` (default, :class:`~synthaug.data.poses.UniformPose`: α, β, γ
+            uniform over their sampling ranges, every view equally likely), ``"fitted"``
+            (:class:`~synthaug.data.poses.FittedPose`: each item's rotation is its seed's *fitted*
             rotation composed with a random rotation of axis uniform on the sphere and angle
             ~ N(0, ``pose_jitter_deg``) per axis component: the views the real seeds show, and
-            views near them; needs ``params`` from a fit). t_x, t_y are drawn as with
-            ``"uniform"``.
+            views near them; needs ``params`` from a fit; t_x, t_y are drawn as with
+            ``"uniform"``), or a pose sampler of your own: any object with
+            ``sample(generator, seed_index, u) -> {"alpha", "beta", "gamma", "t_x", "t_y"}``
+            (:class:`~synthaug.data.poses.PoseSampler`; then ``pose_ranges`` and
+            ``pose_jitter_deg`` are the sampler's business).
         pose_jitter_deg: spread of the random rotation of ``"fitted"`` (degrees, per component of
             the rotation vector).
         transforms: a callable ``(image, target) -> (image, target)`` applied to
@@ -372,7 +401,7 @@ class SyntheticObjectDataset(Dataset):
         capture_sampling: Literal["seed", "kde", "uniform"] = "seed",
         seed_geometry: Mapping[str, Any] | Literal["auto"] | None = "auto",
         transforms: Any = None,
-        pose_sampling: Literal["uniform", "fitted"] = "uniform",
+        pose_sampling: Literal["uniform", "fitted"] | PoseSampler = "uniform",
         pose_jitter_deg: float = 20.0,
     ) -> None:
         super().__init__()
@@ -390,19 +419,18 @@ class SyntheticObjectDataset(Dataset):
         self.seed = int(seed)
         self.epoch = 0
         self.label = int(label)
-        self.render = render
+        self.backend = render  # "cache" / "exact" (the name render is the method)
         self._set_up_capture(backgrounds, params, effects=effects, object_scale=object_scale,
-                             capture_sampling=capture_sampling, seed_geometry=seed_geometry,
-                             pose_sampling=pose_sampling, pose_jitter_deg=pose_jitter_deg)
-        self.pose_ranges = _pose_ranges(pose_ranges)
+                             capture_sampling=capture_sampling, seed_geometry=seed_geometry)
+        # after the capture set-up: "fitted" reads the fit's rotations (given, never the sampled rows)
+        self._set_up_pose(pose_sampling, fitted=params is not None, jitter_deg=pose_jitter_deg, ranges=pose_ranges)
         self._set_up_mixing(real, synthetic_per_real, length)
         self._set_up_renderer(mesh, cache, cache_options)
 
     # ----------------------------------------------------------- set-up
     def _set_up_capture(self, backgrounds: Any, params: CaptureParams | str | os.PathLike | None, *,
                         effects: Sequence[str] | None, object_scale: float | None, capture_sampling: str,
-                        seed_geometry: Mapping[str, Any] | str | None, pose_sampling: str,
-                        pose_jitter_deg: float) -> None:
+                        seed_geometry: Mapping[str, Any] | str | None) -> None:
         """One background and one row of capture parameters per seed, the effects, and how items draw them."""
         self.backgrounds = self._load_backgrounds(backgrounds)
         n_seeds = len(self.backgrounds)
@@ -411,14 +439,6 @@ class SyntheticObjectDataset(Dataset):
         self.params, scales = self._load_params(params, n_seeds)
         if object_scale is None and scales is not None:
             self.seed_scales = scales
-        if pose_sampling not in ("uniform", "fitted"):
-            raise ValueError(f"pose_sampling must be 'uniform' or 'fitted', got {pose_sampling!r}")
-        if pose_sampling == "fitted" and self.params is None:
-            raise ValueError("pose_sampling='fitted' draws around each seed's fitted pose: give params (a fit)")
-        if not (math.isfinite(pose_jitter_deg) and pose_jitter_deg >= 0):
-            raise ValueError(f"pose_jitter_deg must be finite and >= 0, got {pose_jitter_deg}")
-        self.pose_sampling = pose_sampling
-        self.pose_jitter_deg = float(pose_jitter_deg)
         if self.params is None:  # "for now sampled": one row per seed from the default ranges
             g = torch.Generator().manual_seed(self.seed)
             self.params = CaptureParams.sample(n_seeds, generator=g, channels=self.channels)
@@ -447,6 +467,32 @@ class SyntheticObjectDataset(Dataset):
             self._density = CaptureDensity(self.params, kind=capture_sampling)
         self._random_effects = [e for e in ordered(list(self.effects)) if e.is_random]
 
+    def _set_up_pose(self, pose_sampling: Any, *, fitted: bool, jitter_deg: float,
+                     ranges: Mapping[str, tuple[float, float]] | None) -> None:
+        """The pose sampler: ``"uniform"`` / ``"fitted"`` built here, or the user's own object."""
+        if not (math.isfinite(jitter_deg) and jitter_deg >= 0):
+            raise ValueError(f"pose_jitter_deg must be finite and >= 0, got {jitter_deg}")
+        self.pose_ranges = pose_ranges(ranges)
+        if isinstance(pose_sampling, str):
+            if pose_sampling == "uniform":
+                self.pose_sampler: PoseSampler = UniformPose(ranges)
+            elif pose_sampling == "fitted":
+                if not fitted:
+                    raise ValueError("pose_sampling='fitted' draws around each seed's fitted pose: give params "
+                                     "(a fit)")
+                self.pose_sampler = FittedPose(self.params, jitter_deg, ranges)
+            else:
+                raise ValueError(f"pose_sampling must be 'uniform', 'fitted' or a pose sampler (an object with "
+                                 f"sample(generator, seed_index, u)), got {pose_sampling!r}")
+        elif callable(getattr(pose_sampling, "sample", None)):
+            if ranges is not None:
+                raise ValueError("pose_ranges is for pose_sampling 'uniform' / 'fitted'; a pose sampler of your "
+                                 "own draws its own ranges")
+            self.pose_sampler = pose_sampling
+        else:
+            raise ValueError(f"pose_sampling must be 'uniform', 'fitted' or a pose sampler (an object with "
+                             f"sample(generator, seed_index, u)), got {type(pose_sampling).__name__}")
+
     def _set_up_mixing(self, real: Dataset | None, synthetic_per_real: float, length: int | None) -> None:
         """How many real and synthetic items the dataset holds."""
         self.real = real
@@ -467,13 +513,13 @@ class SyntheticObjectDataset(Dataset):
         self._cache = cache
         self._cache_options = dict(cache_options or {})
         self._renderer = None
-        if self.render == "cache" and self._cache is None:
+        if self.backend == "cache" and self._cache is None:
             # built here (in the main process, through a GL subprocess), memory-mapped by workers
             from synthaug.render.cache import ViewCache
 
             opts = {"sprite_size": 96 if self.mode == "patch" else 128, **self._cache_options}
             self._cache = ViewCache.build(mesh, **opts)
-        elif self.render == "exact":
+        elif self.backend == "exact":
             from synthaug.render.server import Renderer
 
             self._renderer = Renderer(mesh)  # starts its GL subprocess lazily, per process
@@ -535,15 +581,18 @@ class SyntheticObjectDataset(Dataset):
     def _validate_sizes(self) -> None:
         if self.params.channels != self.channels:
             raise ValueError(f"params has {self.params.channels} channel(s) but channels={self.channels}")
-        need = self.patch_size if self.mode == "patch" else self._crop_size()
+        need = self._crop()
         for i, b in enumerate(self.backgrounds):
             h, w = b.shape[-2:]
             if h < need or w < need:
                 raise ValueError(f"backgrounds[{i}] is {h}x{w}, smaller than the {need}x{need} "
                                  f"{'patch' if self.mode == 'patch' else 'object crop'} this dataset needs")
 
-    def _crop_size(self) -> int:
-        # crop in which the object and its blur live (frame mode): largest object / 0.5, even
+    def _crop(self) -> int:
+        """Side of the rendered square: the patch (patch mode), or the crop in which the object and its blur
+        live (frame mode: largest object / 0.5, even)."""
+        if self.mode == "patch":
+            return self.patch_size
         return int(math.ceil(self.object_size[1] / 0.5 / 2)) * 2
 
     # --------------------------------------------------------- protocol
@@ -559,32 +608,89 @@ class SyntheticObjectDataset(Dataset):
 
     def __getitems__(self, indices: Sequence[Any]) -> list[tuple[torch.Tensor, dict[str, torch.Tensor]]]:
         """Items of a batch; each index is an int (the dataset's epoch) or an ``(epoch, index)`` pair."""
-        n = len(self)
-        idx: list[tuple[int, int]] = []
+        params = []
         for i in indices:
             if isinstance(i, (tuple, list)):
                 if len(i) != 2:
                     raise IndexError(f"an index is an int or an (epoch, index) pair, got {i!r}")
-                epoch, i = int(i[0]), int(i[1])
+                params.append(self.make_params(int(i[1]), int(i[0])))
             else:
-                epoch, i = self.epoch, int(i)
-            if i < 0:
-                i += n
-            if not 0 <= i < n:
-                raise IndexError(f"index {i} out of range for a dataset of length {n}")
-            idx.append((epoch, i))
-        out: list[Any] = [None] * len(idx)
-        syn = [(k, e, i) for k, (e, i) in enumerate(idx) if i >= self.n_real]
-        for k, (e, i) in enumerate(idx):
-            if i < self.n_real:
-                out[k] = self._real_item(i)
+                params.append(self.make_params(int(i)))
+        return self.render(params)
+
+    def make_params(self, index: int, epoch: int | None = None) -> ItemParams:
+        """All random choices of item ``index`` in ``epoch`` (default: the dataset's), from its own generator.
+
+        A pure function of (seed, epoch, index): the item's generator draws ten uniforms (seed, negative, five
+        for the pose, the crop corner, the object size), then the random effects' fields, then the capture
+        parameters (``capture_sampling`` "kde" / "uniform"), and the pose sampler comes last (so that one that
+        draws more, as "fitted", moves no other draw).
+
+        Example:
+            >>> p = ds.make_params(3)  # doctest: +SKIP
+            >>> torch.equal(ds.render(p)[0], ds[3][0])  # doctest: +SKIP
+            True
+        """
+        n = len(self)
+        epoch = self.epoch if epoch is None else int(epoch)
+        if index < 0:
+            index += n
+        if not 0 <= index < n:
+            raise IndexError(f"index {index} out of range for a dataset of length {n}")
+        if index < self.n_real:
+            return ItemParams(index=index, epoch=epoch, real=True)
+        g = item_generator(self.seed, epoch, index)
+        u = torch.rand(10, generator=g, dtype=torch.float64).tolist()
+        n_seeds = len(self.backgrounds)
+        seed_index = min(int(u[0] * n_seeds), n_seeds - 1)
+        h, w = self.backgrounds[seed_index].shape[-2:]
+        crop = self._crop()
+        fields: dict[str, torch.Tensor] = {}
+        for eff in self._random_effects:
+            fields.update(eff.sample_fields((1, self.channels, crop, crop), g))
+        capture = None if self._density is None else tuple(self._density.sample(1, generator=g)[0].tolist())
+        lo, hi = self.object_size
+        return ItemParams(
+            index=index, epoch=epoch, real=False, seed_index=seed_index, negative=u[1] < self.negative_fraction,
+            pose=self.pose_sampler.sample(g, seed_index, u[2:7]),
+            crop_xy=(min(int(u[7] * (w - crop + 1)), w - crop), min(int(u[8] * (h - crop + 1)), h - crop)),
+            object_px=lo + (hi - lo) * u[9] if self.mode == "frame" else None,
+            capture=capture, fields=fields)
+
+    @overload
+    def render(self, params: ItemParams) -> tuple[Any, dict[str, Any]]: ...
+
+    @overload
+    def render(self, params: Sequence[ItemParams]) -> list[tuple[Any, dict[str, Any]]]: ...
+
+    def render(self, params: ItemParams | Sequence[ItemParams]) -> Any:
+        """The item(s) of ``params`` (from :meth:`make_params`), exactly as ``ds[i]`` / ``__getitems__`` give them.
+
+        Draws nothing except the ``transforms``' own draws (seeded from the params' seed, epoch and index as
+        in ``ds[i]``). A sequence renders as one batch (vectorised) and returns a list; one params object
+        returns one ``(image, target)``.
+        """
+        single = isinstance(params, ItemParams)
+        batch = [params] if single else list(params)
+        for p in batch:
+            if not isinstance(p, ItemParams):
+                raise TypeError(f"render takes ItemParams (from make_params), got {type(p).__name__}")
+            if p.real and not 0 <= p.index < self.n_real:
+                raise ValueError(f"real item {p.index} out of range: this dataset has {self.n_real} real items")
+            if not p.real and not 0 <= p.seed_index < len(self.backgrounds):
+                raise ValueError(f"seed_index {p.seed_index} out of range: this dataset has "
+                                 f"{len(self.backgrounds)} seeds")
+        out: list[Any] = [None] * len(batch)
+        for k, p in enumerate(batch):
+            if p.real:
+                out[k] = self._real_item(p.index)
+        syn = [k for k, p in enumerate(batch) if not p.real]
         if syn:
-            items = self._synthetic_items([i for _, _, i in syn], [e for _, e, _ in syn])
-            for (k, _, _), item in zip(syn, items):
+            for k, item in zip(syn, self._synthetic_items([batch[k] for k in syn])):
                 out[k] = item
         if self.transforms is not None:
-            out = [self._transform(item, e, i) for item, (e, i) in zip(out, idx)]
-        return out
+            out = [self._transform(item, p.epoch, p.index) for item, p in zip(out, batch)]
+        return out[0] if single else out
 
     def _transform(self, item: tuple[Any, Any], epoch: int, index: int) -> tuple[Any, Any]:
         """``transforms(image, target)`` with torch's random draws seeded from (seed, epoch, index)."""
@@ -634,41 +740,8 @@ class SyntheticObjectDataset(Dataset):
         return img, t
 
     # -------------------------------------------------------- synthesis
-    def _draw(self, index: int, epoch: int) -> dict[str, Any]:
-        """All random draws of one item, from its own generator (one uniform vector + fields)."""
-        g = item_generator(self.seed, epoch, index)
-        u = torch.rand(10, generator=g, dtype=torch.float64).tolist()
-        n_seeds = len(self.backgrounds)
-        seed_index = min(int(u[0] * n_seeds), n_seeds - 1)
-        pose = {}
-        for k, name in enumerate(POSE_NAMES):
-            lo, hi = self.pose_ranges[name]
-            pose[name] = lo + (hi - lo) * u[2 + k]
-        h, w = self.backgrounds[seed_index].shape[-2:]
-        crop = self.patch_size if self.mode == "patch" else self._crop_size()
-        d: dict[str, Any] = {
-            "seed_index": seed_index,
-            "negative": u[1] < self.negative_fraction,
-            "pose": pose,
-            "crop_xy": (min(int(u[7] * (w - crop + 1)), w - crop), min(int(u[8] * (h - crop + 1)), h - crop)),
-        }
-        if self.mode == "frame":
-            lo, hi = self.object_size
-            d["object_px"] = lo + (hi - lo) * u[9]
-        fields: dict[str, torch.Tensor] = {}
-        for eff in self._random_effects:
-            fields.update(eff.sample_fields((1, self.channels, crop, crop), g))
-        d["fields"] = fields
-        if self._density is not None:
-            d["capture"] = self._density.sample(1, generator=g)[0]
-        if self.pose_sampling == "fitted":  # drawn last: the uniform pose's draws above stay as they were
-            rotvec = torch.randn(3, generator=g, dtype=torch.float64).numpy() * math.radians(self.pose_jitter_deg)
-            fitted = [float(getattr(self.params, n)[seed_index]) for n in ("alpha", "beta", "gamma")]
-            pose.update(zip(("alpha", "beta", "gamma"), jittered_pose(*fitted, rotvec)))
-        return d
-
     def _layers(self, pose: dict[str, torch.Tensor], size: int, object_scale: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        if self.render == "cache":
+        if self.backend == "cache":
             return self._cache.layers(pose["alpha"], pose["beta"], pose["gamma"], pose["t_x"], pose["t_y"],
                                       size=size, object_scale=object_scale)
         covs, nrms = [], []
@@ -679,49 +752,47 @@ class SyntheticObjectDataset(Dataset):
             nrms.append(n)
         return torch.cat(covs), torch.cat(nrms)
 
-    def _synthetic_items(self, indices: list[int], epochs: list[int] | None = None,
-                         ) -> list[tuple[torch.Tensor, dict[str, torch.Tensor]]]:
-        epochs = [self.epoch] * len(indices) if epochs is None else epochs
-        draws = [self._draw(i, e) for i, e in zip(indices, epochs)]
-        crop = self.patch_size if self.mode == "patch" else self._crop_size()
-        seeds = torch.tensor([d["seed_index"] for d in draws])
+    def _synthetic_items(self, batch: list[ItemParams]) -> list[tuple[torch.Tensor, dict[str, torch.Tensor]]]:
+        """The synthetic items of ``batch``, rendered together (see :meth:`render`)."""
+        crop = self._crop()
+        seeds = torch.tensor([p.seed_index for p in batch])
         theta_rows = self.params[seeds]
         if self._density is not None:
-            theta_rows = self._density.to_params(torch.stack([d["capture"] for d in draws]))
-        pose = {n: torch.tensor([d["pose"][n] for d in draws]) for n in POSE_NAMES}
+            theta_rows = self._density.to_params(torch.tensor([p.capture for p in batch], dtype=torch.float64))
+        pose = {n: torch.tensor([p.pose[n] for p in batch]) for n in POSE_NAMES}
         theta = theta_rows.replace(**pose) if self._pose_in_range(pose) else CaptureParams(
             {**theta_rows.as_dict(), **pose}, channels=self.channels, effects=self.params.effects, validate=False)
         bgs = torch.stack([
-            self.backgrounds[d["seed_index"]][:, d["crop_xy"][1]:d["crop_xy"][1] + crop,
-                                              d["crop_xy"][0]:d["crop_xy"][0] + crop]
-            for d in draws
+            self.backgrounds[p.seed_index][:, p.crop_xy[1]:p.crop_xy[1] + crop,
+                                              p.crop_xy[0]:p.crop_xy[0] + crop]
+            for p in batch
         ])
         if self.mode == "patch":
             scale = (self.seed_scales[seeds].float() if self.seed_scales is not None
-                     else torch.full((len(draws),), self.object_scale))
+                     else torch.full((len(batch),), self.object_scale))
         else:
-            scale = torch.tensor([d["object_px"] / crop for d in draws])
-        fields = {k: torch.cat([d["fields"][k] for d in draws]) for k in draws[0]["fields"]}
+            scale = torch.tensor([p.object_px / crop for p in batch])
+        fields = {k: torch.cat([p.fields[k] for p in batch]) for k in batch[0].fields}
         frame_size = origin = None
         extras: dict[str, torch.Tensor] = {}
         if self.mode == "patch" and self.seed_geometry is not None:  # the seed's place in its frame
             geo = self.seed_geometry
             fsc = geo["frame_scale"][seeds]
-            crop_xy = torch.tensor([d["crop_xy"] for d in draws], dtype=torch.float32)
+            crop_xy = torch.tensor([p.crop_xy for p in batch], dtype=torch.float32)
             origin = geo["origin"][seeds] + crop_xy * fsc[:, None]
             frame_size = geo["frame_size"][seeds]
             extras["frame_scale"] = fsc
         if self.mode == "frame":
-            origin = torch.tensor([d["crop_xy"] for d in draws], dtype=torch.float32)
-            frame_size = torch.tensor([[self.backgrounds[d["seed_index"]].shape[-1],
-                                        self.backgrounds[d["seed_index"]].shape[-2]] for d in draws],
+            origin = torch.tensor([p.crop_xy for p in batch], dtype=torch.float32)
+            frame_size = torch.tensor([[self.backgrounds[p.seed_index].shape[-1],
+                                        self.backgrounds[p.seed_index].shape[-2]] for p in batch],
                                       dtype=torch.float32)
         # Rendered in chunks of ~2**18 pixels: a chunk's layers stay in a core's cache through the effects'
         # many elementwise passes (a 256-patch batch at once spills to memory; ~20 % slower, issue 19). Every
         # step is per item, so the chunking changes no value.
         step = max(1, _CHUNK_PIXELS // (crop * crop))
         covs, chunks = [], []
-        for i in range(0, len(draws), step):
+        for i in range(0, len(batch), step):
             sl = slice(i, i + step)
             cov, nrm = self._layers({k: v[sl] for k, v in pose.items()}, crop, scale[sl])
             covs.append(cov)
@@ -736,26 +807,26 @@ class SyntheticObjectDataset(Dataset):
         # few shared blocks (one per storage), not one shared segment and file descriptor per item and key,
         # which cost more than rendering a frame (issue 19).
         vec = theta.to_vector().float()
-        synthetic = torch.ones(len(draws), dtype=torch.bool)
+        synthetic = torch.ones(len(batch), dtype=torch.bool)
         if self.mode == "patch":
-            labels = torch.tensor([0 if d["negative"] else self.label for d in draws], dtype=torch.int64)
+            labels = torch.tensor([0 if p.negative else self.label for p in batch], dtype=torch.int64)
         else:
-            frames = self._frame_batch(draws)
-            labels = torch.full((len(draws), 1), self.label, dtype=torch.int64)
-            corner = torch.tensor([d["crop_xy"] for d in draws])
+            frames = self._frame_batch(batch)
+            labels = torch.full((len(batch), 1), self.label, dtype=torch.int64)
+            corner = torch.tensor([p.crop_xy for p in batch])
             boxes, n_boxes = _boxes_from_coverage(cov[:, 0], corner[:, 0], corner[:, 1])
             boxes = boxes[:, None]
         out = []
-        for k, d in enumerate(draws):
+        for k, p in enumerate(batch):
             target: dict[str, torch.Tensor] = {"synthetic": synthetic[k], "seed_index": seeds[k], "theta": vec[k]}
             if self.mode == "patch":
                 target["labels"] = labels[k]
-                out.append((bgs[k] if d["negative"] else images[k], target))
+                out.append((bgs[k] if p.negative else images[k], target))
             else:
                 frame = frames[k]
                 n = 0
-                if not d["negative"]:
-                    x0, y0 = d["crop_xy"]
+                if not p.negative:
+                    x0, y0 = p.crop_xy
                     frame[:, y0:y0 + crop, x0:x0 + crop] = images[k]
                     n = n_boxes[k]
                 target["boxes"] = tv_tensors.BoundingBoxes(boxes[k, :n], format="XYXY",
@@ -764,7 +835,7 @@ class SyntheticObjectDataset(Dataset):
                 out.append((tv_tensors.Image(frame), target))
         return out
 
-    def _frame_batch(self, draws: list[dict[str, Any]]) -> list[torch.Tensor]:
+    def _frame_batch(self, batch: list[ItemParams]) -> list[torch.Tensor]:
         """The batch's full frames (copies of their backgrounds), views of one storage.
 
         In a DataLoader worker that storage is allocated in shared memory, as
@@ -772,17 +843,17 @@ class SyntheticObjectDataset(Dataset):
         one shared block, written once, instead of one copy into a new shared
         segment per frame (which cost more than rendering them: issue 19).
         """
-        shapes = {tuple(self.backgrounds[d["seed_index"]].shape) for d in draws}
+        shapes = {tuple(self.backgrounds[p.seed_index].shape) for p in batch}
         if len(shapes) != 1:  # backgrounds of different sizes: one tensor per frame
-            return [self.backgrounds[d["seed_index"]].clone() for d in draws]
-        shape = (len(draws), *shapes.pop())
+            return [self.backgrounds[p.seed_index].clone() for p in batch]
+        shape = (len(batch), *shapes.pop())
         if torch.utils.data.get_worker_info() is not None:
             storage = torch.UntypedStorage._new_shared(math.prod(shape) * 4)
             frames = torch.empty(0, dtype=torch.float32).set_(storage, 0, shape)
         else:
             frames = torch.empty(shape, dtype=torch.float32)
-        for k, d in enumerate(draws):
-            frames[k].copy_(self.backgrounds[d["seed_index"]])
+        for k, p in enumerate(batch):
+            frames[k].copy_(self.backgrounds[p.seed_index])
         return list(frames.unbind(0))
 
     def _pose_in_range(self, pose: dict[str, torch.Tensor]) -> bool:
