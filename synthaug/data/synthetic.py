@@ -63,6 +63,7 @@ import torch
 from torch.utils.data import Dataset, Sampler
 from torchvision import tv_tensors
 
+from synthaug.data.mixing import RealItems, mixed_counts, to_float_image
 from synthaug.data.poses import FittedPose, PoseSampler, UniformPose, pose_ranges
 from synthaug.effects.pipeline import simulate
 from synthaug.effects.registry import ordered
@@ -168,49 +169,6 @@ def collate_detection(batch: Sequence[tuple[Any, Any]]) -> tuple[tuple[Any, ...]
     """Detection collate: ``(images, targets)`` as tuples (torchvision convention)."""
     images, targets = zip(*batch)
     return images, targets
-
-
-def _to_float_image(img: Any, channels: int, where: str) -> torch.Tensor:
-    """(H, W) or (H, W, C) array / (C, H, W) tensor -> (C, H, W) float32 in [0, 1]."""
-    if isinstance(img, (str, os.PathLike)):
-        from PIL import Image
-
-        try:
-            img = np.asarray(Image.open(img))
-        except Exception as e:
-            raise ValueError(f"{where}: cannot read image {img}: {e}") from None
-    if isinstance(img, torch.Tensor):
-        t = img.detach().cpu()
-        if t.ndim == 3 and t.shape[0] in (1, 3):
-            chw = t
-        elif t.ndim == 2:
-            chw = t[None]
-        else:
-            raise ValueError(f"{where}: expected (H, W) or (C, H, W) tensor, got shape {tuple(t.shape)}")
-    else:
-        a = np.asarray(img)
-        if a.ndim == 2:
-            chw = torch.from_numpy(np.ascontiguousarray(a))[None]
-        elif a.ndim == 3 and a.shape[2] in (1, 3, 4):
-            chw = torch.from_numpy(np.ascontiguousarray(a[..., :3])).permute(2, 0, 1)
-        else:
-            raise ValueError(f"{where}: expected an (H, W) or (H, W, C) image, got shape {a.shape}")
-    if chw.dtype == torch.uint8:
-        chw = chw.float() / 255.0
-    elif chw.is_floating_point():
-        chw = chw.float()
-        if chw.numel() and (not torch.isfinite(chw).all() or chw.min() < -1e-3 or chw.max() > 1 + 1e-3):
-            raise ValueError(f"{where}: float images must be finite and in [0, 1]")
-    else:
-        raise ValueError(f"{where}: unsupported dtype {chw.dtype} (use uint8 or float in [0, 1])")
-    if chw.shape[0] == channels:
-        return chw.contiguous()
-    if channels == 1 and chw.shape[0] == 3:  # ITU-R BT.601 luma, as OpenCV's RGB2GRAY
-        w = torch.tensor([0.299, 0.587, 0.114])[:, None, None]
-        return (chw * w).sum(0, keepdim=True)
-    if channels == 3 and chw.shape[0] == 1:
-        return chw.expand(3, -1, -1).contiguous()
-    raise ValueError(f"{where}: cannot convert {chw.shape[0]} channels to {channels}")
 
 
 def _is_integral(x: Any) -> bool:
@@ -424,7 +382,13 @@ class SyntheticObjectDataset(Dataset):
                              capture_sampling=capture_sampling, seed_geometry=seed_geometry)
         # after the capture set-up: "fitted" reads the fit's rotations (given, never the sampled rows)
         self._set_up_pose(pose_sampling, fitted=params is not None, jitter_deg=pose_jitter_deg, ranges=pose_ranges)
-        self._set_up_mixing(real, synthetic_per_real, length)
+        # real items first, then the synthetic ones (synthaug.data.mixing says why the layout lives here)
+        self.real = real
+        self.n_real, self.n_synthetic = mixed_counts(real, synthetic_per_real, length)
+        theta_size = len(CaptureParams.vector_names(channels=self.channels, effects=self.params.effects))
+        self._real_items = None if real is None else RealItems(
+            real, mode=self.mode, channels=self.channels, patch_size=self.patch_size, label=self.label,
+            theta_size=theta_size)
         self._set_up_renderer(mesh, cache, cache_options)
 
     # ----------------------------------------------------------- set-up
@@ -493,20 +457,6 @@ class SyntheticObjectDataset(Dataset):
             raise ValueError(f"pose_sampling must be 'uniform', 'fitted' or a pose sampler (an object with "
                              f"sample(generator, seed_index, u)), got {type(pose_sampling).__name__}")
 
-    def _set_up_mixing(self, real: Dataset | None, synthetic_per_real: float, length: int | None) -> None:
-        """How many real and synthetic items the dataset holds."""
-        self.real = real
-        if real is not None:
-            if synthetic_per_real < 0 or not math.isfinite(synthetic_per_real):
-                raise ValueError(f"synthetic_per_real must be finite and >= 0, got {synthetic_per_real}")
-            self.n_real = len(real)  # type: ignore[arg-type]
-            self.n_synthetic = int(round(synthetic_per_real * self.n_real))
-        else:
-            if length is None or length < 0:
-                raise ValueError(f"length must be given (>= 0) when real is None, got {length}")
-            self.n_real = 0
-            self.n_synthetic = int(length)
-
     def _set_up_renderer(self, mesh: Any, cache: Any, cache_options: Mapping[str, Any] | None) -> None:
         """The view cache (built now unless given) or the exact renderer (its GL subprocess starts lazily)."""
         self._mesh = mesh
@@ -542,7 +492,7 @@ class SyntheticObjectDataset(Dataset):
             items = list(backgrounds)
         out = []
         for i, img in enumerate(items):
-            t = _to_float_image(img, self.channels, f"backgrounds[{i}]")
+            t = to_float_image(img, self.channels, f"backgrounds[{i}]")
             out.append(t)
         return out
 
@@ -683,7 +633,7 @@ class SyntheticObjectDataset(Dataset):
         out: list[Any] = [None] * len(batch)
         for k, p in enumerate(batch):
             if p.real:
-                out[k] = self._real_item(p.index)
+                out[k] = self._real_items[p.index]  # type: ignore[index]
         syn = [k for k, p in enumerate(batch) if not p.real]
         if syn:
             for k, item in zip(syn, self._synthetic_items([batch[k] for k in syn])):
@@ -700,44 +650,6 @@ class SyntheticObjectDataset(Dataset):
         if not isinstance(out, (tuple, list)) or len(out) != 2:
             raise ValueError(f"transforms must return (image, target), got {type(out).__name__}")
         return out[0], out[1]
-
-    def _real_item(self, i: int) -> tuple[torch.Tensor, dict[str, Any]]:
-        """Item ``i`` of the user's dataset in the synthetic items' format (image dtype, shape, target keys)."""
-        item = self.real[i]  # type: ignore[index]
-        if not isinstance(item, (tuple, list)) or len(item) != 2:
-            raise ValueError(f"real dataset items must be (image, target) pairs; item {i} is {type(item).__name__}")
-        image, target = item
-        where = f"real[{i}]"
-        img = _to_float_image(image, self.channels, where)
-        h, w = img.shape[-2:]
-        if isinstance(target, Mapping):
-            t = dict(target)
-        else:
-            t = {"labels": target}
-        if self.mode == "patch":
-            if (h, w) != (self.patch_size, self.patch_size):
-                raise ValueError(f"{where}: image is {h}x{w} but patch_size is {self.patch_size} (real and synthetic "
-                                 f"patches must have one size to be batched together)")
-            label = torch.as_tensor(t.get("labels", self.label))
-            if label.numel() != 1:
-                raise ValueError(f"{where}: a patch's label must be one class id, got shape {tuple(label.shape)}")
-            t["labels"] = label.reshape(()).to(torch.int64)
-        else:
-            if "boxes" not in t:
-                raise ValueError(f"{where}: frame mode needs a target dict with 'boxes' (N, 4) XYXY pixels")
-            boxes = torch.as_tensor(t["boxes"], dtype=torch.float32).reshape(-1, 4)
-            t["boxes"] = tv_tensors.BoundingBoxes(boxes, format="XYXY", canvas_size=(h, w))
-            labels = t.get("labels")
-            t["labels"] = (torch.full((len(boxes),), self.label, dtype=torch.int64) if labels is None
-                           else torch.as_tensor(labels, dtype=torch.int64).reshape(-1))
-            if len(t["labels"]) != len(boxes):
-                raise ValueError(f"{where}: {len(boxes)} boxes but {len(t['labels'])} labels")
-            img = tv_tensors.Image(img)
-        t.setdefault("synthetic", torch.tensor(False))
-        t.setdefault("seed_index", torch.tensor(-1, dtype=torch.int64))
-        t.setdefault("theta", torch.full((len(CaptureParams.vector_names(channels=self.channels,
-                                                                        effects=self.params.effects)),), float("nan")))
-        return img, t
 
     # -------------------------------------------------------- synthesis
     def _layers(self, pose: dict[str, torch.Tensor], size: int, object_scale: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
