@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
@@ -90,6 +91,7 @@ def mixed_counts(real: Any, synthetic_per_real: float, length: int | None) -> tu
     return 0, int(length)
 
 
+@dataclass(frozen=True)
 class RealItems:
     """A user's map-style dataset of ``(image, label_or_target)`` with items in the synthetic items' format.
 
@@ -104,14 +106,12 @@ class RealItems:
         label: the object's class id; theta_size: length of the synthetic items' ``theta``.
     """
 
-    def __init__(self, real: Any, *, mode: Literal["patch", "frame"], channels: int, patch_size: int, label: int,
-                 theta_size: int) -> None:
-        self.real = real
-        self.mode = mode
-        self.channels = channels
-        self.patch_size = patch_size
-        self.label = label
-        self.theta_size = theta_size
+    real: Any
+    mode: Literal["patch", "frame"]
+    channels: int
+    patch_size: int
+    label: int
+    theta_size: int
 
     def __len__(self) -> int:
         return len(self.real)

@@ -9,11 +9,13 @@ ones, the rest synthetic, so a shuffling sampler mixes them at the chosen
 
 Every item is a pure function of ``(seed, epoch, index)``: the same bytes with
 any ``num_workers`` and across runs. Drawing and rendering are two steps, as
-torchvision's ``make_params`` / ``transform``: :meth:`SyntheticObjectDataset.make_params`
-draws an item's random choices into a frozen :class:`ItemParams` (seed, pose,
-crop, noise fields, capture parameters) and :meth:`SyntheticObjectDataset.render`
-turns params into items without drawing (``render(make_params(i))`` is
-``ds[i]``). The pose comes from a pose sampler (:mod:`synthaug.data.poses`). New poses every epoch, the PyTorch way: an
+torchvision's ``make_params`` / ``transform``:
+:meth:`SyntheticObjectDataset.make_params` draws an item's random choices into a
+frozen :class:`ItemParams` (seed, pose, crop, noise fields, capture parameters)
+and :meth:`SyntheticObjectDataset.render` turns params into items without
+drawing (``render(make_params(i))`` is ``ds[i]``). The pose comes from a pose
+sampler (:mod:`synthaug.data.poses`); real items from
+:mod:`synthaug.data.mixing`. New poses every epoch, the PyTorch way: an
 :class:`EpochSampler` yields ``(epoch, index)`` pairs, so the epoch reaches the
 DataLoader workers even when they are persistent (or under a
 ``DistributedSampler``, which it wraps); Lightning calls its ``set_epoch``.
@@ -228,7 +230,7 @@ class ItemParams:
         seed_index: the seed whose background (and, with ``capture_sampling="seed"``, capture parameters)
             the item uses; -1 for a real item.
         negative: no object (patch mode: a background patch, label 0; frame mode: the bare frame).
-        pose: ``{"alpha", "beta", "gamma", "t_x", "t_y"}`` (radians; t_x, t_y in units of the crop), from the
+        pose: ``{"alpha", "beta", "gamma", "t_x", "t_y"}`` (radians; t_x, t_y fractions of the crop side), from the
             dataset's pose sampler.
         crop_xy: (x, y) corner of the patch (patch mode) or of the object's crop (frame mode) in the
             seed's background.
@@ -581,7 +583,7 @@ class SyntheticObjectDataset(Dataset):
             >>> torch.equal(ds.render(p)[0], ds[3][0])  # doctest: +SKIP
             True
         """
-        n = len(self)
+        n, index = len(self), int(index)
         epoch = self.epoch if epoch is None else int(epoch)
         if index < 0:
             index += n
