@@ -132,8 +132,8 @@ def rule_text() -> str:
     return (f"Significance: a statistic counts when its test rejects 'no effect' at α (Bonferroni) **and** its "
             f"value leaves the range that clean measured data give it — measured on {s['n_cases']} clean "
             f"nuisance-varied reference-camera seed sets of {s['n_seeds']} seeds (material, light, mesh and a "
-            f"moving scene drawn at random, nothing hidden): μ ± {s['z_two_sided']:.2f} σ of the clean values "
-            f"and around 0, widened to their min/max) for residual measures, μ + {s['z_one_sided']:.2f} σ for a "
+            f"moving scene drawn at random, nothing hidden): ± {s['z_two_sided']:.2f} σ of the clean values around "
+            f"their mean and around 0 (widened to their min/max) for residual measures, μ + {s['z_one_sided']:.2f} σ for a "
             f"candidate's held-out gain, set for a {100 * s['family_rate']:.0f} % false-alarm rate per clean case over "
             f"{s['n_statistics']} statistics (`{s['command']}`, {s['date']}). Statistics without a clean null "
             "(colour) keep hand-set floors.")

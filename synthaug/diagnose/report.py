@@ -419,10 +419,12 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                    if acc is not None else "")
                 + (f"; gains measured on top of {', '.join(f['given'])}" if f.get("given") else ""))
         lines.append("")
-    lines += ["## Residual structure", "", "| measure | value | p | significant | description |",
-              "|---|---|---|---|---|"]
+    lines += ["## Residual structure", "", "| measure | value | p | clean range / floor | significant | description |",
+              "|---|---|---|---|---|---|"]
     for name, m in report["residuals"].items():
-        lines.append(f"| {name} | {m['value']:.3g} | {m['p']:.2g} | {'yes' if m['significant'] else ''} | "
+        fl = m.get("floor")
+        fl_s = (f"[{fl[0]:.3g}, {fl[1]:.3g}]" if isinstance(fl, list) else f"|v| ≥ {fl:.3g}" if fl else "")
+        lines.append(f"| {name} | {m['value']:.3g} | {m['p']:.2g} | {fl_s} | {'yes' if m['significant'] else ''} | "
                      f"{m['description']} |")
     fr = report.get("feature_residuals")
     if fr:
