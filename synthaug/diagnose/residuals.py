@@ -536,11 +536,13 @@ def structure_measures(data: DiagnosisData, syn: torch.Tensor, *, rng: np.random
         data: the seeds.
         syn: (N, 1, P, P) best-fit synthetic images.
         rng: generator of the permutation tests.
-        alpha: significance level (Bonferroni-corrected over the measures).
+        alpha: significance level (Bonferroni-corrected over the measures). A measure is significant when
+            its test rejects at that level and its value leaves the range clean nuisance-varied data give it
+            (:func:`synthaug.diagnose.calibration.structure_significant`).
 
     Returns:
-        ``{measure: {"value": effect size, "p": p-value, "significant": bool,
-        "description": str, ...}}``.
+        ``{measure: {"value": effect size, "p": p-value, "significant": bool, "floor": the clean range
+        [lo, hi] (or a hand-set floor on |value|), "description": str, ...}}``.
     """
     real = data.real
     res = real - syn
