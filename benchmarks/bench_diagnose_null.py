@@ -26,22 +26,17 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import math
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
 
-def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
-    """Wilson score interval of a binomial proportion k / n."""
-    if n == 0:
-        return 0.0, 1.0
-    p = k / n
-    d = 1 + z * z / n
-    c = (p + z * z / (2 * n)) / d
-    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return max(0.0, c - h), min(1.0, c + h)
+def wilson(k: int, n: int) -> tuple[float, float]:
+    """Wilson score 95 % interval of k / n (the library's :func:`synthaug.diagnose.gap.binomial_ci`)."""
+    from synthaug.diagnose.gap import binomial_ci
+
+    return binomial_ci(k, n, method="wilson")
 
 
 def make_case(work: Path, k: int, a: argparse.Namespace) -> tuple[Path, Path, dict[str, Any], float]:
