@@ -13,7 +13,10 @@ Per seed:
 1. a scene background b (procedural sky, or given frames) and a pose, size
    and place of the object, rendered through a view cache of the *real* mesh
    (which may differ from the coarse mesh the fit gets: ``mesh_perturbation``);
-2. object-only physics on the object layers: Lambert material w_d, hidden
+2. object-only physics on the object layers: Lambert material w_d (or, with
+   ``nuisances``, the case's own material under its video's light:
+   :func:`~synthaug.diagnose.nuisances.shade_object`; the frame's scene then
+   may also drift against the background's), hidden
    ``specular``, ``rotor_blur`` (true rotor parts of the built-in quadcopter),
    the paper's motion blur, hidden ``rolling_shutter`` (along the motion
    direction), the out-of-list ``interlacing``; overlay on b, then the paper's
