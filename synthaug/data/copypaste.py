@@ -34,7 +34,6 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from synthaug.params import CaptureParams
 
 
 def fitted_silhouettes(seedset: Any, fit_file: str | Path, mesh: Any = None, *, cache: Any = None) -> np.ndarray:
@@ -43,21 +42,10 @@ def fitted_silhouettes(seedset: Any, fit_file: str | Path, mesh: Any = None, *, 
     Raises:
         ValueError: the fit does not hold one row per seed of ``seedset``.
     """
-    from synthaug.render.cache import ViewCache
+    from synthaug.data.fitted import fitted_layers
 
-    theta, extra, meta = CaptureParams.load_with_extra(fit_file)
-    n, p = len(seedset), int(np.asarray(seedset.patches).shape[-1])
-    if theta.batch_size != n:
-        raise ValueError(f"{fit_file} has {theta.batch_size} rows but the seed set has {n} seeds")
-    cfg = meta.get("config", {}) if isinstance(meta, dict) else {}
-    if cache is None:
-        cache = ViewCache.build(mesh or meta.get("mesh") or "quadcopter", step_deg=cfg.get("step_deg", 5.0),
-                                sprite_size=cfg.get("sprite_size", 96))
-    default = float(meta.get("object_scale", seedset.object_fraction)) if isinstance(meta, dict) else 0.7
-    scale = torch.tensor([float(e.get("object_scale", default)) for e in extra], dtype=torch.float32)
-    f = lambda t: t.float().reshape(-1)  # noqa: E731
-    cov, _ = cache.layers(f(theta.alpha), f(theta.beta), f(theta.gamma), f(theta.t_x), f(theta.t_y), size=p,
-                          object_scale=scale)
+    *_, cov, _ = fitted_layers(fit_file, len(seedset), int(np.asarray(seedset.patches).shape[-1]), mesh=mesh,
+                               cache=cache, default_scale=float(seedset.object_fraction))
     return cov[:, 0].numpy()
 
 

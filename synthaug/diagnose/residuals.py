@@ -152,13 +152,13 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
     """
     import os
 
+    from synthaug.data.fitted import fit_view_cache, fitted_scales
     from synthaug.data.seedset import SeedSet, crop_resampling_sigma
     from synthaug.diagnose.noise import seed_noise_levels
     from synthaug.diagnose.reference_camera import seed_geometry
     from synthaug.effects.pipeline import sample_fields
     from synthaug.fit.fitting import build_distance, patches_tensor
     from synthaug.params import CaptureParams
-    from synthaug.render.cache import ViewCache
 
     if isinstance(seeds, (str, os.PathLike)):
         seeds = SeedSet.load(seeds)
@@ -167,11 +167,9 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         raise ValueError(f"{fit_path} has {theta.batch_size} rows but the seed set has {len(seeds)} seeds")
     if theta.channels != 1:
         raise ValueError(f"only grayscale fits are supported, got {theta.channels} channels")
-    cfg = meta.get("config", {})
-    step, sprite = cfg.get("step_deg", 5.0), cfg.get("sprite_size", 96)
-    cache = ViewCache.build(mesh, step_deg=step, sprite_size=sprite)
+    cache = fit_view_cache(meta, mesh)
     p = seeds.patch_size
-    scale = torch.tensor([float(e.get("object_scale", meta.get("object_scale", 0.7))) for e in extra])
+    scale = fitted_scales(extra, meta, 0.7).float()
     cov, nrm = cache.layers(theta.alpha.float(), theta.beta.float(), theta.gamma.float(), theta.t_x.float(),
                             theta.t_y.float(), size=p, object_scale=scale)
     part_rotor = None
@@ -179,7 +177,7 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         from synthaug.diagnose.reference_camera import _real_object
 
         _, body, _ = _real_object("quadcopter", 0.0, 0)
-        body_cache = ViewCache.build(body, step_deg=step, sprite_size=sprite)
+        body_cache = fit_view_cache(meta, body)
         part_rotor = _rotor_layers(body_cache, theta, p, scale, cov)
     fields: dict[str, list[torch.Tensor]] = {}
     names = tuple(theta.effects) + (("shot_noise",) if "shot_noise" not in theta.effects else ())

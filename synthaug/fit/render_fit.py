@@ -17,20 +17,20 @@ def render_fitted(seeds: Any, fit_path: Any, mesh: Any = "quadcopter", *, indice
     Returns:
         real (N, 1, P, P) and synthetic (N, 1, P, P), float in [0, 1].
     """
+    from synthaug.data.fitted import fit_view_cache, fitted_scales
     from synthaug.fit.fitting import patches_tensor
     from synthaug.fit.objective import FitSpace, RenderObjective
-    from synthaug.render.cache import ViewCache
 
     theta, extra, meta = CaptureParams.load_with_extra(fit_path)
     if theta.batch_size != len(seeds):
         raise ValueError(f"{fit_path} has {theta.batch_size} rows but the seed set has {len(seeds)} seeds")
-    cfg = meta.get("config", {})
     if cache is None:
-        cache = ViewCache.build(mesh, step_deg=cfg.get("step_deg", 5.0), sprite_size=cfg.get("sprite_size", 96))
+        cache = fit_view_cache(meta, mesh)
+    scales = fitted_scales(extra, meta, 0.7)
     idx = list(range(len(seeds))) if indices is None else list(indices)
     reals, syns = [], []
     for i in idx:
-        scale = float(extra[i].get("object_scale", meta.get("object_scale", 0.7)))
+        scale = float(scales[i])
         space = FitSpace.default(channels=theta.channels, effects=theta.effects)
         obj = RenderObjective(patches_tensor(seeds.patches[i:i + 1]), patches_tensor(seeds.backgrounds[i:i + 1]),
                               cache, distance=None, space=space, object_scale=scale,
