@@ -35,7 +35,6 @@ import torch.nn.functional as F
 from torch import Tensor
 
 
-
 def fitted_silhouettes(seedset: Any, fit_file: str | Path, mesh: Any = None, *, cache: Any = None) -> np.ndarray:
     """Each seed's object coverage (N, P, P) in [0, 1] at its fitted pose, translation and scale.
 

@@ -431,17 +431,17 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     for kind in detectors:
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
+        fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
         conds = [Condition(base, kind, seed_count=seed_count)]
         conds += [Condition(f"{base} + {r:g}x synthetic ({dist or Path(str(params)).stem}"
                             f"{'' if ps == 'uniform' else f', {ps} poses'})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
-                            fit_options=tuple(sorted((fit_options or {}).items())) if dist else (), pose_sampling=ps)
+                            fit_options=fit_opts, pose_sampling=ps)
                   for r in synthetic_ratios for ps in pose_sampling]
         conds += [Condition(f"{base} + {c}x perturbed", kind, seed_count=seed_count, perturb_copies=int(c))
                   for c in perturb_copies]
         conds += [Condition(f"{base} + {r:g}x copy-paste ({dist or Path(str(params)).stem} silhouettes)", kind,
-                            seed_count=seed_count, params=params, mesh=mesh, fit_distance=dist,
-                            fit_options=tuple(sorted((fit_options or {}).items())) if dist else (),
+                            seed_count=seed_count, params=params, mesh=mesh, fit_distance=dist, fit_options=fit_opts,
                             copy_paste_ratio=float(r))
                   for r in copy_paste_ratios]
         for c in conds:
