@@ -52,6 +52,17 @@ def _generated_seeds(tmp: Path, n: int) -> Path:
     return path
 
 
+def _seed_objective(seeds, i, cache, dist, cfg, scale):
+    """Seed i's objective and search space: the fit's bounds, the scale searched in 0.25-1.25 x ``scale``."""
+    from synthaug.fit.fitting import patches_tensor, seed_seed
+    from synthaug.fit.objective import FitSpace, RenderObjective
+
+    space = FitSpace.default(bounds=dict(cfg.bounds), scale_range=(0.25 * scale, 1.25 * scale))
+    obj = RenderObjective(patches_tensor(seeds.patches[i:i + 1]), patches_tensor(seeds.backgrounds[i:i + 1]),
+                          cache, dist, space, object_scale=scale, noise_seed=seed_seed(0, i))
+    return obj, space
+
+
 def _profile(seeds, cache, dist, cfg, scale, args) -> dict:
     """Where one CMA-ES fit's time goes: cProfile's top functions by own time, and the objective's cost per
     evaluation by batch size (a fixed cost per call shows as a falling curve)."""
@@ -60,13 +71,10 @@ def _profile(seeds, cache, dist, cfg, scale, args) -> dict:
 
     import numpy as np
 
-    from synthaug.fit.fitting import fit_one, patches_tensor, seed_seed
-    from synthaug.fit.objective import FitSpace, RenderObjective
+    from synthaug.fit.fitting import fit_one, seed_seed
     from synthaug.fit.optimizers import get_optimizer
 
-    space = FitSpace.default(bounds=dict(cfg.bounds), scale_range=(0.25 * scale, 1.25 * scale))
-    obj = RenderObjective(patches_tensor(seeds.patches[:1]), patches_tensor(seeds.backgrounds[:1]), cache, dist, space,
-                          object_scale=scale, noise_seed=seed_seed(0, 0))
+    obj, space = _seed_objective(seeds, 0, cache, dist, cfg, scale)
     rng = np.random.default_rng(0)
     per_eval = {}
     for b in (1, 12, 24, 48, 96):
@@ -115,8 +123,7 @@ def main() -> int:
 
     torch.set_num_threads(1)
     from synthaug.data.seedset import SeedSet
-    from synthaug.fit.fitting import FitConfig, build_distance, fit_one, patches_tensor, seed_seed
-    from synthaug.fit.objective import FitSpace, RenderObjective
+    from synthaug.fit.fitting import FitConfig, build_distance, fit_one, seed_seed
     from synthaug.fit.optimizers import get_optimizer
     from synthaug.render.cache import ViewCache
 
@@ -130,9 +137,7 @@ def main() -> int:
     for i in range(min(args.n, len(seeds))):
         s = seed_seed(0, i)
         scale = float(seeds.object_fraction)
-        space = FitSpace.default(bounds=dict(cfg.bounds), scale_range=(0.25 * scale, 1.25 * scale))
-        obj = RenderObjective(patches_tensor(seeds.patches[i:i + 1]), patches_tensor(seeds.backgrounds[i:i + 1]),
-                              cache, dist, space, object_scale=scale, noise_seed=s)
+        obj, space = _seed_objective(seeds, i, cache, dist, cfg, scale)
         x0 = np.random.default_rng(s).random(space.dim)
         res = {}
         for name, opt, budget in (("cmaes", "cmaes", args.budget), ("anneal", "anneal", args.budget),
