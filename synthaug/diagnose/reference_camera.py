@@ -56,6 +56,7 @@ import json
 import math
 import os
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -70,7 +71,7 @@ from synthaug.effects.functional import gaussian_blur_fft
 from synthaug.diagnose.nuisances import Nuisances, SeedNuisance, drift_scene, shade_object  # noqa: F401
 from synthaug.effects.material import TEXTURE_PAD, texture_field
 from synthaug.effects.pipeline import apply_effects
-from synthaug.effects.registry import PAPER_EFFECTS, RenderState, get_effect
+from synthaug.effects.registry import PAPER_EFFECTS, RenderState, get_effect, ordered
 from synthaug.effects import functional as Fx
 from synthaug.params import CaptureParams
 
@@ -442,6 +443,410 @@ def _box(cov: np.ndarray, threshold: float = 0.5) -> np.ndarray | None:
     return np.array([xs[0], ys[0], xs[-1] + 1 - xs[0], ys[-1] + 1 - ys[0]], np.float64)
 
 
+# ------------------------------------------------------------------ setup
+_PAPER_NAMES = ("w_d", "sigma_s", "sigma_u", "sigma_v", "alpha_m", "sigma_n")
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """The validated arguments of :func:`make_measured_seedset`, read by every step."""
+
+    n_seeds: int
+    frame_hw: tuple[int, int]
+    object_px: tuple[float, float]
+    crop_side: int  # side of the square the object is rendered in (frame px)
+    patch_size: int
+    object_fraction: float
+    settings: dict[str, dict[str, Strength]]
+    ranges: dict[str, tuple[float, float]]
+    per_video: tuple[str, ...]
+    n_videos: int
+    read_noise: float
+    background_noise_factor: float
+    nuisances: Nuisances
+    mesh_perturbation: float
+    seed: int
+    colour: bool
+    view_step_deg: float
+    sprite_size: int
+
+
+def _setup(*, n_seeds: int, hidden: Any, mesh: Any, mesh_perturbation: float, frame_size: tuple[int, int],
+           patch_size: int, object_fraction: float, object_px: tuple[float, float], seed: int,
+           paper_ranges: Mapping[str, tuple[float, float]] | None, read_noise: float,
+           background_noise_factor: float, n_videos: int, per_video: Sequence[str], view_step_deg: float,
+           sprite_size: int, colour: bool, nuisances: Nuisances | None) -> _Setup:
+    """Check :func:`make_measured_seedset`'s arguments (errors name the bad value) into one record."""
+    if n_seeds < 1:
+        raise ValueError(f"n_seeds must be >= 1, got {n_seeds}")
+    h_f, w_f = (int(v) for v in frame_size)
+    lo_px, hi_px = (float(v) for v in object_px)
+    if not 4 <= lo_px <= hi_px:
+        raise ValueError(f"object_px must be (low, high) with 4 <= low <= high, got {object_px}")
+    crop_side = int(math.ceil(2.5 * hi_px / 2)) * 2
+    if crop_side + 2 > min(h_f, w_f):
+        raise ValueError(f"frame_size {frame_size} is too small for objects of {hi_px} px (need > {crop_side + 2})")
+    if not 0 <= read_noise <= 0.2:
+        raise ValueError(f"read_noise must be in [0, 0.2], got {read_noise}")
+    if not 0 <= background_noise_factor <= 1:
+        raise ValueError(f"background_noise_factor must be in [0, 1], got {background_noise_factor}")
+    if n_videos < 1:
+        raise ValueError(f"n_videos must be >= 1, got {n_videos}")
+    per_video = tuple(per_video)
+    bad_pv = sorted(set(per_video) - set(PAPER_RANGES))
+    if bad_pv:
+        raise ValueError(f"per_video: unknown parameter(s) {bad_pv}; known: {sorted(PAPER_RANGES)}")
+    settings = resolve_hidden(hidden)
+    nz = Nuisances.none() if nuisances is None else nuisances
+    if not isinstance(nz, Nuisances):
+        raise ValueError(f"nuisances must be a Nuisances record or None, got {type(nuisances).__name__}")
+    if nz.mesh_perturbation > 0 and mesh_perturbation > 0:
+        raise ValueError(f"give the mesh perturbation once: mesh_perturbation={mesh_perturbation} and "
+                         f"nuisances.mesh_perturbation={nz.mesh_perturbation}")
+    if not nz.mesh_is_model and not (isinstance(mesh, str) and mesh == "quadcopter") and \
+            (nz.rotor_scale != 1.0 or nz.mesh_sections != 16):
+        raise ValueError("nuisances.rotor_scale / mesh_sections apply to the built-in 'quadcopter' only, "
+                         f"got mesh {mesh!r}")
+    ranges = dict(PAPER_RANGES)
+    bad = sorted(set(paper_ranges or {}) - set(ranges))
+    if bad:
+        raise ValueError(f"paper_ranges: unknown parameter(s) {bad}; known: {sorted(ranges)}")
+    ranges.update({k: (float(v[0]), float(v[1])) for k, v in dict(paper_ranges or {}).items()})
+    return _Setup(n_seeds=n_seeds, frame_hw=(h_f, w_f), object_px=(lo_px, hi_px), crop_side=crop_side,
+                  patch_size=patch_size, object_fraction=object_fraction, settings=settings, ranges=ranges,
+                  per_video=per_video, n_videos=n_videos, read_noise=read_noise,
+                  background_noise_factor=background_noise_factor, nuisances=nz,
+                  mesh_perturbation=max(mesh_perturbation, nz.mesh_perturbation), seed=seed, colour=colour,
+                  view_step_deg=view_step_deg, sprite_size=sprite_size)
+
+
+def _scenes(setup: _Setup, backgrounds: Sequence[np.ndarray] | None
+            ) -> tuple[list[np.ndarray], list[np.ndarray | None]]:
+    """Each seed's scene (float in [0, 1], (H, W), or (3, H, W) with ``colour``) and the colour of its air.
+
+    The colour is a per-seed tint (RGB, unit luma; None in gray): a bluish sky is the gray sky times it.
+    """
+    from synthaug.data.procedural import sky_backgrounds
+
+    n_seeds, (h_f, w_f), seed = setup.n_seeds, setup.frame_hw, setup.seed
+    if backgrounds is None:
+        scenes = [b.astype(np.float64) / 255.0 for b in sky_backgrounds(n_seeds, (h_f, w_f), seed=seed)]
+    else:
+        if len(backgrounds) == 0:
+            raise ValueError("backgrounds must hold at least one frame")
+        scenes = []
+        for i in range(n_seeds):
+            b = np.asarray(backgrounds[i % len(backgrounds)])
+            if b.shape != (h_f, w_f):
+                raise ValueError(f"backgrounds[{i % len(backgrounds)}] has shape {b.shape}, expected {(h_f, w_f)}")
+            scenes.append(b.astype(np.float64) / 255.0 if b.dtype == np.uint8 else b.astype(np.float64))
+    tints: list[np.ndarray | None] = [None] * n_seeds
+    if setup.colour:  # red and green below blue
+        for i in range(n_seeds):
+            t = np.random.default_rng([seed, i, 3]).uniform([0.78, 0.9, 1.0], [0.9, 0.97, 1.0])
+            tints[i] = t / float(np.dot(t, Cx.LUMA_WEIGHTS))  # unit luma: the colour of this scene's air
+            scenes[i] = np.clip(scenes[i][None] * t[:, None, None], 0.0, 1.0)
+    return scenes, tints
+
+
+# ------------------------------------------------------------------ per seed: draw
+@dataclass(frozen=True)
+class MeasuredSeed:
+    """The drawn, frozen record of one measured seed: every random number it uses, drawn before any rendering.
+
+    Streams: ``[seed, index, 0]`` the scene's (Θ, pose, size, place and the noise fields), ``[seed, index, 1]``
+    the hidden settings, ``[seed, video, 2]`` the per-video Θ; the nuisances' are their own
+    (:meth:`~synthaug.diagnose.nuisances.Nuisances.draw_seed`). The scene does not depend on what is hidden,
+    so the same seed with and without an effect differs only by the effect.
+
+    Attributes:
+        index, video: the seed's index and its video.
+        paper: the paper's Θ (patch units: σ in patch px).
+        camera: ``{effect: {param: value}}`` the hidden settings this seed sees, the physics of
+            :data:`_DERIVED_PARAMS` applied (haze from the object's distance, auto-exposure from the scene's
+            brightness, the rolling shutter along α_m).
+        pose: (α, β, γ) requested, radians.
+        size_px: object size (mesh unit length) in frame px.
+        corner: (x0, y0), frame px, of the square the object is rendered in.
+        nuisance: the nuisance values this seed sees.
+        object_noise: (1, 1, S, S) the object noise's standard normal field (S: the render square's side).
+        frame_noise, background_noise: (1, C, H, W) the sensor noise's standard normal fields of the frame
+            and of its background frame.
+        texture_noise: (1, 1, S + 2·TEXTURE_PAD, S + 2·TEXTURE_PAD) white noise of the albedo texture, or None.
+    """
+
+    index: int
+    video: int
+    paper: dict[str, float]
+    camera: dict[str, dict[str, float]]
+    pose: tuple[float, float, float]
+    size_px: float
+    corner: tuple[int, int]
+    nuisance: SeedNuisance
+    object_noise: torch.Tensor
+    frame_noise: torch.Tensor
+    background_noise: torch.Tensor
+    texture_noise: torch.Tensor | None
+
+
+def _draw_seed(setup: _Setup, index: int, scene: np.ndarray) -> MeasuredSeed:
+    """Draw seed ``index``'s record (a pure function of ``(setup.seed, index)`` and its scene)."""
+    seed, i, nz, side = setup.seed, index, setup.nuisances, setup.crop_side
+    h_f, w_f = setup.frame_hw
+    video = i % setup.n_videos
+    rng = np.random.default_rng([seed, i, 0])
+    cam = _draw_strengths(setup.settings, np.random.default_rng([seed, i, 1]))
+    paper = {k: float(rng.uniform(*setup.ranges[k])) for k in _PAPER_NAMES}
+    video_rng = np.random.default_rng([seed, video, 2])
+    for k in setup.per_video:  # the scene's light on the object's paint: one value per video
+        paper[k] = float(video_rng.uniform(*setup.ranges[k]))
+    alpha, beta, gamma = rng.uniform(-math.pi, math.pi), rng.uniform(-math.pi / 2, math.pi / 2), \
+        rng.uniform(-math.pi, math.pi)
+    size_px = float(rng.uniform(*setup.object_px))
+    x0 = int(rng.integers(1, w_f - side - 1))
+    y0 = int(rng.integers(1, h_f - side - 1))
+    gen = torch.Generator().manual_seed(int(rng.integers(2 ** 62)))
+    seed_nz = nz.draw_seed(seed=seed, index=i, video=video)  # own streams: nothing above changes
+    texture = None
+    object_noise = torch.randn((1, 1, side, side), generator=gen, dtype=torch.float64)
+    if not nz.shading_is_model and nz.albedo_texture_amp > 0:
+        texture = torch.randn((1, 1, side + 2 * TEXTURE_PAD, side + 2 * TEXTURE_PAD),
+                              generator=torch.Generator().manual_seed(seed_nz.texture_seed), dtype=torch.float64)
+    frame_shape = (1, 1 if scene.ndim == 2 else scene.shape[0], h_f, w_f)
+    frame_noise = torch.randn(frame_shape, generator=gen, dtype=torch.float64)
+    background_noise = torch.randn(frame_shape, generator=gen, dtype=torch.float64)
+    return MeasuredSeed(index=i, video=video, paper=paper,
+                        camera=_with_physics(cam, size_px, float(np.mean(scene)), paper["alpha_m"]),
+                        pose=(float(alpha), float(beta), float(gamma)), size_px=size_px, corner=(x0, y0),
+                        nuisance=seed_nz, object_noise=object_noise, frame_noise=frame_noise,
+                        background_noise=background_noise, texture_noise=texture)
+
+
+def _with_physics(cam: dict[str, dict[str, float]], size_px: float, scene_mean: float,
+                  alpha_m: float) -> dict[str, dict[str, float]]:
+    """``cam`` (freshly drawn, changed in place) with the settings of :data:`_DERIVED_PARAMS` turned into the
+    effects' own parameters."""
+    if "haze" in cam and "haze_extinction_px" in cam["haze"]:  # more air in front of a farther object
+        cam["haze"]["haze_amount"] = 1.0 - math.exp(-cam["haze"]["haze_extinction_px"] / size_px)
+    if "exposure" in cam and "exposure_auto" in cam["exposure"]:  # auto-exposure follows the scene
+        cam["exposure"]["exposure_gain"] = float(np.clip((AE_TARGET / max(scene_mean, 1e-3)) ** cam["exposure"]
+                                                         ["exposure_auto"], 0.5, 2.0))
+    if "rolling_shutter" in cam:
+        rs = cam["rolling_shutter"]
+        if "rs_magnitude" in rs:  # readout shear along this seed's motion
+            rs["rs_skew"] = rs["rs_magnitude"] * math.cos(alpha_m)
+            rs["rs_stretch"] = rs["rs_magnitude"] * math.sin(alpha_m)
+    return cam
+
+
+# ------------------------------------------------------------------ per seed: render, physics, capture
+def _batched(image: np.ndarray) -> torch.Tensor:
+    """(H, W) or (C, H, W) -> (1, C, H, W) tensor (sharing memory)."""
+    t = torch.from_numpy(image)[None]
+    return t[None] if t.ndim == 3 else t
+
+
+def _render_layers(draw: MeasuredSeed, cache: Any, body_cache: Any | None, side: int
+                   ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
+    """Coverage and normals of the real object in its render square, and its rotors' coverage (or None)."""
+    pose = [torch.tensor([float(v)]) for v in (*draw.pose, 0.0, 0.0)]
+    cov, nrm = cache.layers(*pose, size=side, object_scale=draw.size_px / side, dtype=torch.float64)
+    if body_cache is None:
+        return cov, nrm, None
+    cov_body, _ = body_cache.layers(*pose, size=side, object_scale=draw.size_px / side, dtype=torch.float64)
+    return cov, nrm, (cov - cov_body).clamp(0.0, 1.0)
+
+
+def _annotated_box(setup: _Setup, draw: MeasuredSeed, cov: torch.Tensor) -> np.ndarray:
+    """The box an annotator draws (x, y, w, h, frame px): the sharp object, after the geometric warps."""
+    cam, (x0, y0), side = draw.camera, draw.corner, setup.crop_side
+    cov_geo = cov
+    if "rolling_shutter" in cam:
+        rs = cam["rolling_shutter"]
+        cov_geo = Cx.rolling_shutter(cov, cov, torch.tensor([rs["rs_skew"]]), torch.tensor([rs["rs_stretch"]]))[1]
+    cov_frame = np.zeros(setup.frame_hw)
+    cov_frame[y0:y0 + side, x0:x0 + side] = cov_geo[0, 0].numpy()
+    if "lens_distortion" in cam:
+        cov_frame = Cx.lens_distortion(torch.from_numpy(cov_frame)[None, None],
+                                       torch.tensor([cam["lens_distortion"]["distortion_k1"]], dtype=torch.float64),
+                                       recentre=False).numpy()[0, 0]
+    box = _box(cov_frame)
+    if box is None:  # pragma: no cover - a unit-size mesh is never empty at >= 4 px
+        raise RuntimeError(f"seed {draw.index}: the object is not visible")
+    return box
+
+
+def _frame_sigmas(paper: Mapping[str, float], frame_scale: float) -> dict[str, float]:
+    """The paper's blurs σ_s, σ_u, σ_v in frame px."""
+    return {k: paper[k] * frame_scale for k in ("sigma_s", "sigma_u", "sigma_v")}
+
+
+def _object_radiance(nz: Nuisances, draw: MeasuredSeed, cov: torch.Tensor, nrm: torch.Tensor,
+                     side: int) -> torch.Tensor:
+    """The object's colour before the model's material: the real material under its video's light, or (the
+    fit's own shading) a neutral radiance 0.5 that the ``material`` effect then shades."""
+    if nz.shading_is_model:
+        return Fx.diffuse_material(nrm, cov, torch.tensor([[0.5]], dtype=torch.float64))
+    texture = None
+    if draw.texture_noise is not None:
+        texture = texture_field(draw.texture_noise, torch.tensor([nz.albedo_texture_px], dtype=torch.float64),
+                                (side, side))
+    return shade_object(nrm, cov, draw.paper["w_d"], nz, draw.nuisance, texture=texture)
+
+
+def _object_on_frame(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, cov: torch.Tensor, nrm: torch.Tensor,
+                     rotor: torch.Tensor | None, frame_scale: float) -> torch.Tensor:
+    """The linear frame (1, C, H, W): the object-only physics on the render square at frame scale (σ in frame
+    px) — effects in the registry's order —, overlaid on the scene as it was when the frame was taken (a
+    nuisance may move it against the background frame's), then boundary blur and object noise."""
+    cam, paper, nz, side, (x0, y0) = draw.camera, draw.paper, setup.nuisances, setup.crop_side, draw.corner
+    shot = _batched(drift_scene(scene, draw.nuisance))
+    bg_crop = shot[..., y0:y0 + side, x0:x0 + side]
+    values: dict[str, Any] = {"w_d": paper["w_d"], **_frame_sigmas(paper, frame_scale), "alpha_m": paper["alpha_m"],
+                              "sigma_n": paper["sigma_n"]}
+    object_effects = [e.name for e in ordered([e for e in OBJECT_ONLY_EFFECTS if e in cam and e in CAMERA_EFFECTS])]
+    for eff in object_effects:
+        values.update({s.name: cam[eff][s.name] for s in get_effect(eff).params})
+    obj_names = (() if not nz.shading_is_model else ("material",)) + ("motion_blur",) + tuple(object_effects)
+    theta = CaptureParams(values, effects=PAPER_EFFECTS + tuple(object_effects), validate=False).to(torch.float64)
+    extras = {} if rotor is None else {"part_rotor": rotor}
+    colour0 = _object_radiance(nz, draw, cov, nrm, side)
+    frame_lin = shot.clone()
+    for c in range(shot.shape[1]):  # a neutral object: the same layers over each channel's background
+        state = RenderState(object_color=colour0, coverage=cov, normals=nrm, background=bg_crop[:, c:c + 1],
+                            extras=extras, fields={"noise": draw.object_noise})
+        state = apply_effects(state, theta, obj_names, clamp=False)
+        if "interlacing" in cam:
+            col, cv = _interlace(state.object_color, state.coverage, cam["interlacing"]["interlace_shift"],
+                                 paper["alpha_m"])
+            state = state.replace(object_color=col, coverage=cv)
+        state = apply_effects(state, theta, ("boundary_blur", "object_noise"), clamp=False)
+        frame_lin[:, c:c + 1, y0:y0 + side, x0:x0 + side] = state.image
+    return frame_lin
+
+
+def _capture(setup: _Setup, draw: MeasuredSeed, frame_lin: torch.Tensor, scene: np.ndarray,
+             tint: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """The whole-frame camera on the frame and on the object-free background frame B (its noise reduced by
+    ``background_noise_factor``): 8-bit (frame, B) in gray, and their RGB captures (or None) with ``colour``
+    (the gray images are then the capture's luma)."""
+    cam = draw.camera
+    frame_u8 = _to_u8(_camera(frame_lin, cam, draw.frame_noise, 1.0, setup.read_noise, tint=tint), cam)
+    bg_u8 = _to_u8(_camera(_batched(scene), cam, draw.background_noise, setup.background_noise_factor,
+                           setup.read_noise, tint=tint), cam)
+    if not setup.colour:
+        return frame_u8, bg_u8, None, None
+    import cv2
+
+    return (cv2.cvtColor(frame_u8, cv2.COLOR_RGB2GRAY), cv2.cvtColor(bg_u8, cv2.COLOR_RGB2GRAY), frame_u8, bg_u8)
+
+
+# ------------------------------------------------------------------ per seed: crop and truth
+@dataclass(frozen=True)
+class _SeedOutput:
+    """What one seed adds to the seed set (the arguments of :func:`~synthaug.data.seedset.write_seedset`)."""
+
+    patch: np.ndarray
+    background: np.ndarray
+    box: np.ndarray
+    crop: Any
+    frame: np.ndarray
+    background_frame: np.ndarray
+    patch_rgb: np.ndarray | None
+    background_rgb: np.ndarray | None
+    record: dict[str, Any]
+    truth_row: dict[str, Any]
+    truth_extra: dict[str, Any]
+
+
+def _crop_seed(setup: _Setup, draw: MeasuredSeed, cache: Any, box: np.ndarray, side: float, frame_scale: float,
+               captured: tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]) -> _SeedOutput:
+    """Object and background patches around ``box``, and the seed's truth (Θ in patch units)."""
+    from synthaug.data.seedset import crop_patch
+
+    frame_u8, bg_u8, frame_rgb, bg_rgb = captured
+    p = setup.patch_size
+    patch, crop = crop_patch(frame_u8, box=box, patch_size=p, object_fraction=setup.object_fraction)
+    rgb = (None, None) if frame_rgb is None else \
+        (crop_patch(frame_rgb, crop=crop, patch_size=p)[0], crop_patch(bg_rgb, crop=crop, patch_size=p)[0])
+    cx, cy = float(crop[0]), float(crop[1])
+    origin = [cx - side / 2, cy - side / 2]
+    s = setup.crop_side
+    render_c = (draw.corner[0] + (s - 1) / 2.0, draw.corner[1] + (s - 1) / 2.0)
+    alpha, beta, gamma = draw.pose
+    g_alpha, g_beta = (float(v) for v in cache.grid_pose(torch.tensor([alpha]), torch.tensor([beta])))
+    theta_patch = {"alpha": g_alpha, "beta": g_beta, "gamma": gamma,
+                   "t_x": (render_c[0] - cx) / side, "t_y": (render_c[1] - cy) / side,
+                   **{k: draw.paper[k] for k in _PAPER_NAMES}}
+    hidden_model = _model_units(draw.camera, frame_scale)
+    w_f, h_f = setup.frame_hw[1], setup.frame_hw[0]
+    truth = {"theta": theta_patch, "hidden": draw.camera, "hidden_model": hidden_model, "object_px": draw.size_px,
+             "object_scale": draw.size_px / side, "render_centre": list(render_c), "origin": origin,
+             "frame_scale": frame_scale, "alpha_requested": alpha, "beta_requested": beta,
+             "sigma_frame": _frame_sigmas(draw.paper, frame_scale),
+             **({} if setup.nuisances.is_none() else {"nuisance": draw.nuisance.as_dict()})}
+    return _SeedOutput(
+        patch=patch, background=crop_patch(bg_u8, crop=crop, patch_size=p)[0], box=box, crop=crop,
+        frame=frame_u8, background_frame=bg_u8, patch_rgb=rgb[0], background_rgb=rgb[1],
+        record={"video": f"refcam{draw.video:02d}", "frame": draw.index // setup.n_videos, "class": "drone",
+                "background_method": "reference_camera", "background_quality": 1.0, "split": "train",
+                "truth": truth},
+        truth_row={**theta_patch, **{k: v for e in hidden_model.values() for k, v in e.items()}},
+        truth_extra={"object_scale": draw.size_px / side, "origin": origin, "frame_size": [w_f, h_f],
+                     "frame_scale": frame_scale})
+
+
+def _simulate_seed(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, tint: np.ndarray | None, cache: Any,
+                   body_cache: Any | None) -> _SeedOutput:
+    """One seed through the reference camera: render, object physics, capture, crop."""
+    cov, nrm, rotor = _render_layers(draw, cache, body_cache, setup.crop_side)
+    box = _annotated_box(setup, draw, cov)
+    side = max(box[2], box[3]) / setup.object_fraction
+    frame_scale = side / setup.patch_size
+    frame_lin = _object_on_frame(setup, draw, scene, cov, nrm, rotor, frame_scale)
+    return _crop_seed(setup, draw, cache, box, side, frame_scale, _capture(setup, draw, frame_lin, scene, tint))
+
+
+def _header(setup: _Setup, mesh_desc: str) -> dict[str, Any]:
+    """The seed set's metadata: its geometry and the ``reference_camera`` block (the truth of the case)."""
+    (h_f, w_f), settings, nz = setup.frame_hw, setup.settings, setup.nuisances
+    return {
+        "patch_size": setup.patch_size, "object_fraction": setup.object_fraction, "frame_size": [w_f, h_f],
+        "source": {"generator": _FORMAT, "version": _VERSION},
+        "reference_camera": {
+            "format": _FORMAT, "version": _VERSION, "hidden": settings, "mesh": mesh_desc,
+            "mesh_perturbation": setup.mesh_perturbation, "seed": setup.seed, "read_noise": setup.read_noise,
+            "background_noise_factor": setup.background_noise_factor, "paper_ranges": setup.ranges,
+            "object_px": list(setup.object_px), "view_step_deg": setup.view_step_deg,
+            "sprite_size": setup.sprite_size, "per_video": list(setup.per_video), "n_videos": setup.n_videos,
+            "colour": bool(setup.colour),
+            "whole_frame": [e for e in settings if e in WHOLE_FRAME_EFFECTS],
+            "object_only": [e for e in settings if e in OBJECT_ONLY_EFFECTS],
+            "truth_file": "truth.json",
+            **({} if nz.is_none() else {"nuisances": nz.as_dict()}),
+        },
+    }
+
+
+def _write(out_dir: str | os.PathLike, setup: _Setup, mesh_desc: str, seeds: list[_SeedOutput]) -> Path:
+    """The seed set (:func:`~synthaug.data.seedset.write_seedset`) with ``truth.json`` beside."""
+    from synthaug.data.seedset import write_seedset
+
+    nz = setup.nuisances
+    truth_bytes = _truth_file([s.truth_row for s in seeds], [s.truth_extra for s in seeds],
+                              tuple(e for e in setup.settings if e in CAMERA_EFFECTS),
+                              None if nz.is_none() else nz.as_dict())
+    rgb = setup.colour
+    return write_seedset(out_dir, patches=np.stack([s.patch for s in seeds]),
+                         backgrounds=np.stack([s.background for s in seeds]), boxes=[s.box for s in seeds],
+                         centres=[[s.box[0] + s.box[2] / 2, s.box[1] + s.box[3] / 2] for s in seeds],
+                         crops=[s.crop for s in seeds], records=[s.record for s in seeds],
+                         frames=[s.frame for s in seeds], background_frames=[s.background_frame for s in seeds],
+                         metadata=_header(setup, mesh_desc), extra_files={"truth.json": truth_bytes},
+                         patches_rgb=np.stack([s.patch_rgb for s in seeds]) if rgb else None,
+                         backgrounds_rgb=np.stack([s.background_rgb for s in seeds]) if rgb else None)
+
+
 # ------------------------------------------------------------------ main
 def make_measured_seedset(
     out_dir: str | os.PathLike,
@@ -516,241 +921,23 @@ def make_measured_seedset(
     Returns:
         the seed-set folder.
     """
-    from synthaug.data.procedural import sky_backgrounds
-    from synthaug.data.seedset import crop_patch, write_seedset
     from synthaug.render.cache import ViewCache
 
-    if n_seeds < 1:
-        raise ValueError(f"n_seeds must be >= 1, got {n_seeds}")
-    h_f, w_f = (int(v) for v in frame_size)
-    lo_px, hi_px = (float(v) for v in object_px)
-    if not 4 <= lo_px <= hi_px:
-        raise ValueError(f"object_px must be (low, high) with 4 <= low <= high, got {object_px}")
-    crop_side = int(math.ceil(2.5 * hi_px / 2)) * 2
-    if crop_side + 2 > min(h_f, w_f):
-        raise ValueError(f"frame_size {frame_size} is too small for objects of {hi_px} px (need > {crop_side + 2})")
-    if not 0 <= read_noise <= 0.2:
-        raise ValueError(f"read_noise must be in [0, 0.2], got {read_noise}")
-    if not 0 <= background_noise_factor <= 1:
-        raise ValueError(f"background_noise_factor must be in [0, 1], got {background_noise_factor}")
-    if n_videos < 1:
-        raise ValueError(f"n_videos must be >= 1, got {n_videos}")
-    per_video = tuple(per_video)
-    bad_pv = sorted(set(per_video) - set(PAPER_RANGES))
-    if bad_pv:
-        raise ValueError(f"per_video: unknown parameter(s) {bad_pv}; known: {sorted(PAPER_RANGES)}")
-    settings = resolve_hidden(hidden)
-    nz = Nuisances.none() if nuisances is None else nuisances
-    if not isinstance(nz, Nuisances):
-        raise ValueError(f"nuisances must be a Nuisances record or None, got {type(nuisances).__name__}")
-    if nz.mesh_perturbation > 0 and mesh_perturbation > 0:
-        raise ValueError(f"give the mesh perturbation once: mesh_perturbation={mesh_perturbation} and "
-                         f"nuisances.mesh_perturbation={nz.mesh_perturbation}")
-    mesh_perturbation = max(mesh_perturbation, nz.mesh_perturbation)
-    if not nz.mesh_is_model and not (isinstance(mesh, str) and mesh == "quadcopter") and \
-            (nz.rotor_scale != 1.0 or nz.mesh_sections != 16):
-        raise ValueError("nuisances.rotor_scale / mesh_sections apply to the built-in 'quadcopter' only, "
-                         f"got mesh {mesh!r}")
-    ranges = dict(PAPER_RANGES)
-    bad = sorted(set(paper_ranges or {}) - set(ranges))
-    if bad:
-        raise ValueError(f"paper_ranges: unknown parameter(s) {bad}; known: {sorted(ranges)}")
-    ranges.update({k: (float(v[0]), float(v[1])) for k, v in dict(paper_ranges or {}).items()})
-
-    full_mesh, body_mesh, mesh_desc = _real_object(mesh, mesh_perturbation, seed, rotor_scale=nz.rotor_scale,
+    setup = _setup(n_seeds=n_seeds, hidden=hidden, mesh=mesh, mesh_perturbation=mesh_perturbation,
+                   frame_size=frame_size, patch_size=patch_size, object_fraction=object_fraction, object_px=object_px,
+                   seed=seed, paper_ranges=paper_ranges, read_noise=read_noise,
+                   background_noise_factor=background_noise_factor, n_videos=n_videos, per_video=per_video,
+                   view_step_deg=view_step_deg, sprite_size=sprite_size, colour=colour, nuisances=nuisances)
+    nz = setup.nuisances
+    full_mesh, body_mesh, mesh_desc = _real_object(mesh, setup.mesh_perturbation, seed, rotor_scale=nz.rotor_scale,
                                                    sections=nz.mesh_sections)
     cache = ViewCache.build(full_mesh, step_deg=view_step_deg, sprite_size=sprite_size)
     body_cache = None if body_mesh is None else ViewCache.build(body_mesh, step_deg=view_step_deg,
                                                                  sprite_size=sprite_size)
-
-    if backgrounds is None:
-        scenes = [b.astype(np.float64) / 255.0 for b in sky_backgrounds(n_seeds, (h_f, w_f), seed=seed)]
-    else:
-        if len(backgrounds) == 0:
-            raise ValueError("backgrounds must hold at least one frame")
-        scenes = []
-        for i in range(n_seeds):
-            b = np.asarray(backgrounds[i % len(backgrounds)])
-            if b.shape != (h_f, w_f):
-                raise ValueError(f"backgrounds[{i % len(backgrounds)}] has shape {b.shape}, expected {(h_f, w_f)}")
-            scenes.append(b.astype(np.float64) / 255.0 if b.dtype == np.uint8 else b.astype(np.float64))
-
-    tints: list[np.ndarray | None] = [None] * n_seeds
-    if colour:  # a bluish sky: the gray sky times a per-seed tint (red and green below blue)
-        for i in range(n_seeds):
-            t = np.random.default_rng([seed, i, 3]).uniform([0.78, 0.9, 1.0], [0.9, 0.97, 1.0])
-            tints[i] = t / float(np.dot(t, Cx.LUMA_WEIGHTS))  # unit luma: the colour of this scene's air
-            scenes[i] = np.clip(scenes[i][None] * t[:, None, None], 0.0, 1.0)
-    object_effects = [e for e in ("specular", "rotor_blur", "rolling_shutter") if e in settings]
-    rgb_patches: list[np.ndarray] = []
-    rgb_backgrounds: list[np.ndarray] = []
-    patches, bg_patches, boxes, centres, crops, records, frames, bg_frames = [], [], [], [], [], [], [], []
-    truth_rows: list[dict[str, Any]] = []
-    truth_extra: list[dict[str, Any]] = []
-    for i in range(n_seeds):
-        # two streams per seed: the scene (pose, place, Θ, noise) does not depend on what is hidden,
-        # so the same seed with and without an effect differs only by the effect
-        rng = np.random.default_rng([seed, i, 0])
-        cam = _draw_strengths(settings, np.random.default_rng([seed, i, 1]))
-        paper = {k: float(rng.uniform(*ranges[k])) for k in ("w_d", "sigma_s", "sigma_u", "sigma_v", "alpha_m",
-                                                              "sigma_n")}
-        video_rng = np.random.default_rng([seed, i % n_videos, 2])
-        for k in per_video:  # the scene's light on the object's paint: one value per video
-            paper[k] = float(video_rng.uniform(*ranges[k]))
-        alpha, beta, gamma = rng.uniform(-math.pi, math.pi), rng.uniform(-math.pi / 2, math.pi / 2), \
-            rng.uniform(-math.pi, math.pi)
-        size_px = float(rng.uniform(lo_px, hi_px))
-        x0 = int(rng.integers(1, w_f - crop_side - 1))
-        y0 = int(rng.integers(1, h_f - crop_side - 1))
-        gen = torch.Generator().manual_seed(int(rng.integers(2 ** 62)))
-        seed_nz = nz.draw_seed(seed=seed, index=i, video=i % n_videos)  # own streams: nothing above changes
-
-        pose = [torch.tensor([float(v)]) for v in (alpha, beta, gamma, 0.0, 0.0)]
-        cov, nrm = cache.layers(*pose, size=crop_side, object_scale=size_px / crop_side, dtype=torch.float64)
-        rotor = None
-        if body_cache is not None:
-            cov_body, _ = body_cache.layers(*pose, size=crop_side, object_scale=size_px / crop_side,
-                                            dtype=torch.float64)
-            rotor = (cov - cov_body).clamp(0.0, 1.0)
-        if "haze" in cam and "haze_extinction_px" in cam["haze"]:  # more air in front of a farther object
-            cam["haze"]["haze_amount"] = 1.0 - math.exp(-cam["haze"]["haze_extinction_px"] / size_px)
-        if "exposure" in cam and "exposure_auto" in cam["exposure"]:  # auto-exposure follows the scene
-            m = float(np.mean(scenes[i]))
-            cam["exposure"]["exposure_gain"] = float(np.clip((AE_TARGET / max(m, 1e-3)) ** cam["exposure"]
-                                                             ["exposure_auto"], 0.5, 2.0))
-        if "rolling_shutter" in cam:
-            rs = cam["rolling_shutter"]
-            if "rs_magnitude" in rs:  # readout shear along this seed's motion
-                rs["rs_skew"] = rs["rs_magnitude"] * math.cos(paper["alpha_m"])
-                rs["rs_stretch"] = rs["rs_magnitude"] * math.sin(paper["alpha_m"])
-        # the box an annotator draws: the sharp object, after the geometric warps
-        cov_geo = cov
-        if "rolling_shutter" in cam:
-            rs = cam["rolling_shutter"]
-            cov_geo = Cx.rolling_shutter(cov, cov, torch.tensor([rs["rs_skew"]]), torch.tensor([rs["rs_stretch"]]))[1]
-        cov_frame = np.zeros((h_f, w_f))
-        cov_frame[y0:y0 + crop_side, x0:x0 + crop_side] = cov_geo[0, 0].numpy()
-        if "lens_distortion" in cam:
-            cov_frame = Cx.lens_distortion(torch.from_numpy(cov_frame)[None, None],
-                                           torch.tensor([cam["lens_distortion"]["distortion_k1"]], dtype=torch.float64),
-                                           recentre=False).numpy()[0, 0]
-        box = _box(cov_frame)
-        if box is None:  # pragma: no cover - a unit-size mesh is never empty at >= 4 px
-            raise RuntimeError(f"seed {i}: the object is not visible")
-        side = max(box[2], box[3]) / object_fraction
-        frame_scale = side / patch_size
-
-        # object physics on the crop, at frame scale (σ in frame px)
-        scene = torch.from_numpy(scenes[i])[None]
-        scene = scene[None] if scene.ndim == 3 else scene  # (1, C, H, W)
-        # the scene when the frame was taken (B_i is the scene of the background estimate: a nuisance moves it)
-        shot = torch.from_numpy(drift_scene(scenes[i], seed_nz))[None]
-        shot = shot[None] if shot.ndim == 3 else shot
-        bg_crop = shot[..., y0:y0 + crop_side, x0:x0 + crop_side]
-        values: dict[str, Any] = {
-            "w_d": paper["w_d"], "sigma_s": paper["sigma_s"] * frame_scale, "sigma_u": paper["sigma_u"] * frame_scale,
-            "sigma_v": paper["sigma_v"] * frame_scale, "alpha_m": paper["alpha_m"], "sigma_n": paper["sigma_n"],
-        }
-        for eff in object_effects:
-            values.update({s.name: cam[eff][s.name] for s in get_effect(eff).params})
-        own_shading = not nz.shading_is_model
-        obj_names = (() if own_shading else ("material",)) + ("motion_blur",) + tuple(object_effects)
-        theta = CaptureParams(values, effects=PAPER_EFFECTS + tuple(object_effects), validate=False)
-        extras = {} if rotor is None else {"part_rotor": rotor}
-        obj_noise = torch.randn(bg_crop[:, :1].shape, generator=gen, dtype=torch.float64)
-        if own_shading:  # the real material under this video's light (the model's Lambert is not applied)
-            texture = None
-            if nz.albedo_texture_amp > 0:
-                white = torch.randn((1, 1, crop_side + 2 * TEXTURE_PAD, crop_side + 2 * TEXTURE_PAD),
-                                    generator=torch.Generator().manual_seed(seed_nz.texture_seed), dtype=torch.float64)
-                texture = texture_field(white, torch.tensor([nz.albedo_texture_px], dtype=torch.float64),
-                                        (crop_side, crop_side))
-            colour0 = shade_object(nrm, cov, paper["w_d"], nz, seed_nz, texture=texture)
-        else:
-            colour0 = Fx.diffuse_material(nrm, cov, torch.tensor([[0.5]], dtype=torch.float64))
-        frame_lin = shot.clone()
-        for c in range(scene.shape[1]):  # a neutral object: the same layers over each channel's background
-            state = RenderState(object_color=colour0,
-                                coverage=cov, normals=nrm, background=bg_crop[:, c:c + 1], extras=extras,
-                                fields={"noise": obj_noise})
-            state = apply_effects(state, theta.to(torch.float64), obj_names, clamp=False)
-            if "interlacing" in cam:
-                col, cv = _interlace(state.object_color, state.coverage, cam["interlacing"]["interlace_shift"],
-                                     paper["alpha_m"])
-                state = state.replace(object_color=col, coverage=cv)
-            state = apply_effects(state, theta.to(torch.float64), ("boundary_blur", "object_noise"), clamp=False)
-            frame_lin[:, c:c + 1, y0:y0 + crop_side, x0:x0 + crop_side] = state.image
-
-        # the whole-frame camera, on the frame and on the object-free background
-        noise_f = torch.randn(scene.shape, generator=gen, dtype=torch.float64)
-        noise_b = torch.randn(scene.shape, generator=gen, dtype=torch.float64)
-        frame_u8 = _to_u8(_camera(frame_lin, cam, noise_f, 1.0, read_noise, tint=tints[i]), cam)
-        bg_u8 = _to_u8(_camera(scene, cam, noise_b, background_noise_factor, read_noise, tint=tints[i]), cam)
-        if colour:  # the seed set's gray images are the capture's luma; the RGB patches are kept beside
-            import cv2
-
-            frame_rgb, bg_rgb = frame_u8, bg_u8
-            frame_u8 = cv2.cvtColor(frame_rgb, cv2.COLOR_RGB2GRAY)
-            bg_u8 = cv2.cvtColor(bg_rgb, cv2.COLOR_RGB2GRAY)
-
-        patch, crop = crop_patch(frame_u8, box=box, patch_size=patch_size, object_fraction=object_fraction)
-        bg_patch, _ = crop_patch(bg_u8, crop=crop, patch_size=patch_size)
-        if colour:
-            rgb_patches.append(crop_patch(frame_rgb, crop=crop, patch_size=patch_size)[0])
-            rgb_backgrounds.append(crop_patch(bg_rgb, crop=crop, patch_size=patch_size)[0])
-        cx, cy = float(crop[0]), float(crop[1])
-        origin = [cx - side / 2, cy - side / 2]
-        render_c = (x0 + (crop_side - 1) / 2.0, y0 + (crop_side - 1) / 2.0)
-        g_alpha, g_beta = (float(v) for v in cache.grid_pose(torch.tensor([alpha]), torch.tensor([beta])))
-        theta_patch = {
-            "alpha": g_alpha, "beta": g_beta, "gamma": float(gamma),
-            "t_x": (render_c[0] - cx) / side, "t_y": (render_c[1] - cy) / side,
-            **{k: paper[k] for k in ("w_d", "sigma_s", "sigma_u", "sigma_v", "alpha_m", "sigma_n")},
-        }
-        hidden_model = _model_units(cam, frame_scale)
-        truth_rows.append({**theta_patch, **{k: v for e in hidden_model.values() for k, v in e.items()}})
-        truth_extra.append({"object_scale": size_px / side, "origin": origin, "frame_size": [w_f, h_f],
-                            "frame_scale": frame_scale})
-        patches.append(patch)
-        bg_patches.append(bg_patch)
-        boxes.append(box)
-        centres.append([box[0] + box[2] / 2, box[1] + box[3] / 2])
-        crops.append(crop)
-        frames.append(frame_u8)
-        bg_frames.append(bg_u8)
-        records.append({
-            "video": f"refcam{i % n_videos:02d}", "frame": i // n_videos, "class": "drone",
-            "background_method": "reference_camera", "background_quality": 1.0, "split": "train",
-            "truth": {"theta": theta_patch, "hidden": cam, "hidden_model": hidden_model, "object_px": size_px,
-                      "object_scale": size_px / side, "render_centre": list(render_c), "origin": origin,
-                      "frame_scale": frame_scale, "alpha_requested": float(alpha), "beta_requested": float(beta),
-                      "sigma_frame": {k: values[k] for k in ("sigma_s", "sigma_u", "sigma_v")},
-                      **({} if nz.is_none() else {"nuisance": seed_nz.as_dict()})},
-        })
-
-    hidden_model_effects = tuple(e for e in settings if e in CAMERA_EFFECTS)
-    truth_bytes = _truth_file(truth_rows, truth_extra, hidden_model_effects,
-                              None if nz.is_none() else nz.as_dict())
-    meta = {
-        "patch_size": patch_size, "object_fraction": object_fraction, "frame_size": [w_f, h_f],
-        "source": {"generator": _FORMAT, "version": _VERSION},
-        "reference_camera": {
-            "format": _FORMAT, "version": _VERSION, "hidden": settings, "mesh": mesh_desc,
-            "mesh_perturbation": mesh_perturbation, "seed": seed, "read_noise": read_noise,
-            "background_noise_factor": background_noise_factor, "paper_ranges": ranges,
-            "object_px": [lo_px, hi_px], "view_step_deg": view_step_deg, "sprite_size": sprite_size,
-            "per_video": list(per_video), "n_videos": n_videos, "colour": bool(colour),
-            "whole_frame": [e for e in settings if e in WHOLE_FRAME_EFFECTS],
-            "object_only": [e for e in settings if e in OBJECT_ONLY_EFFECTS],
-            "truth_file": "truth.json",
-            **({} if nz.is_none() else {"nuisances": nz.as_dict()}),
-        },
-    }
-    return write_seedset(out_dir, patches=np.stack(patches), backgrounds=np.stack(bg_patches), boxes=boxes,
-                         centres=centres, crops=crops, records=records, frames=frames, background_frames=bg_frames,
-                         metadata=meta, extra_files={"truth.json": truth_bytes},
-                         patches_rgb=np.stack(rgb_patches) if colour else None,
-                         backgrounds_rgb=np.stack(rgb_backgrounds) if colour else None)
+    scenes, tints = _scenes(setup, backgrounds)
+    seeds = [_simulate_seed(setup, _draw_seed(setup, i, scenes[i]), scenes[i], tints[i], cache, body_cache)
+             for i in range(n_seeds)]
+    return _write(out_dir, setup, mesh_desc, seeds)
 
 
 def _model_units(cam: dict[str, dict[str, float]], frame_scale: float) -> dict[str, dict[str, float]]:
