@@ -172,16 +172,8 @@ def diagnose(
         ``screened`` (every candidate), ``residuals`` (structure measures),
         ``parameter_dependence``, ``realism`` (real-vs-synthetic accuracy).
     """
-    from synthaug.diagnose.residuals import (
-        load_diagnosis_data,
-        feature_residual_map,
-        parameter_dependence,
-        seed_groups,
-        seed_metadata,
-        structure_measures,
-    )
-    from synthaug.diagnose.calibration import describe as describe_floors, rule_text
-    from synthaug.diagnose.screening import CANDIDATE_GRIDS, base_render, kfold, realism_accuracy
+    from synthaug.diagnose.residuals import load_diagnosis_data
+    from synthaug.diagnose.screening import CANDIDATE_GRIDS, kfold, realism_accuracy
 
     t0 = time.perf_counter()
     say = progress or (lambda s: None)
@@ -195,8 +187,65 @@ def diagnose(
     data = load_diagnosis_data(seeds_dir, fit_path, mesh, distance=distance)
     if len(data) < 2 * k:
         raise ValueError(f"need at least {2 * k} seeds for {k}-fold screening, got {len(data)}")
-    rng = np.random.default_rng(seed)
     say("residual analysis")
+    res = _residual_analysis(data, np.random.default_rng(seed), alpha)
+    order, hinted = _order(res["structure"], names)
+    say(f"screening {len(order)} candidates")
+    rows, picked = _forward_selection(data, order, k=k, seed=seed, alpha=alpha, max_effects=max_effects, say=say)
+    folds = kfold(len(data), k, np.random.default_rng(seed + 1))
+    acc_base = realism_accuracy(data, res["syn0"], folds)
+    nlf = _noise_level_function(data, folds)
+    findings, ext_images = _effect_findings(data, picked, folds, acc_base, res["structure"], hinted)
+    remaining = _remaining_structure(data, picked, res["structure"], seed=seed, alpha=alpha)
+    gap_report = None
+    if gap:
+        say(f"gap in the detectors' features ({gap} training samples per seed)")
+        gap_report = _gap_report(data, res["syn0"], seeds_dir, mesh, fit_path, gap=gap, seed=seed,
+                                 detectors=gap_detectors, out_dir=out_dir if plots else None)
+    unexplained = _unexplained_finding(remaining, picked, findings)
+    if unexplained is not None:
+        findings.append(unexplained)
+    report = {
+        "format": REPORT_FORMAT, "version": 1,
+        "inputs": {"seeds": str(getattr(seeds_dir, "path", seeds_dir)), "mesh": str(mesh), "fit": str(fit_path),
+                   "distance": data.distance_name, "n_seeds": len(data), "k_folds": k, "seed": seed,
+                   "alpha": alpha},
+        "findings": findings,
+        "significant": bool(findings),
+        "screened": [_screened_row(r) for r in rows],
+        **_residual_sections(data, res, hinted),
+        "noise_level_function": nlf,
+        "realism": {"accuracy_base": acc_base,
+                    "note": "k-fold accuracy of logistic regression on HOG, real vs fitted synthetic; 0.5 = "
+                            "indistinguishable"},
+        "seconds": time.perf_counter() - t0,
+    }
+    if gap_report is not None:
+        report["gap"] = gap_report
+    report = _jsonable(report)
+    if out_dir is not None:
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        from synthaug.params import atomic_write_text
+
+        figs = _plots(out, data, res["syn0"], ext_images, res["fmap"]) if plots else {}
+        atomic_write_text(out / "report.json", json.dumps(report, indent=1))
+        atomic_write_text(out / "report.md", write_markdown(report, figs))
+    return report
+
+
+def _residual_analysis(data: Any, rng: np.random.Generator, alpha: float) -> dict[str, Any]:
+    """The base render's residual: its structure, the HOG residual map, and which fitted parameters depend on
+    the seeds' metadata. Returns ``syn0`` (the base render), ``structure``, ``fmap`` and ``dependence``."""
+    from synthaug.diagnose.residuals import (
+        feature_residual_map,
+        parameter_dependence,
+        seed_groups,
+        seed_metadata,
+        structure_measures,
+    )
+    from synthaug.diagnose.screening import base_render
+
     syn0, w0 = base_render(data)
     structure = structure_measures(data, syn0, rng=rng, alpha=alpha)
     fmap = feature_residual_map(data, syn0)
@@ -207,20 +256,47 @@ def diagnose(
         fitted[p] = th[p][:, 0].double().numpy()
     dependence = parameter_dependence(fitted, {k_: v for k_, v in meta.items() if k_ != "inverse_size"}, rng=rng,
                                       alpha=alpha, groups=seed_groups(data))
-    order, hinted = _order(structure, names)
-    say(f"screening {len(order)} candidates")
-    rows, picked = _forward_selection(data, order, k=k, seed=seed, alpha=alpha, max_effects=max_effects, say=say)
-    folds = kfold(len(data), k, np.random.default_rng(seed + 1))
-    acc_base = realism_accuracy(data, syn0, folds)
-    nlf = None
-    if data.noise_levels is not None:
-        from synthaug.diagnose.noise import noise_channel
+    return {"syn0": syn0, "structure": structure, "fmap": fmap, "dependence": dependence}
 
-        nc = noise_channel(data.noise_levels, folds)
-        nlf = {k_: nc[k_] for k_ in ("slope", "t", "p", "n_seeds", "fitted_slope", "gain")}
-        nlf["note"] = ("log-log slope of the frames' noise variance vs brightness, off the object (0: read noise "
-                       "only, as the model's sigma_n assumes; > 0: shot noise; < 0: a compressive tone curve after "
-                       "the sensor); gain: held-out log-likelihood of the power-law NLF over a flat one, nats/px")
+
+def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str]) -> dict[str, Any]:
+    """The report's sections on the base residual, its colour and the significance rule."""
+    from synthaug.diagnose.calibration import describe as describe_floors, rule_text
+
+    fmap = res["fmap"]
+    return {
+        "residuals": res["structure"],
+        "feature_residuals": None if fmap is None else {
+            "mean_per_block": fmap["mean"], "block_stride_px": fmap["cell_px"], "share_centre": fmap["share_centre"],
+            "note": "mean over seeds of |HOG block(real) - HOG block(synthetic)| at each block position of the "
+                    "object-centred patch: where the detector sees the difference"},
+        "hinted_candidates": hinted,
+        "colour": {"screened": data.real_rgb is not None, "note": data.colour_note},
+        "significance": {"rule": rule_text(), "calibration": describe_floors()["source"]},
+        "parameter_dependence": [d for d in res["dependence"] if d["significant"]],
+    }
+
+
+def _noise_level_function(data: Any, folds: Any) -> dict[str, Any] | None:
+    """The frames' noise-level function off the object (None without measured noise levels)."""
+    if data.noise_levels is None:
+        return None
+    from synthaug.diagnose.noise import noise_channel
+
+    nc = noise_channel(data.noise_levels, folds)
+    nlf = {k_: nc[k_] for k_ in ("slope", "t", "p", "n_seeds", "fitted_slope", "gain")}
+    nlf["note"] = ("log-log slope of the frames' noise variance vs brightness, off the object (0: read noise "
+                   "only, as the model's sigma_n assumes; > 0: shot noise; < 0: a compressive tone curve after "
+                   "the sensor); gain: held-out log-likelihood of the power-law NLF over a flat one, nats/px")
+    return nlf
+
+
+def _effect_findings(data: Any, picked: list[tuple[dict, dict]], folds: Any, acc_base: float,
+                     structure: dict[str, dict[str, Any]], hinted: list[str]
+                     ) -> tuple[list[dict[str, Any]], tuple[str, torch.Tensor] | None]:
+    """One finding per accepted effect (its gains and evidence), and the first one's extended render."""
+    from synthaug.diagnose.screening import realism_accuracy
+
     findings: list[dict[str, Any]] = []
     ext_images = None
     for rank, (row, given) in enumerate(picked):
@@ -244,81 +320,68 @@ def diagnose(
                          "residual_structure": [m["description"] for n_, m in structure.items()
                                                 if m["significant"] and row["effect"] in HINTS.get(n_, ())]},
         })
-    remaining = structure
-    if picked:  # the residual of the extended model: is there structure the accepted effects do not explain?
-        accepted = {r["effect"]: _setting(r) for r, _ in picked}
-        syn_acc = base_render(data, accepted)[0]
-        remaining = structure_measures(data, syn_acc, rng=np.random.default_rng(seed + 2), alpha=alpha)
-        explains = {h for e in accepted for h, cands in HINTS.items() if e in cands}
-        remaining = {n_: m for n_, m in remaining.items() if n_ not in explains}
-    gap_report = None
-    if gap:
-        say(f"gap in the detectors' features ({gap} training samples per seed)")
-        from synthaug.data.seedset import SeedSet
-        from synthaug.diagnose.gap import gap_section, training_samples
+    return findings, ext_images
 
-        seedset = SeedSet.load(seeds_dir) if isinstance(seeds_dir, (str, os.PathLike)) else seeds_dir
-        seed_of = np.arange(len(data))  # folds hold a seed's real and synthetic patches out together
-        gap_report = gap_section(data.real, {"training": training_samples(seedset, mesh, fit_path, gap * len(data),
-                                                                          seed=seed),
-                                             "fitted": (syn0, seed_of)},
-                                 real_groups=seed_of, detectors=gap_detectors, seed=seed,
-                                 out_dir=out_dir if plots else None)
+
+def _remaining_structure(data: Any, picked: list[tuple[dict, dict]], structure: dict[str, dict[str, Any]], *,
+                         seed: int, alpha: float) -> dict[str, dict[str, Any]]:
+    """The residual of the extended model: structure the accepted effects do not explain (``structure`` when
+    none was accepted)."""
+    from synthaug.diagnose.residuals import structure_measures
+    from synthaug.diagnose.screening import base_render
+
+    if not picked:
+        return structure
+    accepted = {r["effect"]: _setting(r) for r, _ in picked}
+    syn_acc = base_render(data, accepted)[0]
+    remaining = structure_measures(data, syn_acc, rng=np.random.default_rng(seed + 2), alpha=alpha)
+    explains = {h for e in accepted for h, cands in HINTS.items() if e in cands}
+    return {n_: m for n_, m in remaining.items() if n_ not in explains}
+
+
+def _gap_report(data: Any, syn0: torch.Tensor, seeds_dir: Any, mesh: Any, fit_path: str | os.PathLike, *,
+                gap: int, seed: int, detectors: dict[str, Any] | None,
+                out_dir: str | os.PathLike | None) -> dict[str, Any]:
+    """The ``gap`` section: the real patches against ``gap`` training samples per seed and the fitted renders."""
+    from synthaug.data.seedset import SeedSet
+    from synthaug.diagnose.gap import gap_section, training_samples
+
+    seedset = SeedSet.load(seeds_dir) if isinstance(seeds_dir, (str, os.PathLike)) else seeds_dir
+    seed_of = np.arange(len(data))  # folds hold a seed's real and synthetic patches out together
+    return gap_section(data.real, {"training": training_samples(seedset, mesh, fit_path, gap * len(data), seed=seed),
+                                   "fitted": (syn0, seed_of)},
+                       real_groups=seed_of, detectors=detectors, seed=seed, out_dir=out_dir)
+
+
+def _unexplained_finding(remaining: dict[str, dict[str, Any]], picked: list[tuple[dict, dict]],
+                         findings: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The ``"unexplained"`` finding: significant structure left in the residual (None when there is none)."""
     sig_struct = {n_: m for n_, m in remaining.items() if m["significant"] and n_ != "background_bias"}
-    if sig_struct:
-        findings.append({
-            "effect": "unexplained", "significant": True,
-            "structure": {n_: {"description": m["description"], "p": m["p"], "value": m["value"],
-                               **{kk: m[kk] for kk in ("frequency", "period_px") if kk in m}}
-                          for n_, m in sig_struct.items()},
-            "evidence": {"note": ("the residual has significant structure, and no candidate's extension helps "
-                                  "on held-out seeds") if not picked else
-                         (f"structure left in the residual after adding {', '.join(f['effect'] for f in findings)}, "
-                          "of a kind those effects do not produce")},
-            "gains": {},
-        })
-    report = {
-        "format": REPORT_FORMAT, "version": 1,
-        "inputs": {"seeds": str(getattr(seeds_dir, "path", seeds_dir)), "mesh": str(mesh), "fit": str(fit_path),
-                   "distance": data.distance_name, "n_seeds": len(data), "k_folds": k, "seed": seed,
-                   "alpha": alpha},
-        "findings": findings,
-        "significant": bool(findings),
-        "screened": [{kk: r[kk] for kk in ("effect", "significant", "channel", "score", "p_adjusted", "gain")}
-                     | {"setting_feature": r["screen"]["feature"]["setting"],
-                        "setting_pixel": r["screen"]["pixel"]["setting"],
-                        "setting_colour": r["screen"]["colour"]["setting"] if "colour" in r["screen"] else None,
-                        "gain_colour": r["screen"]["colour"]["gain"] if "colour" in r["screen"] else None,
-                        "colour_skipped": r["screen"].get("colour_skipped"),
-                        "gain_feature": r["screen"]["feature"]["gain"], "gain_pixel": r["screen"]["pixel"]["gain"],
-                        "absorption": r["absorption"], "channels": r["channels"]} for r in rows],
-        "residuals": structure,
-        "feature_residuals": None if fmap is None else {
-            "mean_per_block": fmap["mean"], "block_stride_px": fmap["cell_px"], "share_centre": fmap["share_centre"],
-            "note": "mean over seeds of |HOG block(real) - HOG block(synthetic)| at each block position of the "
-                    "object-centred patch: where the detector sees the difference"},
-        "hinted_candidates": hinted,
-        "colour": {"screened": data.real_rgb is not None, "note": data.colour_note},
-        "significance": {"rule": rule_text(), "calibration": describe_floors()["source"]},
-        "parameter_dependence": [d for d in dependence if d["significant"]],
-        "noise_level_function": nlf,
-        "realism": {"accuracy_base": acc_base,
-                    "note": "k-fold accuracy of logistic regression on HOG, real vs fitted synthetic; 0.5 = "
-                            "indistinguishable"},
-        "seconds": time.perf_counter() - t0,
+    if not sig_struct:
+        return None
+    return {
+        "effect": "unexplained", "significant": True,
+        "structure": {n_: {"description": m["description"], "p": m["p"], "value": m["value"],
+                           **{kk: m[kk] for kk in ("frequency", "period_px") if kk in m}}
+                      for n_, m in sig_struct.items()},
+        "evidence": {"note": ("the residual has significant structure, and no candidate's extension helps "
+                              "on held-out seeds") if not picked else
+                     (f"structure left in the residual after adding {', '.join(f['effect'] for f in findings)}, "
+                      "of a kind those effects do not produce")},
+        "gains": {},
     }
-    if gap_report is not None:
-        report["gap"] = gap_report
-    report = _jsonable(report)
-    if out_dir is not None:
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        from synthaug.params import atomic_write_text
 
-        figs = _plots(out, data, syn0, ext_images, fmap) if plots else {}
-        atomic_write_text(out / "report.json", json.dumps(report, indent=1))
-        atomic_write_text(out / "report.md", write_markdown(report, figs))
-    return report
+
+def _screened_row(r: dict[str, Any]) -> dict[str, Any]:
+    """One candidate's row of the report's ``screened`` list."""
+    sc = r["screen"]
+    return {kk: r[kk] for kk in ("effect", "significant", "channel", "score", "p_adjusted", "gain")} | {
+        "setting_feature": sc["feature"]["setting"], "setting_pixel": sc["pixel"]["setting"],
+        "setting_colour": sc["colour"]["setting"] if "colour" in sc else None,
+        "gain_colour": sc["colour"]["gain"] if "colour" in sc else None,
+        "colour_skipped": sc.get("colour_skipped"),
+        "gain_feature": sc["feature"]["gain"], "gain_pixel": sc["pixel"]["gain"],
+        "absorption": r["absorption"], "channels": r["channels"]}
 
 
 def _plots(out: Path, data: Any, syn0: torch.Tensor, ext: tuple[str, torch.Tensor] | None,
