@@ -105,9 +105,6 @@ def run_gain(
     Returns:
         the numbers written to ``gain.json``.
     """
-    from synthaug.diagnose.extend import extend_fit, select_extension
-    from synthaug.evaluate.context import ExperimentContext
-
     if class_name not in DEFAULT_MESH and mesh is None:
         raise ValueError(f"no default mesh for class {class_name!r}; give mesh")
     if not training_seeds:
@@ -122,54 +119,17 @@ def run_gain(
             raise ValueError(f"no ratio given and no validation choice in {chosen}")
         ratio = float(json.loads(chosen.read_text())[detector])
     seedset_dir = Path(seedsets) / f"{class_name}_{n_seeds}"
-    chosen: Any = report
-    if extended_fit is not None:
-        ext_fit = Path(extended_fit)
-        if not ext_fit.is_file():
-            raise FileNotFoundError(f"no extended fit {ext_fit}")
-        eff_of = lambda f: list(json.loads(Path(f).read_text())["effects"])  # noqa: E731
-        added = [e for e in eff_of(ext_fit) if e not in eff_of(fit)]
-        ext = {"effect": "+".join(added) or ext_fit.stem, "setting": {}, "source": f"fitted file {ext_fit}",
-               "significant": None}
-        tag = "fit_" + ext["effect"]
-    elif effect is not None:
-        rep = json.loads(Path(report).read_text())
-        rows = [r for r in rep.get("screened", []) if r.get("effect") == effect]
-        if not rows:
-            raise ValueError(f"{effect!r} was not screened in {report}; screened: "
-                             f"{[r.get('effect') for r in rep.get('screened', [])]}")
-        chosen = rows[0]
-    if extended_fit is None:
-        ext = select_extension(chosen, use_top_screened=use_top_screened)
-        tag = _setting_tag(ext["effect"], ext["setting"]) + "_wdr"  # w_d scaled by the effect's re-solved ratio
-        ext_fit = out / "extended_fit.json"
-        extend_fit(fit, seedset_dir, chosen, ext_fit, use_top_screened=use_top_screened, mesh=mesh)
+    ext, ext_fit, tag = _extension(report, fit, out, seedset_dir, mesh, effect=effect,
+                                   use_top_screened=use_top_screened, extended_fit=extended_fit)
     log(f"extension: {ext} -> {ext_fit}")
 
     per_seed: dict[int, dict[str, Any]] = {}
     shared_eval: dict[str, Any] = {}
     t_all = time.perf_counter()
     for s in training_seeds:
-        # one context per training seed, as Table 1's runs (the negatives are drawn with the seed)
-        ctx = ExperimentContext(out_dir=out, class_name=class_name, seedsets_dir=Path(seedsets), mesh=mesh,
-                                fits_dir=fit.parent, stride_k=stride_k, val_stride_k=30,
-                                max_val_videos=MAX_VAL_VIDEOS.get(class_name), scales=SCALES.get(class_name),
-                                seed=int(s), log=log, cells_path=None if cells is None else Path(cells))
-        ctx._eval.update(shared_eval)  # decode the test videos once
-        t0 = time.perf_counter()
-        base = ctx.cell(f"syn_{n_seeds}_hog_r{ratio:g}", detector, _synthetic_build(ctx, n_seeds, ratio, fit))
-        extd = ctx.cell(f"syn_{n_seeds}_hog_r{ratio:g}_ext_{tag}", detector,
-                        _synthetic_build(ctx, n_seeds, ratio, ext_fit))
-        shared_eval.update(ctx._eval)
-        per_seed[int(s)] = {
-            "base": base["test"]["ap"], "extended": extd["test"]["ap"],
-            "base_iou03": base["test"]["ap_iou03"], "extended_iou03": extd["test"]["ap_iou03"],
-            "gain": extd["test"]["ap"] - base["test"]["ap"],
-            "seconds_this_run": round(time.perf_counter() - t0, 1),  # ~0 when both cells were cached
-            "cell_seconds": {arm: {"build": c["train"].get("build_s"), "train": c["train"].get("train_s"),
-                                   "test": round(c["test"]["n_frames"] / max(c["test"]["frames_per_second"], 1e-9), 1)}
-                             for arm, c in (("base", base), ("extended", extd))},
-        }
+        per_seed[int(s)] = _seed_gain(int(s), shared_eval, class_name=class_name, out=out, seedsets=Path(seedsets),
+                                      mesh=mesh, fit=fit, ext_fit=ext_fit, tag=tag, n_seeds=n_seeds, ratio=ratio,
+                                      stride_k=stride_k, detector=detector, log=log, cells=cells)
         log(f"seed {s}: base {per_seed[int(s)]['base']:.3f} extended {per_seed[int(s)]['extended']:.3f}")
     gains = np.array([v["gain"] for v in per_seed.values()])
     numbers = {
@@ -186,6 +146,69 @@ def run_gain(
     atomic_write_text(out / "gain.json", json.dumps(numbers, indent=1) + "\n")
     atomic_write_text(out / "gain.md", _markdown(numbers))
     return numbers
+
+
+def _extension(report: str | Path | None, fit: Path, out: Path, seedset_dir: Path, mesh: str, *,
+               effect: str | None, use_top_screened: bool, extended_fit: str | Path | None
+               ) -> tuple[dict[str, Any], Path, str]:
+    """The extension compared with ``fit``: ``(description, extended fit file, cell tag)``.
+
+    A given ``extended_fit`` is used as it is; otherwise the report's finding (or ``effect``'s screened row,
+    or the top-screened candidate) extends ``fit`` into ``out/extended_fit.json``.
+    """
+    from synthaug.diagnose.extend import extend_fit, select_extension
+
+    if extended_fit is not None:
+        ext_fit = Path(extended_fit)
+        if not ext_fit.is_file():
+            raise FileNotFoundError(f"no extended fit {ext_fit}")
+        eff_of = lambda f: list(json.loads(Path(f).read_text())["effects"])  # noqa: E731
+        added = [e for e in eff_of(ext_fit) if e not in eff_of(fit)]
+        ext = {"effect": "+".join(added) or ext_fit.stem, "setting": {}, "source": f"fitted file {ext_fit}",
+               "significant": None}
+        return ext, ext_fit, "fit_" + ext["effect"]
+    chosen: Any = report
+    if effect is not None:
+        rep = json.loads(Path(report).read_text())
+        rows = [r for r in rep.get("screened", []) if r.get("effect") == effect]
+        if not rows:
+            raise ValueError(f"{effect!r} was not screened in {report}; screened: "
+                             f"{[r.get('effect') for r in rep.get('screened', [])]}")
+        chosen = rows[0]
+    ext = select_extension(chosen, use_top_screened=use_top_screened)
+    tag = _setting_tag(ext["effect"], ext["setting"]) + "_wdr"  # w_d scaled by the effect's re-solved ratio
+    ext_fit = out / "extended_fit.json"
+    extend_fit(fit, seedset_dir, chosen, ext_fit, use_top_screened=use_top_screened, mesh=mesh)
+    return ext, ext_fit, tag
+
+
+def _seed_gain(seed: int, shared_eval: dict[str, Any], *, class_name: str, out: Path, seedsets: Path, mesh: str,
+               fit: Path, ext_fit: Path, tag: str, n_seeds: int, ratio: float, stride_k: int, detector: str,
+               log: Callable[[str], None], cells: str | Path | None) -> dict[str, Any]:
+    """Test AP of the base and the extended arm for one training seed (``shared_eval``: the decoded test
+    videos, filled by the first seed and reused)."""
+    from synthaug.evaluate.context import ExperimentContext
+
+    # one context per training seed, as Table 1's runs (the negatives are drawn with the seed)
+    ctx = ExperimentContext(out_dir=out, class_name=class_name, seedsets_dir=seedsets, mesh=mesh,
+                            fits_dir=fit.parent, stride_k=stride_k, val_stride_k=30,
+                            max_val_videos=MAX_VAL_VIDEOS.get(class_name), scales=SCALES.get(class_name),
+                            seed=seed, log=log, cells_path=None if cells is None else Path(cells))
+    ctx._eval.update(shared_eval)  # decode the test videos once
+    t0 = time.perf_counter()
+    base = ctx.cell(f"syn_{n_seeds}_hog_r{ratio:g}", detector, _synthetic_build(ctx, n_seeds, ratio, fit))
+    extd = ctx.cell(f"syn_{n_seeds}_hog_r{ratio:g}_ext_{tag}", detector,
+                    _synthetic_build(ctx, n_seeds, ratio, ext_fit))
+    shared_eval.update(ctx._eval)
+    return {
+        "base": base["test"]["ap"], "extended": extd["test"]["ap"],
+        "base_iou03": base["test"]["ap_iou03"], "extended_iou03": extd["test"]["ap_iou03"],
+        "gain": extd["test"]["ap"] - base["test"]["ap"],
+        "seconds_this_run": round(time.perf_counter() - t0, 1),  # ~0 when both cells were cached
+        "cell_seconds": {arm: {"build": c["train"].get("build_s"), "train": c["train"].get("train_s"),
+                               "test": round(c["test"]["n_frames"] / max(c["test"]["frames_per_second"], 1e-9), 1)}
+                         for arm, c in (("base", base), ("extended", extd))},
+    }
 
 
 def _significance(flag: bool | None) -> str:
