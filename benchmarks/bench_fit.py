@@ -3,7 +3,9 @@
 Per seed (40x40, ``hog`` by default, one torch thread): CMA-ES at ``--budget``
 evaluations, simulated annealing at the same budget, and simulated annealing
 at ``--reference-budget`` (default 10x the budget) as the reference optimum. Reports the median seconds per
-seed and how many CMA-ES fits land within 5% of the 10x-annealing distance.
+seed and how many CMA-ES fits land within 5% of the 10x-annealing distance. With ``--fit-path``, the seeds
+are also fitted ``--lockstep`` at a time (``synthaug fit``'s default: the populations of several seeds scored in
+one batch, the same fits) and that path's seconds per seed are reported beside the one-at-a-time figure.
 
 Usage::
 
@@ -63,6 +65,31 @@ def _seed_objective(seeds, i, cache, dist, cfg, scale):
     return obj, space
 
 
+def _lockstep(seeds, cache, dist, cfg, rows, args) -> dict:
+    """The same seeds fitted ``args.lockstep`` at a time (``synthaug fit``'s path): seconds per seed by repeat,
+    and whether every fit equals the one made alone."""
+    from synthaug.fit.fitting import fit_objective, patches_tensor, search, seed_seed
+    from synthaug.fit.lockstep import run_lockstep
+
+    n, k = len(rows), args.lockstep
+    scale = float(seeds.object_fraction)
+    per_seed, same = [], True
+    for _ in range(args.repeats):
+        t = time.perf_counter()
+        results = []
+        for start in range(0, n, k):
+            group = list(range(start, min(n, start + k)))
+            objs = [fit_objective(patches_tensor(seeds.patches[i:i + 1]), patches_tensor(seeds.backgrounds[i:i + 1]),
+                                  cache, dist, cfg, seed=seed_seed(0, i), object_scale=scale) for i in group]
+            results += run_lockstep(objs, [lambda ev, o=o, i=i: search(o, cfg, seed=seed_seed(0, i), object_scale=scale,
+                                                                       evaluate=ev) for o, i in zip(objs, group)])
+        per_seed.append((time.perf_counter() - t) / n)
+        same &= all(r["distance"] == row["cmaes"]["distance"] for r, row in zip(results, rows))
+    print(json.dumps({"lockstep": k, "seconds_per_seed": [round(x, 3) for x in per_seed]}), file=sys.stderr)
+    return {"k": k, "seconds_per_seed_median": round(statistics.median(per_seed), 3),
+            "seconds_per_seed_by_repeat": [round(x, 3) for x in per_seed], "same_fits_as_alone": bool(same)}
+
+
 def _profile(seeds, cache, dist, cfg, scale, args) -> dict:
     """Where one CMA-ES fit's time goes: cProfile's top functions by own time, and the objective's cost per
     evaluation by batch size (a fixed cost per call shows as a falling curve)."""
@@ -113,6 +140,11 @@ def main() -> int:
     parser.add_argument("--fit-path", action="store_true",
                         help="time `synthaug fit`'s own path for CMA-ES (fit_one with FitConfig(distance, budget): the "
                              "rotation-grid start) instead of CMA-ES from the uniform look")
+    parser.add_argument("--lockstep", type=int, default=8, metavar="K",
+                        help="with --fit-path: also fit the seeds K at a time in lockstep (synthaug fit's default path: "
+                             "their populations scored in one batch), --repeats times, and report the seconds per seed "
+                             "(group wall time / K) beside the one-at-a-time figure; 0: skip")
+    parser.add_argument("--repeats", type=int, default=3, help="repeats of the lockstep timing (median reported)")
     parser.add_argument("--profile", type=int, default=0, metavar="K",
                         help="also profile the CMA-ES fit of the first seed (cProfile) and report the K functions "
                              "with the most own time, and the objective's cost per evaluation by batch size")
@@ -171,6 +203,8 @@ def main() -> int:
         "cmaes_path": "synthaug fit (fit_one, rotation-grid start)" if args.fit_path else "CMA-ES from the uniform look",
         "per_seed": [{k: v for k, v in r.items()} for r in rows],
     }
+    if args.fit_path and args.lockstep > 0:
+        out["lockstep"] = _lockstep(seeds, cache, dist, cfg, rows, args)
     if args.profile:
         out["profile"] = _profile(seeds, cache, dist, cfg, scale, args)
     print(json.dumps(out, indent=1))

@@ -91,6 +91,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--sprite-size", type=int_at_least(8), default=d["sprite_size"],
                         help="view-cache sprite side (px)")
     parser.add_argument("--workers", type=positive_int, default=1, help="local processes")
+    parser.add_argument("--lockstep", type=positive_int, default=8,
+                        help="seeds fitted together per process, their populations scored in one batch (the same fits, "
+                             "faster; 1: one at a time)")
     parser.add_argument("--dask", default=None, help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
@@ -126,7 +129,7 @@ def main(args: argparse.Namespace) -> int:
                 raise ValueError(f"--effects: {e}") from None
         cfg = config_from_args(args)
         out = fit_seedset(args.seed_set, args.mesh, args.out, cfg, workers=args.workers, dask_address=args.dask,
-                          progress=not args.no_progress)
+                          lockstep=args.lockstep, progress=not args.no_progress)
     except (ValueError, FileNotFoundError) as e:
         print(f"synthaug fit: {e}", file=sys.stderr)
         return 2

@@ -182,8 +182,16 @@ def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance
     (the paper), drawn from ``seed``; with ``"grid"``, at the best poses of
     :func:`pose_grid_starts`. A given ``x0`` is the start either way.
     """
+    objective = fit_objective(target, background, cache, distance, cfg, seed=seed, object_scale=object_scale,
+                              space=space, geometry=geometry)
+    return search(objective, cfg, seed=seed, object_scale=object_scale, x0=x0)
+
+
+def fit_objective(target: torch.Tensor, background: torch.Tensor, cache: Any, distance: Any, cfg: FitConfig, *,
+                  seed: int, object_scale: float, space: Any = None,
+                  geometry: dict[str, torch.Tensor] | None = None) -> Any:
+    """The :class:`~synthaug.fit.objective.RenderObjective` of one seed's fit (its search space from ``cfg``)."""
     from synthaug.fit.objective import FitSpace, RenderObjective
-    from synthaug.fit.optimizers import get_optimizer
 
     if space is None:
         names = CaptureParams.vector_names(effects=cfg.effects)
@@ -200,14 +208,28 @@ def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance
                                  scale_range=(cfg.scale_range[0] * object_scale, cfg.scale_range[1] * object_scale)
                                  if cfg.fit_scale else None)
     geo = geometry or {}
-    objective = RenderObjective(target, background, cache, distance, space, object_scale=object_scale,
-                                noise_seed=seed, origin=geo.get("origin"), frame_size=geo.get("frame_size"),
-                                extras={"frame_scale": geo["frame_scale"]} if "frame_scale" in geo else None)
+    return RenderObjective(target, background, cache, distance, space, object_scale=object_scale,
+                           noise_seed=seed, origin=geo.get("origin"), frame_size=geo.get("frame_size"),
+                           extras={"frame_scale": geo["frame_scale"]} if "frame_scale" in geo else None)
+
+
+def search(objective: Any, cfg: FitConfig, *, seed: int, object_scale: float, x0: np.ndarray | None = None,
+           evaluate: Callable[[np.ndarray], np.ndarray] | None = None) -> dict[str, Any]:
+    """Minimise a seed's objective (:func:`fit_objective`) as ``cfg`` says: the start, then the optimiser.
+
+    ``evaluate`` scores candidates in place of ``objective`` with the same values (the lockstep's
+    batched scoring, :mod:`synthaug.fit.lockstep`); ``objective`` still gives the search space.
+    """
+    from synthaug.fit.optimizers import get_optimizer
+
+    space = objective.space
+    if evaluate is None:
+        evaluate = objective
     init = None
     n_init = int(cfg.init_fraction * cfg.budget)
     rotations_free = {"alpha", "beta", "gamma"} <= set(space.free_names())
     if x0 is None and cfg.init == "grid" and n_init >= 16 and rotations_free:
-        init = pose_grid_starts(objective, space, budget=n_init,
+        init = pose_grid_starts(evaluate, space, budget=n_init,
                                 object_scale=object_scale, n_starts=cfg.init_starts, seed=seed)
     elif x0 is None:
         x0 = np.random.default_rng(seed).random(space.dim)
@@ -217,10 +239,10 @@ def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance
                 x0[names.index(k)] = 0.5  # the annotated centre, the middle of the scale range
     opt = get_optimizer(cfg.optimizer)
     if init is None:
-        result = opt.minimize(objective, space.dim, x0=x0, seed=seed, budget=cfg.budget)
+        result = opt.minimize(evaluate, space.dim, x0=x0, seed=seed, budget=cfg.budget)
         best_x, best, stats = result.x, result.fun, result.stats()
     else:
-        result = opt.minimize(objective, space.dim, seed=seed, budget=cfg.budget - init["n_evals"],
+        result = opt.minimize(evaluate, space.dim, seed=seed, budget=cfg.budget - init["n_evals"],
                               starts=init["starts"], stds=init["stds"])
         n0 = init["n_evals"]
         best_x, best = (result.x, result.fun) if result.fun < init["fun"] else (init["x"], init["fun"])
@@ -373,33 +395,47 @@ def _context(seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, *, seeds
     return _CTX
 
 
-def _fit_index(index: int, seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, parts: str,
-               fingerprint: dict[str, Any] | None = None) -> int:
+def _fit_indices(indices: Sequence[int], seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, parts: str,
+                 fingerprint: dict[str, Any] | None = None) -> list[int]:
+    """Fit the seeds ``indices`` in lockstep (:mod:`synthaug.fit.lockstep`) and write one part per seed."""
+    from synthaug.fit.lockstep import run_lockstep
+
     ctx = _context(seeds_path, mesh, cfg, distance)
     seeds = ctx["seeds"]
     scale = cfg.object_scale if cfg.object_scale is not None else float(seeds.object_fraction)
-    s = seed_seed(cfg.seed, index)
-    target = patches_tensor(seeds.patches[index:index + 1])
-    background = patches_tensor(seeds.backgrounds[index:index + 1])
     t0 = time.perf_counter()
-    geometry = None
-    if cfg.effects is not None and set(cfg.effects) - {"boundary_blur", "motion_blur", "object_noise", "material"}:
-        # camera effects may depend on where the patch sits in its frame (vignetting, distortion...)
-        if "geometry" not in ctx:
-            ctx["geometry"] = seed_geometry(seeds)
-        g = ctx["geometry"]
-        geometry = {"origin": g["origin"][index:index + 1], "frame_size": g["frame_size"][index:index + 1],
-                    "frame_scale": g["frame_scale"][index:index + 1]}
-    res = fit_one(target, background, ctx["cache"], ctx["distance"], cfg, seed=s, object_scale=scale,
-                  geometry=geometry)
-    res["stats"]["seconds"] = round(time.perf_counter() - t0, 3)
-    res["index"] = index
-    res["generator_seed"] = s
-    if fingerprint is not None:  # what the part depends on: a rerun with other inputs recomputes it
-        res["fingerprint"] = fingerprint["digest"]
-        res["inputs"] = fingerprint["inputs"]
-    atomic_write_text(Path(parts) / f"seed_{index:05d}.json", json.dumps(res))
-    return index
+    camera = cfg.effects is not None and bool(set(cfg.effects) - {"boundary_blur", "motion_blur", "object_noise",
+                                                                   "material"})
+    if camera and "geometry" not in ctx:  # camera effects may depend on where the patch sits in its frame
+        ctx["geometry"] = seed_geometry(seeds)
+    objectives, searches = [], []
+    for index in indices:
+        s = seed_seed(cfg.seed, index)
+        geometry = None
+        if camera:
+            g = ctx["geometry"]
+            geometry = {k: g[k][index:index + 1] for k in ("origin", "frame_size", "frame_scale")}
+        objective = fit_objective(patches_tensor(seeds.patches[index:index + 1]),
+                                  patches_tensor(seeds.backgrounds[index:index + 1]), ctx["cache"], ctx["distance"],
+                                  cfg, seed=s, object_scale=scale, geometry=geometry)
+        objectives.append(objective)
+        searches.append(lambda evaluate, o=objective, s=s: search(o, cfg, seed=s, object_scale=scale,
+                                                                    evaluate=evaluate))
+    results = run_lockstep(objectives, searches)
+    seconds = round((time.perf_counter() - t0) / max(len(indices), 1), 3)
+    for index, res in zip(indices, results):
+        res["stats"]["seconds"] = seconds  # the group's wall time per seed
+        res["index"] = index
+        res["generator_seed"] = seed_seed(cfg.seed, index)
+        if fingerprint is not None:  # what the part depends on: a rerun with other inputs recomputes it
+            res["fingerprint"] = fingerprint["digest"]
+            res["inputs"] = fingerprint["inputs"]
+        atomic_write_text(Path(parts) / f"seed_{index:05d}.json", json.dumps(res))
+    return list(indices)
+
+
+def _groups(todo: Sequence[int], size: int) -> list[list[int]]:
+    return [list(todo[i:i + size]) for i in range(0, len(todo), size)]
 
 
 def _cfg_json(cfg: FitConfig) -> dict[str, Any]:
@@ -566,6 +602,7 @@ def fit_seedset(
     indices: Sequence[int] | None = None,
     progress: bool | Callable[[int, int], None] = False,
     distance: Any = None,
+    lockstep: int = 8,
 ) -> Path:
     """Fit every seed of a seed set and write the capture-parameter file.
 
@@ -580,12 +617,16 @@ def fit_seedset(
         indices: fit only these seeds (default: all).
         progress: show a tqdm bar (True) or call ``progress(done, total)``.
         distance: a prebuilt distance (default: :func:`build_distance` on the seeds).
+        lockstep: seeds fitted together in one process, their optimisers' populations scored in one batch
+            (:mod:`synthaug.fit.lockstep`; the fits are the same as one at a time, only faster: issue 19).
 
     Returns:
         the output path.
     """
     from synthaug.data.seedset import SeedSet
 
+    if not isinstance(lockstep, int) or isinstance(lockstep, bool) or lockstep < 1:
+        raise ValueError(f"lockstep must be an int >= 1, got {lockstep!r}")
     seeds_path = str(Path(seeds_path))
     seeds = SeedSet.load(seeds_path)  # validates the seed set (clear errors) before any work
     n = len(seeds)
@@ -617,7 +658,7 @@ def fit_seedset(
     try:
         parts.mkdir(parents=True, exist_ok=True)
         _fit_parts(seeds, seeds_path, mesh, cfg, distance, parts, out, fingerprint, todo_all, cache, workers=workers,
-             dask_address=client, progress=progress)
+             dask_address=client, progress=progress, lockstep=lockstep)
     except BaseException:
         if fresh and not any(parts.glob("seed_*.json")):  # nothing to resume: leave nothing behind
             shutil.rmtree(parts, ignore_errors=True)
@@ -632,8 +673,8 @@ def fit_seedset(
 
 def _fit_parts(seeds: Any, seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, parts: Path, out: Path,
          fingerprint: dict[str, Any], todo_all: list[int], cache: Any, *, workers: int,
-         dask_address: Any, progress: bool | Callable[[int, int], None]) -> None:
-    """Fit the seeds not finished yet (of ``todo_all``) into ``parts``, then assemble ``out``."""
+         dask_address: Any, progress: bool | Callable[[int, int], None], lockstep: int = 1) -> None:
+    """Fit the seeds not finished yet (of ``todo_all``) into ``parts``, ``lockstep`` at a time, then assemble ``out``."""
     done = _check_parts(parts, fingerprint)
     todo = [i for i in todo_all if i not in done]
     bar = None
@@ -649,15 +690,16 @@ def _fit_parts(seeds: Any, seeds_path: str, mesh: Any, cfg: FitConfig, distance:
             progress(len({int(p.stem.split("_")[1]) for p in parts.glob("seed_*.json")}), len(todo_all))
 
     if dask_address is not None:
-        _run_dask(dask_address, todo, seeds_path, mesh, cfg, distance, str(parts), tick, fingerprint)
+        _run_dask(dask_address, todo, seeds_path, mesh, cfg, distance, str(parts), tick, fingerprint,
+                  lockstep=lockstep)
     elif workers <= 1:
         # one thread, as in worker processes (same floating-point results); the caller's setting is restored
         threads = torch.get_num_threads()
         try:
             _context(seeds_path, mesh, cfg, distance, seeds=seeds, cache=cache)
-            for i in todo:
-                _fit_index(i, seeds_path, mesh, cfg, distance, str(parts), fingerprint)
-                tick()
+            for group in _groups(todo, lockstep):
+                for _ in _fit_indices(group, seeds_path, mesh, cfg, distance, str(parts), fingerprint):
+                    tick()
         finally:
             torch.set_num_threads(threads)
     else:
@@ -668,10 +710,11 @@ def _fit_parts(seeds: Any, seeds_path: str, mesh: Any, cfg: FitConfig, distance:
 
         # workers die with this process (a kill -9 of the command leaves nothing running)
         with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"), **pool_kwargs()) as ex:
-            futs = [ex.submit(_fit_index, i, seeds_path, mesh, cfg, distance, str(parts), fingerprint) for i in todo]
+            futs = [ex.submit(_fit_indices, group, seeds_path, mesh, cfg, distance, str(parts), fingerprint)
+                    for group in _groups(todo, min(lockstep, -(-len(todo) // workers)))]
             for f in as_completed(futs):
-                f.result()
-                tick()
+                for _ in f.result():
+                    tick()
     if bar is not None:
         bar.close()
     _assemble(seeds, todo_all, cfg, mesh, seeds_path, parts, out, fingerprint["digest"])
@@ -721,18 +764,19 @@ def _dask_client(address: str, *, timeout_s: float = 10.0) -> Any:
 
 
 def _run_dask(address: Any, todo: list[int], seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any,
-              parts: str, tick: Callable[[], None], fingerprint: dict[str, Any] | None = None) -> None:
+              parts: str, tick: Callable[[], None], fingerprint: dict[str, Any] | None = None, *,
+              lockstep: int = 1) -> None:
     from distributed import Client, as_completed
 
     own = isinstance(address, str)
     client = Client(address) if own else (address if isinstance(address, Client) else Client(address))
     try:
         dist_f = client.scatter(distance, broadcast=True)
-        futs = [client.submit(_fit_index, i, seeds_path, mesh, cfg, dist_f, parts, fingerprint, pure=False)
-                for i in todo]
+        futs = [client.submit(_fit_indices, group, seeds_path, mesh, cfg, dist_f, parts, fingerprint, pure=False)
+                for group in _groups(todo, lockstep)]
         for f in as_completed(futs):
-            f.result()
-            tick()
+            for _ in f.result():
+                tick()
     finally:
         if own or not isinstance(address, Client):
             client.close()

@@ -254,6 +254,13 @@ class RenderObjective:
         self.frame_size = None if frame_size is None else torch.as_tensor(frame_size, dtype=torch.float32).reshape(1, 2)
         self.extras = dict(extras or {})
         self.n_evals = 0
+        self._target_features: torch.Tensor | None = None
+
+    def target_features(self) -> torch.Tensor:
+        """The distance's features of the target (computed once; the distance must define ``features``)."""
+        if self._target_features is None:
+            self._target_features = self.distance.features(self.target)
+        return self._target_features
 
     def render(self, u: np.ndarray | torch.Tensor) -> torch.Tensor:
         """S(Θ(u), B) for (N, D) coordinates -> (N, C, P, P)."""
@@ -280,3 +287,79 @@ class RenderObjective:
         if not np.all(np.isfinite(out)):
             out = np.where(np.isfinite(out), out, math.inf)
         return out
+
+
+@torch.no_grad()
+def score_together(objectives: Sequence[RenderObjective], us: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """Several seeds' candidates scored in one batched pass: ``[objectives[k](us[k]) for k]``, with the same values.
+
+    Each seed's population is small (CMA-ES asks for about a dozen candidates at a time) and a call of the
+    objective has a fixed cost that such a batch does not amortise (issue 19: 0.31 ms per evaluation at batch
+    12 against 0.16 at 96). Fitting several seeds in lockstep and scoring their populations together pays that
+    cost once. Every value is computed per candidate (render, effects and features act on each image alone), so
+    a seed's values do not depend on the company it is scored in; the tests compare against separate calls.
+
+    Args:
+        objectives: the seeds' objectives; they must share the view cache, the distance and the patch size.
+        us: each objective's ``(N_k, D_k)`` search coordinates (an empty population is allowed).
+
+    Returns:
+        One ``(N_k,)`` array of distances per objective (``inf`` where a value is not finite).
+    """
+    from synthaug.distances.registry import Distance
+
+    if len(objectives) != len(us):
+        raise ValueError(f"{len(objectives)} objectives but {len(us)} populations")
+    if not objectives:
+        return []
+    first = objectives[0]
+    for o in objectives[1:]:
+        if o.cache is not first.cache or o.distance is not first.distance:
+            raise ValueError("objectives scored together must share one view cache and one distance")
+        if o.target.shape[1:] != first.target.shape[1:]:
+            raise ValueError(f"objectives scored together must share a patch shape: {tuple(o.target.shape[1:])} "
+                             f"vs {tuple(first.target.shape[1:])}")
+        if o.space.effects != first.space.effects or o.space.channels != first.space.channels:
+            raise ValueError("objectives scored together must search the same effects and channels")
+        if (o.origin is None) != (first.origin is None) or set(o.extras) != set(first.extras) \
+                or set(o.fields) != set(first.fields):
+            raise ValueError("objectives scored together must have the same frame geometry keys and effect fields")
+    us = [np.atleast_2d(np.asarray(u, dtype=np.float64)) for u in us]
+    counts = [len(u) for u in us]
+    owner = np.repeat(np.arange(len(us)), counts)
+    row = np.concatenate([np.arange(c) for c in counts]) if sum(counts) else np.zeros(0, int)
+    out = [np.empty(c) for c in counts]
+    dist = first.distance
+    by_features = type(dist).forward is Distance.forward
+    f_real = torch.cat([o.target_features() for o in objectives]) if by_features else None
+    size = first.target.shape[-1]
+    chunk = first.chunk
+    for i in range(0, len(owner), chunk):
+        sel = owner[i:i + chunk]
+        groups = [(k, row[i:i + chunk][sel == k]) for k in np.unique(sel)]
+        parts = [(objectives[k], us[k][r]) for k, r in groups]
+        theta = CaptureParams.from_vector(torch.cat([o.space.to_vector(u) for o, u in parts]), channels=first.space.channels,
+                                          effects=first.space.effects, validate=False).to(torch.float32)
+        scale = torch.cat([o.space.scale(u, o.object_scale).float() for o, u in parts])
+        cov, nrm = first.cache.layers(theta.alpha, theta.beta, theta.gamma, theta.t_x, theta.t_y,
+                                      size=size, object_scale=scale)
+        cat = lambda get: torch.cat([get(o).expand(len(u), *get(o).shape[1:]) for o, u in parts])  # noqa: E731
+        images = simulate(cov, nrm, cat(lambda o: o.background), theta,
+                          fields={k: cat(lambda o, k=k: o.fields[k]) for k in first.fields},
+                          origin=None if first.origin is None else cat(lambda o: o.origin),
+                          frame_size=None if first.frame_size is None else cat(lambda o: o.frame_size),
+                          extras={k: cat(lambda o, k=k: o.extras[k]) for k in first.extras})
+        n_rows = torch.as_tensor([len(u) for _, u in parts])
+        if by_features:
+            keep = torch.as_tensor([k for k, _ in groups])
+            d = dist.compare(f_real[keep].repeat_interleave(n_rows, 0), dist.features(images))
+        else:
+            d = dist(cat(lambda o: o.target), images)
+        d = d.double().numpy()
+        start = 0
+        for (k, r), n in zip(groups, n_rows.tolist()):
+            out[k][r] = d[start:start + n]
+            start += n
+    for o, c in zip(objectives, counts):
+        o.n_evals += c
+    return [np.where(np.isfinite(v), v, math.inf) for v in out]

@@ -153,8 +153,12 @@ class CMAES(Optimizer):
             # share what is left between this run and the restarts still to come
             runs_left = max_restarts + 1 - restarts
             share = budget - track.n if (runs_left <= 1 or not self.share_budget) else max((budget - track.n) // runs_left, 4 * pop)
-            opts = {"bounds": [0.0, 1.0], "seed": int(rng.integers(1, 2**31 - 1)), "popsize": pop, "verbose": -9,
-                    "maxfevals": share, "tolfun": 1e-9, "tolx": 1e-7}
+            # pycma draws from numpy's global generator, seeded from "seed", unless given its own "randn": its own
+            # RandomState with that seed gives the same stream, and searches in other threads do not touch it
+            # (the lockstep fits, synthaug.fit.lockstep)
+            cma_seed = int(rng.integers(1, 2**31 - 1))
+            opts = {"bounds": [0.0, 1.0], "seed": float("nan"), "randn": np.random.RandomState(cma_seed).randn,
+                    "popsize": pop, "verbose": -9, "maxfevals": share, "tolfun": 1e-9, "tolx": 1e-7}
             if cma_stds is not None:
                 opts["CMA_stds"] = list(cma_stds)
             with warnings.catch_warnings():
