@@ -174,9 +174,9 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
                             theta.t_y.float(), size=p, object_scale=scale)
     part_rotor = None
     if isinstance(mesh, str) and mesh == "quadcopter":
-        from synthaug.diagnose.reference_camera import _real_object
+        from synthaug.diagnose.reference_camera.real_object import real_object
 
-        _, body, _ = _real_object("quadcopter", 0.0, 0)
+        _, body, _ = real_object("quadcopter", 0.0, 0)
         body_cache = fit_view_cache(meta, body)
         part_rotor = _rotor_layers(body_cache, theta, p, scale, cov)
     fields: dict[str, list[torch.Tensor]] = {}

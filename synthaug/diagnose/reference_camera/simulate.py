@@ -1,61 +1,13 @@
-"""The measured-data simulator ("reference camera"): seed sets like real ones, with known hidden effects.
-
-Diagnosis (issue 6) must find what the simulation S(Θ, B) misses. To test
-it, this module makes *measured data* whose truth is known: whole camera
-frames with an object at a random place and size, captured through a richer
-camera than the model's, with any chosen candidate effects switched on
-("hidden"), then cut into a seed set in the exact
-:func:`~synthaug.data.seedset.write_seedset` format, so ``SeedSet.load`` and
-``synthaug fit`` read it like an ingested one.
-
-Per seed:
-
-1. a scene background b (procedural sky, or given frames) and a pose, size
-   and place of the object, rendered through a view cache of the *real* mesh
-   (which may differ from the coarse mesh the fit gets: ``mesh_perturbation``);
-2. object-only physics on the object layers: Lambert material w_d (or, with
-   ``nuisances``, the case's own material under its video's light:
-   :func:`~synthaug.diagnose.nuisances.shade_object`; the frame's scene then
-   may also drift against the background's), hidden
-   ``specular``, ``rotor_blur`` (true rotor parts of the built-in quadcopter),
-   the paper's motion blur, hidden ``rolling_shutter`` (along the motion
-   direction), the out-of-list ``interlacing``; overlay on b, then the paper's
-   boundary blur and object noise (all at frame scale);
-3. the camera on the WHOLE frame, in physical order: haze → defocus →
-   chromatic aberration → lens distortion → vignetting → exposure → white
-   balance → sensor noise (read + shot) → tone curve → sharpening → 8-bit →
-   JPEG (OpenCV's real codec);
-4. the background frame B through the SAME camera without the object (its
-   noise reduced by ``background_noise_factor``, as an aligned median of
-   several frames is), so B_i contains the whole-frame effects exactly as
-   with real data;
-5. the box of the object's (geometrically warped) coverage, then object and
-   background patches with :func:`~synthaug.data.seedset.crop_patch`.
-
-The truth is stored: the header's ``reference_camera`` block (hidden effects
-and their settings, mesh, noise, ranges), each record's ``truth`` (Θ in patch
-units, the hidden parameters actually used, object size and place) and
-``truth.json``, a :class:`~synthaug.params.CaptureParams` file over
-``PAPER_EFFECTS + hidden`` with per-seed ``object_scale``, ``origin``,
-``frame_size`` and ``frame_scale`` extras, which is what a fit should recover.
-
-Example:
-    >>> import tempfile, os
-    >>> from synthaug.data.seedset import SeedSet
-    >>> with tempfile.TemporaryDirectory() as d:
-    ...     p = make_measured_seedset(os.path.join(d, "m"), n_seeds=2, hidden={"vignetting": {"vignette_k": 0.3}},
-    ...                               frame_size=(96, 128), object_px=(16, 20), view_step_deg=30, sprite_size=48)
-    ...     s = SeedSet.load(p)
-    ...     len(s), s.patches.shape, s.metadata["reference_camera"]["hidden"]
-    (2, (2, 40, 40), {'vignetting': {'vignette_k': 0.3}})
+"""The reference camera as a simulator: the arguments checked into one record, each seed's record drawn
+(:class:`MeasuredSeed`: every random number, frozen), then rendered, its object physics applied, captured
+by the whole-frame camera (:mod:`~synthaug.diagnose.reference_camera.capture`), cropped and written with
+its truth (:func:`make_measured_seedset`).
 """
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -63,362 +15,26 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import torch
 
-import synthaug.effects.camera  # noqa: F401  (registers the candidate effects)
-from synthaug.data.seedset import seed_geometry  # re-exported (it lives next to crop_patch)
+from synthaug.diagnose.nuisances import Nuisances, SeedNuisance, drift_scene, shade_object
+from synthaug.diagnose.reference_camera.capture import capture, to_u8
+from synthaug.diagnose.reference_camera.real_object import real_object
+from synthaug.diagnose.reference_camera.settings import (
+    AE_TARGET,
+    OBJECT_ONLY_EFFECTS,
+    PAPER_RANGES,
+    WHOLE_FRAME_EFFECTS,
+    Strength,
+    _draw_strengths,
+    resolve_hidden,
+)
+from synthaug.diagnose.reference_camera.truth import _FORMAT, _VERSION, _model_units, _truth_file
 from synthaug.effects import camera_functional as Cx
+from synthaug.effects import functional as Fx
 from synthaug.effects.camera import CAMERA_EFFECTS
-from synthaug.effects.functional import gaussian_blur_fft
-from synthaug.diagnose.nuisances import Nuisances, SeedNuisance, drift_scene, shade_object  # noqa: F401
 from synthaug.effects.material import TEXTURE_PAD, texture_field
 from synthaug.effects.pipeline import apply_effects
 from synthaug.effects.registry import PAPER_EFFECTS, RenderState, get_effect, ordered
-from synthaug.effects import functional as Fx
 from synthaug.params import CaptureParams
-
-__all__ = [
-    "REALISTIC_STRENGTHS",
-    "REALISTIC_RANGES",
-    "OUTSIDE_EFFECTS",
-    "PAPER_RANGES",
-    "WHOLE_FRAME_EFFECTS",
-    "OBJECT_ONLY_EFFECTS",
-    "make_measured_seedset",
-    "quadcopter_parts",
-    "perturb_mesh",
-    "resolve_hidden",
-    "seed_geometry",
-    "load_truth",
-    "Nuisances",
-]
-
-Strength = float | tuple[float, float]
-
-# Typical settings of each candidate (a float is one value for the whole seed set,
-# the camera's; a (low, high) pair is drawn per seed, for scene-dependent effects).
-REALISTIC_STRENGTHS: dict[str, dict[str, Strength]] = {
-    "vignetting": {"vignette_k": 0.3},
-    "gamma": {"gamma_g": 0.75},
-    "shot_noise": {"shot_sigma": 0.04},
-    "defocus": {"defocus_sigma": 1.0},
-    "compression": {"jpeg_quality": 40.0},
-    "specular": {"specular_ks": (0.3, 0.6), "specular_shininess": 30.0},
-    "haze": {"haze_extinction_px": 10.0, "haze_airlight": 0.85},
-    "chromatic_aberration": {"ca_shift": 2.0},
-    "white_balance": {"wb_gain": 0.9},
-    "sharpening": {"sharpen_amount": 1.0, "sharpen_sigma": 1.0},
-    "lens_distortion": {"distortion_k1": -0.15},
-    "rolling_shutter": {"rs_magnitude": (0.06, 0.15)},
-    "rotor_blur": {"rotor_opacity": (0.15, 0.4)},
-    "exposure": {"exposure_auto": 0.5, "exposure_offset": 0.04},
-    "interlacing": {"interlace_shift": (1.0, 2.0)},
-}
-
-# The realistic span of each setting (documentation, and for tests drawing strengths).
-REALISTIC_RANGES: dict[str, dict[str, tuple[float, float]]] = {
-    "vignetting": {"vignette_k": (0.2, 0.4)},
-    "gamma": {"gamma_g": (0.7, 1.4)},
-    "shot_noise": {"shot_sigma": (0.02, 0.06)},
-    "defocus": {"defocus_sigma": (0.7, 1.5)},
-    "compression": {"jpeg_quality": (30.0, 60.0)},
-    "specular": {"specular_ks": (0.2, 0.6), "specular_shininess": (10.0, 60.0)},
-    "haze": {"haze_amount": (0.1, 0.4), "haze_extinction_px": (5.0, 15.0), "haze_airlight": (0.7, 0.95)},
-    "chromatic_aberration": {"ca_shift": (1.0, 3.0)},
-    "white_balance": {"wb_gain": (0.8, 1.25)},
-    "sharpening": {"sharpen_amount": (0.5, 1.5), "sharpen_sigma": (0.7, 1.5)},
-    "lens_distortion": {"distortion_k1": (-0.2, 0.1)},
-    "rolling_shutter": {"rs_magnitude": (0.05, 0.15)},
-    "rotor_blur": {"rotor_opacity": (0.1, 0.5)},
-    "exposure": {"exposure_gain": (0.8, 1.3), "exposure_auto": (0.3, 0.8), "exposure_offset": (-0.05, 0.05)},
-    "interlacing": {"interlace_shift": (0.5, 2.5)},
-}
-
-# Effects the reference camera can hide that are NOT candidates of the model
-# (for the "unexplained" case): interlaced fields of a moving object.
-OUTSIDE_EFFECTS: tuple[str, ...] = ("interlacing",)
-
-WHOLE_FRAME_EFFECTS: tuple[str, ...] = (
-    "haze", "defocus", "chromatic_aberration", "lens_distortion", "vignetting", "exposure", "white_balance",
-    "shot_noise", "gamma", "sharpening", "compression",
-)
-OBJECT_ONLY_EFFECTS: tuple[str, ...] = ("specular", "rotor_blur", "rolling_shutter", "interlacing")
-
-# Per-seed ranges of the paper's parameters, in patch pixels (σ) / intensity.
-PAPER_RANGES: dict[str, tuple[float, float]] = {
-    "w_d": (0.05, 0.7),
-    "sigma_s": (0.3, 1.2),
-    "sigma_u": (0.0, 2.0),
-    "sigma_v": (0.0, 0.6),
-    "alpha_m": (-math.pi / 2, math.pi / 2),
-    "sigma_n": (0.0, 0.03),
-}
-
-# Settings the reference camera turns into the effect's own parameters per seed (the physics behind them);
-# giving those parameters explicitly replaces the setting:
-# rs_magnitude -> rs_skew/rs_stretch along the seed's motion direction; haze_extinction_px -> haze_amount
-# = 1 - exp(-haze_extinction_px / object_px) (Koschmieder: a smaller object is farther, behind more air);
-# exposure_auto -> exposure_gain = (AE_TARGET / mean scene brightness) ** exposure_auto (auto-exposure).
-_DERIVED_PARAMS = {"rs_magnitude": ("rs_skew", "rs_stretch"), "haze_extinction_px": ("haze_amount",),
-                   "exposure_auto": ("exposure_gain",)}
-AE_TARGET = 0.5
-_FORMAT = "synthaug.reference_camera"
-_VERSION = 1
-
-
-# ------------------------------------------------------------------ hidden
-def resolve_hidden(
-    hidden: Mapping[str, Mapping[str, Strength]] | Sequence[str] | None,
-) -> dict[str, dict[str, Strength]]:
-    """Hidden effects with every setting filled in (defaults from :data:`REALISTIC_STRENGTHS`).
-
-    Args:
-        hidden: ``{effect: {param: value or (low, high)}}`` (missing params take
-            their realistic default), or a list of effect names, or None.
-
-    Returns:
-        ``{effect: {param: value or (low, high)}}``, in :data:`CAMERA_EFFECTS` order.
-
-    Example:
-        >>> resolve_hidden(["defocus"])
-        {'defocus': {'defocus_sigma': 1.0}}
-    """
-    if hidden is None:
-        return {}
-    if isinstance(hidden, str):
-        raise ValueError(f"hidden must be a mapping or a list of effect names, got the string {hidden!r}")
-    items = dict(hidden) if isinstance(hidden, Mapping) else {name: {} for name in hidden}
-    known = set(CAMERA_EFFECTS) | set(OUTSIDE_EFFECTS)
-    out: dict[str, dict[str, Strength]] = {}
-    for name in list(CAMERA_EFFECTS) + list(OUTSIDE_EFFECTS):
-        if name not in items:
-            continue
-        given = dict(items[name] or {})
-        allowed = set(REALISTIC_STRENGTHS[name])
-        if name in CAMERA_EFFECTS:
-            allowed |= {s.name for s in get_effect(name).params}
-        base = {k: v for k, v in REALISTIC_STRENGTHS[name].items()
-                if not set(_DERIVED_PARAMS.get(k, ())) & set(given)}  # an explicit value replaces the physics
-        bad = sorted(set(given) - allowed)
-        if bad:
-            raise ValueError(f"hidden[{name!r}]: unknown parameter(s) {bad}; known: {sorted(allowed)}")
-        merged = {**base, **given}
-        for k, v in merged.items():
-            merged[k] = _check_strength(name, k, v)
-        out[name] = merged
-    unknown = sorted(set(items) - known)
-    if unknown:
-        raise ValueError(f"unknown hidden effect(s) {unknown}; candidates: {sorted(known)}")
-    return out
-
-
-def _check_strength(effect: str, name: str, v: Any) -> Strength:
-    if isinstance(v, (tuple, list)):
-        if len(v) != 2 or not all(math.isfinite(float(x)) for x in v) or float(v[0]) > float(v[1]):
-            raise ValueError(f"hidden[{effect!r}][{name!r}] must be a number or (low, high), got {v!r}")
-        lo, hi = float(v[0]), float(v[1])
-        _check_in_spec(effect, name, lo)
-        _check_in_spec(effect, name, hi)
-        return (lo, hi)
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        raise ValueError(f"hidden[{effect!r}][{name!r}] must be a number or (low, high), got {v!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"hidden[{effect!r}][{name!r}] must be finite, got {v!r}")
-    _check_in_spec(effect, name, x)
-    return x
-
-
-_REFERENCE_SPECS = {"haze_extinction_px": (0.0, 100.0), "exposure_auto": (0.0, 1.5), "rs_magnitude": (-1.0, 1.0)}
-
-
-def _check_in_spec(effect: str, name: str, x: float) -> None:
-    if name in _REFERENCE_SPECS and not _REFERENCE_SPECS[name][0] <= x <= _REFERENCE_SPECS[name][1]:
-        lo, hi = _REFERENCE_SPECS[name]
-        raise ValueError(f"hidden[{effect!r}][{name!r}] must be in [{lo}, {hi}], got {x}")
-    if effect not in CAMERA_EFFECTS:
-        return
-    for s in get_effect(effect).params:
-        if s.name == name and not (s.low <= x <= s.high):
-            raise ValueError(f"hidden[{effect!r}][{name!r}] must be in [{s.low}, {s.high}], got {x}")
-
-
-def _draw_strengths(settings: dict[str, dict[str, Strength]], rng: np.random.Generator) -> dict[str, dict[str, float]]:
-    out = {}
-    for eff, params in settings.items():
-        out[eff] = {k: (float(rng.uniform(v[0], v[1])) if isinstance(v, tuple) else float(v))
-                    for k, v in sorted(params.items())}
-    return out
-
-
-# ------------------------------------------------------------------ meshes
-def quadcopter_parts(**kwargs: Any):
-    """The built-in quadcopter (normalised) and a boolean mask of its rotor faces.
-
-    Rotors are found as the connected components that are thin discs (height
-    < 1.5 % of the model, span > 20 %), so the mask follows
-    :func:`~synthaug.render.mesh.make_quadcopter` whatever its face order.
-
-    Returns:
-        (mesh, rotor_faces) with rotor_faces a (F,) bool array; 4 discs.
-    """
-    import trimesh
-
-    from synthaug.render.mesh import make_quadcopter
-
-    mesh = make_quadcopter(**kwargs)
-    groups = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(mesh.faces)))
-    mask = np.zeros(len(mesh.faces), bool)
-    n_rotors = 0
-    for faces in groups:
-        faces = np.asarray(faces)
-        pts = mesh.vertices[np.unique(mesh.faces[faces])]
-        ext = pts.max(0) - pts.min(0)
-        if ext[2] < 0.015 and min(ext[0], ext[1]) > 0.2:
-            mask[faces] = True
-            n_rotors += 1
-    if n_rotors != 4:
-        raise RuntimeError(f"expected 4 rotor discs in the quadcopter, found {n_rotors}")
-    return mesh, mask
-
-
-def perturb_mesh(mesh: Any, amount: float, *, seed: int = 0):
-    """A smoothly deformed copy of ``mesh`` (the real object ≠ the coarse model).
-
-    Every vertex moves by ``amount`` × (unit-size mesh) × a smooth random field
-    (three random sinusoids of the position, 1-3 cycles per unit), so parts
-    bend, swell and shift coherently. Faces are kept (same face order).
-
-    Example:
-        >>> from synthaug.render.mesh import make_quadcopter
-        >>> m = make_quadcopter()
-        >>> p = perturb_mesh(m, 0.05, seed=1)
-        >>> p.faces.shape == m.faces.shape, 0 < float(abs(p.vertices - m.vertices).max()) < 0.2
-        (True, True)
-    """
-    import trimesh
-
-    if not 0 <= amount <= 0.5:
-        raise ValueError(f"mesh_perturbation must be in [0, 0.5], got {amount}")
-    rng = np.random.default_rng(seed)
-    v = np.asarray(mesh.vertices, np.float64)
-    disp = np.zeros_like(v)
-    for _ in range(3):
-        freq = rng.normal(size=3)
-        freq *= rng.uniform(1.0, 3.0) * 2 * np.pi / np.linalg.norm(freq)
-        direction = rng.normal(size=3)
-        direction /= np.linalg.norm(direction)
-        disp += np.sin(v @ freq + rng.uniform(0, 2 * np.pi))[:, None] * direction / math.sqrt(3)
-    return trimesh.Trimesh(vertices=v + amount * disp, faces=np.asarray(mesh.faces), process=False)
-
-
-def _pinned(mesh: Any, lo: np.ndarray, hi: np.ndarray):
-    """``mesh`` plus two sub-pixel triangles at the corners ``lo``/``hi``.
-
-    Normalisation (centre and scale of the bounding box) then equals that of the
-    mesh whose bounds these are, so the two render at the same place and size.
-    """
-    import trimesh
-
-    eps = 1e-5
-    tri = np.array([[0, 0, 0], [eps, 0, 0], [0, eps, 0]], np.float64)
-    v = np.concatenate([mesh.vertices, lo + tri, hi - tri])
-    n = len(mesh.vertices)
-    f = np.concatenate([mesh.faces, [[n, n + 1, n + 2], [n + 3, n + 5, n + 4]]])
-    return trimesh.Trimesh(vertices=v, faces=f, process=False)
-
-
-def _real_object(mesh: Any, perturbation: float, seed: int, *, rotor_scale: float = 1.0,
-                 sections: int = 16) -> tuple[Any, Any | None, str]:
-    """(full mesh, mesh without rotors or None, description). ``rotor_scale`` and ``sections`` change the
-    built-in quadcopter's propeller radius and cylinder sections (the real object is not the model)."""
-    from synthaug.render.mesh import load_mesh, normalize_mesh
-
-    if isinstance(mesh, str) and mesh == "quadcopter":
-        if rotor_scale == 1.0 and sections == 16:
-            full, rotor = quadcopter_parts()
-            desc = "quadcopter"
-        else:
-            full, rotor = quadcopter_parts(rotor_radius=0.17 * rotor_scale, sections=int(sections))
-            desc = f"quadcopter (rotors x{rotor_scale:.3g}, {int(sections)} sections)"
-    else:
-        full, rotor = load_mesh(mesh), None
-        desc = str(mesh) if isinstance(mesh, (str, os.PathLike)) else "<Trimesh>"
-    if perturbation > 0:
-        full = perturb_mesh(full, perturbation, seed=seed)
-        desc += f" perturbed {perturbation:g} (seed {seed})"
-    full = normalize_mesh(full)
-    if rotor is None:
-        return full, None, desc
-    import trimesh
-
-    body = trimesh.Trimesh(vertices=full.vertices, faces=full.faces[~rotor], process=False)
-    body.remove_unreferenced_vertices()
-    return full, _pinned(body, full.bounds[0], full.bounds[1]), desc
-
-
-# ------------------------------------------------------------------ camera
-def _blur_pad(sigma: float) -> int:
-    return int(math.ceil(3.0 * sigma)) + 2
-
-
-def _camera(img: torch.Tensor, cam: dict[str, dict[str, float]], noise: torch.Tensor, noise_factor: float,
-            read_noise: float, tint: np.ndarray | None = None) -> torch.Tensor:
-    """The whole-frame camera on a (1, C, H, W) float64 scene image, up to (not including) 8-bit/JPEG.
-    ``tint``: the colour of the scene's air (RGB, unit luma), the haze airlight's colour in RGB."""
-    one = lambda v: torch.tensor([float(v)], dtype=img.dtype)  # noqa: E731
-    if "haze" in cam:
-        air = one(cam["haze"]["haze_airlight"])
-        if tint is not None and img.shape[1] == 3:
-            air = (air * torch.as_tensor(tint, dtype=img.dtype)).clamp(0.0, 1.0)[None]
-        img = Cx.haze(img, one(cam["haze"]["haze_amount"]), air)
-    if "defocus" in cam:
-        s = cam["defocus"]["defocus_sigma"]
-        img = gaussian_blur_fft(img, one(s), pad=_blur_pad(s), border="replicate")
-    if "chromatic_aberration" in cam:
-        img = Cx.chromatic_aberration(img, one(cam["chromatic_aberration"]["ca_shift"]), border="border")
-    if "lens_distortion" in cam:
-        img = Cx.lens_distortion(img, one(cam["lens_distortion"]["distortion_k1"]), recentre=False, border="border")
-    if "vignetting" in cam:
-        img = Cx.vignetting(img, one(cam["vignetting"]["vignette_k"]))
-    if "exposure" in cam:
-        img = Cx.exposure(img, one(cam["exposure"]["exposure_gain"]), one(cam["exposure"]["exposure_offset"]))
-    if "white_balance" in cam:
-        img = Cx.white_balance(img, wb_gains(cam["white_balance"]["wb_gain"], img.shape[1], img.dtype))
-    shot = cam.get("shot_noise", {}).get("shot_sigma", 0.0)
-    std = torch.sqrt(read_noise ** 2 + shot ** 2 * img.clamp(0.0, 1.0))
-    img = img + noise_factor * std * noise
-    if "gamma" in cam:
-        img = Cx.gamma_curve(img.clamp(0.0, 1.0), one(cam["gamma"]["gamma_g"]))
-    if "sharpening" in cam:
-        s = cam["sharpening"]["sharpen_sigma"]
-        img = Cx.unsharp_mask(img, one(cam["sharpening"]["sharpen_amount"]), one(s), pad=_blur_pad(s),
-                              border="replicate")
-    return img
-
-
-def wb_gains(g: float, channels: int, dtype: torch.dtype = torch.float64) -> torch.Tensor:
-    """White balance ``g`` as per-channel gains (1, C): gray ``g``; RGB ``(g, 1, 1/g)`` (a colour-temperature
-    shift: red up, blue down, green fixed)."""
-    if channels == 3:
-        return torch.tensor([[g, 1.0, 1.0 / g]], dtype=dtype)
-    return torch.tensor([float(g)], dtype=dtype)
-
-
-def _to_u8(img: torch.Tensor, cam: dict[str, dict[str, float]]) -> np.ndarray:
-    """8-bit (and JPEG) of a (1, C, H, W) image: (H, W) gray or (H, W, 3) RGB."""
-    import cv2
-
-    u8 = np.clip(np.round(img[0].permute(1, 2, 0).numpy() * 255.0), 0, 255).astype(np.uint8)
-    u8 = u8[..., 0] if u8.shape[-1] == 1 else np.ascontiguousarray(u8)
-    if "compression" in cam:
-        q = int(round(cam["compression"]["jpeg_quality"]))
-        bgr = u8 if u8.ndim == 2 else cv2.cvtColor(u8, cv2.COLOR_RGB2BGR)
-        ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, q])
-        if not ok:
-            raise RuntimeError("JPEG encoding failed")
-        u8 = cv2.imdecode(buf, cv2.IMREAD_GRAYSCALE if u8.ndim == 2 else cv2.IMREAD_COLOR)
-        u8 = u8 if u8.ndim == 2 else cv2.cvtColor(u8, cv2.COLOR_BGR2RGB)
-    return u8
 
 
 def _interlace(color: torch.Tensor, cov: torch.Tensor, shift: float, angle: float) -> tuple[torch.Tensor, torch.Tensor]:
@@ -562,9 +178,9 @@ class MeasuredSeed:
     Attributes:
         index, video: the seed's index and its video.
         paper: the paper's Θ (patch units: σ in patch px).
-        camera: ``{effect: {param: value}}`` the hidden settings this seed sees, the physics of
-            :data:`_DERIVED_PARAMS` applied (haze from the object's distance, auto-exposure from the scene's
-            brightness, the rolling shutter along α_m).
+        camera: ``{effect: {param: value}}`` the hidden settings this seed sees, the physics behind the
+            derived ones applied (settings' ``_DERIVED_PARAMS``: haze from the object's distance,
+            auto-exposure from the scene's brightness, the rolling shutter along α_m).
         pose: (α, β, γ) requested, radians.
         size_px: object size (mesh unit length) in frame px.
         corner: (x0, y0), frame px, of the square the object is rendered in.
@@ -624,8 +240,8 @@ def _draw_seed(setup: _Setup, index: int, scene: np.ndarray) -> MeasuredSeed:
 
 def _with_physics(cam: dict[str, dict[str, float]], size_px: float, scene_mean: float,
                   alpha_m: float) -> dict[str, dict[str, float]]:
-    """``cam`` (freshly drawn, changed in place) with the settings of :data:`_DERIVED_PARAMS` turned into the
-    effects' own parameters."""
+    """``cam`` (freshly drawn, changed in place) with the settings of ``_DERIVED_PARAMS``
+    (:mod:`~synthaug.diagnose.reference_camera.settings`) turned into the effects' own parameters."""
     if "haze" in cam and "haze_extinction_px" in cam["haze"]:  # more air in front of a farther object
         cam["haze"]["haze_amount"] = 1.0 - math.exp(-cam["haze"]["haze_extinction_px"] / size_px)
     if "exposure" in cam and "exposure_auto" in cam["exposure"]:  # auto-exposure follows the scene
@@ -725,14 +341,14 @@ def _object_on_frame(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, cov: 
     return frame_lin
 
 
-def _capture(setup: _Setup, draw: MeasuredSeed, frame_lin: torch.Tensor, scene: np.ndarray,
-             tint: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
+def _capture_frames(setup: _Setup, draw: MeasuredSeed, frame_lin: torch.Tensor, scene: np.ndarray,
+                    tint: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
     """The whole-frame camera on the frame and on the object-free background frame B (its noise reduced by
     ``background_noise_factor``): 8-bit (frame, B) in gray, and their RGB captures (or None) with ``colour``
     (the gray images are then the capture's luma)."""
     cam = draw.camera
-    frame_u8 = _to_u8(_camera(frame_lin, cam, draw.frame_noise, 1.0, setup.read_noise, tint=tint), cam)
-    bg_u8 = _to_u8(_camera(_batched(scene), cam, draw.background_noise, setup.background_noise_factor,
+    frame_u8 = to_u8(capture(frame_lin, cam, draw.frame_noise, 1.0, setup.read_noise, tint=tint), cam)
+    bg_u8 = to_u8(capture(_batched(scene), cam, draw.background_noise, setup.background_noise_factor,
                            setup.read_noise, tint=tint), cam)
     if not setup.colour:
         return frame_u8, bg_u8, None, None
@@ -804,7 +420,8 @@ def _simulate_seed(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, tint: n
     side = max(box[2], box[3]) / setup.object_fraction
     frame_scale = side / setup.patch_size
     frame_lin = _object_on_frame(setup, draw, scene, cov, nrm, rotor, frame_scale)
-    return _crop_seed(setup, draw, cache, box, side, frame_scale, _capture(setup, draw, frame_lin, scene, tint))
+    captured = _capture_frames(setup, draw, frame_lin, scene, tint)
+    return _crop_seed(setup, draw, cache, box, side, frame_scale, captured)
 
 
 def _header(setup: _Setup, mesh_desc: str) -> dict[str, Any]:
@@ -929,8 +546,8 @@ def make_measured_seedset(
                    background_noise_factor=background_noise_factor, n_videos=n_videos, per_video=per_video,
                    view_step_deg=view_step_deg, sprite_size=sprite_size, colour=colour, nuisances=nuisances)
     nz = setup.nuisances
-    full_mesh, body_mesh, mesh_desc = _real_object(mesh, setup.mesh_perturbation, seed, rotor_scale=nz.rotor_scale,
-                                                   sections=nz.mesh_sections)
+    full_mesh, body_mesh, mesh_desc = real_object(mesh, setup.mesh_perturbation, seed, rotor_scale=nz.rotor_scale,
+                                                  sections=nz.mesh_sections)
     cache = ViewCache.build(full_mesh, step_deg=view_step_deg, sprite_size=sprite_size)
     body_cache = None if body_mesh is None else ViewCache.build(body_mesh, step_deg=view_step_deg,
                                                                  sprite_size=sprite_size)
@@ -938,48 +555,3 @@ def make_measured_seedset(
     seeds = [_simulate_seed(setup, _draw_seed(setup, i, scenes[i]), scenes[i], tints[i], cache, body_cache)
              for i in range(n_seeds)]
     return _write(out_dir, setup, mesh_desc, seeds)
-
-
-def _model_units(cam: dict[str, dict[str, float]], frame_scale: float) -> dict[str, dict[str, float]]:
-    """The hidden settings as the model's parameters of a patch (σ in patch px)."""
-    out: dict[str, dict[str, float]] = {}
-    for eff, params in cam.items():
-        if eff not in CAMERA_EFFECTS:
-            continue
-        p = {s.name: params[s.name] for s in get_effect(eff).params if s.name in params}
-        if eff == "defocus":
-            p["defocus_sigma"] = params["defocus_sigma"] / frame_scale
-        if eff == "sharpening":
-            p["sharpen_sigma"] = params["sharpen_sigma"] / frame_scale
-        out[eff] = p
-    return out
-
-
-def _truth_file(rows: list[dict[str, Any]], extra: list[dict[str, Any]], effects: tuple[str, ...],
-                nuisances: dict[str, Any] | None = None) -> bytes:
-    names = PAPER_EFFECTS + effects
-    specs = {s.name: s for e in names for s in get_effect(e).params}
-    values: dict[str, list[float]] = {}
-    for row in rows:
-        for k, v in row.items():
-            if k in specs:  # clip into the spec range so the file loads (records keep the raw values)
-                v = min(max(v, specs[k].low), specs[k].high) if not specs[k].periodic else v
-            values.setdefault(k, []).append(v)
-    theta = CaptureParams(values, effects=names, validate=False).wrapped()
-    with tempfile.TemporaryDirectory() as d:
-        path = Path(d) / "truth.json"
-        theta.save(path, extra=extra, metadata={"generator": _FORMAT, "version": _VERSION,
-                                                "note": "true Θ per seed in patch units (σ in patch px)",
-                                                **({} if nuisances is None else {"nuisances": nuisances})})
-        return path.read_bytes()
-
-
-# ------------------------------------------------------------------ readers
-def load_truth(path: str | os.PathLike) -> tuple[CaptureParams, list[dict[str, Any]], dict[str, Any]]:
-    """The true Θ of a reference-camera seed set: ``(theta, per-seed extras, reference_camera header)``."""
-    path = Path(path)
-    theta, extra, _ = CaptureParams.load_with_extra(path / "truth.json")
-    header = json.loads((path / "seedset.json").read_text())
-    if "reference_camera" not in header:
-        raise ValueError(f"{path}: not a reference-camera seed set (no 'reference_camera' in its header)")
-    return theta, extra, header["reference_camera"]
