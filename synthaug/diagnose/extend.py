@@ -209,7 +209,7 @@ def extend_fit(
     values.update({k: v.float() for k, v in rows.items()})
     w_note = "kept from the base fit"
     if mesh is not None:
-        from synthaug.diagnose.residuals import load_diagnosis_data, solve_albedo
+        from synthaug.diagnose.diagnosis_data import load_diagnosis_data, solve_albedo
 
         data = load_diagnosis_data(seeds, fit_path, mesh)
         w_ext, w_base = solve_albedo(data, {effect: dict(rows)}), solve_albedo(data)

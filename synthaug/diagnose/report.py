@@ -88,7 +88,7 @@ def _setting(row: dict[str, Any]) -> dict[str, float]:
 
 def _extended_render(data: Any, row: dict[str, Any], given: dict[str, Any] | None = None
                      ) -> tuple[torch.Tensor, dict[str, float]]:
-    from synthaug.diagnose.residuals import render_with, solve_albedo
+    from synthaug.diagnose.diagnosis_data import render_with, solve_albedo
     from synthaug.diagnose.screening import extension_values, given_values
 
     setting = _setting(row)
@@ -172,7 +172,7 @@ def diagnose(
         ``screened`` (every candidate), ``residuals`` (structure measures),
         ``parameter_dependence``, ``realism`` (real-vs-synthetic accuracy).
     """
-    from synthaug.diagnose.residuals import load_diagnosis_data
+    from synthaug.diagnose.diagnosis_data import load_diagnosis_data
     from synthaug.diagnose.screening import CANDIDATE_GRIDS, kfold, realism_accuracy
 
     t0 = time.perf_counter()

@@ -34,19 +34,32 @@ Fitted parameters can silently absorb a missing effect, which shows as a
 dependence of a per-seed value on seed metadata; :func:`parameter_dependence`
 tests every (parameter, metadata) pair with a permutation test of Spearman's ρ.
 
-All tests use an explicit ``numpy.random.Generator``.
+All tests use an explicit ``numpy.random.Generator``. The data they read, and the re-rendered fit, are
+:mod:`synthaug.diagnose.diagnosis_data`'s (its names are re-exported here).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 import torch
 
 from synthaug.diagnose.calibration import HAND_FLOORS, structure_significant
+from synthaug.diagnose.diagnosis_data import (  # noqa: F401  (re-exported: their home before the split)
+    GRAY_CHROMA_LEVELS,
+    DiagnosisData,
+    chroma_distance,
+    is_single_channel,
+    load_diagnosis_data,
+    pairwise_distance,
+    pixel_distance,
+    render_rgb,
+    render_with,
+    solve_albedo,
+    solve_albedo_rgb,
+)
 from synthaug.diagnose.stats import permutation_spearman, t_test, within_groups  # noqa: F401  (re-exported)
 
 __all__ = [
@@ -71,284 +84,6 @@ __all__ = [
 # The hand-set effect-size floors of the structure measures (kept as the fallback of statistics without a null
 # calibration): the calibrated rule is synthaug.diagnose.calibration's.
 EFFECT_FLOORS = HAND_FLOORS
-
-
-# ------------------------------------------------------------------ data
-@dataclass
-class DiagnosisData:
-    """Everything needed to re-render the fitted images of a seed set, batched.
-
-    Shape:
-        real, background, coverage: (N, 1, P, P) float32 in [0, 1];
-        normals (N, 3, P, P); origin, frame_size (N, 2); frame_scale (N,);
-        fields: random fields (N, 1, P, P) (the fit's object-noise field, a shot-noise field).
-    """
-
-    real: torch.Tensor
-    background: torch.Tensor
-    coverage: torch.Tensor
-    normals: torch.Tensor
-    theta: Any
-    fields: dict[str, torch.Tensor]
-    origin: torch.Tensor
-    frame_size: torch.Tensor
-    frame_scale: torch.Tensor
-    part_rotor: torch.Tensor | None
-    distance_name: str
-    distance: Any
-    records: list[dict[str, Any]] = field(default_factory=list)
-    fit_distance: np.ndarray | None = None
-    resample_sigma: torch.Tensor | None = None  # (N,) patch px: the seed patches' crop resampling blur
-    object_px: torch.Tensor | None = None  # (N,) the fitted object's size in frame px (object scale x crop side)
-    frame_brightness: torch.Tensor | None = None  # (N,) mean of the whole frame (what auto-exposure meters)
-    noise_levels: list[dict[str, np.ndarray]] | None = None  # per seed: its frame's noise level function
-    real_rgb: torch.Tensor | None = None  # (N, 3, P, P) the RGB seed patches, when the seed set has them
-    background_rgb: torch.Tensor | None = None  # (N, 3, P, P)
-    colour_note: str | None = None  # why there is no colour channel (gray or single-channel data)
-
-    def __len__(self) -> int:
-        return int(self.real.shape[0])
-
-    def subset(self, idx: Sequence[int] | np.ndarray) -> "DiagnosisData":
-        idx_t = torch.as_tensor(np.asarray(idx, np.int64))
-        take = lambda t: None if t is None else t[idx_t]  # noqa: E731
-        return DiagnosisData(
-            real=take(self.real), background=take(self.background), coverage=take(self.coverage),
-            normals=take(self.normals), theta=self.theta[idx_t], fields={k: take(v) for k, v in self.fields.items()},
-            origin=take(self.origin), frame_size=take(self.frame_size), frame_scale=take(self.frame_scale),
-            part_rotor=take(self.part_rotor), distance_name=self.distance_name, distance=self.distance,
-            records=[self.records[int(i)] for i in idx_t] if self.records else [],
-            fit_distance=None if self.fit_distance is None else self.fit_distance[np.asarray(idx, np.int64)],
-            resample_sigma=take(self.resample_sigma), object_px=take(self.object_px),
-            frame_brightness=take(self.frame_brightness),
-            noise_levels=None if self.noise_levels is None else [self.noise_levels[int(i)] for i in idx_t],
-            real_rgb=take(self.real_rgb), background_rgb=take(self.background_rgb), colour_note=self.colour_note)
-
-
-def _rotor_layers(cache_body: Any, theta: Any, size: int, scale: torch.Tensor, cov: torch.Tensor) -> torch.Tensor:
-    cov_b, _ = cache_body.layers(theta.alpha.float(), theta.beta.float(), theta.gamma.float(), theta.t_x.float(),
-                                 theta.t_y.float(), size=size, object_scale=scale)
-    return (cov - cov_b).clamp(0.0, 1.0)
-
-
-def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance: str | Any = "hog",
-                        resampling: bool = True) -> DiagnosisData:
-    """Load a seed set and its fit, and render the fitted layers of every seed.
-
-    Args:
-        seeds: a :class:`~synthaug.data.seedset.SeedSet` or its folder.
-        fit_path: the fit file (``synthaug fit`` output).
-        mesh: the mesh given to the fit (path or built-in name; ``"quadcopter"``
-            also gives its rotor parts).
-        distance: the detector's distance (name or module), e.g. ``"hog"``.
-        resampling: put the seed patches' known crop-resampling blur
-            (:func:`~synthaug.data.seedset.crop_resampling_sigma`) on the
-            rendered object in every model, base and extended: a seed patch
-            and its background are resampled crops, a render is not, and
-            without it a missing blur of ~0.4 px reads as a camera effect.
-
-    Returns:
-        a :class:`DiagnosisData`.
-    """
-    import os
-
-    from synthaug.data.fitted import fit_view_cache, fitted_scales
-    from synthaug.data.seedset import SeedSet, crop_resampling_sigma
-    from synthaug.diagnose.noise import seed_noise_levels
-    from synthaug.diagnose.reference_camera import seed_geometry
-    from synthaug.effects.pipeline import sample_fields
-    from synthaug.fit.fitting import build_distance, patches_tensor
-    from synthaug.params import CaptureParams
-
-    if isinstance(seeds, (str, os.PathLike)):
-        seeds = SeedSet.load(seeds)
-    theta, extra, meta = CaptureParams.load_with_extra(fit_path)
-    if theta.batch_size != len(seeds):
-        raise ValueError(f"{fit_path} has {theta.batch_size} rows but the seed set has {len(seeds)} seeds")
-    if theta.channels != 1:
-        raise ValueError(f"only grayscale fits are supported, got {theta.channels} channels")
-    cache = fit_view_cache(meta, mesh)
-    p = seeds.patch_size
-    scale = fitted_scales(extra, meta, 0.7).float()
-    cov, nrm = cache.layers(theta.alpha.float(), theta.beta.float(), theta.gamma.float(), theta.t_x.float(),
-                            theta.t_y.float(), size=p, object_scale=scale)
-    part_rotor = None
-    if isinstance(mesh, str) and mesh == "quadcopter":
-        from synthaug.diagnose.reference_camera.real_object import real_object
-
-        _, body, _ = real_object("quadcopter", 0.0, 0)
-        body_cache = fit_view_cache(meta, body)
-        part_rotor = _rotor_layers(body_cache, theta, p, scale, cov)
-    fields: dict[str, list[torch.Tensor]] = {}
-    names = tuple(theta.effects) + (("shot_noise",) if "shot_noise" not in theta.effects else ())
-    for e in extra:
-        # the fit's own object-noise field first (same generator, same order), then the candidates'
-        f = sample_fields(names, (1, 1, p, p), torch.Generator().manual_seed(int(e.get("generator_seed", 0))))
-        for k, v in f.items():
-            fields.setdefault(k, []).append(v)
-    geo = seed_geometry(seeds)
-    frames = _read_frames(seeds)  # the whole frames: what auto-exposure meters, and the noise level function
-    dist = build_distance(distance, seeds) if isinstance(distance, str) else distance
-    name = distance if isinstance(distance, str) else getattr(distance, "name", type(distance).__name__)
-    return DiagnosisData(
-        real=patches_tensor(seeds.patches), background=patches_tensor(seeds.backgrounds), coverage=cov,
-        normals=nrm, theta=theta, fields={k: torch.cat(v) for k, v in fields.items()}, origin=geo["origin"],
-        frame_size=geo["frame_size"], frame_scale=geo["frame_scale"], part_rotor=part_rotor,
-        distance_name=str(name), distance=dist, records=list(seeds.records),
-        fit_distance=np.array([float(e.get("distance", np.nan)) for e in extra]),
-        resample_sigma=torch.from_numpy(crop_resampling_sigma(geo["frame_scale"].double().numpy())).float()
-        if resampling else None,
-        object_px=(scale.double() * p * geo["frame_scale"].double()).float(),
-        frame_brightness=None if frames is None else torch.tensor([float(f.mean()) / 255.0 for f in frames],
-                                                                  dtype=torch.float64),
-        noise_levels=None if frames is None else seed_noise_levels(seeds, frames=frames),
-        **_colour_patches(seeds))
-
-
-# Largest |R - G| or |B - G| (grey levels) of RGB seed patches that still count as single-channel: a gray
-# video decoded to RGB carries +-1-2 levels of chroma from the codec's YUV rounding, no colour.
-GRAY_CHROMA_LEVELS = 2
-
-
-def is_single_channel(rgb: np.ndarray, *, tol: int = GRAY_CHROMA_LEVELS) -> bool:
-    """Whether uint8 RGB images (..., 3) carry no colour: every |R - G| and |B - G| at most ``tol`` levels.
-
-    Example:
-        >>> g = np.full((2, 4, 4, 3), 120, np.uint8); g[..., 2] += 1
-        >>> is_single_channel(g), is_single_channel(np.dstack([g[0, ..., :2], g[0, ..., :1] + 9]))
-        (True, False)
-    """
-    a = np.asarray(rgb).astype(np.int16)
-    if a.shape[-1] != 3:
-        raise ValueError(f"expected RGB images (..., 3), got shape {a.shape}")
-    return bool(a.size == 0 or max(int(np.abs(a[..., 0] - a[..., 1]).max()),
-                                   int(np.abs(a[..., 2] - a[..., 1]).max())) <= tol)
-
-
-def _colour_patches(seeds: Any) -> dict[str, Any]:
-    """``real_rgb``/``background_rgb`` (N, 3, P, P) float32 when the seed set has RGB patches with colour;
-    ``colour_note`` says why the colour channel is off otherwise."""
-    col = seeds.colour()
-    if col is None:
-        return {"colour_note": "grayscale seed set (no RGB patches)"}
-    rgb, bg = col
-    if is_single_channel(rgb) and is_single_channel(bg):
-        return {"colour_note": f"single-channel data: the RGB patches carry no colour (|R-G|, |B-G| <= "
-                               f"{GRAY_CHROMA_LEVELS} grey levels)"}
-    to_t = lambda a: torch.from_numpy(a).permute(0, 3, 1, 2).float() / 255.0  # noqa: E731
-    return {"real_rgb": to_t(rgb), "background_rgb": to_t(bg)}
-
-
-def _read_frames(seeds: Any) -> list[np.ndarray] | None:
-    """Every seed's whole frame (uint8), read once; None when the seed set has no frames."""
-    try:
-        return [np.asarray(seeds.frame(i)) for i in range(len(seeds))]
-    except (FileNotFoundError, OSError, KeyError, IndexError, ValueError):
-        return None
-
-
-def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor | float]] | None = None, *,
-                w_d: torch.Tensor | None = None, clamp: bool = True, rgb: bool = False) -> torch.Tensor:
-    """S(Θ_i ⊕ φ, B_i) for every seed of ``data``: the fit's Θ extended by candidate effects.
-
-    Args:
-        data: the seeds and their fitted layers.
-        extension: ``{effect: {param: value}}``, a value a scalar (camera-wide), an (N,) tensor (per
-            seed) or, with ``rgb``, a (1, 3) camera-wide or (N, 3) per-seed value per channel. Effects
-            already in Θ are overridden.
-        w_d: (N,) albedo replacing the fitted w_d (the per-seed nuisance re-solve).
-        rgb: render over the RGB backgrounds (:attr:`DiagnosisData.background_rgb`): the fitted (gray)
-            Θ on every channel of a neutral object.
-
-    Returns:
-        (N, 1, P, P) synthetic images ((N, 3, P, P) with ``rgb``).
-    """
-    from synthaug.effects.pipeline import simulate
-    from synthaug.params import CaptureParams
-
-    if rgb and data.background_rgb is None:
-        raise ValueError("this seed set has no RGB patches (colour.npz)")
-    extension = dict(extension or {})
-    n, c = len(data), (3 if rgb else 1)
-    values = {k: v.float()[:, :1].expand(n, c) if v.ndim == 2 else v.float() for k, v in data.theta.as_dict().items()}
-    if w_d is not None:
-        values["w_d"] = torch.as_tensor(w_d, dtype=torch.float32).reshape(n, 1).expand(n, c)
-    effects = tuple(data.theta.effects) + tuple(e for e in extension if e not in data.theta.effects)
-    for eff, params in extension.items():
-        for k, v in params.items():
-            values[k] = _per_channel_values(v, n, c)
-    if data.resample_sigma is not None:  # the crop's resampling blur, combined with a defocus candidate
-        if "defocus" not in effects:
-            effects = effects + ("defocus",)
-            values["defocus_sigma"] = torch.zeros(n, c)
-        values["defocus_sigma"] = torch.sqrt(values["defocus_sigma"] ** 2
-                                             + data.resample_sigma.float().reshape(n, 1) ** 2)
-    theta = CaptureParams(values, channels=c, effects=effects, validate=False)
-    extras: dict[str, torch.Tensor] = {"frame_scale": data.frame_scale}
-    if data.part_rotor is not None:
-        extras["part_rotor"] = data.part_rotor
-    fields = {k: v.expand(n, c, *v.shape[-2:]) for k, v in data.fields.items()}
-    background = data.background_rgb if rgb else data.background
-    return simulate(data.coverage, data.normals, background, theta, fields=fields, origin=data.origin,
-                    frame_size=data.frame_size, extras=extras, clamp=clamp)
-
-
-def _per_channel_values(v: Any, n: int, c: int) -> torch.Tensor:
-    """A parameter value as (N, C): a scalar or (N,) for every channel; (1, C) or (N, C) per channel."""
-    t = torch.as_tensor(v, dtype=torch.float32)
-    if t.ndim == 2 and t.shape[1] == c and t.shape[0] in (1, n):
-        return t.expand(n, c)
-    return t.reshape(-1, 1).expand(n, c)
-
-
-def render_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None, *,
-               w_d: torch.Tensor | None = None, clamp: bool = True) -> torch.Tensor:
-    """:func:`render_with` over the RGB backgrounds: (N, 3, P, P)."""
-    return render_with(data, extension, w_d=w_d, clamp=clamp, rgb=True)
-
-
-def solve_albedo_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None) -> torch.Tensor:
-    """Per-seed w_d of a neutral object, one value for all three channels (least squares over RGB)."""
-    return solve_albedo(data, extension, rgb=True)
-
-
-def chroma_distance(real: torch.Tensor, syn: torch.Tensor) -> np.ndarray:
-    """Per-seed L2 of the chroma residual ``(R - G, B - G)``: blind to whatever acts alike on all channels
-    (blur, tone, haze on a neutral object), it sees colour fringes and colour casts."""
-    chroma = lambda x: torch.stack([x[:, 0] - x[:, 1], x[:, 2] - x[:, 1]], 1)  # noqa: E731
-    return (chroma(real) - chroma(syn)).flatten(1).norm(dim=1).double().numpy()
-
-
-def pairwise_distance(data: DiagnosisData, syn: torch.Tensor, real: torch.Tensor | None = None) -> np.ndarray:
-    """d(X_i, Y_i) per seed in the detector's distance (features when it has them)."""
-    real = data.real if real is None else real
-    dist = data.distance
-    with torch.no_grad():
-        if hasattr(dist, "features"):
-            return (dist.features(real) - dist.features(syn)).flatten(1).norm(dim=1).double().numpy()
-        return np.array([float(dist(real[i:i + 1], syn[i:i + 1])[0]) for i in range(len(real))])
-
-
-def pixel_distance(real: torch.Tensor, syn: torch.Tensor) -> np.ndarray:
-    """Pixel L2 per seed (eq. 2)."""
-    return (real - syn).flatten(1).norm(dim=1).double().numpy()
-
-
-def solve_albedo(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None,
-                 *, lo: float = 0.0, hi: float = 1.0, rgb: bool = False) -> torch.Tensor:
-    """Per-seed w_d minimising the pixel L2, by a linear fit between two renders.
-
-    The image is affine in w_d for the paper's effects (material → blurs →
-    overlay), so two renders give the exact least-squares w_d; with a
-    nonlinear extension it is the secant solution. With ``rgb``: one w_d for the three channels
-    of a neutral object, least squares over RGB.
-    """
-    a = render_with(data, extension, w_d=torch.full((len(data),), 0.2), clamp=False, rgb=rgb)
-    b = render_with(data, extension, w_d=torch.full((len(data),), 0.6), clamp=False, rgb=rgb)
-    slope = (b - a) / 0.4
-    num = (((data.real_rgb if rgb else data.real) - a) * slope).flatten(1).sum(1)
-    den = (slope * slope).flatten(1).sum(1).clamp_min(1e-9)
-    return (0.2 + num / den).clamp(lo, hi)
 
 
 # ------------------------------------------------------------------ masks and maps

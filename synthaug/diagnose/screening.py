@@ -60,14 +60,8 @@ import torch
 
 from synthaug.diagnose.calibration import HAND_MIN_GAIN, gain_floor
 from synthaug.diagnose.noise import NOISE_CANDIDATES, SLOPE_FLOOR, noise_channel
-from synthaug.diagnose.residuals import (
-    DiagnosisData,
-    pairwise_distance,
-    pixel_distance,
-    render_with,
-    seed_metadata,
-    solve_albedo,
-)
+from synthaug.diagnose.diagnosis_data import DiagnosisData, pairwise_distance, pixel_distance, render_with, solve_albedo
+from synthaug.diagnose.residuals import seed_metadata
 
 __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "screen_candidates", "screen_one", "absorption_gain",
            "realism_accuracy", "kfold"]
@@ -137,7 +131,7 @@ def colour_values(data: DiagnosisData, effect: str, setting: Setting) -> dict[st
 def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], base: np.ndarray, *,
                   penalty: float = 0.005, given: dict[str, Setting] | None = None) -> dict[str, Any] | None:
     """Held-out gain of ``effect`` in the chroma distance (RGB seed sets only; None otherwise)."""
-    from synthaug.diagnose.residuals import chroma_distance, render_rgb, solve_albedo_rgb
+    from synthaug.diagnose.diagnosis_data import chroma_distance, render_rgb, solve_albedo_rgb
 
     if effect not in COLOUR_CANDIDATES or data.real_rgb is None or not float(np.mean(base)) > 0:
         return None  # no colour (or a base model that already matches the chroma exactly): nothing to screen
@@ -474,7 +468,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         nc = noise_channel(data.noise_levels, folds)
     base_colour = None
     if data.real_rgb is not None and any(c in COLOUR_CANDIDATES for c in names):
-        from synthaug.diagnose.residuals import chroma_distance, render_rgb, solve_albedo_rgb
+        from synthaug.diagnose.diagnosis_data import chroma_distance, render_rgb, solve_albedo_rgb
 
         gv = given_values(data, given, rgb=True) or None
         base_colour = chroma_distance(data.real_rgb, render_rgb(data, gv, w_d=solve_albedo_rgb(data, gv)))
