@@ -5,10 +5,12 @@
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 import torch
 
+from synthaug.diagnose.reference_camera.settings import WHOLE_FRAME_EFFECTS
 from synthaug.effects import camera_functional as Cx
 from synthaug.effects.functional import gaussian_blur_fft
 
@@ -17,38 +19,59 @@ def _blur_pad(sigma: float) -> int:
     return int(math.ceil(3.0 * sigma)) + 2
 
 
+def _one(v: float, like: torch.Tensor) -> torch.Tensor:
+    return torch.tensor([float(v)], dtype=like.dtype)
+
+
+def _haze(img: torch.Tensor, p: dict[str, float], tint: np.ndarray | None) -> torch.Tensor:
+    air = _one(p["haze_airlight"], img)
+    if tint is not None and img.shape[1] == 3:  # the airlight has the colour of the scene's air
+        air = (air * torch.as_tensor(tint, dtype=img.dtype)).clamp(0.0, 1.0)[None]
+    return Cx.haze(img, _one(p["haze_amount"], img), air)
+
+
+def _defocus(img: torch.Tensor, p: dict[str, float], tint: np.ndarray | None) -> torch.Tensor:
+    s = p["defocus_sigma"]
+    return gaussian_blur_fft(img, _one(s, img), pad=_blur_pad(s), border="replicate")
+
+
+def _sharpening(img: torch.Tensor, p: dict[str, float], tint: np.ndarray | None) -> torch.Tensor:
+    s = p["sharpen_sigma"]
+    return Cx.unsharp_mask(img, _one(p["sharpen_amount"], img), _one(s, img), pad=_blur_pad(s), border="replicate")
+
+
+# each whole-frame effect on a (1, C, H, W) image, given its settings (shot noise and JPEG: see capture / to_u8)
+_FRAME_STEPS: dict[str, Callable[[torch.Tensor, dict[str, float], np.ndarray | None], torch.Tensor]] = {
+    "haze": _haze,
+    "defocus": _defocus,
+    "chromatic_aberration": lambda img, p, t: Cx.chromatic_aberration(img, _one(p["ca_shift"], img), border="border"),
+    "lens_distortion": lambda img, p, t: Cx.lens_distortion(img, _one(p["distortion_k1"], img), recentre=False,
+                                                            border="border"),
+    "vignetting": lambda img, p, t: Cx.vignetting(img, _one(p["vignette_k"], img)),
+    "exposure": lambda img, p, t: Cx.exposure(img, _one(p["exposure_gain"], img), _one(p["exposure_offset"], img)),
+    "white_balance": lambda img, p, t: Cx.white_balance(img, wb_gains(p["wb_gain"], img.shape[1], img.dtype)),
+    "gamma": lambda img, p, t: Cx.gamma_curve(img.clamp(0.0, 1.0), _one(p["gamma_g"], img)),
+    "sharpening": _sharpening,
+}
+
+
 def capture(img: torch.Tensor, cam: dict[str, dict[str, float]], noise: torch.Tensor, noise_factor: float,
             read_noise: float, tint: np.ndarray | None = None) -> torch.Tensor:
     """The whole-frame camera on a (1, C, H, W) float64 scene image, up to (not including) 8-bit/JPEG.
-    ``tint``: the colour of the scene's air (RGB, unit luma), the haze airlight's colour in RGB."""
-    one = lambda v: torch.tensor([float(v)], dtype=img.dtype)  # noqa: E731
-    if "haze" in cam:
-        air = one(cam["haze"]["haze_airlight"])
-        if tint is not None and img.shape[1] == 3:
-            air = (air * torch.as_tensor(tint, dtype=img.dtype)).clamp(0.0, 1.0)[None]
-        img = Cx.haze(img, one(cam["haze"]["haze_amount"]), air)
-    if "defocus" in cam:
-        s = cam["defocus"]["defocus_sigma"]
-        img = gaussian_blur_fft(img, one(s), pad=_blur_pad(s), border="replicate")
-    if "chromatic_aberration" in cam:
-        img = Cx.chromatic_aberration(img, one(cam["chromatic_aberration"]["ca_shift"]), border="border")
-    if "lens_distortion" in cam:
-        img = Cx.lens_distortion(img, one(cam["lens_distortion"]["distortion_k1"]), recentre=False, border="border")
-    if "vignetting" in cam:
-        img = Cx.vignetting(img, one(cam["vignetting"]["vignette_k"]))
-    if "exposure" in cam:
-        img = Cx.exposure(img, one(cam["exposure"]["exposure_gain"]), one(cam["exposure"]["exposure_offset"]))
-    if "white_balance" in cam:
-        img = Cx.white_balance(img, wb_gains(cam["white_balance"]["wb_gain"], img.shape[1], img.dtype))
-    shot = cam.get("shot_noise", {}).get("shot_sigma", 0.0)
-    std = torch.sqrt(read_noise ** 2 + shot ** 2 * img.clamp(0.0, 1.0))
-    img = img + noise_factor * std * noise
-    if "gamma" in cam:
-        img = Cx.gamma_curve(img.clamp(0.0, 1.0), one(cam["gamma"]["gamma_g"]))
-    if "sharpening" in cam:
-        s = cam["sharpening"]["sharpen_sigma"]
-        img = Cx.unsharp_mask(img, one(cam["sharpening"]["sharpen_amount"]), one(s), pad=_blur_pad(s),
-                              border="replicate")
+
+    The hidden effects of ``cam`` act in the order of
+    :data:`~synthaug.diagnose.reference_camera.settings.WHOLE_FRAME_EFFECTS`; the sensor's noise (read noise
+    always, shot noise when hidden; ``noise`` its standard normal field, scaled by ``noise_factor``) sits at
+    ``shot_noise``'s place. ``tint``: the colour of the scene's air (RGB, unit luma), the haze airlight's
+    colour in RGB.
+    """
+    for name in WHOLE_FRAME_EFFECTS:
+        if name == "shot_noise":
+            shot = cam.get("shot_noise", {}).get("shot_sigma", 0.0)
+            std = torch.sqrt(read_noise ** 2 + shot ** 2 * img.clamp(0.0, 1.0))
+            img = img + noise_factor * std * noise
+        elif name in cam and name in _FRAME_STEPS:
+            img = _FRAME_STEPS[name](img, cam[name], tint)
     return img
 
 
