@@ -34,8 +34,8 @@ Per seed:
 
 One module a concept: :mod:`.settings` (what can be hidden, and how strongly), :mod:`.real_object`
 (the filmed mesh), :mod:`.simulate` (the checked arguments, each seed's frozen record
-:class:`~synthaug.diagnose.reference_camera.simulate.MeasuredSeed` drawn first, then steps 1, 2, 4 and 5),
-:mod:`.capture` (step 3, the whole-frame camera) and :mod:`.truth` (what a fit should recover).
+:class:`~synthaug.diagnose.reference_camera.simulate.MeasuredSeed` drawn first, then steps 1, 2 and 5),
+:mod:`.capture` (steps 3 and 4, the whole-frame camera) and :mod:`.truth` (what a fit should recover).
 
 The truth is stored: the header's ``reference_camera`` block (hidden effects
 and their settings, mesh, noise, ranges), each record's ``truth`` (Θ in patch
