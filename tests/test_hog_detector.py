@@ -231,6 +231,39 @@ def test_svm_against_separable_reference() -> None:
     assert float(w[0] * 2 + b) == pytest.approx(1.0, abs=0.05)  # support vectors sit on the margin
 
 
+def test_svm_sample_weight_counts_as_repeated_samples() -> None:
+    # a weight of k is the sample k times (the class halves are shared by weight, as by count)
+    g = torch.Generator().manual_seed(4)
+    x = torch.randn(30, 5, generator=g)
+    y = torch.where(x[:, 0] + 0.3 * torch.randn(30, generator=g) > 0, 1.0, -1.0)
+    sw = torch.ones(30)
+    sw[:4] = 3.0
+    w1, b1 = train_linear_svm(x, y, regularization=1e-2, sample_weight=sw)
+    rep = torch.cat([x, x[:4], x[:4]]), torch.cat([y, y[:4], y[:4]])
+    w2, b2 = train_linear_svm(*rep, regularization=1e-2)
+    torch.testing.assert_close(w1, w2, atol=1e-4, rtol=1e-3)
+    torch.testing.assert_close(b1, b2, atol=1e-4, rtol=1e-3)
+    w3, b3 = train_linear_svm(x, y, regularization=1e-2, sample_weight=torch.ones(30))
+    w4, b4 = train_linear_svm(x, y, regularization=1e-2)
+    torch.testing.assert_close(w3, w4, atol=1e-6, rtol=1e-5)
+    with pytest.raises(ValueError, match="sample_weight"):
+        train_linear_svm(x, y, sample_weight=-sw)
+    with pytest.raises(ValueError, match="no weight"):
+        train_linear_svm(x, y, sample_weight=torch.where(y > 0, 0.0, 1.0))
+
+
+def test_positive_weights_zero_drops_those_positives() -> None:
+    # one component (no k-means choice): positives of weight 0 train the same filter as leaving them out
+    pos, neg = _problem(seed=13, n_pos=16, n_neg=40)
+    extra = torch.rand(8, 1, 40, 40, generator=torch.Generator().manual_seed(2))
+    w = torch.cat([torch.ones(16), torch.zeros(8)])
+    a = HOGDetector.fit(torch.cat([pos, extra]), neg, components=1, mining_rounds=0, positive_weights=w)
+    b = HOGDetector.fit(pos, neg, components=1, mining_rounds=0)
+    torch.testing.assert_close(a.weights, b.weights, atol=1e-4, rtol=1e-3)
+    with pytest.raises(ValueError, match="one weight per positive"):
+        HOGDetector.fit(pos, neg, components=1, mining_rounds=0, positive_weights=torch.ones(3))
+
+
 def test_kmeans_recovers_separated_clusters() -> None:
     g = torch.Generator().manual_seed(0)
     centres = torch.tensor([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])

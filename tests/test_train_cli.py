@@ -10,6 +10,7 @@ import pytest
 import torch
 
 from synthaug.cli import main as cli_main
+from synthaug.detectors.hog_dpm import HOGDetector
 
 DRONES = ["V_DRONE_003", "V_DRONE_010", "V_DRONE_027"]
 # small budgets: tiny frames, one pyramid level pair, every 3rd frame mined and validated
@@ -142,6 +143,22 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     assert calls[-1] == (8, "quadcopter", 24, 2, "fitted") and meta2["synthetic"]["pose_sampling"] == "fitted"
     assert meta2["perturbed"] == {"copies": 2, "count": 16}
     assert meta2["synthetic"]["copy_paste"] == {"ratio": 1.5, "count": 12}  # the copy-paste baseline, cut with the fit
+    # --synthetic-share reaches the SVM as per-positive weights: the 8 real seeds hold 1 - share of the positive half
+    seen = []
+    real_fit = HOGDetector.fit
+
+    def spy(positives, negatives, **kw):
+        seen.append((positives.shape[0], kw.get("positive_weights")))
+        return real_fit(positives, negatives, **kw)
+
+    monkeypatch.setattr(HOGDetector, "fit", staticmethod(spy))
+    out3 = ws["root"] / "runs" / "hog_syn_share.pt"
+    assert _train(ws, out3, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
+                  "--synthetic-share", "0.25", "--mining-rounds", "0") == 0
+    (n, w), = seen
+    assert n == 32 and w.shape == (32,)
+    assert float(w[:8].sum()) == pytest.approx(0.75 * 32) and float(w[8:].sum()) == pytest.approx(0.25 * 32)
+    assert json.loads(out3.with_suffix(".json").read_text())["positives"]["synthetic_share"] == 0.25
 
 
 @pytest.mark.parametrize(
@@ -158,6 +175,9 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
         ("negative_perturb_copies", "--perturb-copies"),
         ("negative_copy_paste", "--copy-paste-ratio"),
         ("copy_paste_without_params", "--copy-paste-ratio"),
+        ("share_out_of_range", "--synthetic-share"),
+        ("share_without_added", "--synthetic-share"),
+        ("share_for_cnn", "--synthetic-share"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -190,6 +210,13 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--copy-paste-ratio", "-1"]
     elif case == "copy_paste_without_params":
         extra += ["--copy-paste-ratio", "2"]
+    elif case == "share_out_of_range":
+        extra += ["--perturb-copies", "1", "--synthetic-share", "1.0"]
+    elif case == "share_without_added":
+        extra += ["--synthetic-share", "0.5"]
+    elif case == "share_for_cnn":
+        base["--detector"] = "cnn"
+        extra += ["--perturb-copies", "1", "--synthetic-share", "0.5"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
     capsys.readouterr()

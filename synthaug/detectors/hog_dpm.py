@@ -103,12 +103,15 @@ def train_linear_svm(
     regularization: float = 1e-3,
     max_iter: int = 200,
     init: tuple[Tensor, Tensor] | None = None,
+    sample_weight: Tensor | None = None,
 ) -> tuple[Tensor, Tensor]:
     """Class-balanced L2-regularised squared-hinge linear SVM, primal, L-BFGS.
 
     Minimises ``λ/2 ||w||² + Σ_i c_i max(0, 1 - y_i (w·x_i + b))²`` with
     ``c_i = 1 / (2 N_{y_i})`` (each class weighs one half); the bias is not
-    regularised.
+    regularised. With ``sample_weight`` (≥ 0), ``c_i = s_i / (2 Σ_{j: y_j = y_i} s_j)``:
+    each class still weighs one half, shared in proportion to the weights (a weight of 2 counts
+    as the sample twice).
 
     Args:
         features: training vectors.
@@ -116,6 +119,7 @@ def train_linear_svm(
         regularization: λ.
         max_iter: L-BFGS iterations.
         init: warm start ``(w, b)``.
+        sample_weight: ``(N,)`` non-negative weights (None: all equal).
 
     Returns:
         ``(w, b)``, shapes ``(D,)`` and ``()``.
@@ -131,7 +135,16 @@ def train_linear_svm(
     n_neg = int((y < 0).sum())
     if n_pos == 0 or n_neg == 0:
         raise ValueError(f"an SVM needs both classes, got {n_pos} positives and {n_neg} negatives")
-    cost = torch.where(y > 0, 0.5 / n_pos, 0.5 / n_neg)
+    if sample_weight is None:
+        cost = torch.where(y > 0, 0.5 / n_pos, 0.5 / n_neg)
+    else:
+        sw = torch.as_tensor(sample_weight).double().reshape(-1)
+        if sw.shape != y.shape or not bool(torch.isfinite(sw).all()) or bool((sw < 0).any()):
+            raise ValueError(f"sample_weight must be {tuple(y.shape)} finite and >= 0, got {tuple(sw.shape)}")
+        w_pos, w_neg = float(sw[y > 0].sum()), float(sw[y < 0].sum())
+        if w_pos <= 0 or w_neg <= 0:
+            raise ValueError("sample_weight gives a class no weight at all")
+        cost = torch.where(y > 0, 0.5 * sw / w_pos, 0.5 * sw / w_neg)
     w = (init[0].double().clone() if init is not None else torch.zeros(x.shape[1], dtype=torch.float64)).requires_grad_(True)
     b = (init[1].double().clone().reshape(()) if init is not None else torch.zeros((), dtype=torch.float64)).requires_grad_(True)
     opt = torch.optim.LBFGS([w, b], lr=1.0, max_iter=max_iter, line_search_fn="strong_wolfe", tolerance_grad=1e-9, tolerance_change=1e-12)
@@ -276,6 +289,7 @@ class HOGDetector(PatchDetector):
         mirror: bool = True,
         generator: torch.Generator | None = None,
         verbose: bool = False,
+        positive_weights: Tensor | None = None,
     ) -> "HOGDetector":
         """Train the mixture with k-means initialisation, latent re-assignment and hard-negative mining.
 
@@ -300,6 +314,9 @@ class HOGDetector(PatchDetector):
             mirror: add horizontally flipped positives.
             generator: the only randomness (k-means seeding, initial cache).
             verbose: print the cache size and training error per round.
+            positive_weights: ``(P,)`` each positive's weight in the SVM's positive half
+                (:func:`train_linear_svm`'s ``sample_weight``; its mirror copy weighs the same);
+                None: all equal. The components' k-means and latent assignment do not use them.
 
         Returns:
             The trained detector.
@@ -317,8 +334,14 @@ class HOGDetector(PatchDetector):
             raise ValueError("need negatives or background_images, got neither")
         if ignore_boxes is not None and len(ignore_boxes) != len(background_images):
             raise ValueError(f"ignore_boxes must have one entry per background image ({len(background_images)}), got {len(ignore_boxes)}")
+        pw = None
+        if positive_weights is not None:
+            pw = torch.as_tensor(positive_weights, dtype=torch.float64).reshape(-1)
+            if pw.shape[0] != pos.shape[0]:
+                raise ValueError(f"positive_weights must have one weight per positive ({pos.shape[0]}), got {pw.shape[0]}")
         if mirror:
             pos = torch.cat([pos, pos.flip(-1)])
+            pw = None if pw is None else torch.cat([pw, pw])
         f_pos = _hog_chunked(pos, config)
         f_pool = _hog_chunked(neg, config)
 
@@ -340,7 +363,8 @@ class HOGDetector(PatchDetector):
                 x = torch.cat([members, cache])
                 y = torch.cat([torch.ones(members.shape[0]), -torch.ones(cache.shape[0])])
                 init = (weights[j], bias[j]) if warm else None
-                weights[j], bias[j] = train_linear_svm(x, y, regularization=regularization, init=init)
+                sw = None if pw is None else torch.cat([pw[assign == j], torch.ones(cache.shape[0], dtype=torch.float64)])
+                weights[j], bias[j] = train_linear_svm(x, y, regularization=regularization, init=init, sample_weight=sw)
 
         train_all(warm=False)
         for round_ in range(max(mining_rounds, latent_rounds)):

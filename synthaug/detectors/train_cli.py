@@ -62,6 +62,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--copy-paste-ratio", type=float, default=0.0,
                         help="copy-paste patches per real seed with --params: the seeds' objects cut out with their fitted "
                              "silhouettes, pasted on other seeds' backgrounds (a user's baseline)")
+    parser.add_argument("--synthetic-share", type=float, default=None,
+                        help="the share of the positive class's training weight held by the added positives (synthetic, "
+                             "copy-paste, perturbed), the rest by the real ones (HOG; default: every positive weighs the same)")
     parser.add_argument("--seed", type=int, default=0, help="training seed: initialisation, negative sampling, the automatic split")
     parser.add_argument("--ingest-seed", type=int, default=0, help="`synthaug ingest --seed` of the seed draw (shards are reused per value)")
     parser.add_argument("--val-fraction", type=float, default=0.2, help="share of the class's videos kept for validation without --split")
@@ -137,7 +140,7 @@ def main(args: argparse.Namespace) -> int:
             seed_count=100 if args.seed_counts is None else args.seed_counts, all_frames=args.all_frames,
             frame_step=args.frame_step, seedset=args.seed_set, params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
             perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
-            copy_paste_ratio=args.copy_paste_ratio, options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
+            copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share, options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,
             command={k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if not k.startswith("_")},

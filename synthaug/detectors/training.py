@@ -164,6 +164,7 @@ def _fit_once(
     mining_frames: Sequence[Tensor],
     mining_boxes: Sequence[Tensor | None] | None,
     options: TrainOptions,
+    positive_weights: Tensor | None = None,
 ) -> Any:
     from synthaug.detectors.base import check_patches
 
@@ -175,6 +176,8 @@ def _fit_once(
     window = int(positives.shape[-1])
     positives = check_patches(positives, window)
     negatives = check_patches(negatives, window)
+    if positive_weights is not None and kind != "hog":
+        raise ValueError(f"positive weights are implemented for the HOG detector's SVM only, not for {kind!r}")
     if kind == "hog":
         from synthaug.detectors.hog_dpm import HOGDetector
 
@@ -189,6 +192,7 @@ def _fit_once(
             mining_rounds=options.hog_mining_rounds,
             window=window,
             generator=torch.Generator().manual_seed(seed),
+            positive_weights=positive_weights,
         )
     elif kind == "adaboost":
         from synthaug.detectors.adaboost import train_adaboost
@@ -289,6 +293,7 @@ def train_with_mining(
     log: Callable[[str], None] | None = None,
     fit: Callable[[Tensor, Tensor], Any] | None = None,
     box_regressor: Any = None,
+    positive_weights: Tensor | None = None,
 ) -> TrainResult:
     """Train, then mine hard negatives and retrain in rounds until the validation false positives stop falling.
 
@@ -313,6 +318,8 @@ def train_with_mining(
         box_regressor: set on every round's detector (a
             :class:`~synthaug.detectors.boxes.BoxRegressor`; it does not depend on the
             detector), so the validation count matches at the boxes detection reports.
+        positive_weights: ``(P,)`` each positive's weight in the positive class (HOG only:
+            :meth:`~synthaug.detectors.hog_dpm.HOGDetector.fit`); None: all equal.
 
     Returns:
         A :class:`TrainResult`.
@@ -322,7 +329,7 @@ def train_with_mining(
     def train(neg: Tensor) -> Any:
         if fit is None:
             det = _fit_once(kind, positives, neg, seed, box_in_window=box_in_window, mining_frames=mining_frames,
-                            mining_boxes=mining_boxes, options=options)
+                            mining_boxes=mining_boxes, options=options, positive_weights=positive_weights)
         else:
             det = fit(positives, neg)
             det.box_in_window = None if box_in_window is None else tuple(float(v) for v in box_in_window)

@@ -224,6 +224,7 @@ def train_from_videos(
     perturb_copies: int = 0,
     pose_sampling: str = "uniform",
     copy_paste_ratio: float = 0.0,
+    synthetic_share: float | None = None,
     options: TrainOptions = TrainOptions(),
     work_dir: str | Path | None = None,
     ingest_seed: int = 0,
@@ -270,6 +271,9 @@ def train_from_videos(
         copy_paste_ratio: copy-paste patches per real seed (needs ``params``: the seeds' objects cut
             out with their fitted silhouettes and pasted on other seeds' backgrounds,
             :func:`~synthaug.data.copypaste.copy_paste_positives`; a user's baseline).
+        synthetic_share: the share of the positive class's training weight held by the positives added to the
+            real ones (synthetic, copy-paste, perturbed), the rest shared by the real ones; None: every positive
+            weighs the same, so the added ones hold ``added / (real + added)`` (HOG only; the SVM's per-sample cost).
         options: budgets (:class:`~synthaug.detectors.training.TrainOptions`).
         work_dir: ingest output folder (default: ``<out>.work``; a temporary folder when ``out`` is None).
         ingest_seed: ``synthaug ingest --seed`` of the seed draw (0: the same seed set as a
@@ -290,7 +294,7 @@ def train_from_videos(
     say = log or (lambda m: None)
     _check_options(kind, frame_step=frame_step, synthetic_ratio=synthetic_ratio, params=params, all_frames=all_frames,
                    seedset=seedset, seed_count=seed_count, perturb_copies=perturb_copies,
-                   copy_paste_ratio=copy_paste_ratio)
+                   copy_paste_ratio=copy_paste_ratio, synthetic_share=synthetic_share)
     t_start = time.perf_counter()
     vs = discover_videos(videos_dir, labels_dir)
     sp = split_by_video(vs, class_name, split=split, seed=seed, val_fraction=val_fraction, block=split_block,
@@ -308,6 +312,7 @@ def train_from_videos(
                                     ingest_seed=ingest_seed)
     else:
         ts = _all_frames_training_set(vs, sp, frame_step=frame_step, seed=seed)
+    n_real = int(ts.positives.shape[0])
     perturb_info = _add_perturbed(ts, perturb_copies, seed=seed, say=say)
     synthetic_info = _add_from_fit(ts, params, mesh=mesh, synthetic_ratio=synthetic_ratio, copy_paste_ratio=copy_paste_ratio,
                                    pose_sampling=pose_sampling, seed=seed, say=say)
@@ -317,7 +322,10 @@ def train_from_videos(
     # ---------------------------------------------------------------- training with mining
     regressor, box_info = _box_regressor(vs, sp, options, ts.box_in_window, seed=seed, say=say)
     t0 = time.perf_counter()
-    res = _mine_and_train(kind, ts, vs, sp, options, seed=seed, regressor=regressor, say=say)
+    weights = share_weights(n_real, int(ts.positives.shape[0]), synthetic_share)
+    if weights is not None:
+        ts.info["synthetic_share"] = synthetic_share
+    res = _mine_and_train(kind, ts, vs, sp, options, seed=seed, regressor=regressor, say=say, positive_weights=weights)
     t_train = time.perf_counter() - t0
     meta = _metadata(kind, class_name, seed, videos_dir, labels_dir, sp, ts, res, options=options,
                      synthetic_info=synthetic_info, perturb_info=perturb_info, box_info=box_info,
@@ -331,8 +339,16 @@ def train_from_videos(
 
 def _check_options(kind: str, *, frame_step: int, synthetic_ratio: float, params: Any, all_frames: bool,
                    seedset: str | Path | None, seed_count: int | None, perturb_copies: int,
-                   copy_paste_ratio: float) -> None:
+                   copy_paste_ratio: float, synthetic_share: float | None = None) -> None:
     """:func:`train_from_videos`' arguments on their own; :class:`TrainingInputError` names the option."""
+    if synthetic_share is not None:
+        if not 0.0 <= synthetic_share < 1.0:
+            raise TrainingInputError("--synthetic-share", f"must be in [0, 1), got {synthetic_share}")
+        if kind != "hog":
+            raise TrainingInputError("--synthetic-share", f"weights the HOG detector's SVM; not implemented for {kind}")
+        if synthetic_ratio <= 0 and copy_paste_ratio <= 0 and perturb_copies <= 0:
+            raise TrainingInputError("--synthetic-share", "there are no added positives to weigh: give "
+                                     "--synthetic-ratio, --copy-paste-ratio or --perturb-copies")
     if kind not in DETECTORS:
         raise TrainingInputError("--detector", f"unknown detector {kind!r}; choose from {list(DETECTORS)}")
     if frame_step < 1:
@@ -498,8 +514,25 @@ def _box_regressor(vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, b
     return regressor, box_info
 
 
+def share_weights(n_real: int, n_all: int, share: float | None) -> Tensor | None:
+    """Per-positive weights giving the ``n_all - n_real`` added positives (after the real ones) ``share`` of the
+    total weight and the real ones the rest (each group shared equally); None when ``share`` is None or nothing
+    was added.
+
+    Example:
+        >>> share_weights(2, 6, 0.5).tolist()  # 2 real, 4 added: half the weight each
+        [1.5, 1.5, 0.75, 0.75, 0.75, 0.75]
+    """
+    if share is None or n_all <= n_real:
+        return None
+    added = n_all - n_real
+    w = torch.full((n_all,), (1.0 - share) * n_all / n_real, dtype=torch.float64)
+    w[n_real:] = share * n_all / added
+    return w
+
+
 def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, *,
-                    seed: int, regressor: Any, say: Callable[[str], None]) -> Any:
+                    seed: int, regressor: Any, say: Callable[[str], None], positive_weights: Tensor | None = None) -> Any:
     """:func:`~synthaug.detectors.training.train_with_mining` on ``ts``, mining every ``options.mining_stride``-th
     frame of the training videos (+ negative-class videos), stopped on the validation videos."""
     mine_src = VideoFrames(vs.videos_dir, vs.labels_dir, positive=sp["train"], negative=sp["negative_train"],
@@ -509,7 +542,7 @@ def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, 
     return train_with_mining(kind, ts.positives, ts.negatives, seed, box_in_window=ts.box_in_window,
                              mining_frames=ts.hog_frames, mining_boxes=ts.hog_boxes, options=options,
                              mining_source=mine_src if options.mining_rounds else None, val_frames=val_src, log=say,
-                             box_regressor=regressor)
+                             box_regressor=regressor, positive_weights=positive_weights)
 
 
 def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, labels_dir: str | Path,

@@ -82,6 +82,8 @@ class Condition:
             each seed's fitted pose).
         copy_paste_ratio: copy-paste patches per real seed (the real objects cut out with the fit's
             silhouettes, pasted on other seeds' backgrounds; a user's baseline).
+        synthetic_share: the added positives' share of the positive class's training weight (None: by
+            count; :func:`~synthaug.detectors.video_training.train_from_videos`).
     """
 
     name: str
@@ -97,6 +99,7 @@ class Condition:
     perturb_copies: int = 0
     pose_sampling: str = "uniform"
     copy_paste_ratio: float = 0.0
+    synthetic_share: float | None = None
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -105,7 +108,8 @@ class Condition:
             d["seed_count"] = None
         else:
             d["frame_step"] = None
-        for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling", "copy_paste_ratio"):  # added later:
+        for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling", "copy_paste_ratio",  # added later:
+                  "synthetic_share"):
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         return d
@@ -236,7 +240,8 @@ class ProtocolRunner:
             split=self.paths.split_file, seed=seed, seed_count=condition.seed_count, all_frames=condition.all_frames,
             frame_step=condition.frame_step, params=self.params_for(condition, seed), mesh=condition.mesh,
             synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies,
-            pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio, options=options,
+            pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio,
+            synthetic_share=condition.synthetic_share, options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
         t_train = time.perf_counter() - t0
@@ -411,6 +416,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
                          fit_options: Mapping[str, Any] | None = None, pose_sampling: Sequence[str] = ("uniform",),
                          copy_paste_ratios: Sequence[float] = (), seeds: Sequence[int] | None = None,
+                         synthetic_share: float | None = None,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -422,7 +428,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``fit_options`` (other :class:`~synthaug.fit.fitting.FitConfig` fields); each ratio once per
     ``pose_sampling`` (``"uniform"``: the paper's poses; ``"fitted"``: around each seed's fitted pose).
     ``copy_paste_ratios``: the copy-paste baseline (the seeds' objects cut out with the same fit's
-    silhouettes, pasted on other seeds' backgrounds), one condition per ratio.
+    silhouettes, pasted on other seeds' backgrounds), one condition per ratio. ``synthetic_share``: the added
+    positives' share of the positive class's weight in every synthetic, perturbed and copy-paste condition.
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -432,17 +439,19 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
+        share = "" if synthetic_share is None else f", share {synthetic_share:g}"
         conds = [Condition(base, kind, seed_count=seed_count)]
         conds += [Condition(f"{base} + {r:g}x synthetic ({dist or Path(str(params)).stem}"
-                            f"{'' if ps == 'uniform' else f', {ps} poses'})", kind, seed_count=seed_count,
+                            f"{'' if ps == 'uniform' else f', {ps} poses'}{share})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
-                            fit_options=fit_opts, pose_sampling=ps)
+                            fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share)
                   for r in synthetic_ratios for ps in pose_sampling]
-        conds += [Condition(f"{base} + {c}x perturbed", kind, seed_count=seed_count, perturb_copies=int(c))
+        conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
+                            synthetic_share=synthetic_share)
                   for c in perturb_copies]
-        conds += [Condition(f"{base} + {r:g}x copy-paste ({dist or Path(str(params)).stem} silhouettes)", kind,
+        conds += [Condition(f"{base} + {r:g}x copy-paste ({dist or Path(str(params)).stem} silhouettes{share})", kind,
                             seed_count=seed_count, params=params, mesh=mesh, fit_distance=dist, fit_options=fit_opts,
-                            copy_paste_ratio=float(r))
+                            copy_paste_ratio=float(r), synthetic_share=synthetic_share)
                   for r in copy_paste_ratios]
         for c in conds:
             _run_into(results, runner, c, seeds)
@@ -504,6 +513,8 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--copy-paste-ratios", type=float, nargs="*", default=[],
                     help="copy-paste baseline: patches per real seed, the seeds' objects cut out with the fit's "
                          "silhouettes and pasted on other seeds' backgrounds")
+    sy.add_argument("--synthetic-share", type=float, default=None,
+                    help="the added positives' share of the positive class's training weight (HOG; default: by count)")
     return p
 
 
@@ -528,7 +539,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         synthetic_comparison(runner, detectors=args.detectors, seed_count=args.seed_counts,
                              synthetic_ratios=args.synthetic_ratios, fit_distance=dist, params=args.params,
                              perturb_copies=args.perturb_copies, mesh=args.mesh, pose_sampling=args.pose_sampling,
-                             copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds, out=args.out)
+                             copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds,
+                             synthetic_share=args.synthetic_share, out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
