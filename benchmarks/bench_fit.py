@@ -90,6 +90,28 @@ def _lockstep(seeds, cache, dist, cfg, rows, args) -> dict:
             "seconds_per_seed_by_repeat": [round(x, 3) for x in per_seed], "same_fits_as_alone": bool(same)}
 
 
+def _fit_seedset(source: str, tmp: Path, args) -> dict:
+    """Wall seconds per seed of ``fit_seedset(workers=W)`` (``synthaug fit --workers W``, every default) over
+    ``--fit-seeds`` seeds, start-up included, by repeat."""
+    from synthaug.data.seedset import SeedSet
+    from synthaug.fit.fitting import FitConfig, fit_seedset
+
+    seeds_path = source
+    if len(SeedSet.load(source)) < args.fit_seeds:
+        seeds_path = str(_generated_seeds(tmp / "fit_seedset", args.fit_seeds))
+    n = min(args.fit_seeds, len(SeedSet.load(seeds_path)))
+    per_seed = []
+    for r in range(args.repeats):
+        t = time.perf_counter()
+        fit_seedset(seeds_path, args.mesh, tmp / f"fit_w{args.workers}_{r}.json",
+                    FitConfig(distance=args.distance, budget=args.budget), workers=args.workers, indices=range(n))
+        per_seed.append((time.perf_counter() - t) / n)
+    print(json.dumps({"fit_seedset_workers": args.workers, "seconds_per_seed": [round(x, 3) for x in per_seed]}),
+          file=sys.stderr)
+    return {"workers": args.workers, "seeds": n, "seconds_per_seed_median": round(statistics.median(per_seed), 3),
+            "seconds_per_seed_by_repeat": [round(x, 3) for x in per_seed]}
+
+
 def _profile(seeds, cache, dist, cfg, scale, args) -> dict:
     """Where one CMA-ES fit's time goes: cProfile's top functions by own time, and the objective's cost per
     evaluation by batch size (a fixed cost per call shows as a falling curve)."""
@@ -145,6 +167,10 @@ def main() -> int:
                              "their populations scored in one batch), --repeats times, and report the seconds per seed "
                              "(group wall time / K) beside the one-at-a-time figure; 0: skip")
     parser.add_argument("--repeats", type=int, default=3, help="repeats of the lockstep timing (median reported)")
+    parser.add_argument("--workers", type=int, default=0, metavar="W",
+                        help="also time `synthaug fit`'s whole command path, fit_seedset(workers=W) with its defaults "
+                             "(lockstep, process start-up included) on --fit-seeds seeds, --repeats times; 0: skip")
+    parser.add_argument("--fit-seeds", type=int, default=32, help="seeds of the --workers timing (generated if needed)")
     parser.add_argument("--profile", type=int, default=0, metavar="K",
                         help="also profile the CMA-ES fit of the first seed (cProfile) and report the K functions "
                              "with the most own time, and the objective's cost per evaluation by batch size")
@@ -205,6 +231,8 @@ def main() -> int:
     }
     if args.fit_path and args.lockstep > 0:
         out["lockstep"] = _lockstep(seeds, cache, dist, cfg, rows, args)
+    if args.workers > 0:
+        out["fit_seedset"] = _fit_seedset(source, tmp, args)
     if args.profile:
         out["profile"] = _profile(seeds, cache, dist, cfg, scale, args)
     print(json.dumps(out, indent=1))
