@@ -53,8 +53,8 @@ def _interrupted(seeds, out, cfg, after=2):
         if done >= after:
             raise _Stop()
 
-    with pytest.raises(_Stop):
-        fit_seedset(seeds, "quadcopter", out, cfg, progress=progress)
+    with pytest.raises(_Stop):  # one seed at a time: parts land one by one (lockstep groups land together)
+        fit_seedset(seeds, "quadcopter", out, cfg, progress=progress, lockstep=1)
     parts = out.parent / f".{out.name}.parts"
     assert len(list(parts.glob("seed_*.json"))) == after and not out.exists()
     return parts

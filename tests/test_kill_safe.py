@@ -119,7 +119,7 @@ def test_kill_9_of_fit_leaves_no_process_and_the_rerun_gives_the_uninterrupted_f
     out = tmp_path / "fit.json"
     parts = tmp_path / ".fit.json.parts"
     cmd = _cli("fit", "--seeds", seeds, "--out", out, "--budget", budget, "--step-deg", 30, "--sprite-size", 48,
-               "--workers", 2, "--no-progress")
+               "--workers", 2, "--lockstep", 1, "--no-progress")  # parts land one by one, so the kill falls between them
     children, survivors = _kill_when(cmd, lambda: len(list(parts.glob("seed_*.json"))) >= 1)
     assert survivors == [], [(p, _cmdline(psutil.Process(p))) for p in survivors if psutil.pid_exists(p)]
     done = len(list(parts.glob("seed_*.json")))
