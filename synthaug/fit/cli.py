@@ -14,7 +14,7 @@ import sys
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from synthaug.fit.fitting import FitConfig
+    from synthaug.fit.config import FitConfig
 
 
 def _bound(text: str) -> tuple[str, tuple[float, float]]:
@@ -45,7 +45,7 @@ def _json_object(text: str) -> dict:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug._checks import (add_option, dataclass_defaults, float_in, int_at_least, nonneg_float,
                                   open_unit_float, positive_float, positive_int)
-    from synthaug.fit.fitting import INITS, OBJECT_NOISE, FitConfig
+    from synthaug.fit.config import INITS, OBJECT_NOISE, FitConfig
     from synthaug.fit.optimizers import list_optimizers
 
     d = dataclass_defaults(FitConfig)  # every FitConfig field is an option here, with the dataclass's default
@@ -99,8 +99,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def config_from_args(args: argparse.Namespace) -> FitConfig:
-    """The :class:`~synthaug.fit.fitting.FitConfig` the parsed options describe."""
-    from synthaug.fit.fitting import FitConfig
+    """The :class:`~synthaug.fit.config.FitConfig` the parsed options describe."""
+    from synthaug.fit.config import FitConfig
 
     if args.scale_range[0] >= args.scale_range[1]:
         raise ValueError(f"--scale-range: LOW must be < HIGH, got {args.scale_range}")
@@ -115,7 +115,7 @@ def config_from_args(args: argparse.Namespace) -> FitConfig:
 def main(args: argparse.Namespace) -> int:
     from synthaug._checks import check_output_file, check_seedset_dir
     from synthaug.distances.registry import check_distance
-    from synthaug.fit.fitting import fit_seedset
+    from synthaug.fit.run import fit_seedset
     from synthaug.params import CaptureParams
 
     try:

@@ -181,7 +181,8 @@ class CNNDistanceRefit(L.Callback):
         if not isinstance(dm, SyntheticPatchDataModule) or dm.synthetic is None:
             raise ValueError("CNNDistanceRefit needs a SyntheticPatchDataModule")
         from synthaug.distances.cnn import CNNDistance
-        from synthaug.fit.fitting import FitConfig, fit_seedset
+        from synthaug.fit.config import FitConfig
+        from synthaug.fit.run import fit_seedset
         from synthaug.params import CaptureParams, fitted_object_scales
 
         net = copy.deepcopy(pl_module.net).cpu()

@@ -18,7 +18,7 @@ def render_fitted(seeds: Any, fit_path: Any, mesh: Any = "quadcopter", *, indice
         real (N, 1, P, P) and synthetic (N, 1, P, P), float in [0, 1].
     """
     from synthaug.data.fitted import fit_view_cache, fitted_scales
-    from synthaug.fit.fitting import patches_tensor
+    from synthaug.fit.config import patches_tensor
     from synthaug.fit.objective import FitSpace, RenderObjective
 
     theta, extra, meta = CaptureParams.load_with_extra(fit_path)
