@@ -105,7 +105,7 @@ class FitConfig:
 
 
 def seed_seed(base: int, index: int) -> int:
-    from synthaug.data.synthetic import item_seed
+    from synthaug.data.epochs import item_seed
 
     return item_seed(base, 0x5EED, index) % (2**31 - 1)
 
