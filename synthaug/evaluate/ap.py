@@ -96,6 +96,96 @@ def _json_float(x: float) -> float | None:
     return None if math.isnan(x) else float(x)
 
 
+@dataclass(frozen=True)
+class RankedDetections:
+    """Every detection of a list of frames by decreasing score, with the object of its frame it overlaps most.
+
+    The one home of the VOC matching rule (module docstring): :meth:`true_positives` labels the
+    ranking at an IoU; :func:`match_detections` (the AP) and
+    :func:`synthaug.evaluate.matching.match_video` (the protocol's per-video matches) both read it.
+
+    Attributes:
+        scores: ``(D,)`` detection scores, decreasing (stable: earlier frame first on ties).
+        boxes: ``(D, 4)`` the detections' boxes, XYXY, in that order.
+        candidate: ``(D,)`` index into ``objects`` of the object of its frame each detection
+            overlaps most (the first on ties), -1 when its frame has no object.
+        candidate_iou: ``(D,)`` its IoU with that object (0 when there is none).
+        objects: ``(G, 4)`` every labelled box of the counted frames, XYXY, in frame order.
+        n_frames: frames counted (processed).
+    """
+
+    scores: np.ndarray
+    boxes: np.ndarray
+    candidate: np.ndarray
+    candidate_iou: np.ndarray
+    objects: np.ndarray
+    n_frames: int
+
+    @property
+    def n_ground_truth(self) -> int:
+        return int(self.objects.shape[0])
+
+    def true_positives(self, iou_threshold: float = 0.5) -> np.ndarray:
+        """``(D,)`` bool: in score order, a detection is a TP if its candidate reaches ``iou_threshold``
+        (inclusive) and no higher-scoring detection claimed it."""
+        if not 0.0 < iou_threshold <= 1.0:
+            raise ValueError(f"iou_threshold must be in (0, 1], got {iou_threshold}")
+        claimed = np.zeros(self.n_ground_truth, dtype=bool)
+        is_tp = np.zeros(self.scores.size, dtype=bool)
+        for i, j in enumerate(self.candidate.tolist()):
+            if j >= 0 and self.candidate_iou[i] >= iou_threshold and not claimed[j]:
+                claimed[j] = True
+                is_tp[i] = True
+        return is_tp
+
+
+def rank_detections(
+    detections: Sequence[np.ndarray | None],
+    ground_truth: Sequence[np.ndarray | None],
+) -> RankedDetections:
+    """Rank all detections of all frames by score and find each one's candidate object.
+
+    Args:
+        detections: per frame, ``(K, 5)`` ``[x, y, w, h, score]`` or None (not processed: the
+            frame and its objects are left out).
+        ground_truth: per frame, ``(G, 4)`` ``[x, y, w, h]`` or None (no object).
+            Only the first ``min(len(detections), len(ground_truth))`` frames count.
+
+    Returns:
+        The :class:`RankedDetections`.
+    """
+    frames = min(len(detections), len(ground_truth))
+    scores, boxes, candidate, candidate_iou, objects = [], [], [], [], []
+    n_gt = 0
+    n_frames = 0
+    for f in range(frames):
+        if detections[f] is None:
+            continue
+        n_frames += 1
+        d = np.asarray(detections[f], dtype=np.float64).reshape(-1, 5)
+        g = np.zeros((0, 4)) if ground_truth[f] is None else np.asarray(ground_truth[f], dtype=np.float64).reshape(-1, 4)
+        d_xyxy, g_xyxy = xywh_to_xyxy(d[:, :4]), xywh_to_xyxy(g)  # XYWH at the file edge, XYXY inside
+        if g.shape[0]:
+            iou = box_iou(d_xyxy, g_xyxy)  # (K, G)
+            j = np.argmax(iou, axis=1)
+            candidate.append(n_gt + j)
+            candidate_iou.append(iou[np.arange(d.shape[0]), j])
+        else:
+            candidate.append(np.full(d.shape[0], -1))
+            candidate_iou.append(np.zeros(d.shape[0]))
+        n_gt += g.shape[0]
+        scores.append(d[:, 4])
+        boxes.append(d_xyxy)
+        objects.append(g_xyxy)
+    cat = lambda xs, shape: np.concatenate(xs) if xs else np.zeros(shape)  # noqa: E731
+    raw = cat(scores, (0,))
+    order = np.array(sorted(range(raw.size), key=lambda i: -raw[i]), dtype=np.intp)  # stable: frame order on ties
+    return RankedDetections(
+        scores=raw[order], boxes=cat(boxes, (0, 4))[order], candidate=cat(candidate, (0,)).astype(np.intp)[order],
+        candidate_iou=cat(candidate_iou, (0,))[order], objects=cat(objects, (0, 4)), n_frames=n_frames,
+    )
+
+
 def match_detections(
     detections: Sequence[np.ndarray | None],
     ground_truth: Sequence[np.ndarray | None],
@@ -115,33 +205,8 @@ def match_detections(
     """
     if not 0.0 < iou_threshold <= 1.0:
         raise ValueError(f"iou_threshold must be in (0, 1], got {iou_threshold}")
-    frames = min(len(detections), len(ground_truth))
-    entries: list[tuple[float, int, int]] = []  # (score, frame, row)
-    ious: dict[int, np.ndarray] = {}  # per frame: (K, G) IoU of its detections with its objects
-    n_gt = 0
-    n_frames = 0
-    for f in range(frames):
-        if detections[f] is None:
-            continue
-        n_frames += 1
-        d = np.asarray(detections[f], dtype=np.float64).reshape(-1, 5)
-        g = np.zeros((0, 4)) if ground_truth[f] is None else np.asarray(ground_truth[f], dtype=np.float64).reshape(-1, 4)
-        ious[f] = box_iou(xywh_to_xyxy(d[:, :4]), xywh_to_xyxy(g))  # XYWH at the file edge, XYXY inside
-        n_gt += g.shape[0]
-        entries.extend((float(d[k, 4]), f, k) for k in range(d.shape[0]))
-    entries.sort(key=lambda e: -e[0])  # sort is stable: frame order on ties
-    claimed = {f: np.zeros(iou.shape[1], dtype=bool) for f, iou in ious.items()}
-    scores = np.array([e[0] for e in entries], dtype=np.float64)
-    is_tp = np.zeros(len(entries), dtype=bool)
-    for i, (_, f, k) in enumerate(entries):
-        row = ious[f][k]
-        if row.size == 0:
-            continue
-        j = int(np.argmax(row))
-        if row[j] >= iou_threshold and not claimed[f][j]:
-            claimed[f][j] = True
-            is_tp[i] = True
-    return scores, is_tp, n_gt, n_frames
+    ranked = rank_detections(detections, ground_truth)
+    return ranked.scores, ranked.true_positives(iou_threshold), ranked.n_ground_truth, ranked.n_frames
 
 
 def precision_recall(scores: np.ndarray, is_tp: np.ndarray, n_ground_truth: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

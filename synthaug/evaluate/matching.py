@@ -2,8 +2,9 @@
 
 Per test video, :func:`match_video` matches the per-frame detections (``[x, y, w, h, score]``,
 the format of :func:`synthaug.detectors.sliding.detect_multiscale` and the detection files)
-to the per-frame labelled boxes with :func:`synthaug.evaluate.ap.match_detections`
-(VOC rule) at every protocol IoU and keeps a :class:`VideoMatches`: the sorted
+to the per-frame labelled boxes with the VOC rule of :mod:`synthaug.evaluate.ap`
+(:func:`~synthaug.evaluate.ap.rank_detections`, the ranking :func:`~synthaug.evaluate.ap.match_detections`
+labels) at every protocol IoU and keeps a :class:`VideoMatches`: the sorted
 scores, their TP flags, each detection's longest side, the longest side of the
 object each TP matched, and the longest side of every labelled object. From
 these, :mod:`synthaug.evaluate.stats` pools any multiset of videos into one AP
@@ -37,7 +38,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from synthaug.data.boxes import box_iou, xywh_to_xyxy
+from synthaug.evaluate.ap import rank_detections
 from synthaug.evaluate.protocol import Protocol, SizeBucket
 
 __all__ = ["VideoMatches", "match_video", "match_videos"]
@@ -146,48 +147,18 @@ def match_video(
         The :class:`VideoMatches`. TP/FP labels are :func:`match_detections`' (VOC rule); the
         object a TP matched is the one it overlaps most (the rule's candidate).
     """
-    from synthaug.evaluate.ap import match_detections
-
-    frames = min(len(detections), len(ground_truth))
-    raw_scores, det_size, best_iou, best_size, gt_size = [], [], [], [], []
-    n_frames = 0
-    for f in range(frames):
-        if detections[f] is None:
-            continue
-        n_frames += 1
-        d = np.asarray(detections[f], dtype=np.float64).reshape(-1, 5)
-        g = np.zeros((0, 4)) if ground_truth[f] is None else np.asarray(ground_truth[f], dtype=np.float64).reshape(-1, 4)
-        d_xyxy, g_xyxy = xywh_to_xyxy(d[:, :4]), xywh_to_xyxy(g)
-        gs = _longest_side(g_xyxy)
-        gt_size.append(gs)
-        raw_scores.append(d[:, 4])
-        det_size.append(_longest_side(d_xyxy))
-        if g.shape[0] and d.shape[0]:
-            iou = box_iou(d_xyxy, g_xyxy)
-            j = np.argmax(iou, axis=1)
-            best_iou.append(iou[np.arange(d.shape[0]), j])
-            best_size.append(gs[j])
-        else:
-            best_iou.append(np.zeros(d.shape[0]))
-            best_size.append(np.full(d.shape[0], np.nan))
-    cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0)  # noqa: E731
-    raw, dsz, biou, bsz, gsz = cat(raw_scores), cat(det_size), cat(best_iou), cat(best_size), cat(gt_size)
-    if not np.all(np.isfinite(raw)):
+    ranked = rank_detections(detections, ground_truth)
+    if not np.all(np.isfinite(ranked.scores)):
         raise ValueError(f"video {stem!r}: detection scores must be finite")
-    order = np.argsort(-raw, kind="stable")  # match_detections' order: by score, frame order on ties
     ious = tuple(float(t) for t in iou_thresholds)
-    tps, msz = [], []
-    for t in ious:
-        scores, is_tp, n_gt, n_fr = match_detections(detections, ground_truth, t)
-        if not np.array_equal(scores, raw[order]) or n_gt != gsz.size or n_fr != n_frames:
-            raise AssertionError(f"video {stem!r}: detection order disagrees with match_detections")
-        if np.any(biou[order][is_tp] < t):
-            raise AssertionError(f"video {stem!r}: a true positive below IoU {t}")
-        tps.append(is_tp)
-        msz.append(np.where(is_tp, bsz[order], np.nan))
-    return VideoMatches(stem=stem, n_frames=n_frames, iou_thresholds=ious, scores=raw[order],
-                        tp=np.array(tps, dtype=bool).reshape(len(ious), raw.size), det_size=dsz[order],
-                        match_size=np.array(msz, dtype=np.float64).reshape(len(ious), raw.size), gt_size=gsz)
+    tp = np.array([ranked.true_positives(t) for t in ious], dtype=bool).reshape(len(ious), ranked.scores.size)
+    gt_size = _longest_side(ranked.objects)
+    candidate_size = np.full(ranked.scores.size, np.nan)  # the object a TP matched is its candidate
+    has = ranked.candidate >= 0
+    candidate_size[has] = gt_size[ranked.candidate[has]]
+    return VideoMatches(stem=stem, n_frames=ranked.n_frames, iou_thresholds=ious, scores=ranked.scores, tp=tp,
+                        det_size=_longest_side(ranked.boxes), match_size=np.where(tp, candidate_size, np.nan),
+                        gt_size=gt_size)
 
 
 def match_videos(
