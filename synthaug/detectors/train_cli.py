@@ -27,9 +27,36 @@ import sys
 import time
 from pathlib import Path
 
-__all__ = ["add_arguments", "main"]
+__all__ = ["add_arguments", "add_budget_options", "budget_options", "main"]
 
 _DETECTORS = ("hog", "adaboost", "cnn")
+
+# The detector families' training budgets, one spelling for `synthaug train` and `synthaug experiment`:
+# TrainOptions field -> (flag, lowest value, help); the defaults are TrainOptions'.
+_BUDGETS = {
+    "hog_components": ("--hog-components", 1, "HOG mixture components (aspect clusters)"),
+    "hog_mining_rounds": ("--hog-mining-rounds", 0, "HOG's own cache-mining rounds per training"),
+    "ada_rounds": ("--ada-rounds", 1, "AdaBoost boosting rounds"),
+    "ada_candidates": ("--ada-candidates", 1, "AdaBoost weak-learner candidates scored per round"),
+    "cnn_epochs": ("--cnn-epochs", 1, "CNN passes over the training patches"),
+    "cnn_max_steps": ("--cnn-max-steps", 1, "cap on CNN optimiser steps"),
+}
+
+
+def add_budget_options(parser: argparse._ActionsContainer) -> None:
+    """Add the training-budget options of the three families (``--hog-components`` ... ``--cnn-max-steps``),
+    defaults read from :class:`~synthaug.detectors.training.TrainOptions`; :func:`budget_options` reads them back."""
+    from synthaug._checks import dataclass_defaults, int_at_least
+    from synthaug.detectors.training import TrainOptions
+
+    d = dataclass_defaults(TrainOptions)
+    for name, (flag, low, help_) in _BUDGETS.items():
+        parser.add_argument(flag, type=int_at_least(low), default=d[name], help=help_)
+
+
+def budget_options(args: argparse.Namespace) -> dict[str, int]:
+    """The :class:`~synthaug.detectors.training.TrainOptions` fields that :func:`add_budget_options` added."""
+    return {name: getattr(args, name) for name in _BUDGETS}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -77,13 +104,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                help="validation false positives counted on every K-th validation frame")
     parser.add_argument("--scales", type=float, nargs="+", default=None,
                         help="pyramid of mining and validation (default: synthaug.detectors.sliding.DEFAULT_SCALES)")
-    parser.add_argument("--hog-components", type=int, default=d["hog_components"], help="HOG mixture components")
-    parser.add_argument("--hog-mining-rounds", type=int, default=d["hog_mining_rounds"],
-                        help="HOG's own cache-mining rounds per training")
-    parser.add_argument("--ada-rounds", type=int, default=d["ada_rounds"], help="AdaBoost boosting rounds")
-    parser.add_argument("--ada-candidates", type=int, default=d["ada_candidates"], help="AdaBoost weak-learner candidates")
-    parser.add_argument("--cnn-epochs", type=int, default=d["cnn_epochs"], help="CNN passes over the patches")
-    parser.add_argument("--cnn-max-steps", type=int, default=d["cnn_max_steps"], help="cap on CNN optimiser steps")
+    add_budget_options(parser)
     parser.add_argument("--cnn-shift", type=int, default=d["cnn_shift"],
                         help="CNN positives moved by random whole-pixel offsets up to this (0: off)")
     parser.add_argument("--extra-negatives", type=int, default=3000, help="object-free crops of the seed frames added to the seed set's negatives")
@@ -122,9 +143,7 @@ def main(args: argparse.Namespace) -> int:
     if args.threads is not None:
         torch.set_num_threads(args.threads)
     try:
-        options = TrainOptions(hog_components=args.hog_components, hog_mining_rounds=args.hog_mining_rounds,
-                               ada_rounds=args.ada_rounds, ada_candidates=args.ada_candidates, cnn_epochs=args.cnn_epochs,
-                               cnn_max_steps=args.cnn_max_steps, cnn_shift=args.cnn_shift, mining_rounds=args.mining_rounds,
+        options = TrainOptions(**budget_options(args), cnn_shift=args.cnn_shift, mining_rounds=args.mining_rounds,
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
                                val_stride=args.val_frame_stride, scales=None if args.scales is None else tuple(args.scales))
     except ValueError as e:

@@ -29,8 +29,9 @@ from pathlib import Path
 
 import torch
 
-from synthaug._checks import (add_option, check_output_dir, dataclass_defaults, int_at_least, nonneg_float, nonneg_int,
+from synthaug._checks import (add_option, check_output_dir, dataclass_defaults, int_at_least, nonneg_float,
                               positive_float, positive_int)
+from synthaug.detectors.train_cli import add_budget_options, budget_options
 from synthaug.detectors.training import TrainOptions
 from synthaug.evaluate.context import ExperimentContext
 from synthaug.evaluate.experiments import EXPERIMENTS
@@ -38,7 +39,6 @@ from synthaug.evaluate.experiments import EXPERIMENTS
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     d = dataclass_defaults(ExperimentContext)  # defaults read from the dataclasses: they cannot drift
-    t = dataclass_defaults(TrainOptions)
     # numbers are checked as they are parsed: a bad one exits 2 at once, naming the option (not after fitting)
     parser.add_argument("experiments", nargs="+", choices=[*EXPERIMENTS, "all"], help="experiments to run, in order")
     parser.add_argument("--class", dest="class_name", default=d["class_name"],
@@ -73,15 +73,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fit-workers", type=positive_int, default=d["fit_workers"], help="processes fitting Θ")
     parser.add_argument("--fit-budget", type=int_at_least(10), default=d["fit_budget"],
                         help="objective evaluations per seed fit")
-    parser.add_argument("--cnn-epochs", type=positive_int, default=t["cnn_epochs"], help="CNN training epochs")
-    parser.add_argument("--cnn-max-steps", type=positive_int, default=t["cnn_max_steps"], help="cap on CNN optimiser steps")
-    parser.add_argument("--ada-rounds", type=positive_int, default=t["ada_rounds"], help="AdaBoost boosting rounds")
-    parser.add_argument("--ada-candidates", type=positive_int, default=t["ada_candidates"],
-                        help="weak-learner candidates scored per round")
-    parser.add_argument("--hog-components", type=positive_int, default=t["hog_components"],
-                        help="HOG mixture components (aspect clusters)")
-    parser.add_argument("--hog-mining-rounds", type=nonneg_int, default=t["hog_mining_rounds"],
-                        help="HOG hard-negative mining rounds")
+    add_budget_options(parser)
 
 
 DEFAULT_MESH = {"drone": "../shared/data/meshes/quadcopter.glb", "airplane": "../shared/data/meshes/twin_prop_airplane.glb"}
@@ -96,8 +88,7 @@ def main(args: argparse.Namespace) -> int:
     if mesh is None:
         print(f"synthaug experiment: error: no default mesh for class {args.class_name!r}; give --mesh", file=sys.stderr)
         return 2
-    opts = TrainOptions(hog_components=args.hog_components, hog_mining_rounds=args.hog_mining_rounds, ada_rounds=args.ada_rounds,
-                        ada_candidates=args.ada_candidates, cnn_epochs=args.cnn_epochs, cnn_max_steps=args.cnn_max_steps)
+    opts = TrainOptions(**budget_options(args))
 
     def log(msg: str) -> None:
         print(f"[{time.strftime('%H:%M:%S')}] {msg}", flush=True)
