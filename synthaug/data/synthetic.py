@@ -65,6 +65,7 @@ import torch
 from torch.utils.data import Dataset
 from torchvision import tv_tensors
 
+from synthaug.data.captures import CAPTURE_SAMPLERS, CaptureSampler
 from synthaug.data.epochs import EpochSampler, item_generator, item_seed
 from synthaug.data.mixing import RealItems, mixed_counts, to_float_image
 from synthaug.data.poses import FittedPose, PoseSampler, UniformPose, pose_ranges
@@ -145,8 +146,8 @@ class ItemParams:
         crop_xy: (x, y) corner of the patch (patch mode) or of the object's crop (frame mode) in the
             seed's background.
         object_px: frame mode: the object's size in pixels (mesh unit length); None in patch mode.
-        capture: the capture parameters drawn from the density over the seeds (``capture_sampling``
-            ``"kde"`` / ``"uniform"``; density's vector order), or None (the seed's own, ``"seed"``).
+        capture: the capture parameters the dataset's capture sampler drew (``capture_sampling`` ``"kde"`` /
+            ``"uniform"``: the density's vector order), or None (the seed's own, ``"seed"``).
         fields: the random effects' noise fields, ``{field name: (1, C, crop, crop) tensor}`` (not JSON: everything
             else is, ``dataclasses.asdict(p)`` without ``fields``).
     """
@@ -218,7 +219,11 @@ class SyntheticObjectDataset(Dataset):
             capture parameters), ``"kde"`` (drawn from a kernel density over all
             seeds: combinations no seed had) or ``"uniform"`` (each parameter
             uniform between its min and max over the seeds: the paper's Fig. 10
-            baseline). The background always comes from one seed.
+            baseline): :class:`~synthaug.data.captures.SeedCapture`,
+            :class:`~synthaug.data.captures.KDECapture`,
+            :class:`~synthaug.data.captures.UniformCapture`; or a capture sampler of
+            your own (:class:`~synthaug.data.captures.CaptureSampler`). The
+            background always comes from one seed.
         seed_geometry: patch mode: where each seed's background patch sits in its
             frame, ``{"origin": (N, 2), "frame_size": (N, 2), "frame_scale": (N,)}``
             as :func:`synthaug.data.seedset.seed_geometry` returns it, passed to
@@ -268,7 +273,7 @@ class SyntheticObjectDataset(Dataset):
         render: Literal["cache", "exact"] = "cache",
         cache: Any = None,
         cache_options: Mapping[str, Any] | None = None,
-        capture_sampling: Literal["seed", "kde", "uniform"] = "seed",
+        capture_sampling: Literal["seed", "kde", "uniform"] | CaptureSampler = "seed",
         seed_geometry: Mapping[str, Any] | Literal["auto"] | None = "auto",
         transforms: Any = None,
         pose_sampling: Literal["uniform", "fitted"] | PoseSampler = "uniform",
@@ -305,7 +310,7 @@ class SyntheticObjectDataset(Dataset):
 
     # ----------------------------------------------------------- set-up
     def _set_up_capture(self, backgrounds: Any, params: CaptureParams | str | os.PathLike | None, *,
-                        effects: Sequence[str] | None, object_scale: float | None, capture_sampling: str,
+                        effects: Sequence[str] | None, object_scale: float | None, capture_sampling: Any,
                         seed_geometry: Mapping[str, Any] | str | None) -> None:
         """One background and one row of capture parameters per seed, the effects, and how items draw them."""
         self.backgrounds = self._load_backgrounds(backgrounds)
@@ -323,8 +328,12 @@ class SyntheticObjectDataset(Dataset):
         if missing:
             raise ValueError(f"effects {missing} have no parameters in params (which has {list(self.params.effects)})")
         self._validate_sizes()
-        if capture_sampling not in ("seed", "kde", "uniform"):
-            raise ValueError(f"capture_sampling must be 'seed', 'kde' or 'uniform', got {capture_sampling!r}")
+        if isinstance(capture_sampling, str):
+            if capture_sampling not in CAPTURE_SAMPLERS:
+                raise ValueError(f"capture_sampling must be 'seed', 'kde' or 'uniform', got {capture_sampling!r}")
+        elif not isinstance(capture_sampling, CaptureSampler):
+            raise ValueError(f"capture_sampling must be 'seed', 'kde', 'uniform' or a capture sampler (an object with "
+                             f"sample(generator, seed_index) and rows(seed_indices, captures)), got {capture_sampling!r}")
         self.capture_sampling = capture_sampling
         if isinstance(seed_geometry, str):
             if seed_geometry != "auto":
@@ -336,11 +345,8 @@ class SyntheticObjectDataset(Dataset):
 
                 seed_geometry = _geometry(backgrounds)
         self.seed_geometry = None if seed_geometry is None else self._check_geometry(seed_geometry, n_seeds)
-        self._density = None
-        if capture_sampling != "seed":
-            from synthaug.data.density import CaptureDensity
-
-            self._density = CaptureDensity(self.params, kind=capture_sampling)
+        self.capture_sampler: CaptureSampler = (CAPTURE_SAMPLERS[capture_sampling](self.params)
+                                                if isinstance(capture_sampling, str) else capture_sampling)
         self._random_effects = [e for e in ordered(list(self.effects)) if e.is_random]
 
     def _set_up_pose(self, pose_sampling: Any, *, fitted: bool, jitter_deg: float,
@@ -485,7 +491,7 @@ class SyntheticObjectDataset(Dataset):
 
         A pure function of (seed, epoch, index): the item's generator draws ten uniforms (seed, negative, five
         for the pose, the crop corner, the object size), then the random effects' fields, then the capture
-        parameters (``capture_sampling`` "kde" / "uniform"), and the pose sampler comes last (so that one that
+        parameters (the capture sampler: "kde" / "uniform" draw, "seed" does not), and the pose sampler comes last (so that one that
         draws more, as "fitted", moves no other draw).
 
         Example:
@@ -510,7 +516,7 @@ class SyntheticObjectDataset(Dataset):
         fields: dict[str, torch.Tensor] = {}
         for eff in self._random_effects:
             fields.update(eff.sample_fields((1, self.channels, crop, crop), g))
-        capture = None if self._density is None else tuple(self._density.sample(1, generator=g)[0].tolist())
+        capture = self.capture_sampler.sample(g, seed_index)
         lo, hi = self.object_size
         return ItemParams(
             index=index, epoch=epoch, real=False, seed_index=seed_index, negative=u[1] < self.negative_fraction,
@@ -580,9 +586,7 @@ class SyntheticObjectDataset(Dataset):
         """The synthetic items of ``batch``, rendered together (see :meth:`render`)."""
         crop = self._crop()
         seeds = torch.tensor([p.seed_index for p in batch])
-        theta_rows = self.params[seeds]
-        if self._density is not None:
-            theta_rows = self._density.to_params(torch.tensor([p.capture for p in batch], dtype=torch.float64))
+        theta_rows = self.capture_sampler.rows(seeds, [p.capture for p in batch])
         pose = {n: torch.tensor([p.pose[n] for p in batch]) for n in POSE_NAMES}
         theta = theta_rows.replace(**pose) if self._pose_in_range(pose) else CaptureParams(
             {**theta_rows.as_dict(), **pose}, channels=self.channels, effects=self.params.effects, validate=False)
