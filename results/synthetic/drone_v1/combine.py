@@ -1,5 +1,6 @@
 """Every condition of results/synthetic/drone_v1 from the cached cells (trains nothing), in two tables per
-detector: paired against real only, and the pose factor paired against the paper's uniform poses.
+detector: paired against real only, against the perturbation and copy-paste baselines, and the pose factor paired
+against the paper's uniform poses.
 
     OMP_NUM_THREADS=1 python results/synthetic/drone_v1/combine.py   # from the repository root -> tables.md
 """
@@ -33,7 +34,8 @@ def main() -> None:
         "hog": [Condition("hog / 100 seeds", "hog", 100),
                 syn("hog", 5, "hog", params=hog_p), syn("hog", 20, "hog", params=hog_p), syn("hog", 50, "hog", params=hog_p),
                 syn("hog", 5, "hog", "fitted", params=hog_p), syn("hog", 20, "hog", "fitted", params=hog_p),
-                Condition("hog / 100 seeds + 5x perturbed", "hog", 100, perturb_copies=5)],
+                Condition("hog / 100 seeds + 5x perturbed", "hog", 100, perturb_copies=5),
+                Condition("hog / 100 seeds + 20x copy-paste", "hog", 100, params=hog_p, mesh=MESH, copy_paste_ratio=20.0)],
         "cnn": [Condition("cnn / 100 seeds", "cnn", 100),
                 syn("cnn", 5, "cnn"), syn("cnn", 20, "cnn"), syn("cnn", 5, "cnn", "fitted"),
                 Condition("cnn / 100 seeds + 20x perturbed", "cnn", 100, perturb_copies=20)],
@@ -55,6 +57,10 @@ def main() -> None:
         if pert and ours:
             lines += [f"## {kind}: synthetic (the paper's uniform poses) paired against the perturbation baseline", "",
                       report_table({pert: res[pert], **{n: res[n] for n in ours}}, baseline=pert), ""]
+        cp = next((n for n in res if "copy-paste" in n), None)
+        if cp and ours:
+            lines += [f"## {kind}: synthetic paired against the copy-paste baseline", "",
+                      report_table({cp: res[cp], **{n: res[n] for n in ours}}, baseline=cp), ""]
         for r in ("5", "20"):
             uni = next((n for n in res if f"+ {r}x synthetic" in n and "poses" not in n), None)
             fit = next((n for n in res if f"+ {r}x synthetic" in n and "fitted poses" in n), None)
