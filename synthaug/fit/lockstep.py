@@ -30,17 +30,26 @@ class _Stopped(Exception):
 
 
 class _Coordinator:
-    """The searches' asks arrive on one queue; each search waits on its own answer queue (one wake-up per
-    round: a shared condition variable woke every thread on every ask, which cost more than the scoring)."""
+    """The searches' asks are collected under a lock and the calling thread is woken once per round, by the
+    last ask (or finish) of the round; each search waits on its own answer queue. Waking the calling thread on
+    every ask, or every thread on every ask, cost more than the scoring: a woken thread waits for the GIL while
+    another search runs its optimiser step (up to the 5 ms switch interval each time)."""
 
     def __init__(self, objectives: Sequence[RenderObjective]) -> None:
         self.objectives = list(objectives)
-        self.inbox: queue.SimpleQueue[tuple[int, str, Any]] = queue.SimpleQueue()
+        self.lock = threading.Lock()
+        self.ready = threading.Event()
+        self.asks: dict[int, np.ndarray] = {}
+        self.running = len(self.objectives)
+        self.error: BaseException | None = None
         self.outboxes: list[queue.SimpleQueue[Any]] = [queue.SimpleQueue() for _ in self.objectives]
 
     def evaluate(self, k: int) -> Callable[[np.ndarray], np.ndarray]:
         def ask(u: np.ndarray) -> np.ndarray:
-            self.inbox.put((k, "ask", u))
+            with self.lock:
+                self.asks[k] = u
+                if len(self.asks) >= self.running:
+                    self.ready.set()
             answer = self.outboxes[k].get()
             if isinstance(answer, _Stopped):
                 raise answer
@@ -48,27 +57,31 @@ class _Coordinator:
         return ask
 
     def finish(self, k: int, error: BaseException | None = None) -> None:
-        self.inbox.put((k, "done", error))
+        with self.lock:
+            self.running -= 1
+            if error is not None and not isinstance(error, _Stopped) and self.error is None:
+                self.error = error
+            if self.error is not None or len(self.asks) >= self.running:
+                self.ready.set()
 
     def serve(self) -> None:
         """Score the asked populations together until every search has finished."""
-        running = set(range(len(self.objectives)))
-        asks: dict[int, np.ndarray] = {}
         try:
-            while running:
-                while len(asks) < len(running):
-                    k, kind, payload = self.inbox.get()
-                    if kind == "ask":
-                        asks[k] = payload
+            while True:
+                self.ready.wait()
+                with self.lock:
+                    self.ready.clear()
+                    if self.error is not None:
+                        raise self.error
+                    if not self.asks:
+                        if self.running == 0:
+                            return
                         continue
-                    running.discard(k)
-                    if payload is not None:
-                        raise payload
-                if not asks:
-                    continue
+                    if len(self.asks) < self.running:  # not a full round yet
+                        continue
+                    asks, self.asks = self.asks, {}
                 keys = sorted(asks)
                 values = score_together([self.objectives[k] for k in keys], [asks[k] for k in keys])
-                asks = {}
                 for k, v in zip(keys, values):
                     self.outboxes[k].put(v)
         except BaseException:
