@@ -27,7 +27,8 @@ def _objectives(cache, n=3, *, distance="hog", cfg=None, geometry=False):
     bgs = patches_tensor(sky_backgrounds(n, (40, 40), seed=3))
     g = torch.Generator().manual_seed(0)
     targets = (bgs + 0.2 * torch.rand(bgs.shape, generator=g)).clamp(0, 1)
-    d = build_distance(distance)
+    d = build_distance(distance, reference=torch.cat([targets, bgs]), seed=0) if distance == "wl_random" \
+        else build_distance(distance)
     out = []
     for i in range(n):
         geo = None
@@ -39,10 +40,10 @@ def _objectives(cache, n=3, *, distance="hog", cfg=None, geometry=False):
     return out
 
 
-@pytest.mark.parametrize("distance", ["hog", "eucl"])
+@pytest.mark.parametrize("distance", ["hog", "eucl", "wl_random"])
 def test_score_together_equals_separate_calls(cache, distance):
     # different noise fields, backgrounds, object scales; populations of different sizes, one empty; chunk
-    # boundaries that fall inside a seed's population
+    # boundaries that fall inside a seed's population; wl_random overrides forward (the per-candidate targets path)
     objs = _objectives(cache, 3, distance=distance)
     for o in objs:
         o.chunk = 7
