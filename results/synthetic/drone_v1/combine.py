@@ -35,7 +35,9 @@ def main() -> None:
                 syn("hog", 5, "hog", params=hog_p), syn("hog", 20, "hog", params=hog_p), syn("hog", 50, "hog", params=hog_p),
                 syn("hog", 5, "hog", "fitted", params=hog_p), syn("hog", 20, "hog", "fitted", params=hog_p),
                 Condition("hog / 100 seeds + 5x perturbed", "hog", 100, perturb_copies=5),
-                Condition("hog / 100 seeds + 20x copy-paste", "hog", 100, params=hog_p, mesh=MESH, copy_paste_ratio=20.0)],
+                Condition("hog / 100 seeds + 20x copy-paste", "hog", 100, params=hog_p, mesh=MESH, copy_paste_ratio=20.0),
+                Condition("hog / 100 seeds + 20x synthetic (hog, share 0.5)", "hog", 100, params=hog_p,
+                          synthetic_ratio=20.0, mesh=MESH, fit_distance="hog", synthetic_share=0.5)],
         "cnn": [Condition("cnn / 100 seeds", "cnn", 100),
                 syn("cnn", 5, "cnn"), syn("cnn", 20, "cnn"), syn("cnn", 5, "cnn", "fitted"),
                 Condition("cnn / 100 seeds + 20x perturbed", "cnn", 100, perturb_copies=20)],
@@ -53,10 +55,15 @@ def main() -> None:
         base = f"{kind} / 100 seeds"
         lines += [f"## {kind}: paired against real only", "", report_table(res, baseline=base), ""]
         pert = next((n for n in res if "perturbed" in n), None)
-        ours = [n for n in res if "synthetic" in n and "poses" not in n]
+        ours = [n for n in res if "synthetic" in n and "poses" not in n and "share" not in n]
         if pert and ours:
             lines += [f"## {kind}: synthetic (the paper's uniform poses) paired against the perturbation baseline", "",
                       report_table({pert: res[pert], **{n: res[n] for n in ours}}, baseline=pert), ""]
+        shared = next((n for n in res if "share" in n), None)
+        by_count = next((n for n in res if "+ 20x synthetic" in n and "poses" not in n and "share" not in n), None)
+        if shared and by_count:
+            lines += [f"## {kind}: the real seeds keeping half the positive weight, paired against 20x by count", "",
+                      report_table({by_count: res[by_count], shared: res[shared]}, baseline=by_count), ""]
         cp = next((n for n in res if "copy-paste" in n), None)
         if cp and ours:
             lines += [f"## {kind}: synthetic paired against the copy-paste baseline", "",
