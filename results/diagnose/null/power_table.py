@@ -1,0 +1,31 @@
+"""Issue 20's power table from the power5_*.json runs (run_power5.sh): per candidate, how often the hidden effect is
+named first and significant, misnamed, or missed over 5 fresh nuisance-varied cases, with Wilson 95 % intervals.
+
+    python results/diagnose/null/power_table.py   # from the repository root; prints a Markdown table
+"""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from pathlib import Path
+
+COLOUR_EFFECTS = {"chromatic_aberration", "white_balance", "haze"}  # judged on colour cases (gray rows kept for reference)
+rows = ["| hidden (realistic strength) | data | named first | misnamed first | missed | Wilson 95 % (named) | what was said |",
+        "|---|---|---|---|---|---|---|"]
+tot = Counter()
+for f in sorted(Path("results/diagnose/null").glob("power5_*.json")):
+    d = json.loads(f.read_text())
+    p = d["power"]
+    said = Counter(x for c in d["per_case"] for x in (c["findings"] or ["nothing"]))
+    lo, hi = p["wilson95"]
+    colour = bool(d.get("colour"))
+    rows.append(f"| {p['hidden']} | {'colour' if colour else 'gray'} | {p['named_first']}/{d['cases']} | {p['misnamed_first']} | {p['missed']} | "
+                f"{lo:.2f}–{hi:.2f} | {', '.join(f'{k} ×{v}' for k, v in said.most_common())} |")
+    if (p["hidden"] in COLOUR_EFFECTS) != colour:
+        continue
+    tot.update(named=p["named_first"], wrong=p["misnamed_first"], missed=p["missed"], cases=d["cases"],
+               effects=1, ok=int(p["named_first"] >= 0.8 * d["cases"] and p["misnamed_first"] <= 0.1 * d["cases"]))
+print("\n".join(rows))
+print(f"\nJudged ({' / '.join(sorted(COLOUR_EFFECTS))} on colour cases, the others on gray): {tot['effects']} candidates, {tot['cases']} cases: named first {tot['named']}, misnamed {tot['wrong']}, "
+      f"missed {tot['missed']}; candidates meeting 'named >= 80 %, misnamed <= 10 %': {tot['ok']} of {tot['effects']}")
