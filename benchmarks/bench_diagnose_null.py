@@ -39,6 +39,22 @@ def wilson(k: int, n: int) -> tuple[float, float]:
     return binomial_ci(k, n, method="wilson")
 
 
+def hidden_settings(effect: str, strength: str) -> dict[str, dict[str, Any]]:
+    """The hidden effect's settings: ``"default"`` its realistic default (REALISTIC_STRENGTHS); ``"alt"`` a second
+    realistic strength, each setting at the end of its realistic range farther from the default (the high end on a
+    tie; a per-seed pair becomes the whole range)."""
+    from synthaug.diagnose.reference_camera.settings import REALISTIC_RANGES, REALISTIC_STRENGTHS
+
+    base = dict(REALISTIC_STRENGTHS[effect])
+    if strength == "default":
+        return {effect: base}
+    alt: dict[str, Any] = {}
+    for name, value in base.items():
+        lo, hi = REALISTIC_RANGES[effect][name]
+        alt[name] = (lo, hi) if isinstance(value, tuple) else (lo if abs(value - lo) > abs(hi - value) else hi)
+    return {effect: alt}
+
+
 def make_case(work: Path, k: int, a: argparse.Namespace) -> tuple[Path, Path, dict[str, Any], float]:
     import numpy as np
 
@@ -50,13 +66,15 @@ def make_case(work: Path, k: int, a: argparse.Namespace) -> tuple[Path, Path, di
     nz = Nuisances.none() if a.no_nuisances else Nuisances.draw(np.random.default_rng([a.base_seed, k]))
     key = {"k": k, "base_seed": a.base_seed, "seeds": a.seeds, "fit": a.fit, "budget": a.budget,
            "step_deg": a.step_deg, "sprite_size": a.sprite_size, "nuisances": nz.as_dict(),
-           **({"hidden": a.hidden} if a.hidden else {}), **({"colour": True} if a.colour else {})}
+           **({"hidden": a.hidden} if a.hidden else {}), **({"colour": True} if a.colour else {}),
+           **({"strength": a.strength} if a.strength != "default" else {})}
     stamp = case / "case.json"
     if stamp.exists() and json.loads(stamp.read_text()).get("key") == key and fit.exists():
         return seeds, fit, json.loads(stamp.read_text()), 0.0
     t = time.perf_counter()
     step, sprite = (20.0, 48) if a.fit == "converged" else (a.step_deg, a.sprite_size)
-    make_measured_seedset(seeds, n_seeds=a.seeds, hidden=[a.hidden] if a.hidden else None, nuisances=nz, colour=a.colour,
+    make_measured_seedset(seeds, n_seeds=a.seeds, hidden=hidden_settings(a.hidden, a.strength) if a.hidden else None,
+                          nuisances=nz, colour=a.colour,
                           frame_size=(192, 256),
                           object_px=(20.0, 32.0), view_step_deg=step, sprite_size=sprite, seed=a.base_seed + k,
                           paper_ranges={"w_d": (0.3, 0.45)})
@@ -128,6 +146,9 @@ def main() -> int:
     ap.add_argument("--step-deg", type=float, default=10.0)
     ap.add_argument("--sprite-size", type=int, default=64)
     ap.add_argument("--no-nuisances", action="store_true", help="the fit's own model (the old reference camera)")
+    ap.add_argument("--strength", choices=["default", "alt"], default="default",
+                    help="with --hidden: the realistic default setting, or a second realistic strength (each setting "
+                         "at the end of its realistic range farther from the default)")
     ap.add_argument("--colour", action="store_true",
                     help="colour cases (RGB reference camera): the colour effects (white balance, chromatic "
                          "aberration, haze's airlight) are only identifiable there")
@@ -190,6 +211,7 @@ def main() -> int:
     result = {
         "bench": "diagnose_null", "command": " ".join(["python"] + sys.argv), "cases": len(cases),
         "seeds": a.seeds, "fit": a.fit, "nuisances": not a.no_nuisances, "colour": bool(a.colour), "base_seed": a.base_seed,
+        "strength": a.strength, "hidden_settings": hidden_settings(a.hidden, a.strength) if a.hidden else None,
         "rules": a.rules,
         "floors_in_use": (calibration.describe() if a.rules == "calibrated" else {"source": "hand-set"}),
         "hidden": a.hidden, "power": power,

@@ -11,21 +11,33 @@ from collections import Counter
 from pathlib import Path
 
 COLOUR_EFFECTS = {"chromatic_aberration", "white_balance", "haze"}  # judged on colour cases (gray rows kept for reference)
-rows = ["| hidden (realistic strength) | data | named first | misnamed first | missed | Wilson 95 % (named) | what was said |",
-        "|---|---|---|---|---|---|---|"]
+rows = ["| hidden | strength | data | named first | misnamed first | missed | Wilson 95 % (named) | what was said |",
+        "|---|---|---|---|---|---|---|---|"]
 tot = Counter()
+ok_by_effect: dict[str, list[bool]] = {}
 for f in sorted(Path("results/diagnose/null").glob("power5_*.json")):
     d = json.loads(f.read_text())
     p = d["power"]
     said = Counter(x for c in d["per_case"] for x in (c["findings"] or ["nothing"]))
     lo, hi = p["wilson95"]
     colour = bool(d.get("colour"))
-    rows.append(f"| {p['hidden']} | {'colour' if colour else 'gray'} | {p['named_first']}/{d['cases']} | {p['misnamed_first']} | {p['missed']} | "
+    settings = (d.get("hidden_settings") or {}).get(p["hidden"])
+    if settings is None:  # runs before --strength: the realistic default
+        from synthaug.diagnose.reference_camera.settings import REALISTIC_STRENGTHS
+
+        settings = REALISTIC_STRENGTHS[p["hidden"]]
+    strength = ", ".join(f"{k} {v}" for k, v in settings.items())
+    rows.append(f"| {p['hidden']} | {strength} | {'colour' if colour else 'gray'} | {p['named_first']}/{d['cases']} | {p['misnamed_first']} | {p['missed']} | "
                 f"{lo:.2f}–{hi:.2f} | {', '.join(f'{k} ×{v}' for k, v in said.most_common())} |")
     if (p["hidden"] in COLOUR_EFFECTS) != colour:
         continue
-    tot.update(named=p["named_first"], wrong=p["misnamed_first"], missed=p["missed"], cases=d["cases"],
-               effects=1, ok=int(p["named_first"] >= 0.8 * d["cases"] and p["misnamed_first"] <= 0.1 * d["cases"]))
+    ok = p["named_first"] >= 0.8 * d["cases"] and p["misnamed_first"] <= 0.1 * d["cases"]
+    tot.update(named=p["named_first"], wrong=p["misnamed_first"], missed=p["missed"], cases=d["cases"], runs=1)
+    ok_by_effect.setdefault(p["hidden"], []).append(ok)
 print("\n".join(rows))
-print(f"\nJudged ({' / '.join(sorted(COLOUR_EFFECTS))} on colour cases, the others on gray): {tot['effects']} candidates, {tot['cases']} cases: named first {tot['named']}, misnamed {tot['wrong']}, "
-      f"missed {tot['missed']}; candidates meeting 'named >= 80 %, misnamed <= 10 %': {tot['ok']} of {tot['effects']}")
+both = sorted(e for e, oks in ok_by_effect.items() if len(oks) >= 2 and all(oks))
+some = sorted(e for e, oks in ok_by_effect.items() if any(oks) and e not in both)
+print(f"\nJudged ({' / '.join(sorted(COLOUR_EFFECTS))} on colour cases, the others on gray): {len(ok_by_effect)} "
+      f"candidates, {tot['runs']} (candidate, strength) runs, {tot['cases']} cases: named first {tot['named']}, misnamed "
+      f"{tot['wrong']}, missed {tot['missed']}. 'Named >= 80 %, misnamed <= 10 %' at every strength measured (>= 2): "
+      f"{len(both)} of {len(ok_by_effect)} ({', '.join(both)}); at one strength only: {', '.join(some) or 'none'}")
