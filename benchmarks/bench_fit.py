@@ -68,8 +68,8 @@ def _seed_objective(seeds, i, cache, dist, cfg, scale):
 def _lockstep(seeds, cache, dist, cfg, rows, args) -> dict:
     """The same seeds fitted ``args.lockstep`` at a time (``synthaug fit``'s path): seconds per seed by repeat,
     and whether every fit equals the one made alone."""
-    from synthaug.fit.fitting import fit_objective, patches_tensor, search, seed_seed
-    from synthaug.fit.lockstep import run_lockstep
+    from synthaug.fit.fitting import patches_tensor, seed_seed
+    from synthaug.fit.search import fit_together
 
     n, k = len(rows), args.lockstep
     scale = float(seeds.object_fraction)
@@ -79,10 +79,8 @@ def _lockstep(seeds, cache, dist, cfg, rows, args) -> dict:
         results = []
         for start in range(0, n, k):
             group = list(range(start, min(n, start + k)))
-            objs = [fit_objective(patches_tensor(seeds.patches[i:i + 1]), patches_tensor(seeds.backgrounds[i:i + 1]),
-                                  cache, dist, cfg, seed=seed_seed(0, i), object_scale=scale) for i in group]
-            results += run_lockstep(objs, [lambda ev, o=o, i=i: search(o, cfg, seed=seed_seed(0, i), object_scale=scale,
-                                                                       evaluate=ev) for o, i in zip(objs, group)])
+            results += fit_together(patches_tensor(seeds.patches[group]), patches_tensor(seeds.backgrounds[group]),
+                                    cache, dist, cfg, seeds=[seed_seed(0, i) for i in group], object_scale=scale)
         per_seed.append((time.perf_counter() - t) / n)
         same &= all(r["distance"] == row["cmaes"]["distance"] for r, row in zip(results, rows))
     print(json.dumps({"lockstep": k, "seconds_per_seed": [round(x, 3) for x in per_seed]}), file=sys.stderr)

@@ -264,17 +264,7 @@ class RenderObjective:
 
     def render(self, u: np.ndarray | torch.Tensor) -> torch.Tensor:
         """S(Θ(u), B) for (N, D) coordinates -> (N, C, P, P)."""
-        theta = self.space.to_theta(u)
-        n = theta.batch_size
-        size = self.target.shape[-1]
-        scale = self.space.scale(u, self.object_scale).float()
-        cov, nrm = self.cache.layers(theta.alpha.float(), theta.beta.float(), theta.gamma.float(),
-                                     theta.t_x.float(), theta.t_y.float(), size=size, object_scale=scale)
-        fields = {k: v.expand(n, *v.shape[1:]) for k, v in self.fields.items()}
-        expand = lambda t: None if t is None else t.expand(n, *t.shape[1:])  # noqa: E731
-        return simulate(cov, nrm, self.background.expand(n, -1, -1, -1), theta.to(torch.float32),
-                        fields=fields, origin=expand(self.origin), frame_size=expand(self.frame_size),
-                        extras={k: expand(v) for k, v in self.extras.items()})
+        return _render_parts([(self, u)])
 
     @torch.no_grad()
     def __call__(self, u: np.ndarray | torch.Tensor) -> np.ndarray:
@@ -287,6 +277,25 @@ class RenderObjective:
         if not np.all(np.isfinite(out)):
             out = np.where(np.isfinite(out), out, math.inf)
         return out
+
+
+def _render_parts(parts: Sequence[tuple[RenderObjective, Any]]) -> torch.Tensor:
+    """S(Θ(u), B) of several objectives' candidates in one pass, rows in order: ``[(objective, u), ...]`` ->
+    ``(Σ N, C, P, P)``. The objectives share the view cache, effects and patch size (see :func:`score_together`);
+    each row is rendered with its own objective's background, scale, noise fields and frame geometry."""
+    first = parts[0][0]
+    theta = CaptureParams.from_vector(torch.cat([o.space.to_vector(u) for o, u in parts]), channels=first.space.channels,
+                                      effects=first.space.effects, validate=False).to(torch.float32)
+    scale = torch.cat([o.space.scale(u, o.object_scale).float() for o, u in parts])
+    cov, nrm = first.cache.layers(theta.alpha, theta.beta, theta.gamma, theta.t_x, theta.t_y,
+                                  size=first.target.shape[-1], object_scale=scale)
+    n = [len(np.atleast_2d(u)) for _, u in parts]
+    cat = lambda get: torch.cat([get(o).expand(k, *get(o).shape[1:]) for (o, _), k in zip(parts, n)])  # noqa: E731
+    return simulate(cov, nrm, cat(lambda o: o.background), theta,
+                    fields={k: cat(lambda o, k=k: o.fields[k]) for k in first.fields},
+                    origin=None if first.origin is None else cat(lambda o: o.origin),
+                    frame_size=None if first.frame_size is None else cat(lambda o: o.frame_size),
+                    extras={k: cat(lambda o, k=k: o.extras[k]) for k in first.extras})
 
 
 @torch.no_grad()
@@ -332,29 +341,18 @@ def score_together(objectives: Sequence[RenderObjective], us: Sequence[np.ndarra
     dist = first.distance
     by_features = type(dist).forward is Distance.forward
     f_real = torch.cat([o.target_features() for o in objectives]) if by_features else None
-    size = first.target.shape[-1]
     chunk = first.chunk
     for i in range(0, len(owner), chunk):
         sel = owner[i:i + chunk]
         groups = [(k, row[i:i + chunk][sel == k]) for k in np.unique(sel)]
         parts = [(objectives[k], us[k][r]) for k, r in groups]
-        theta = CaptureParams.from_vector(torch.cat([o.space.to_vector(u) for o, u in parts]), channels=first.space.channels,
-                                          effects=first.space.effects, validate=False).to(torch.float32)
-        scale = torch.cat([o.space.scale(u, o.object_scale).float() for o, u in parts])
-        cov, nrm = first.cache.layers(theta.alpha, theta.beta, theta.gamma, theta.t_x, theta.t_y,
-                                      size=size, object_scale=scale)
-        cat = lambda get: torch.cat([get(o).expand(len(u), *get(o).shape[1:]) for o, u in parts])  # noqa: E731
-        images = simulate(cov, nrm, cat(lambda o: o.background), theta,
-                          fields={k: cat(lambda o, k=k: o.fields[k]) for k in first.fields},
-                          origin=None if first.origin is None else cat(lambda o: o.origin),
-                          frame_size=None if first.frame_size is None else cat(lambda o: o.frame_size),
-                          extras={k: cat(lambda o, k=k: o.extras[k]) for k in first.extras})
+        images = _render_parts(parts)
         n_rows = torch.as_tensor([len(u) for _, u in parts])
         if by_features:
             keep = torch.as_tensor([k for k, _ in groups])
             d = dist.compare(f_real[keep].repeat_interleave(n_rows, 0), dist.features(images))
         else:
-            d = dist(cat(lambda o: o.target), images)
+            d = dist(torch.cat([o.target.expand(len(u), *o.target.shape[1:]) for o, u in parts]), images)
         d = d.double().numpy()
         start = 0
         for (k, r), n in zip(groups, n_rows.tolist()):

@@ -1,9 +1,9 @@
 """One seed's fit: its objective (:func:`fit_objective`) and the search that minimises it (:func:`search`),
-from the start :mod:`synthaug.fit.starts` gives or from a random one; :func:`fit_one` is both."""
+from the start :mod:`synthaug.fit.starts` gives or from a random one; :func:`fit_one` is both, :func:`fit_together` several seeds at once."""
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import torch
@@ -26,6 +26,22 @@ def fit_one(target: torch.Tensor, background: torch.Tensor, cache: Any, distance
     objective = fit_objective(target, background, cache, distance, cfg, seed=seed, object_scale=object_scale,
                               space=space, geometry=geometry)
     return search(objective, cfg, seed=seed, object_scale=object_scale, x0=x0)
+
+
+def fit_together(targets: torch.Tensor, backgrounds: torch.Tensor, cache: Any, distance: Any, cfg: FitConfig, *,
+                 seeds: Sequence[int], object_scale: float,
+                 geometries: Sequence[dict[str, torch.Tensor] | None] | None = None) -> list[dict[str, Any]]:
+    """:func:`fit_one` for several seeds (``targets``/``backgrounds`` (K, C, P, P), one generator seed each),
+    fitted in lockstep (:func:`~synthaug.fit.lockstep.run_lockstep`): the same results, their populations scored
+    in one batch."""
+    from synthaug.fit.lockstep import run_lockstep
+
+    geometries = [None] * len(seeds) if geometries is None else list(geometries)
+    objectives = [fit_objective(targets[k:k + 1], backgrounds[k:k + 1], cache, distance, cfg, seed=s,
+                                object_scale=object_scale, geometry=geometries[k]) for k, s in enumerate(seeds)]
+    return run_lockstep(objectives, [lambda evaluate, o=o, s=s: search(o, cfg, seed=s, object_scale=object_scale,
+                                                                       evaluate=evaluate)
+                                     for o, s in zip(objectives, seeds)])
 
 
 def fit_objective(target: torch.Tensor, background: torch.Tensor, cache: Any, distance: Any, cfg: FitConfig, *,

@@ -15,7 +15,7 @@ import torch
 
 from synthaug.data.seedset import seed_geometry
 from synthaug.fit.config import FitConfig, _cfg_json, _warm_cache, patches_tensor, seed_seed
-from synthaug.fit.search import fit_objective, search
+from synthaug.fit.search import fit_together
 from synthaug.params import atomic_write_text
 
 _CTX: dict[str, Any] = {}
@@ -44,8 +44,6 @@ def _context(seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, *, seeds
 def _fit_indices(indices: Sequence[int], seeds_path: str, mesh: Any, cfg: FitConfig, distance: Any, parts: str,
                  fingerprint: dict[str, Any] | None = None) -> list[int]:
     """Fit the seeds ``indices`` in lockstep (:mod:`synthaug.fit.lockstep`) and write one part per seed."""
-    from synthaug.fit.lockstep import run_lockstep
-
     ctx = _context(seeds_path, mesh, cfg, distance)
     seeds = ctx["seeds"]
     scale = cfg.object_scale if cfg.object_scale is not None else float(seeds.object_fraction)
@@ -54,20 +52,14 @@ def _fit_indices(indices: Sequence[int], seeds_path: str, mesh: Any, cfg: FitCon
                                                                    "material"})
     if camera and "geometry" not in ctx:  # camera effects may depend on where the patch sits in its frame
         ctx["geometry"] = seed_geometry(seeds)
-    objectives, searches = [], []
-    for index in indices:
-        s = seed_seed(cfg.seed, index)
-        geometry = None
-        if camera:
-            g = ctx["geometry"]
-            geometry = {k: g[k][index:index + 1] for k in ("origin", "frame_size", "frame_scale")}
-        objective = fit_objective(patches_tensor(seeds.patches[index:index + 1]),
-                                  patches_tensor(seeds.backgrounds[index:index + 1]), ctx["cache"], ctx["distance"],
-                                  cfg, seed=s, object_scale=scale, geometry=geometry)
-        objectives.append(objective)
-        searches.append(lambda evaluate, o=objective, s=s: search(o, cfg, seed=s, object_scale=scale,
-                                                                    evaluate=evaluate))
-    results = run_lockstep(objectives, searches)
+    geometries = None
+    if camera:
+        g = ctx["geometry"]
+        geometries = [{k: g[k][i:i + 1] for k in ("origin", "frame_size", "frame_scale")} for i in indices]
+    idx = list(indices)
+    results = fit_together(patches_tensor(seeds.patches[idx]), patches_tensor(seeds.backgrounds[idx]), ctx["cache"],
+                           ctx["distance"], cfg, seeds=[seed_seed(cfg.seed, i) for i in idx], object_scale=scale,
+                           geometries=geometries)
     seconds = round((time.perf_counter() - t0) / max(len(indices), 1), 3)
     for index, res in zip(indices, results):
         res["stats"]["seconds"] = seconds  # the group's wall time per seed
