@@ -237,3 +237,128 @@ def test_cnn_training_with_shift_is_deterministic_and_differs_from_without():
     c = fit_patch_detector(pos, neg, epochs=2, batch_size=16, seed=0, shift=0).net.state_dict()
     assert all(torch.equal(a[k], b[k]) for k in a)
     assert not all(torch.equal(a[k], c[k]) for k in a)
+
+
+# ----------------------------------------------------------------- per-positive loss weights (--synthetic-share)
+def _step_loss_and_grad(module, batch):
+    """``PatchDetectorModule._step``'s loss and its gradient over the network's parameters (no trainer: the
+    module's ``self.log`` only warns)."""
+    import warnings
+
+    module.zero_grad()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        loss = module._step(batch, "train")
+    loss.backward()
+    return loss.detach(), [p.grad.detach().clone() for p in module.net.parameters()]
+
+
+def test_cnn_loss_weight_2_is_the_sample_twice_and_0_is_leaving_it_out() -> None:
+    from synthaug.detectors.lightning_module import PatchDetectorModule
+
+    x = torch.rand(6, 1, 40, 40, generator=torch.Generator().manual_seed(3))
+    y = torch.tensor([1.0, 1.0, 1.0, 0.0, 1.0, 0.0])
+    w = torch.tensor([1.0, 2.0, 1.0, 1.0, 0.0, 1.0])  # sample 1 counts twice, sample 4 not at all
+    module = PatchDetectorModule(pos_weight=3.0, init_seed=1)
+    loss_w, grad_w = _step_loss_and_grad(module, (x, y, w))
+    # by hand: the mean over the batch of w_i * BCE_i, the positives' terms times pos_weight
+    z = module.net(x).detach()
+    by_hand = -(3.0 * y * torch.log(torch.sigmoid(z)) + (1 - y) * torch.log(1 - torch.sigmoid(z)))
+    torch.testing.assert_close(loss_w, (w * by_hand).sum() / 6)
+    ref = torch.nn.functional.binary_cross_entropy_with_logits(z, y, pos_weight=torch.tensor(3.0), reduction="none")
+    torch.testing.assert_close(by_hand, ref)
+    # the same batch with sample 1 repeated and sample 4 dropped, unweighted: the same sum, so the same gradient
+    keep = [0, 1, 1, 2, 3, 5]
+    loss_rep, grad_rep = _step_loss_and_grad(module, (x[keep], y[keep]))
+    torch.testing.assert_close(loss_rep * len(keep), loss_w * 6)
+    for a, b in zip(grad_rep, grad_w):
+        torch.testing.assert_close(a * len(keep), b * 6, rtol=1e-4, atol=1e-5)  # float32 sums
+    # weight 0 alone: the gradient of the batch without that sample
+    w0 = torch.tensor([1.0, 1.0, 1.0, 1.0, 0.0, 1.0])
+    loss_0, grad_0 = _step_loss_and_grad(module, (x, y, w0))
+    rest = [0, 1, 2, 3, 5]
+    loss_drop, grad_drop = _step_loss_and_grad(module, (x[rest], y[rest]))
+    torch.testing.assert_close(loss_drop * 5, loss_0 * 6)
+    for a, b in zip(grad_drop, grad_0):
+        torch.testing.assert_close(a * 5, b * 6, rtol=1e-4, atol=1e-5)
+    # the shift augmentation passes the weights on
+    shifted = PatchDetectorModule(pos_weight=3.0, init_seed=1, shift=2)
+    seen = []
+    shifted._step = lambda batch, stage: seen.append(batch) or torch.zeros(())
+    shifted.training_step((x, y, w), 0)
+    assert len(seen[0]) == 3 and torch.equal(seen[0][2], w)
+
+
+def _identify(x, originals):
+    """Index of the original patch ``x`` is, and whether it is the mirror image."""
+    for j, o in enumerate(originals):
+        if torch.equal(x, o):
+            return j, False
+        if torch.equal(x, o.flip(-1)):
+            return j, True
+    raise AssertionError("patch not found")
+
+
+def test_cnn_positive_weights_survive_the_flip_doubling_and_the_split() -> None:
+    from synthaug.detectors.lightning_module import PatchDataModule
+
+    g = torch.Generator().manual_seed(0)
+    pos, neg = torch.rand(10, 1, 40, 40, generator=g), torch.rand(12, 1, 40, 40, generator=g)
+    w = torch.linspace(0.1, 2.8, 10)  # one distinct weight per positive
+    dm = PatchDataModule.from_tensors(pos, neg, positive_weights=w, val_fraction=0.3, batch_size=4, seed=3)
+    dm.setup("fit")
+    seen_train, seen_val = {}, {}
+    for ds, seen in ((dm.train_set, seen_train), (dm.val_set, seen_val)):
+        for i in range(len(ds)):
+            x, y, wi = ds[i]
+            if y == 1:
+                j, mirrored = _identify(x, pos)
+                assert float(wi) == pytest.approx(float(w[j])), (j, mirrored)  # a mirror keeps its patch's weight
+                seen.setdefault(j, []).append(mirrored)
+            else:
+                _identify(x, neg)
+                assert float(wi) == 1.0  # negatives weigh 1
+    # every positive is in exactly one part: twice in training (itself and its mirror), once in validation
+    assert not set(seen_train) & set(seen_val)
+    assert set(seen_train) | set(seen_val) == set(range(10)) and len(seen_val) == 3
+    assert all(sorted(m) == [False, True] for m in seen_train.values())
+    assert all(m == [False] for m in seen_val.values())
+    assert dm.negative_positive_ratio == 1.2  # the class balance stays by count
+    # batches carry the weights; without positive_weights the items stay (patch, label)
+    xb, yb, wb = next(iter(dm.train_dataloader()))
+    assert xb.shape == (4, 1, 40, 40) and wb.shape == (4,) and wb.dtype == torch.float32
+    plain = PatchDataModule.from_tensors(pos, neg, val_fraction=0.3, batch_size=4, seed=3)
+    plain.setup("fit")
+    assert len(plain.train_set[0]) == 2 and len(next(iter(plain.train_dataloader()))) == 2
+    with pytest.raises(ValueError, match="one per positive"):
+        PatchDataModule.from_tensors(pos, neg, positive_weights=torch.ones(9))
+    with pytest.raises(ValueError, match=">= 0"):
+        PatchDataModule.from_tensors(pos, neg, positive_weights=-torch.ones(10))
+
+
+def test_cnn_default_training_is_unchanged_by_the_weights_option(monkeypatch) -> None:
+    """No weights: the loss is the unweighted BCE of before (pinned here as the old ``_step``), bit for bit; weights
+    of 1 give the same network bit for bit; other weights another one."""
+    from synthaug.detectors.lightning_module import PatchDetectorModule, fit_patch_detector
+
+    pos, neg = toy_patches(24, 40, seed=2)
+    default = fit_patch_detector(pos, neg, epochs=3, batch_size=16, seed=5, val_fraction=0.2).net.state_dict()
+    ones = fit_patch_detector(pos, neg, epochs=3, batch_size=16, seed=5, val_fraction=0.2,
+                              positive_weights=torch.ones(24)).net.state_dict()
+    other = fit_patch_detector(pos, neg, epochs=3, batch_size=16, seed=5, val_fraction=0.2,
+                               positive_weights=torch.linspace(0.2, 1.8, 24)).net.state_dict()
+
+    def old_step(self, batch, stage):  # PatchDetectorModule._step before per-sample weights existed
+        x, y = batch
+        logits = self.net(x)
+        loss = torch.nn.functional.binary_cross_entropy_with_logits(logits, y, pos_weight=self._pos_weight())
+        acc = ((logits > 0).float() == y).float().mean()
+        self.log(f"{stage}_loss", loss, prog_bar=True, sync_dist=stage != "train", batch_size=len(y))
+        self.log(f"{stage}_acc", acc, prog_bar=stage != "train", sync_dist=stage != "train", batch_size=len(y))
+        return loss
+
+    monkeypatch.setattr(PatchDetectorModule, "_step", old_step)
+    before = fit_patch_detector(pos, neg, epochs=3, batch_size=16, seed=5, val_fraction=0.2).net.state_dict()
+    assert all(torch.equal(default[k], before[k]) for k in default)
+    assert all(torch.equal(default[k], ones[k]) for k in default)
+    assert not all(torch.equal(default[k], other[k]) for k in default)

@@ -161,6 +161,32 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     assert json.loads(out3.with_suffix(".json").read_text())["positives"]["synthetic_share"] == 0.25
 
 
+def test_cnn_synthetic_share_reaches_the_loss_weights(ws: dict[str, Path], trained: dict[str, Any],
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """--synthetic-share for the CNN: the 8 real seeds hold 1 - share of the positive class's weight in its loss."""
+    import synthaug.detectors.lightning_module as lm
+    from synthaug.detectors.video_training import _check_options
+
+    _check_options("cnn", frame_step=1, synthetic_ratio=0.0, params=None, all_frames=False, seedset=None, seed_count=8,
+                   perturb_copies=1, copy_paste_ratio=0.0, synthetic_share=0.5)  # accepted
+    seen = []
+    real_fit = lm.fit_patch_detector
+
+    def spy(positives, negatives, **kw):
+        seen.append((positives.shape[0], kw.get("positive_weights")))
+        return real_fit(positives, negatives, **{**kw, "epochs": 1})
+
+    monkeypatch.setattr(lm, "fit_patch_detector", spy)
+    out = ws["root"] / "runs" / "cnn_share.pt"
+    seedset = trained["meta"]["positives"]["seedset"]
+    assert _train(ws, out, "--detector", "cnn", "--seedset", seedset, "--perturb-copies", "3", "--synthetic-share", "0.25",
+                  "--mining-rounds", "0") == 0
+    (n, w), = seen
+    assert n == 32 and w.shape == (32,)
+    assert float(w[:8].sum()) == pytest.approx(0.75 * 32) and float(w[8:].sum()) == pytest.approx(0.25 * 32)
+    assert json.loads(out.with_suffix(".json").read_text())["positives"]["synthetic_share"] == 0.25
+
+
 @pytest.mark.parametrize(
     "case, option",
     [
@@ -177,7 +203,7 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
         ("copy_paste_without_params", "--copy-paste-ratio"),
         ("share_out_of_range", "--synthetic-share"),
         ("share_without_added", "--synthetic-share"),
-        ("share_for_cnn", "--synthetic-share"),
+        ("share_for_adaboost", "--synthetic-share"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -214,8 +240,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--perturb-copies", "1", "--synthetic-share", "1.0"]
     elif case == "share_without_added":
         extra += ["--synthetic-share", "0.5"]
-    elif case == "share_for_cnn":
-        base["--detector"] = "cnn"
+    elif case == "share_for_adaboost":
+        base["--detector"] = "adaboost"
         extra += ["--perturb-copies", "1", "--synthetic-share", "0.5"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
@@ -234,3 +260,5 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         assert "must be >= 0, got -1" in err
     if case == "copy_paste_without_params":
         assert "--params" in err
+    if case == "share_for_adaboost":
+        assert "not implemented for adaboost" in err and "CNN" in err

@@ -189,6 +189,44 @@ def test_mining_rounds_stop_when_validation_fp_stops_falling() -> None:
     assert res.log["rounds"][0]["val"]["fp"] > 4 and not res.log["rounds"][0]["val"]["recall_reached"]
 
 
+def test_cnn_positive_weights_reach_every_mining_round(monkeypatch: pytest.MonkeyPatch) -> None:
+    """--synthetic-share for the CNN: every round's training (the mined negatives added, weight 1) gets the same
+    per-positive weights; AdaBoost refuses them."""
+    import synthaug.detectors.lightning_module as lm
+    from synthaug.detectors.video_training import share_weights
+
+    mining = [MiningFrame(_frame([(4 * i, 8, 100), (80, 60, 0)]), np.array([[4.0 * i, 8.0, 40.0, 40.0]]), "V_M_001", i)
+              for i in range(4)]
+    grey = torch.full((20, 1, 40, 40), GREY / 255.0)
+    pos = torch.full((5, 1, 40, 40), 100 / 255.0)
+    w = share_weights(2, 5, 0.5)  # 2 real positives, 3 added: half the weight each
+    seen = []
+
+    class Trained:
+        def __init__(self, negatives: torch.Tensor) -> None:
+            self.negatives = negatives
+
+        def to_detector(self) -> Darkness:
+            return Darkness.fit(pos, self.negatives)
+
+    def spy(positives: torch.Tensor, negatives: torch.Tensor, **kw: Any) -> Trained:
+        seen.append((positives.shape[0], negatives.shape[0], kw.get("positive_weights")))
+        return Trained(negatives)
+
+    monkeypatch.setattr(lm, "fit_patch_detector", spy)
+    opts = TrainOptions(mining_rounds=2, mining_per_frame=3, scales=(1.0,), cnn_epochs=1)
+    res = train_with_mining("cnn", pos, grey, 0, box_in_window=(0, 0, 40, 40), options=opts, mining_source=mining,
+                            positive_weights=w)
+    assert [r["negatives"] for r in res.log["rounds"]] == [20, 32, 44]
+    assert [(p, n) for p, n, _ in seen] == [(5, 20), (5, 32), (5, 44)]
+    assert all(x is w for _, _, x in seen)
+    seen.clear()
+    train_with_mining("cnn", pos, grey, 0, options=opts, mining_source=mining)
+    assert [x for _, _, x in seen] == [None, None, None]  # the default: no weights
+    with pytest.raises(ValueError, match="not for 'adaboost'"):
+        train_with_mining("adaboost", pos, grey, 0, options=opts, positive_weights=w)
+
+
 # ----------------------------------------------------------------- the three families on generated videos
 @pytest.fixture(scope="module")
 def videos(tmp_path_factory: pytest.TempPathFactory) -> Path:

@@ -17,6 +17,13 @@ Items are pure functions of ``(seed, index)`` (the horizontal-flip augmentation
 is the odd half of the index range), so the worker count never changes the
 data; the train/val split is drawn once from ``seed``.
 
+Per-positive weights (``positive_weights`` of :meth:`PatchDataModule.from_tensors` and
+:func:`fit_patch_detector`; e.g. ``synthaug train --synthetic-share``): each item then carries
+its weight, ``(patch, label, weight)`` — a positive keeps its weight through the flip doubling
+and the train/val split, negatives weigh 1 — and the loss is the BCE with ``weight=`` (a weight
+of 2 counts as the sample twice, 0 as leaving it out). Without them the items are
+``(patch, label)`` and the loss is the unweighted BCE, bit-identical to before.
+
 Example:
     >>> dm = PatchDataModule(generated_positives=8, generated_negatives=8, val_fraction=0.25, batch_size=4)
     >>> dm.setup("fit")
@@ -102,23 +109,29 @@ class PatchDetectorModule(L.LightningModule):
         ratio = getattr(dm, "negative_positive_ratio", None)
         return None if ratio is None else torch.tensor(float(ratio), device=self.device)
 
-    def _step(self, batch: tuple[Tensor, Tensor], stage: str) -> Tensor:
-        x, y = batch
+    def _step(self, batch: tuple[Tensor, ...], stage: str) -> Tensor:
+        """BCE with the class balance ``pos_weight``; a batch ``(x, y, w)`` weighs each sample's term by ``w``
+        (mean over the batch: a weight of 2 counts as the sample twice, 0 as leaving it out)."""
+        x, y, *w = batch
         logits = self.net(x)
-        loss = nn.functional.binary_cross_entropy_with_logits(logits, y, pos_weight=self._pos_weight())
+        if w:  # per-sample weights (positive_weights given); the unweighted call below is the default, unchanged
+            loss = nn.functional.binary_cross_entropy_with_logits(logits, y, weight=w[0].to(logits.dtype),
+                                                                  pos_weight=self._pos_weight())
+        else:
+            loss = nn.functional.binary_cross_entropy_with_logits(logits, y, pos_weight=self._pos_weight())
         acc = ((logits > 0).float() == y).float().mean()
         self.log(f"{stage}_loss", loss, prog_bar=True, sync_dist=stage != "train", batch_size=len(y))
         self.log(f"{stage}_acc", acc, prog_bar=stage != "train", sync_dist=stage != "train", batch_size=len(y))
         return loss
 
-    def training_step(self, batch: tuple[Tensor, Tensor], batch_idx: int) -> Tensor:
+    def training_step(self, batch: tuple[Tensor, ...], batch_idx: int) -> Tensor:
         if self.shift:
-            x, y = batch
+            x, y, *w = batch
             g = torch.Generator().manual_seed(int(self.hparams["init_seed"]) * 1_000_003 + int(self.global_step))
-            batch = (shift_patches(x, y > 0.5, self.shift, generator=g), y)
+            batch = (shift_patches(x, y > 0.5, self.shift, generator=g), y, *w)
         return self._step(batch, "train")
 
-    def validation_step(self, batch: tuple[Tensor, Tensor], batch_idx: int) -> Tensor:
+    def validation_step(self, batch: tuple[Tensor, ...], batch_idx: int) -> Tensor:
         return self._step(batch, "val")
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
@@ -162,28 +175,53 @@ def shift_patches(x: Tensor, which: Tensor, shift: int, *, generator: torch.Gene
 class PatchDataset(Dataset):
     """Labelled patches with a deterministic horizontal-flip doubling.
 
-    Item ``i`` is patch ``i // 2``, mirrored when ``i`` is odd (when ``flip``).
+    Item ``i`` is patch ``i // 2``, mirrored when ``i`` is odd (when ``flip``): ``(patch, label)``,
+    or ``(patch, label, weight)`` when ``weights`` are given (the mirror image keeps its patch's weight).
 
     Args:
         patches: float patches in [0, 1], ``(N, 1, S, S)``.
         labels: 1 object, 0 background, ``(N,)``.
         flip: double the set with mirrored copies.
+        weights: per-patch loss weights ``(N,)``, >= 0; None: unweighted items.
     """
 
-    def __init__(self, patches: Tensor, labels: Tensor, flip: bool = True) -> None:
+    def __init__(self, patches: Tensor, labels: Tensor, flip: bool = True, weights: Tensor | None = None) -> None:
         if patches.dim() != 4 or patches.shape[1] != 1 or labels.shape != (patches.shape[0],):
             raise ValueError(f"patches must be (N, 1, S, S) with labels (N,), got {tuple(patches.shape)} and {tuple(labels.shape)}")
+        if weights is not None:
+            weights = torch.as_tensor(weights).float()
+            if weights.shape != labels.shape or not bool(torch.isfinite(weights).all()) or bool((weights < 0).any()):
+                raise ValueError(f"weights must be finite, >= 0 and one per patch ({labels.shape[0]}), got "
+                                 f"{tuple(weights.shape)}")
         self.patches = patches.float()
         self.labels = labels.float()
         self.flip = flip
+        self.weights = weights
 
     def __len__(self) -> int:
         return len(self.patches) * (2 if self.flip else 1)
 
-    def __getitem__(self, i: int) -> tuple[Tensor, Tensor]:
+    def __getitem__(self, i: int) -> tuple[Tensor, ...]:
         j, mirrored = (i // 2, i % 2 == 1) if self.flip else (i, False)
         x = self.patches[j]
-        return (x.flip(-1) if mirrored else x), self.labels[j]
+        if self.weights is None:
+            return (x.flip(-1) if mirrored else x), self.labels[j]
+        return (x.flip(-1) if mirrored else x), self.labels[j], self.weights[j]
+
+
+class _UnitWeight(Dataset):
+    """A user's ``(patch, label)`` dataset with weight 1 per item (beside weighted patches; a
+    ``(patch, label, weight)`` item keeps its weight)."""
+
+    def __init__(self, dataset: Dataset) -> None:
+        self.dataset = dataset
+
+    def __len__(self) -> int:
+        return len(self.dataset)  # type: ignore[arg-type]
+
+    def __getitem__(self, i: int) -> tuple[Tensor, Tensor, Tensor]:
+        x, y, *w = self.dataset[i]  # an item that already carries a weight keeps it
+        return x, y, torch.as_tensor(w[0] if w else 1.0, dtype=torch.float32)
 
 
 def _u8_to_float(a: Any) -> Tensor:
@@ -213,6 +251,7 @@ class PatchDataModule(L.LightningDataModule):
     """
 
     _tensors: tuple[Tensor, Tensor] | None = None  # set by from_tensors before __init__ runs
+    _positive_weights: Tensor | None = None  # from_tensors(positive_weights=): one per tensor positive
 
     def __init__(
         self,
@@ -251,7 +290,8 @@ class PatchDataModule(L.LightningDataModule):
         self.val_set: Dataset | None = None
 
     @classmethod
-    def from_tensors(cls, positives: Tensor, negatives: Tensor, **kwargs: Any) -> "PatchDataModule":
+    def from_tensors(cls, positives: Tensor, negatives: Tensor, *, positive_weights: Tensor | None = None,
+                     **kwargs: Any) -> "PatchDataModule":
         """A data module over patches in memory (plus whatever ``kwargs`` add).
 
         The tensors go through the same split, flip doubling and class balance
@@ -260,6 +300,11 @@ class PatchDataModule(L.LightningDataModule):
         Args:
             positives: object patches ``(P, 1, S, S)``, float in [0, 1] (or uint8).
             negatives: background patches ``(N, 1, S, S)``.
+            positive_weights: ``(P,)`` each positive's weight in the loss (>= 0; e.g.
+                :func:`~synthaug.detectors.video_training.share_weights`, mean 1 so the class
+                balance N/P still holds); every item then carries its weight through the flip
+                doubling and the split, negatives (and any other positives) weigh 1. None:
+                unweighted ``(patch, label)`` items, as before.
             **kwargs: :class:`PatchDataModule` arguments (``val_fraction``,
                 ``batch_size``, ``seed``...).
 
@@ -276,6 +321,12 @@ class PatchDataModule(L.LightningDataModule):
             raise ValueError("from_tensors needs at least one patch")
         dm = cls.__new__(cls)
         dm._tensors = (pos, neg)  # before __init__: its no-data check counts them
+        if positive_weights is not None:
+            w = torch.as_tensor(positive_weights).detach().to(torch.float64).flatten()
+            if w.shape != (len(pos),) or not bool(torch.isfinite(w).all()) or bool((w < 0).any()):
+                raise ValueError(f"positive_weights must be finite, >= 0 and one per positive ({len(pos)}), got "
+                                 f"{tuple(torch.as_tensor(positive_weights).shape)}")
+            dm._positive_weights = w
         dm.__init__(**kwargs)
         return dm
 
@@ -310,6 +361,7 @@ class PatchDataModule(L.LightningDataModule):
         if self.train_set is not None:
             return
         pos, neg = self.load_patches()
+        weighted = self._positive_weights is not None
         g = torch.Generator().manual_seed(self.seed)
         train_parts: list[Dataset] = []
         val_parts: list[Dataset] = []
@@ -319,11 +371,19 @@ class PatchDataModule(L.LightningDataModule):
             perm = torch.randperm(len(x), generator=g)
             n_val = int(round(len(x) * self.val_fraction))
             y = torch.full((len(x),), label)
-            train_parts.append(PatchDataset(x[perm[n_val:]], y[perm[n_val:]], self.flip))
+            w = None
+            if weighted:  # the tensor positives come first in load_patches; everything else weighs 1
+                w = torch.ones(len(x), dtype=torch.float64)
+                if label == 1.0:
+                    w[: len(self._positive_weights)] = self._positive_weights
+                w = w.float()
+            train_parts.append(PatchDataset(x[perm[n_val:]], y[perm[n_val:]], self.flip,
+                                            weights=None if w is None else w[perm[n_val:]]))
             if n_val:
-                val_parts.append(PatchDataset(x[perm[:n_val]], y[perm[:n_val]], flip=False))
+                val_parts.append(PatchDataset(x[perm[:n_val]], y[perm[:n_val]], flip=False,
+                                              weights=None if w is None else w[perm[:n_val]]))
         if self.extra_dataset is not None:
-            train_parts.append(self.extra_dataset)
+            train_parts.append(_UnitWeight(self.extra_dataset) if weighted else self.extra_dataset)
         if not train_parts:
             raise ValueError(f"no training patches found (seed_dir={self.seed_dir!r})")
         if len(pos) and len(neg):
@@ -355,6 +415,7 @@ def fit_patch_detector(
     seed: int = 0,
     val_fraction: float = 0.0,
     shift: int = 0,
+    positive_weights: Tensor | None = None,
 ) -> PatchDetectorModule:
     """Train a :class:`PatchDetectorModule` on patches in memory: the CNN's one training loop.
 
@@ -381,6 +442,11 @@ def fit_patch_detector(
         val_fraction: patches held out for a validation loss/accuracy each
             epoch (logged only; 0: none).
         shift: random whole-pixel shifts of the positives (:class:`PatchDetectorModule`).
+        positive_weights: ``(P,)`` each positive's weight in the BCE loss (``weight=``; negatives 1),
+            kept through the flip doubling and the split (:meth:`PatchDataModule.from_tensors`);
+            :func:`~synthaug.detectors.video_training.share_weights` gives mean-1 weights, so the
+            positive class keeps its total weight (N/P balance) and only its split between real
+            and added positives changes. None: the unweighted loss (the default, unchanged).
 
     Returns:
         The trained module (``.net`` in eval mode; ``.to_detector()`` for a detector).
@@ -394,7 +460,7 @@ def fit_patch_detector(
     if epochs < 1:
         raise ValueError(f"epochs must be >= 1, got {epochs}")
     dm = PatchDataModule.from_tensors(positives, negatives, val_fraction=val_fraction, batch_size=batch_size,
-                                      seed=seed)
+                                      seed=seed, positive_weights=positive_weights)
     dm.setup("fit")
     n_train = len(dm.train_set) // 2  # the set holds every patch and its mirror image
     max_steps = math.ceil(epochs * n_train / batch_size)

@@ -176,8 +176,8 @@ def _fit_once(
     window = int(positives.shape[-1])
     positives = check_patches(positives, window)
     negatives = check_patches(negatives, window)
-    if positive_weights is not None and kind != "hog":
-        raise ValueError(f"positive weights are implemented for the HOG detector's SVM only, not for {kind!r}")
+    if positive_weights is not None and kind == "adaboost":
+        raise ValueError("positive weights are implemented for the HOG detector's SVM and the CNN's loss, not for 'adaboost'")
     if kind == "hog":
         from synthaug.detectors.hog_dpm import HOGDetector
 
@@ -206,7 +206,7 @@ def _fit_once(
         steps_per_epoch = max(1, math.ceil(n / options.cnn_batch_size))
         epochs = max(1, min(options.cnn_epochs, options.cnn_max_steps // steps_per_epoch))
         module = fit_patch_detector(positives, negatives, epochs=epochs, batch_size=options.cnn_batch_size, seed=seed,
-                                    shift=options.cnn_shift)
+                                    shift=options.cnn_shift, positive_weights=positive_weights)
         det = module.to_detector()
     det.box_in_window = None if box_in_window is None else tuple(float(v) for v in box_in_window)
     return det
@@ -318,8 +318,10 @@ def train_with_mining(
         box_regressor: set on every round's detector (a
             :class:`~synthaug.detectors.boxes.BoxRegressor`; it does not depend on the
             detector), so the validation count matches at the boxes detection reports.
-        positive_weights: ``(P,)`` each positive's weight in the positive class (HOG only:
-            :meth:`~synthaug.detectors.hog_dpm.HOGDetector.fit`); None: all equal.
+        positive_weights: ``(P,)`` each positive's weight in the positive class, the same in every
+            round (mined negatives weigh 1): HOG's per-sample SVM cost
+            (:meth:`~synthaug.detectors.hog_dpm.HOGDetector.fit`) or the CNN's per-sample BCE weight
+            (:func:`~synthaug.detectors.lightning_module.fit_patch_detector`); not AdaBoost. None: all equal.
 
     Returns:
         A :class:`TrainResult`.

@@ -273,7 +273,9 @@ def train_from_videos(
             :func:`~synthaug.data.copypaste.copy_paste_positives`; a user's baseline).
         synthetic_share: the share of the positive class's training weight held by the positives added to the
             real ones (synthetic, copy-paste, perturbed), the rest shared by the real ones; None: every positive
-            weighs the same, so the added ones hold ``added / (real + added)`` (HOG only; the SVM's per-sample cost).
+            weighs the same, so the added ones hold ``added / (real + added)``. HOG: the SVM's per-sample cost; CNN:
+            the BCE loss's per-sample weight (kept through the flip doubling, the split and the mining rounds); not
+            AdaBoost.
         options: budgets (:class:`~synthaug.detectors.training.TrainOptions`).
         work_dir: ingest output folder (default: ``<out>.work``; a temporary folder when ``out`` is None).
         ingest_seed: ``synthaug ingest --seed`` of the seed draw (0: the same seed set as a
@@ -344,8 +346,9 @@ def _check_options(kind: str, *, frame_step: int, synthetic_ratio: float, params
     if synthetic_share is not None:
         if not 0.0 <= synthetic_share < 1.0:
             raise TrainingInputError("--synthetic-share", f"must be in [0, 1), got {synthetic_share}")
-        if kind != "hog":
-            raise TrainingInputError("--synthetic-share", f"weights the HOG detector's SVM; not implemented for {kind}")
+        if kind not in ("hog", "cnn"):
+            raise TrainingInputError("--synthetic-share", f"weights the HOG detector's SVM and the CNN's loss; not "
+                                     f"implemented for {kind}")
         if synthetic_ratio <= 0 and copy_paste_ratio <= 0 and perturb_copies <= 0:
             raise TrainingInputError("--synthetic-share", "there are no added positives to weigh: give "
                                      "--synthetic-ratio, --copy-paste-ratio or --perturb-copies")

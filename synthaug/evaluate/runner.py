@@ -514,7 +514,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="copy-paste baseline: patches per real seed, the seeds' objects cut out with the fit's "
                          "silhouettes and pasted on other seeds' backgrounds")
     sy.add_argument("--synthetic-share", type=float, default=None,
-                    help="the added positives' share of the positive class's training weight (HOG; default: by count)")
+                    help="the added positives' share of the positive class's training weight (HOG and CNN; "
+                         "default: by count)")
     return p
 
 
