@@ -341,7 +341,7 @@ def test_gray_rgb_data_skips_colour_statistics_without_runtime_warnings(tmp_path
     from synthaug.data.seedset import SeedSet
     from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
     from synthaug.diagnose.report import diagnose
-    from synthaug.diagnose.screening import COLOUR_CANDIDATES
+    from synthaug.diagnose.screening import COLOUR_CANDIDATES, COLOUR_ONLY
     from synthaug.effects.registry import PAPER_EFFECTS
     from synthaug.params import CaptureParams
 
@@ -360,13 +360,18 @@ def test_gray_rgb_data_skips_colour_statistics_without_runtime_warnings(tmp_path
         report = diagnose(p, "quadcopter", tmp_path / "fit.json", k=3, out_dir=tmp_path / "out", plots=False)
     assert report["colour"]["screened"] is False and "single-channel" in report["colour"]["note"]
     rows = {r["effect"]: r for r in report["screened"]}
-    for name in COLOUR_CANDIDATES:
+    # the colour-only candidates are not offered on single-channel data (issue 20: lens distortion k1 +0.1 was
+    # named chromatic_aberration on gray data in 4 of 5 cases); haze keeps its gray channels
+    assert report["colour"]["not_offered"] == list(COLOUR_ONLY)
+    assert not set(COLOUR_ONLY) & set(rows) and not set(COLOUR_ONLY) & {f["effect"] for f in report["findings"]}
+    for name in set(COLOUR_CANDIDATES) - set(COLOUR_ONLY):
         assert rows[name]["colour_skipped"] and rows[name]["gain_colour"] is None, rows[name]
         assert rows[name]["channel"] != "distance:colour" and rows[name]["score"] is not None
         assert rows[name]["gain"] is not None
     assert report["residuals"]["colour"]["skipped"]
     md = (tmp_path / "out" / "report.md").read_text()
     assert "Colour statistics skipped (single-channel data" in md
+    assert "chromatic_aberration, white_balance not screened (colour-only" in md
     # a true colour seed set keeps its colour channel (the same scenes, tinted skies)
     q = make_measured_seedset(tmp_path / "c", n_seeds=12, colour=True, frame_size=(96, 128), object_px=(16, 20),
                               view_step_deg=30, sprite_size=48, seed=4)
@@ -375,3 +380,76 @@ def test_gray_rgb_data_skips_colour_statistics_without_runtime_warnings(tmp_path
     theta.save(tmp_path / "fit_c.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
     data = load_diagnosis_data(q, tmp_path / "fit_c.json", "quadcopter")
     assert data.real_rgb is not None and data.colour_note is None
+
+
+def test_gray_data_never_offers_the_colour_only_candidates():
+    """Without colour patches (gray, or RGB with equal channels: real_rgb None) chromatic aberration and white
+    balance are not candidates: screen_candidates drops them even when asked, and they are never named; colour
+    data keep every candidate."""
+    from types import SimpleNamespace
+
+    from synthaug.diagnose.screening import COLOUR_ONLY, offered_candidates
+
+    names = list(CANDIDATE_GRIDS)
+    gray, colour = SimpleNamespace(real_rgb=None), SimpleNamespace(real_rgb=torch.zeros(2, 3, 4, 4))
+    kept, gone = offered_candidates(gray, names)
+    assert gone == list(COLOUR_ONLY) == ["chromatic_aberration", "white_balance"]
+    assert kept == [c for c in names if c not in COLOUR_ONLY] and "haze" in kept
+    assert offered_candidates(colour, names) == (names, [])
+
+
+def test_gray_screening_drops_colour_only_candidates_asked_for(tmp_path):
+    from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
+    from synthaug.diagnose.residuals import load_diagnosis_data
+    from synthaug.diagnose.screening import screen_candidates
+    from synthaug.effects.registry import PAPER_EFFECTS
+    from synthaug.params import CaptureParams
+
+    p = make_measured_seedset(tmp_path / "m", n_seeds=8, hidden={"lens_distortion": {"distortion_k1": 0.1}},
+                              frame_size=(96, 128), object_px=(16, 20), view_step_deg=30, sprite_size=48, seed=4)
+    truth, textra, _ = load_truth(p)
+    theta = CaptureParams({k: v for k, v in truth.as_dict().items() if k != "distortion_k1"}, effects=PAPER_EFFECTS)
+    extra = [{"distance": 1.0, "generator_seed": 7 + i, "object_scale": float(e["object_scale"])}
+             for i, e in enumerate(textra)]
+    theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
+    data = load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
+    assert data.real_rgb is None
+    rows = screen_candidates(data, ["chromatic_aberration", "lens_distortion", "white_balance"], k=2)
+    assert [r["effect"] for r in rows] == ["lens_distortion"]
+
+
+def test_tone_evidence_sees_a_tone_curve_and_not_added_noise(tmp_path):
+    """Issue 20: a rising noise level function is shot noise or an expansive tone curve; only the tone curve
+    changes the signal. Hand-built patches over a reference-camera seed set's layers: the fitted model's render
+    through a tone curve x^1.4 (and a little noise), and the same render with shot noise added instead
+    (sd 0.04·sqrt(I)); the tone curve the NLF implies (slope +0.57 -> g = 1.4) must lower the pixel distance of
+    the first and raise that of the second, and name each one's noise-level channel accordingly."""
+    from synthaug.diagnose.diagnosis_data import pixel_distance, render_with
+    from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
+    from synthaug.diagnose.residuals import load_diagnosis_data
+    from synthaug.diagnose.screening import base_render, noise_level_channel, tone_evidence
+    from synthaug.effects.registry import PAPER_EFFECTS
+    from synthaug.params import CaptureParams
+
+    p = make_measured_seedset(tmp_path / "m", n_seeds=16, frame_size=(96, 128), object_px=(16, 20),
+                              view_step_deg=30, sprite_size=48, seed=3, paper_ranges={"w_d": (0.3, 0.45)})
+    truth, textra, _ = load_truth(p)
+    theta = CaptureParams(truth.as_dict(), effects=PAPER_EFFECTS)
+    extra = [{"distance": 1.0, "generator_seed": 7 + i, "object_scale": float(e["object_scale"])}
+             for i, e in enumerate(textra)]
+    theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
+    data = load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
+    w = truth.as_dict()["w_d"][:, 0]
+    gen = torch.Generator().manual_seed(0)
+    clean = render_with(data, None, w_d=w)
+    noise = lambda sd: sd * torch.randn(clean.shape, generator=gen)  # noqa: E731
+    nc = {"slope": 2 * 0.4 / 1.4, "t": 40.0, "p": 1e-30, "n_seeds": 16, "gain": 0.004, "fitted_slope": 2 * 0.4 / 1.4}
+    named = {}
+    for kind, real in (("gamma", render_with(data, {"gamma": {"gamma_g": 1.4}}, w_d=w) + noise(0.01)),
+                       ("shot_noise", clean + noise(0.04 * clean.clamp_min(0).sqrt()))):
+        data.real = real.clamp(0, 1)
+        tone = tone_evidence(data, nc, pixel_distance(data.real, base_render(data)[0]))
+        assert tone["implied_gamma_g"] == pytest.approx(1.4)
+        assert (tone["gain"] > 0) == (kind == "gamma"), (kind, tone)
+        named[kind] = [e for e in ("gamma", "shot_noise") if noise_level_channel(e, nc, 30, 0.01, tone)["significant"]]
+    assert named == {"gamma": ["gamma"], "shot_noise": ["shot_noise"]}

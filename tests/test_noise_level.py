@@ -138,3 +138,26 @@ def test_a_codec_copy_is_not_noise():
     assert len(frame_noise_levels(f, b)["signal"]) == 0
     g = b + rng.normal(size=b.shape) * 1.0 / 255  # one grey level of real noise: measured
     assert len(frame_noise_levels(np.round(g * 255) / 255, b)["signal"]) >= 10
+
+
+def test_a_rising_noise_level_goes_to_gamma_or_shot_noise_by_the_signals_tone():
+    """Issue 20: an expansive tone curve (g > 1) makes the noise rise with brightness as shot noise does (slope
+    2(g - 1)/g = +0.57 at g = 1.4); the NLF was given to shot noise alone, so gamma 1.4 was named shot_noise in 5
+    of 5 cases. The patches' tone decides now: the implied tone curve lowering the pixel distance is gamma's, else
+    shot noise's; never both, and gamma's setting is the one the slope implies."""
+    from synthaug.diagnose.screening import noise_level_channel, noise_setting
+
+    rising = {"slope": 0.55, "t": 40.0, "p": 1e-30, "n_seeds": 60, "gain": 0.004, "fitted_slope": 0.55}
+    tone_curve = {"implied_gamma_g": 1.38, "gain": 0.014, "t": 2.7, "explains": "gamma"}
+    added_noise = {"implied_gamma_g": 1.38, "gain": -0.006, "t": -1.6, "explains": "shot_noise"}
+    sig = lambda e, tone: noise_level_channel(e, rising, 30, 0.01, tone)["significant"]  # noqa: E731
+    assert sig("gamma", tone_curve) and not sig("shot_noise", tone_curve)
+    assert sig("shot_noise", added_noise) and not sig("gamma", added_noise)
+    assert not sig("gamma", None) and sig("shot_noise", None)  # no tone evidence: shot noise, as before
+    assert noise_level_channel("gamma", rising, 30, 0.01, tone_curve)["tone"]["explains"] == "gamma"
+    assert noise_setting("gamma", rising)["gamma_g"] == pytest.approx(2.0 / (2.0 - 0.55))
+    # a falling NLF is a compressive tone curve whatever the tone says (shot noise cannot make it fall)
+    falling = {**rising, "slope": -0.64, "fitted_slope": -0.64}
+    assert noise_level_channel("gamma", falling, 30, 0.01, None)["significant"]
+    assert not noise_level_channel("shot_noise", falling, 30, 0.01, None)["significant"]
+    assert "tone" not in noise_level_channel("gamma", falling, 30, 0.01, None)

@@ -14,7 +14,10 @@ gives the *noise level function* (NLF) var(I) of the camera (Liu et al.,
 * a tone curve f after the sensor: var scales by f'(x)², so a compressive
   curve x^g (g < 1) makes the NLF *fall* with brightness (slope
   2(g - 1)/g with read noise only) — the noise-based radiometric
-  calibration of Matsushita & Lin (CVPR 2007).
+  calibration of Matsushita & Lin (CVPR 2007); an expansive one (g > 1)
+  makes it *rise*, as shot noise does: the NLF alone cannot tell them
+  apart, the signal's tone can (the tone curve changes it, shot noise does
+  not; :func:`synthaug.diagnose.screening.tone_evidence`).
 
 Per seed the log-log slope of the NLF is measured on flat background pixels
 (textured pixels, where an aligned median carries registration error, and a
@@ -45,7 +48,9 @@ from synthaug.diagnose.stats import t_test
 __all__ = ["frame_noise_levels", "nlf_slope", "seed_noise_levels", "aligned_neighbour", "noise_channel",
            "NOISE_CANDIDATES"]
 
-# Candidates the noise level function can testify for, with the sign of the log-log slope they produce.
+# Candidates the noise level function can testify for, with the sign of the log-log slope they produce (gamma:
+# its compressive case, g < 1; an expansive curve, g > 1, rises like shot noise, and the patches' tone tells the
+# two apart: synthaug.diagnose.screening.tone_evidence). The signs also orient the slope's calibrated floors.
 NOISE_CANDIDATES: dict[str, int] = {"shot_noise": +1, "gamma": -1}
 # Smallest |log-log slope| that counts: the noise std changes by >= 10 % over a doubling of brightness.
 SLOPE_FLOOR = 2 * math.log2(1.1)

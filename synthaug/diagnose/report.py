@@ -173,7 +173,7 @@ def diagnose(
         ``parameter_dependence``, ``realism`` (real-vs-synthetic accuracy).
     """
     from synthaug.diagnose.diagnosis_data import load_diagnosis_data
-    from synthaug.diagnose.screening import CANDIDATE_GRIDS, kfold, realism_accuracy
+    from synthaug.diagnose.screening import CANDIDATE_GRIDS, kfold, offered_candidates, realism_accuracy
 
     t0 = time.perf_counter()
     say = progress or (lambda s: None)
@@ -185,6 +185,7 @@ def diagnose(
         raise ValueError(f"k must be >= 2 folds, got {k}")
     say("loading seeds and fitted layers")
     data = load_diagnosis_data(seeds_dir, fit_path, mesh, distance=distance)
+    names, not_offered = offered_candidates(data, names)  # single-channel data: no colour-only candidate
     if len(data) < 2 * k:
         raise ValueError(f"need at least {2 * k} seeds for {k}-fold screening, got {len(data)}")
     say("residual analysis")
@@ -213,7 +214,7 @@ def diagnose(
         "findings": findings,
         "significant": bool(findings),
         "screened": [_screened_row(r) for r in rows],
-        **_residual_sections(data, res, hinted),
+        **_residual_sections(data, res, hinted, not_offered),
         "noise_level_function": nlf,
         "realism": {"accuracy_base": acc_base,
                     "note": "k-fold accuracy of logistic regression on HOG, real vs fitted synthetic; 0.5 = "
@@ -259,8 +260,10 @@ def _residual_analysis(data: Any, rng: np.random.Generator, alpha: float) -> dic
     return {"syn0": syn0, "structure": structure, "fmap": fmap, "dependence": dependence}
 
 
-def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str]) -> dict[str, Any]:
-    """The report's sections on the base residual, its colour and the significance rule."""
+def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str], not_offered: Sequence[str] = ()
+                       ) -> dict[str, Any]:
+    """The report's sections on the base residual, its colour (and the colour-only candidates not offered on
+    single-channel data) and the significance rule."""
     from synthaug.diagnose.calibration import describe as describe_floors, rule_text
 
     fmap = res["fmap"]
@@ -271,7 +274,8 @@ def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str]) -> dic
             "note": "mean over seeds of |HOG block(real) - HOG block(synthetic)| at each block position of the "
                     "object-centred patch: where the detector sees the difference"},
         "hinted_candidates": hinted,
-        "colour": {"screened": data.real_rgb is not None, "note": data.colour_note},
+        "colour": {"screened": data.real_rgb is not None, "note": data.colour_note,
+                   "not_offered": list(not_offered)},
         "significance": {"rule": rule_text(), "calibration": describe_floors()["source"]},
         "parameter_dependence": [d for d in res["dependence"] if d["significant"]],
     }
@@ -286,8 +290,9 @@ def _noise_level_function(data: Any, folds: Any) -> dict[str, Any] | None:
     nc = noise_channel(data.noise_levels, folds)
     nlf = {k_: nc[k_] for k_ in ("slope", "t", "p", "n_seeds", "fitted_slope", "gain")}
     nlf["note"] = ("log-log slope of the frames' noise variance vs brightness, off the object (0: read noise "
-                   "only, as the model's sigma_n assumes; > 0: shot noise; < 0: a compressive tone curve after "
-                   "the sensor); gain: held-out log-likelihood of the power-law NLF over a flat one, nats/px")
+                   "only, as the model's sigma_n assumes; > 0: shot noise, or an expansive tone curve (g > 1), "
+                   "told apart by the patches' tone; < 0: a compressive tone curve after the sensor); gain: "
+                   "held-out log-likelihood of the power-law NLF over a flat one, nats/px")
     return nlf
 
 
@@ -445,6 +450,20 @@ def _plots(out: Path, data: Any, syn0: torch.Tensor, ext: tuple[str, torch.Tenso
     return figs
 
 
+def _tone_text(f: dict[str, Any]) -> str:
+    """A noise-level finding's tone evidence (a rising NLF: tone curve or shot noise), for the markdown."""
+    if f.get("channel") != "noise_level":
+        return ""
+    tone = next((c.get("tone") for c in f["evidence"]["channels"] if c.get("channel") == "noise_level"), None)
+    if not tone:
+        return ""
+    return (f"; the tone curve this rise implies (g = {tone['implied_gamma_g']:.2f}) "
+            f"{'lowers' if tone['gain'] > 0 else 'raises'} the pixel distance to the real patches by "
+            f"{100 * abs(tone['gain']):.1f} % (t = {tone['t']:.1f}): "
+            + ("the signal's tone changed, a tone curve" if tone["explains"] == "gamma" else
+               "the signal's tone is unchanged, added noise"))
+
+
 def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -> str:
     """The human report (markdown) of a diagnosis report dict."""
     figs = figs or {}
@@ -478,6 +497,7 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                 + (f"; noise level function log-log slope {f['evidence']['noise_level_function']['slope']:+.2f} "
                    f"(flat = read noise only), held-out likelihood gain {g['noise_loglik_per_px']:.4f} nats/px"
                    if f["channel"] == "noise_level" else "")
+                + _tone_text(f)
                 + (f"; real-vs-synthetic accuracy {100 * g['realism_accuracy_before']:.0f} % → {100 * acc:.0f} %"
                    if acc is not None else "")
                 + (f"; gains measured on top of {', '.join(f['given'])}" if f.get("given") else ""))
@@ -519,9 +539,12 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
     col = report.get("colour") or {}
     if col and not col.get("screened"):
         skipped = [r["effect"] for r in report["screened"] if r.get("colour_skipped")]
+        gone = col.get("not_offered") or []
         lines += ["", f"Colour statistics skipped ({col.get('note')})"
-                  + (f": {', '.join(skipped)} screened in gray only (feature and pixel distances)." if skipped
-                     else ".")]
+                  + (f": {', '.join(gone)} not screened (colour-only: a single channel has no lateral colour shift "
+                     "and no colour cast)" if gone else "")
+                  + (f"{';' if gone else ':'} {', '.join(skipped)} screened in gray only (feature and pixel "
+                     "distances)" if skipped else "") + "."]
     lines += ["", f"Real-vs-synthetic classifier accuracy (fitted model): "
               f"{100 * report['realism']['accuracy_base']:.0f} % (50 % = indistinguishable).", ""]
     if report.get("gap"):

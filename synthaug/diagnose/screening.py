@@ -38,10 +38,20 @@ function, measured on the seed frames off the object
 (:mod:`synthaug.diagnose.noise`), testifies for ``shot_noise`` (rising with
 brightness) and ``gamma`` (falling: a compressive tone curve after the sensor);
 a pairwise distance cannot credit a noise model, and a tone curve on a dark
-object is nearly a gain that w_d absorbs. For seed sets with RGB patches, the
+object is nearly a gain that w_d absorbs. A *rising* NLF has two causes: shot
+noise adds variance ∝ signal and leaves the signal's tone alone, while an
+expansive tone curve x^g (g > 1) scales the read noise by its slope f'(x) and
+changes the tone of the signal itself. :func:`tone_evidence` tells them apart
+on the patches: the tone curve the NLF implies (g = 2 / (2 - slope)) is
+rendered on every seed; if it lowers the pixel distance to the real patches
+(the object's tone against its real background), the rise is named ``gamma``,
+else ``shot_noise`` — never both. For seed sets with RGB patches, the
 chroma distance (R - G, B - G) of a neutral object screens
-``chromatic_aberration`` and ``white_balance``, which in gray are a radial blur
-and a plain gain, and ``haze``, whose airlight has the sky's colour.
+``chromatic_aberration`` and ``white_balance`` and ``haze``, whose airlight has
+the sky's colour. On single-channel data the colour-only candidates
+(:data:`COLOUR_ONLY`: a lateral colour shift, a colour cast) are not offered
+at all (:func:`offered_candidates`): in gray they are a radial blur and a gain,
+which would only take the name of another effect (lens distortion, exposure).
 
 Finally a real-vs-synthetic classifier (logistic regression on HOG features,
 k-fold by seed; 50 % = indistinguishable) is scored before and after the
@@ -63,8 +73,8 @@ from synthaug.diagnose.noise import NOISE_CANDIDATES, SLOPE_FLOOR, noise_channel
 from synthaug.diagnose.diagnosis_data import DiagnosisData, pairwise_distance, pixel_distance, render_with, solve_albedo
 from synthaug.diagnose.residuals import seed_metadata
 
-__all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "screen_candidates", "screen_one", "absorption_gain",
-           "realism_accuracy", "kfold"]
+__all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "screen_candidates", "screen_one", "absorption_gain",
+           "realism_accuracy", "kfold", "offered_candidates", "tone_evidence"]
 
 Setting = dict[str, float]
 
@@ -108,6 +118,19 @@ ABSORPTION: dict[str, tuple[str, str, int]] = {
 # Haze is screened in colour too: its airlight has the sky's colour (aerial perspective: a far object takes
 # on the colour of the air in front of it).
 COLOUR_CANDIDATES: tuple[str, ...] = ("chromatic_aberration", "white_balance", "haze")
+# Candidates that exist only in colour: a single channel has no lateral colour shift and no colour cast (in gray
+# chromatic aberration is a ~1 px radial blur, white balance a gain that w_d absorbs), so on single-channel data
+# they are not offered (:func:`offered_candidates`); haze stays: its extinction and airlight act on gray too.
+COLOUR_ONLY: tuple[str, ...] = ("chromatic_aberration", "white_balance")
+
+
+def offered_candidates(data: DiagnosisData, names: Sequence[str]) -> tuple[list[str], list[str]]:
+    """The candidates ``names`` that ``data`` can identify, and those it cannot: without colour patches
+    (:attr:`DiagnosisData.real_rgb` None: gray, or RGB whose channels are equal), the colour-only ones
+    (:data:`COLOUR_ONLY`) are left out."""
+    if data.real_rgb is not None:
+        return list(names), []
+    return [c for c in names if c not in COLOUR_ONLY], [c for c in names if c in COLOUR_ONLY]
 
 
 def colour_values(data: DiagnosisData, effect: str, setting: Setting) -> dict[str, dict[str, Any]]:
@@ -357,21 +380,80 @@ def _z(p: float) -> float:
     return float(np.clip(stats.norm.isf(min(max(p, 1e-300), 1.0)), -40.0, 40.0))
 
 
-def noise_level_channel(effect: str, nc: dict[str, Any] | None, n_tests: int, alpha: float
-                        ) -> dict[str, Any] | None:
-    """The noise-level-function channel of ``effect`` (shot noise: the NLF rises with brightness; a
-    compressive tone curve: it falls), from :func:`synthaug.diagnose.noise.noise_channel`."""
+def slope_floor(sign: int) -> float | None:
+    """The calibrated floor of the NLF slope in direction ``sign`` (+1 rising, -1 falling): the clean range of
+    the slope that way, stored under the candidate whose direction it is (:data:`NOISE_CANDIDATES`)."""
+    for name, s in NOISE_CANDIDATES.items():
+        if s == sign:
+            return gain_floor(name, "noise_level")
+    return None
+
+
+def noise_level_channel(effect: str, nc: dict[str, Any] | None, n_tests: int, alpha: float,
+                        tone: dict[str, Any] | None = None) -> dict[str, Any] | None:
+    """The noise-level-function channel of ``effect``, from :func:`synthaug.diagnose.noise.noise_channel`.
+
+    Shot noise: the NLF rises with brightness. A tone curve x^g: it falls (g < 1, compressive) or rises (g > 1,
+    expansive). A rising NLF is given to one of the two by ``tone`` (:func:`tone_evidence`): to ``gamma`` when
+    the tone curve it implies lowers the pixel distance to the real patches (``tone["gain"] > 0``), else to
+    ``shot_noise``; without ``tone`` a rising NLF is shot noise's. The slope's floor is the calibrated clean
+    range in the direction tested (:func:`slope_floor`).
+    """
     if effect not in NOISE_CANDIDATES or nc is None or nc["n_seeds"] < 3:
         return None
     sign = NOISE_CANDIDATES[effect]
+    rising = nc["slope"] > 0
+    if effect == "gamma" and rising:  # an expansive tone curve makes the noise rise with brightness too
+        sign = +1
     p_one = nc["p"] / 2 if nc["slope"] * sign > 0 else 1.0 - nc["p"] / 2
     p_adj = min(1.0, p_one * n_tests)
     z = _z(p_one)
-    floor = gain_floor(effect, "noise_level")  # calibrated: the slope in the candidate's direction on clean data
+    floor = slope_floor(sign)  # calibrated: the slope in the tested direction on clean data
     big = nc["slope"] * sign > floor if floor is not None else abs(nc["slope"]) >= SLOPE_FLOOR
-    return {"channel": "noise_level", "p_adjusted": p_adj, "z": z, "gain": nc["gain"], "slope": nc["slope"],
-            "floor": floor if floor is not None else SLOPE_FLOOR,
-            "significant": bool(p_adj < alpha and nc["slope"] * sign > 0 and big and nc["gain"] > 0)}
+    # which of the two a rising NLF is: the patches' tone decides (tone curve: the implied g helps; shot noise:
+    # the signal's tone is untouched, so the implied g hurts)
+    named = True
+    if rising:
+        named = (tone is not None and tone["gain"] > 0) if effect == "gamma" else (tone is None or tone["gain"] <= 0)
+    out = {"channel": "noise_level", "p_adjusted": p_adj, "z": z, "gain": nc["gain"], "slope": nc["slope"],
+           "floor": floor if floor is not None else SLOPE_FLOOR,
+           "significant": bool(p_adj < alpha and nc["slope"] * sign > 0 and big and nc["gain"] > 0 and named)}
+    if rising and tone is not None:
+        out["tone"] = {k: tone[k] for k in ("implied_gamma_g", "gain", "t", "explains")}
+    return out
+
+
+@torch.no_grad()
+def tone_evidence(data: DiagnosisData, nc: dict[str, Any] | None, base_pixel: np.ndarray, *,
+                  given: dict[str, Setting] | None = None, chunk: int = 128) -> dict[str, Any] | None:
+    """Shot noise or an expansive tone curve, for a rising noise level function (None otherwise).
+
+    Both make the frames' noise rise with brightness; only the tone curve changes the signal. The tone curve
+    the NLF implies (:func:`noise_setting`: g = 2 / (2 - slope)) is rendered on every seed (w_d re-solved, on
+    top of ``given``) and its pixel distance to the real patch compared with the base model's
+    (``base_pixel``): the object's tone against its real background. Its setting comes from the frames off the
+    object, not from these patches, so the comparison needs no held-out folds.
+
+    Returns:
+        ``implied_gamma_g``, ``gain`` (mean relative pixel-distance reduction over seeds: > 0 the tone curve
+        explains the patches, ≤ 0 it makes them worse), ``t``, ``p`` (one-sided, > 0), ``per_seed_gain`` and
+        ``explains`` (``"gamma"`` or ``"shot_noise"``).
+    """
+    if nc is None or nc["n_seeds"] < 3 or not nc["slope"] > 0:
+        return None
+    g = noise_setting("gamma", nc)["gamma_g"]
+    d = []
+    for i in range(0, len(data), chunk):
+        sub = data.subset(np.arange(i, min(i + chunk, len(data))))
+        ext = {**given_values(sub, given), **extension_values(sub, "gamma", {"gamma_g": g})}
+        d.append(pixel_distance(sub.real, render_with(sub, ext, w_d=solve_albedo(sub, ext))))
+    scale = float(np.mean(base_pixel))
+    if not scale > 0:
+        return None
+    per = (np.asarray(base_pixel) - np.concatenate(d)) / scale
+    m, t, p = _one_sided(per)
+    return {"implied_gamma_g": g, "gain": m, "t": t, "p": p, "per_seed_gain": per.tolist(),
+            "explains": "gamma" if m > 0 else "shot_noise"}
 
 
 def noise_setting(effect: str, nc: dict[str, Any]) -> Setting | None:
@@ -457,6 +539,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     bad = [c for c in names if c not in CANDIDATE_GRIDS]
     if bad:
         raise ValueError(f"unknown candidate(s) {bad}; candidates: {sorted(CANDIDATE_GRIDS)}")
+    names = offered_candidates(data, names)[0]  # no colour-only candidate on single-channel data
     rng = np.random.default_rng(seed)
     folds = kfold(len(data), k, rng)
     syn0, w0 = base_render(data, given)
@@ -464,8 +547,10 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     if n_tests is None:
         n_tests = n_screening_tests(names)
     nc = None  # the camera's noise level function (frames needed): one measurement for its candidates
+    tone = None  # a rising NLF: the patches' tone tells an expansive tone curve from shot noise
     if data.noise_levels is not None and any(c in NOISE_CANDIDATES for c in names):
         nc = noise_channel(data.noise_levels, folds)
+        tone = tone_evidence(data, nc, base[1], given=given)
     base_colour = None
     if data.real_rgb is not None and any(c in COLOUR_CANDIDATES for c in names):
         from synthaug.diagnose.diagnosis_data import chroma_distance, render_rgb, solve_albedo_rgb
@@ -503,7 +588,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
                              "gain": ab["gain"], "rho": ab["rho"], "floor": floor,
                              "significant": bool(p_adj < alpha and ab["sign_ok"] and ab["gain"] > max(floor or 0.0,
                                                                                                       0.0))})
-        nl = noise_level_channel(name, nc, n_tests, alpha)
+        nl = noise_level_channel(name, nc, n_tests, alpha, tone)
         if nl is not None:
             channels.append(nl)
         col = None if base_colour is None else screen_colour(data, name, folds, base_colour, penalty=penalty,
