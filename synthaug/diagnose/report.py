@@ -110,6 +110,8 @@ def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha:
     n_tests = n_screening_tests(order)
     rows = screen_candidates(data, order, k=k, seed=seed, alpha=alpha, progress=lambda c: say(f"  {c}"))
     first = rows
+    # the NLF's rise is named once, on the base model (an accepted effect must not rename it in a later round)
+    tone = next((r["tone"] for r in rows if r.get("tone")), None)
     accepted: dict[str, dict[str, float]] = {}
     picked: list[tuple[dict, dict]] = []
     while len(picked) < max_effects:
@@ -123,7 +125,8 @@ def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha:
         if not rest:
             break
         say(f"re-screening {rest} on top of {list(accepted)}")
-        rows = screen_candidates(data, rest, k=k, seed=seed, alpha=alpha, given=accepted, n_tests=n_tests)
+        rows = screen_candidates(data, rest, k=k, seed=seed, alpha=alpha, given=accepted, n_tests=n_tests,
+                                 tone=tone)
     return first, picked
 
 

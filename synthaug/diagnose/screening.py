@@ -508,7 +508,7 @@ def realism_accuracy(data: DiagnosisData, syn: torch.Tensor, folds: list[np.ndar
 def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = None, *, k: int = 5, seed: int = 0,
                       alpha: float = 0.01, penalty: float = 0.005, min_gain: float = HAND_MIN_GAIN,
                       progress: Callable[[str], None] | None = None, given: dict[str, Setting] | None = None,
-                      n_tests: int | None = None) -> list[dict[str, Any]]:
+                      n_tests: int | None = None, tone: dict[str, Any] | None = None) -> list[dict[str, Any]]:
     """Screen candidate effects on held-out seeds; return them ranked, each with its evidence.
 
     Args:
@@ -526,6 +526,9 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
             model includes them and every candidate is screened on top of them
             (the conditional gain of forward selection).
         n_tests: the Bonferroni count (default: this call's tests).
+        tone: the tone evidence of a rising noise level function (:func:`tone_evidence`) decided earlier, on
+            the base model (forward selection passes the first round's, so that an accepted effect screened
+            alongside does not rename the NLF's rise in a later round); None: measured here.
 
     Returns:
         one dict per candidate, ranked (significant distance gains by size, then significant absorbed
@@ -547,10 +550,10 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     if n_tests is None:
         n_tests = n_screening_tests(names)
     nc = None  # the camera's noise level function (frames needed): one measurement for its candidates
-    tone = None  # a rising NLF: the patches' tone tells an expansive tone curve from shot noise
     if data.noise_levels is not None and any(c in NOISE_CANDIDATES for c in names):
         nc = noise_channel(data.noise_levels, folds)
-        tone = tone_evidence(data, nc, base[1], given=given)
+        if tone is None:
+            tone = tone_evidence(data, nc, base[1], given=given)
     base_colour = None
     if data.real_rgb is not None and any(c in COLOUR_CANDIDATES for c in names):
         from synthaug.diagnose.diagnosis_data import chroma_distance, render_rgb, solve_albedo_rgb
@@ -606,6 +609,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         rows.append({"effect": name, "significant": bool(sig), "channel": best["channel"], "score": best["z"],
                      "p_adjusted": best["p_adjusted"], "gain": best["gain"], "channels": channels,
                      "screen": sc, "absorption": ab, "noise": nc if nl is not None else None,
+                     "tone": tone if nl is not None else None,
                      "noise_setting": noise_setting(name, nc) if nl is not None else None})
     rows.sort(key=_rank)
     return rows
