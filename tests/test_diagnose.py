@@ -401,7 +401,7 @@ def test_gray_data_never_offers_the_colour_only_candidates():
 def test_gray_screening_drops_colour_only_candidates_asked_for(tmp_path):
     from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
     from synthaug.diagnose.residuals import load_diagnosis_data
-    from synthaug.diagnose.screening import screen_candidates
+    from synthaug.diagnose.screening import n_screening_tests, screen_candidates
     from synthaug.effects.registry import PAPER_EFFECTS
     from synthaug.params import CaptureParams
 
@@ -414,8 +414,12 @@ def test_gray_screening_drops_colour_only_candidates_asked_for(tmp_path):
     theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
     data = load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
     assert data.real_rgb is None
-    rows = screen_candidates(data, ["chromatic_aberration", "lens_distortion", "white_balance"], k=2)
+    asked = ["chromatic_aberration", "lens_distortion", "white_balance"]
+    rows = screen_candidates(data, asked, k=2)
     assert [r["effect"] for r in rows] == ["lens_distortion"]
+    # the Bonferroni count stays that of the candidates asked for: leaving them out loosens no other test
+    pix = next(c for c in rows[0]["channels"] if c["channel"] == "distance:pixel")
+    assert pix["p_adjusted"] == pytest.approx(min(1.0, rows[0]["screen"]["pixel"]["p"] * n_screening_tests(asked)))
 
 
 def test_tone_evidence_sees_a_tone_curve_and_not_added_noise(tmp_path):

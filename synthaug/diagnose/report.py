@@ -98,7 +98,8 @@ def _extended_render(data: Any, row: dict[str, Any], given: dict[str, Any] | Non
 
 
 def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha: float, max_effects: int,
-                       say: Callable[[str], None]) -> tuple[list[dict[str, Any]], list[tuple[dict, dict]]]:
+                       say: Callable[[str], None], asked: Sequence[str] | None = None
+                       ) -> tuple[list[dict[str, Any]], list[tuple[dict, dict]]]:
     """Screen every candidate, accept the best significant one, re-screen the other significant ones on top
     of it (their conditional gain), and so on: an effect whose gain another one already explains drops out.
 
@@ -107,8 +108,11 @@ def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha:
     """
     from synthaug.diagnose.screening import n_screening_tests, screen_candidates
 
-    n_tests = n_screening_tests(order)
-    rows = screen_candidates(data, order, k=k, seed=seed, alpha=alpha, progress=lambda c: say(f"  {c}"))
+    # the Bonferroni count of every candidate asked for (colour-only ones left out of gray data included): the
+    # count the floors were calibrated with, so that leaving them out does not loosen the other tests
+    n_tests = n_screening_tests(order if asked is None else asked)
+    rows = screen_candidates(data, order, k=k, seed=seed, alpha=alpha, progress=lambda c: say(f"  {c}"),
+                             n_tests=n_tests)
     first = rows
     # the NLF's rise is named once, on the base model (an accepted effect must not rename it in a later round)
     tone = next((r["tone"] for r in rows if r.get("tone")), None)
@@ -184,6 +188,7 @@ def diagnose(
     bad = [c for c in names if c not in CANDIDATE_GRIDS]
     if bad:
         raise ValueError(f"unknown candidate(s) {bad}; candidates: {sorted(CANDIDATE_GRIDS)}")
+    asked = list(names)
     if k < 2:
         raise ValueError(f"k must be >= 2 folds, got {k}")
     say("loading seeds and fitted layers")
@@ -195,7 +200,8 @@ def diagnose(
     res = _residual_analysis(data, np.random.default_rng(seed), alpha)
     order, hinted = _order(res["structure"], names)
     say(f"screening {len(order)} candidates")
-    rows, picked = _forward_selection(data, order, k=k, seed=seed, alpha=alpha, max_effects=max_effects, say=say)
+    rows, picked = _forward_selection(data, order, k=k, seed=seed, alpha=alpha, max_effects=max_effects, say=say,
+                                      asked=asked)
     folds = kfold(len(data), k, np.random.default_rng(seed + 1))
     acc_base = realism_accuracy(data, res["syn0"], folds)
     nlf = _noise_level_function(data, folds)

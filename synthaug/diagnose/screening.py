@@ -542,13 +542,13 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     bad = [c for c in names if c not in CANDIDATE_GRIDS]
     if bad:
         raise ValueError(f"unknown candidate(s) {bad}; candidates: {sorted(CANDIDATE_GRIDS)}")
+    if n_tests is None:  # counted over the candidates asked for: leaving the colour-only ones out of gray data
+        n_tests = n_screening_tests(names)  # does not loosen the others' tests (the calibrated rule's count)
     names = offered_candidates(data, names)[0]  # no colour-only candidate on single-channel data
     rng = np.random.default_rng(seed)
     folds = kfold(len(data), k, rng)
     syn0, w0 = base_render(data, given)
     base = (pairwise_distance(data, syn0), pixel_distance(data.real, syn0))
-    if n_tests is None:
-        n_tests = n_screening_tests(names)
     nc = None  # the camera's noise level function (frames needed): one measurement for its candidates
     if data.noise_levels is not None and any(c in NOISE_CANDIDATES for c in names):
         nc = noise_channel(data.noise_levels, folds)
