@@ -6,6 +6,7 @@ at ``--reference-budget`` (default 10x the budget) as the reference optimum. Rep
 seed and how many CMA-ES fits land within 5% of the 10x-annealing distance. With ``--fit-path``, the seeds
 are also fitted ``--lockstep`` at a time (``synthaug fit``'s default: the populations of several seeds scored in
 one batch, the same fits) and that path's seconds per seed are reported beside the one-at-a-time figure.
+``--optimizers cmaes cmaes_numpy`` runs the ``cma`` package's CMA-ES and the numpy one side by side in one run.
 
 Usage::
 
@@ -65,7 +66,7 @@ def _seed_objective(seeds, i, cache, dist, cfg, scale):
     return obj, space
 
 
-def _lockstep(seeds, cache, dist, cfg, rows, args) -> dict:
+def _lockstep(seeds, cache, dist, cfg, rows, args, key: str = "cmaes") -> dict:
     """The same seeds fitted ``args.lockstep`` at a time (``synthaug fit``'s path): seconds per seed by repeat,
     and whether every fit equals the one made alone."""
     from synthaug.fit.fitting import patches_tensor, seed_seed
@@ -82,13 +83,14 @@ def _lockstep(seeds, cache, dist, cfg, rows, args) -> dict:
             results += fit_together(patches_tensor(seeds.patches[group]), patches_tensor(seeds.backgrounds[group]),
                                     cache, dist, cfg, seeds=[seed_seed(0, i) for i in group], object_scale=scale)
         per_seed.append((time.perf_counter() - t) / n)
-        same &= all(r["distance"] == row["cmaes"]["distance"] for r, row in zip(results, rows))
-    print(json.dumps({"lockstep": k, "seconds_per_seed": [round(x, 3) for x in per_seed]}), file=sys.stderr)
+        same &= all(r["distance"] == row[key]["distance"] for r, row in zip(results, rows))
+    print(json.dumps({"optimizer": cfg.optimizer, "lockstep": k, "seconds_per_seed": [round(x, 3) for x in per_seed]}),
+          file=sys.stderr)
     return {"k": k, "seconds_per_seed_median": round(statistics.median(per_seed), 3),
             "seconds_per_seed_by_repeat": [round(x, 3) for x in per_seed], "same_fits_as_alone": bool(same)}
 
 
-def _fit_seedset(source: str, tmp: Path, args) -> dict:
+def _fit_seedset(source: str, tmp: Path, args, optimizer: str = "cmaes") -> dict:
     """Wall seconds per seed of ``fit_seedset(workers=W)`` (``synthaug fit --workers W``, every default) over
     ``--fit-seeds`` seeds, start-up included, by repeat."""
     from synthaug.data.seedset import SeedSet
@@ -101,11 +103,12 @@ def _fit_seedset(source: str, tmp: Path, args) -> dict:
     per_seed = []
     for r in range(args.repeats):
         t = time.perf_counter()
-        fit_seedset(seeds_path, args.mesh, tmp / f"fit_w{args.workers}_{r}.json",
-                    FitConfig(distance=args.distance, budget=args.budget), workers=args.workers, indices=range(n))
+        fit_seedset(seeds_path, args.mesh, tmp / f"fit_{optimizer}_w{args.workers}_{r}.json",
+                    FitConfig(distance=args.distance, budget=args.budget, optimizer=optimizer), workers=args.workers,
+                    indices=range(n))
         per_seed.append((time.perf_counter() - t) / n)
-    print(json.dumps({"fit_seedset_workers": args.workers, "seconds_per_seed": [round(x, 3) for x in per_seed]}),
-          file=sys.stderr)
+    print(json.dumps({"optimizer": optimizer, "fit_seedset_workers": args.workers,
+                      "seconds_per_seed": [round(x, 3) for x in per_seed]}), file=sys.stderr)
     return {"workers": args.workers, "seeds": n, "seconds_per_seed_median": round(statistics.median(per_seed), 3),
             "seconds_per_seed_by_repeat": [round(x, 3) for x in per_seed]}
 
@@ -155,6 +158,9 @@ def main() -> int:
     parser.add_argument("--distance", default="hog")
     parser.add_argument("--n", type=int, default=8)
     parser.add_argument("--budget", type=int, default=3500, help="CMA-ES (and equal-budget annealing) evaluations")
+    parser.add_argument("--optimizers", nargs="+", default=["cmaes"], metavar="NAME",
+                        help="the CMA-ES columns, side by side in one run (e.g. cmaes cmaes_numpy: the cma package "
+                             "and the numpy engine); the first one's figures are also the top-level keys")
     parser.add_argument("--reference-budget", type=int, default=None,
                         help="evaluations of the reference annealing run (default 10x --budget)")
     parser.add_argument("--fit-path", action="store_true",
@@ -188,7 +194,8 @@ def main() -> int:
     seeds = SeedSet.load(source)
     cache = ViewCache.build(args.mesh)
     dist = build_distance(args.distance, seeds)
-    cfg = FitConfig(distance=args.distance, budget=args.budget)
+    cfgs = {o: FitConfig(distance=args.distance, budget=args.budget, optimizer=o) for o in args.optimizers}
+    cfg = cfgs[args.optimizers[0]]
     rows = []
     for i in range(min(args.n, len(seeds))):
         s = seed_seed(0, i)
@@ -196,41 +203,53 @@ def main() -> int:
         obj, space = _seed_objective(seeds, i, cache, dist, cfg, scale)
         x0 = np.random.default_rng(s).random(space.dim)
         res = {}
-        for name, opt, budget in (("cmaes", "cmaes", args.budget), ("anneal", "anneal", args.budget),
-                                  ("anneal_10x", "anneal", args.reference_budget or 10 * args.budget)):
+        runs = [(o, o, args.budget) for o in args.optimizers] + [
+            ("anneal", "anneal", args.budget), ("anneal_10x", "anneal", args.reference_budget or 10 * args.budget)]
+        for name, opt, budget in runs:
             t = time.perf_counter()
-            if name == "cmaes" and args.fit_path:
-                f = fit_one(obj.target, obj.background, cache, dist, cfg, seed=s, object_scale=scale)
+            if name in cfgs and args.fit_path:
+                f = fit_one(obj.target, obj.background, cache, dist, cfgs[name], seed=s, object_scale=scale)
                 res[name] = {"distance": f["distance"], "seconds": time.perf_counter() - t,
                              "evals": f["stats"]["n_evals"]}
                 continue
             r = get_optimizer(opt).minimize(obj, space.dim, x0=x0, seed=s, budget=budget)
             res[name] = {"distance": r.fun, "seconds": time.perf_counter() - t, "evals": r.n_evals}
-        res["cmaes_within_5pct_of_anneal_10x"] = bool(res["cmaes"]["distance"] <= 1.05 * res["anneal_10x"]["distance"])
+        for o in args.optimizers:
+            res[f"{o}_within_5pct_of_anneal_10x"] = bool(res[o]["distance"] <= 1.05 * res["anneal_10x"]["distance"])
         rows.append(res)
         print(json.dumps({"seed": i, **{k: (round(v["distance"], 4), round(v["seconds"], 2)) if isinstance(v, dict) else v
                                          for k, v in res.items()}}), file=sys.stderr)
     med = lambda k, f: statistics.median(r[k][f] for r in rows)  # noqa: E731
+
+    def summary(o: str) -> dict:
+        return {"seconds_median": round(med(o, "seconds"), 3), "distance_median": round(med(o, "distance"), 4),
+                "within_5pct_of_anneal_10x": sum(r[f"{o}_within_5pct_of_anneal_10x"] for r in rows),
+                "ratio_anneal_over_distance_equal_budget_median": round(statistics.median(
+                    r["anneal"]["distance"] / max(r[o]["distance"], 1e-12) for r in rows), 3)}
+
+    first = summary(args.optimizers[0])
     out = {
         "benchmark": "fit", "seeds": source, "distance": args.distance, "budget": args.budget, "n": len(rows),
         "reference_budget": args.reference_budget or 10 * args.budget,
-        "torch_threads": 1,
-        "cmaes_seconds_median": round(med("cmaes", "seconds"), 3),
+        "torch_threads": 1, "optimizers": list(args.optimizers),
+        "cmaes_seconds_median": first["seconds_median"],
         "anneal_seconds_median": round(med("anneal", "seconds"), 3),
         "anneal_10x_seconds_median": round(med("anneal_10x", "seconds"), 3),
-        "cmaes_distance_median": round(med("cmaes", "distance"), 4),
+        "cmaes_distance_median": first["distance_median"],
         "anneal_distance_median": round(med("anneal", "distance"), 4),
         "anneal_10x_distance_median": round(med("anneal_10x", "distance"), 4),
-        "cmaes_within_5pct_of_anneal_10x": sum(r["cmaes_within_5pct_of_anneal_10x"] for r in rows),
-        "ratio_anneal_over_cmaes_distance_equal_budget_median": round(statistics.median(
-            r["anneal"]["distance"] / max(r["cmaes"]["distance"], 1e-12) for r in rows), 3),
+        "cmaes_within_5pct_of_anneal_10x": first["within_5pct_of_anneal_10x"],
+        "ratio_anneal_over_cmaes_distance_equal_budget_median": first["ratio_anneal_over_distance_equal_budget_median"],
         "cmaes_path": "synthaug fit (fit_one, rotation-grid start)" if args.fit_path else "CMA-ES from the uniform look",
+        "by_optimizer": {o: summary(o) for o in args.optimizers},
         "per_seed": [{k: v for k, v in r.items()} for r in rows],
     }
-    if args.fit_path and args.lockstep > 0:
-        out["lockstep"] = _lockstep(seeds, cache, dist, cfg, rows, args)
-    if args.workers > 0:
-        out["fit_seedset"] = _fit_seedset(source, tmp, args)
+    for o in args.optimizers:
+        suffix = "" if o == args.optimizers[0] else f"_{o}"
+        if args.fit_path and args.lockstep > 0:
+            out["lockstep" + suffix] = _lockstep(seeds, cache, dist, cfgs[o], rows, args, key=o)
+        if args.workers > 0:
+            out["fit_seedset" + suffix] = _fit_seedset(source, tmp, args, optimizer=o)
     if args.profile:
         out["profile"] = _profile(seeds, cache, dist, cfg, scale, args)
     print(json.dumps(out, indent=1))

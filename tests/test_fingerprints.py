@@ -154,6 +154,22 @@ def test_mesh_file_bytes_are_part_of_the_fingerprint(fit_world, tmp_path):
     assert fit_inputs(seeds, "quadcopter", _cfg())["mesh_sha256"] == "builtin:quadcopter"
 
 
+
+def test_the_optimiser_implementation_is_part_of_the_fingerprint(fit_world):
+    """A fit made by another implementation of the optimiser (the numpy CMA-ES vs the cma package's, or an older
+    numpy engine) visits other points: it is not reused, and the warning says why."""
+    from synthaug.fit.fitting import fit_inputs, what_changed
+    from synthaug.fit.optimizers import IMPLEMENTATION_VERSION
+
+    root, seeds, _, _ = fit_world
+    a = fit_inputs(seeds, "quadcopter", _cfg())
+    b = fit_inputs(seeds, "quadcopter", _cfg(optimizer="cmaes_numpy"))
+    assert a["optimizer"].startswith(f"synthaug cmaes {IMPLEMENTATION_VERSION} (pycma")
+    assert "numpy CMAState" in b["optimizer"]
+    assert what_changed(a, b).startswith('optimizer "cmaes" -> "cmaes_numpy", the optimiser\'s implementation')
+    older = dict(a, optimizer=a["optimizer"].replace(f" {IMPLEMENTATION_VERSION} ", " 1 "))
+    assert what_changed(older, a).startswith("the optimiser's implementation synthaug cmaes 1")
+
 # ------------------------------------------------------------------------ ingest
 from synthaug.data.ingest import IngestConfig, ingest_videos  # noqa: E402
 from synthaug.data.seedset import SeedSet  # noqa: E402

@@ -1,7 +1,7 @@
 """What a per-seed fit depends on (:func:`fit_inputs`), and which finished parts of an earlier run may be reused.
 
 Every part records a fingerprint of its inputs: the seed set's content, the mesh, every
-:class:`~synthaug.fit.config.FitConfig` option, the synthaug version, and a caller-given distance's state
+:class:`~synthaug.fit.config.FitConfig` option, the synthaug version, the optimiser's implementation, and a caller-given distance's state
 (:func:`object_digest`). A rerun reuses a part only when its fingerprint is the current one, and recomputes the
 others with a warning naming what changed (:func:`what_changed`: another ``--distance``, ``--budget``, seed set...).
 """
@@ -93,18 +93,20 @@ def mesh_digest(mesh: Any) -> str:
 
 def fit_inputs(seeds_path: str | os.PathLike, mesh: Any, cfg: FitConfig, distance: Any = None) -> dict[str, Any]:
     """Everything a per-seed fit depends on: the seed set's content, the mesh, every option, the synthaug
-    version, and the state of a caller-given distance (None: built from ``cfg`` and the seeds)."""
+    version, the optimiser's implementation, and the state of a caller-given distance (None: built from ``cfg`` and the seeds)."""
     from synthaug import __version__
+    from synthaug.fit.optimizers import get_optimizer
 
     out = {"seedset_sha256": seedset_digest(seeds_path), "mesh_sha256": mesh_digest(mesh), "config": _cfg_json(cfg),
-           "synthaug_version": __version__}
+           "synthaug_version": __version__, "optimizer": get_optimizer(cfg.optimizer).implementation()}
     if distance is not None:
         out["distance_object"] = object_digest(distance)
     return out
 
 
 _INPUT_NAMES = {"seedset_sha256": "the seed set's content", "mesh_sha256": "the mesh",
-                "synthaug_version": "the synthaug version", "distance_object": "the given distance object"}
+                "synthaug_version": "the synthaug version", "optimizer": "the optimiser's implementation",
+                "distance_object": "the given distance object"}
 
 
 def what_changed(old: dict[str, Any] | None, new: dict[str, Any]) -> str:
@@ -116,10 +118,10 @@ def what_changed(old: dict[str, Any] | None, new: dict[str, Any]) -> str:
     for k in sorted(set(oc) | set(nc)):
         if oc.get(k) != nc.get(k):
             diffs.append(f"{k} {json.dumps(oc.get(k), default=str)} -> {json.dumps(nc.get(k), default=str)}")
-    for k in ("seedset_sha256", "mesh_sha256", "synthaug_version", "distance_object"):
+    for k in ("seedset_sha256", "mesh_sha256", "synthaug_version", "optimizer", "distance_object"):
         if old.get(k) != new.get(k):
             what = _INPUT_NAMES[k]
-            if k == "synthaug_version":
+            if k in ("synthaug_version", "optimizer"):
                 what += f" {old.get(k)} -> {new.get(k)}"
             diffs.append(what)
     return ", ".join(diffs)
