@@ -50,7 +50,10 @@ def test_demo_runs_end_to_end(demo):
     assert "## Diagnosis" in report and (out / "diagnosis" / "report.md").exists()
     assert (out / "diagnosis_clean" / "report.md").exists()
     diag = json.loads((out / "diagnosis" / "report.json").read_text())
-    assert diag["inputs"]["n_seeds"] == 10 and len(diag["screened"]) == 14
+    # the demo's measured data are gray: the 14 candidates less the two colour-only ones (issue 20)
+    assert diag["inputs"]["n_seeds"] == 10 and len(diag["screened"]) == 12
+    assert sorted(diag["colour"]["not_offered"]) == ["chromatic_aberration", "white_balance"]
+    assert not {"chromatic_aberration", "white_balance"} & {r["effect"] for r in diag["screened"]}
 
 
 def readme_python_blocks():
