@@ -114,11 +114,9 @@ class PatchDetectorModule(L.LightningModule):
         (mean over the batch: a weight of 2 counts as the sample twice, 0 as leaving it out)."""
         x, y, *w = batch
         logits = self.net(x)
-        if w:  # per-sample weights (positive_weights given); the unweighted call below is the default, unchanged
-            loss = nn.functional.binary_cross_entropy_with_logits(logits, y, weight=w[0].to(logits.dtype),
-                                                                  pos_weight=self._pos_weight())
-        else:
-            loss = nn.functional.binary_cross_entropy_with_logits(logits, y, pos_weight=self._pos_weight())
+        # per-sample weights when positive_weights were given; weight=None is the unweighted default, unchanged
+        loss = nn.functional.binary_cross_entropy_with_logits(logits, y, weight=w[0].to(logits.dtype) if w else None,
+                                                              pos_weight=self._pos_weight())
         acc = ((logits > 0).float() == y).float().mean()
         self.log(f"{stage}_loss", loss, prog_bar=True, sync_dist=stage != "train", batch_size=len(y))
         self.log(f"{stage}_acc", acc, prog_bar=stage != "train", sync_dist=stage != "train", batch_size=len(y))
@@ -172,6 +170,16 @@ def shift_patches(x: Tensor, which: Tensor, shift: int, *, generator: torch.Gene
     return out
 
 
+def _checked_weights(weights: Any, n: int, name: str, per: str, *, flatten: bool = False) -> Tensor:
+    """``weights`` as a tensor of ``n`` loss weights (``flatten``: of any shape holding ``n``), finite and >= 0;
+    ValueError naming ``name`` otherwise."""
+    given = torch.as_tensor(weights).detach()
+    w = given.flatten() if flatten else given
+    if w.shape != (n,) or not bool(torch.isfinite(w).all()) or bool((w < 0).any()):
+        raise ValueError(f"{name} must be finite, >= 0 and one per {per} ({n}), got {tuple(given.shape)}")
+    return w
+
+
 class PatchDataset(Dataset):
     """Labelled patches with a deterministic horizontal-flip doubling.
 
@@ -189,10 +197,7 @@ class PatchDataset(Dataset):
         if patches.dim() != 4 or patches.shape[1] != 1 or labels.shape != (patches.shape[0],):
             raise ValueError(f"patches must be (N, 1, S, S) with labels (N,), got {tuple(patches.shape)} and {tuple(labels.shape)}")
         if weights is not None:
-            weights = torch.as_tensor(weights).float()
-            if weights.shape != labels.shape or not bool(torch.isfinite(weights).all()) or bool((weights < 0).any()):
-                raise ValueError(f"weights must be finite, >= 0 and one per patch ({labels.shape[0]}), got "
-                                 f"{tuple(weights.shape)}")
+            weights = _checked_weights(weights, labels.shape[0], "weights", "patch").float()
         self.patches = patches.float()
         self.labels = labels.float()
         self.flip = flip
@@ -322,11 +327,8 @@ class PatchDataModule(L.LightningDataModule):
         dm = cls.__new__(cls)
         dm._tensors = (pos, neg)  # before __init__: its no-data check counts them
         if positive_weights is not None:
-            w = torch.as_tensor(positive_weights).detach().to(torch.float64).flatten()
-            if w.shape != (len(pos),) or not bool(torch.isfinite(w).all()) or bool((w < 0).any()):
-                raise ValueError(f"positive_weights must be finite, >= 0 and one per positive ({len(pos)}), got "
-                                 f"{tuple(torch.as_tensor(positive_weights).shape)}")
-            dm._positive_weights = w
+            dm._positive_weights = _checked_weights(positive_weights, len(pos), "positive_weights", "positive",
+                                                    flatten=True).to(torch.float64)
         dm.__init__(**kwargs)
         return dm
 
