@@ -116,7 +116,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         seeds = _make_seedset(Path(tmp), args.seeds)
         ds = SyntheticObjectDataset("quadcopter", seeds, length=args.epoch_length, mode="patch", patch_size=40,
-                                    seed=0, cache_options={"step_deg": args.step_deg})
+                                    seed=0, render={"step_deg": args.step_deg})
         sampler = EpochSampler(ds)
         loader = DataLoader(ds, batch_size=args.batch_size, sampler=sampler, num_workers=args.workers,
                             persistent_workers=args.workers > 0)

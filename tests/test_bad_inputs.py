@@ -225,7 +225,7 @@ def test_dataset_takes_an_integral_float_patch_size(small_cache):
     from synthaug.data.synthetic import SyntheticObjectDataset
 
     ds = SyntheticObjectDataset("quadcopter", [np.full((48, 48), 128, np.uint8)], length=1, patch_size=np.float64(24),
-                                cache=small_cache)
+                                render=small_cache)
     assert ds.patch_size == 24 and isinstance(ds.patch_size, int)
 
 

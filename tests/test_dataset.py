@@ -10,6 +10,7 @@ import pytest
 import torch
 from torch.utils.data import DataLoader, Dataset
 
+from synthaug.data.poses import FittedPose, UniformPose
 from synthaug.data.procedural import sky_backgrounds
 from synthaug.data.synthetic import SyntheticObjectDataset, collate_detection
 from synthaug.params import CaptureParams
@@ -34,7 +35,7 @@ def backgrounds():
 
 def make(backgrounds, small_cache, **kw):
     kw.setdefault("length", 40)
-    return SyntheticObjectDataset("quadcopter", backgrounds, cache=small_cache, **kw)
+    return SyntheticObjectDataset("quadcopter", backgrounds, render=small_cache, **kw)
 
 
 def _bytes(loader):
@@ -113,7 +114,7 @@ def test_object_changes_the_patch_and_effects_can_be_ablated(backgrounds, small_
 
 def test_frame_mode_boxes(small_cache):
     frames = sky_backgrounds(2, (120, 160), seed=3)
-    ds = SyntheticObjectDataset("quadcopter", frames, cache=small_cache, mode="frame", length=12,
+    ds = SyntheticObjectDataset("quadcopter", frames, render=small_cache, mode="frame", length=12,
                                 object_size=(16, 30), effects=["material"])
     loader = DataLoader(ds, batch_size=4, collate_fn=collate_detection)
     images, targets = next(iter(loader))
@@ -133,7 +134,7 @@ def test_frame_mode_boxes(small_cache):
 
 def test_rgb_mode(small_cache):
     frames = np.stack([np.dstack([b, b // 2, b // 3]) for b in sky_backgrounds(2, (50, 50), seed=0)])
-    ds = SyntheticObjectDataset("quadcopter", frames, cache=small_cache, length=4, channels=3)
+    ds = SyntheticObjectDataset("quadcopter", frames, render=small_cache, length=4, channels=3)
     img, t = ds[0]
     assert img.shape == (3, 40, 40) and t["theta"].shape == (5 + 6 * 3,)
 
@@ -216,15 +217,15 @@ def test_per_seed_object_scale_from_a_fit_file(tmp_path, small_cache):
     bgs = np.full((2, 40, 40), 200, np.uint8)
     theta = CaptureParams({"w_d": [0.1, 0.1]})
     theta.save(tmp_path / "fit.json", extra=[{"object_scale": 0.25}, {"object_scale": 0.9}])
-    ds = SyntheticObjectDataset("quadcopter", bgs, tmp_path / "fit.json", cache=small_cache, length=40,
-                                negative_fraction=0.0, effects=["material"], pose_ranges={"beta": (1.2, 1.5)})
+    ds = SyntheticObjectDataset("quadcopter", bgs, tmp_path / "fit.json", render=small_cache, length=40,
+                                negative_fraction=0.0, effects=["material"], pose_sampling=UniformPose({"beta": (1.2, 1.5)}))
     area = {0: [], 1: []}
     for i in range(len(ds)):
         img, t = ds[i]
         area[int(t["seed_index"])].append(float((img < 0.6).float().sum()))
     # areas scale with the square of the object scale: (0.9 / 0.25)^2 ≈ 13
     assert np.median(area[1]) > 6 * np.median(area[0]) > 0
-    fixed = SyntheticObjectDataset("quadcopter", bgs, tmp_path / "fit.json", cache=small_cache, length=4,
+    fixed = SyntheticObjectDataset("quadcopter", bgs, tmp_path / "fit.json", render=small_cache, length=4,
                                    object_scale=0.5)
     assert fixed.seed_scales is None
 
@@ -292,7 +293,7 @@ def test_fitted_pose_sampling_draws_around_each_seeds_fitted_pose(backgrounds, s
     from scipy.spatial.transform import Rotation
 
     fit = CaptureParams.sample(4, generator=torch.Generator().manual_seed(9))
-    exact = make(backgrounds, small_cache, params=fit, pose_sampling="fitted", pose_jitter_deg=0.0, length=40)
+    exact = make(backgrounds, small_cache, params=fit, pose_sampling=FittedPose(fit, jitter_deg=0.0), length=40)
     for i in range(len(exact)):
         _, t = exact[i]
         s = int(t["seed_index"])
@@ -301,7 +302,7 @@ def test_fitted_pose_sampling_draws_around_each_seeds_fitted_pose(backgrounds, s
         assert (want.inv() * Rotation.from_euler("xyz", t["theta"][:3].double().numpy())).magnitude() < 1e-5
     # with a jitter: the angle to the fitted rotation is |v|, v ~ N(0, s^2 I3): a chi(3) of mean 2 s sqrt(2/pi)
     sigma = 20.0
-    ds = make(backgrounds, small_cache, params=fit, pose_sampling="fitted", pose_jitter_deg=sigma, length=400)
+    ds = make(backgrounds, small_cache, params=fit, pose_sampling=FittedPose(fit, jitter_deg=sigma), length=400)
     angles = []
     for i in range(len(ds)):
         _, t = ds[i]
@@ -320,5 +321,7 @@ def test_fitted_pose_sampling_draws_around_each_seeds_fitted_pose(backgrounds, s
         make(backgrounds, small_cache, pose_sampling="fitted")
     with pytest.raises(ValueError, match="pose_sampling"):
         make(backgrounds, small_cache, params=fit, pose_sampling="kde")
-    with pytest.raises(ValueError, match="pose_jitter_deg"):
-        make(backgrounds, small_cache, params=fit, pose_sampling="fitted", pose_jitter_deg=-1.0)
+    with pytest.raises(ValueError, match="jitter_deg"):
+        FittedPose(fit, jitter_deg=-1.0)
+    with pytest.raises(ValueError, match="4 seeds"):  # one fitted rotation per seed
+        make(backgrounds, small_cache, params=fit, pose_sampling=FittedPose(np.zeros((3, 3))))

@@ -60,11 +60,11 @@ def _configs(cache):
 
     def patch(**kw):
         kw.setdefault("length", 12)
-        return SyntheticObjectDataset("quadcopter", patches, cache=cache, seed=3, **kw)
+        return SyntheticObjectDataset("quadcopter", patches, render=cache, seed=3, **kw)
 
     def frame(**kw):
         kw.setdefault("length", 8)
-        return SyntheticObjectDataset("quadcopter", frames, cache=cache, mode="frame", object_size=(18, 34),
+        return SyntheticObjectDataset("quadcopter", frames, render=cache, mode="frame", object_size=(18, 34),
                                       seed=4, **kw)
 
     geo = {"origin": torch.tensor([[10.0, 20.0], [0.0, 0.0], [50.0, 5.0], [7.0, 90.0]]),
@@ -74,9 +74,10 @@ def _configs(cache):
         "patch_fit": patch(params=fit),
         "patch_kde": patch(params=fit, capture_sampling="kde"),
         "patch_uniform": patch(params=fit, capture_sampling="uniform"),
-        "patch_fitted_pose": patch(params=fit, pose_sampling="fitted", pose_jitter_deg=15.0),
+        "patch_fitted_pose": patch(params=fit, pose_sampling=FittedPose(fit, jitter_deg=15.0)),
         "patch_kde_fitted_pose": patch(params=fit, capture_sampling="kde", pose_sampling="fitted"),
-        "patch_ranges": patch(pose_ranges={"beta": (-0.2, 0.3), "t_x": (-0.1, 0.1)}, negative_fraction=0.25),
+        "patch_ranges": patch(pose_sampling=UniformPose({"beta": (-0.2, 0.3), "t_x": (-0.1, 0.1)}),
+                              negative_fraction=0.25),
         "patch_rgb": patch(params=rgb, channels=3),
         "patch_geometry_extended": patch(params=extended, seed_geometry=geo),
         "patch_real_transforms": patch(length=None, real=RealPatches(), synthetic_per_real=2.5, transforms=_noise),
@@ -219,7 +220,7 @@ class FixedPose:
 def test_a_pose_sampler_object_is_honoured(small_cache):
     bgs = sky_backgrounds(4, (64, 72), seed=1)
     sampler = FixedPose()
-    ds = SyntheticObjectDataset("quadcopter", bgs, cache=small_cache, length=10, pose_sampling=sampler)
+    ds = SyntheticObjectDataset("quadcopter", bgs, render=small_cache, length=10, pose_sampling=sampler)
     assert ds.pose_sampler is sampler and isinstance(sampler, PoseSampler)
     for i in range(len(ds)):
         _, t = ds[i]
@@ -228,17 +229,15 @@ def test_a_pose_sampler_object_is_honoured(small_cache):
     assert len(sampler.calls) == 10 and all(n == 5 for _, n in sampler.calls)
     # the built-in samplers are such objects: passing them gives the strings' bytes
     fit = CaptureParams.sample(4, generator=torch.Generator().manual_seed(9))
-    by_name = SyntheticObjectDataset("quadcopter", bgs, fit, cache=small_cache, length=6, pose_sampling="fitted",
-                                     pose_jitter_deg=7.0)
-    by_object = SyntheticObjectDataset("quadcopter", bgs, fit, cache=small_cache, length=6,
-                                       pose_sampling=FittedPose(fit, jitter_deg=7.0))
-    by_uniform = SyntheticObjectDataset("quadcopter", bgs, fit, cache=small_cache, length=6,
-                                        pose_sampling=UniformPose({"beta": (0.0, 0.1)}))
-    ranged = SyntheticObjectDataset("quadcopter", bgs, fit, cache=small_cache, length=6,
-                                    pose_ranges={"beta": (0.0, 0.1)})
+    by_name = SyntheticObjectDataset("quadcopter", bgs, fit, render=small_cache, length=6, pose_sampling="fitted")
+    by_object = SyntheticObjectDataset("quadcopter", bgs, fit, render=small_cache, length=6,
+                                       pose_sampling=FittedPose(fit, jitter_deg=20.0))
+    uniform = SyntheticObjectDataset("quadcopter", bgs, fit, render=small_cache, length=6)
+    by_uniform = SyntheticObjectDataset("quadcopter", bgs, fit, render=small_cache, length=6,
+                                        pose_sampling=UniformPose())
     for i in range(6):
         _same_item(by_name[i], by_object[i])
-        _same_item(by_uniform[i], ranged[i])
+        _same_item(uniform[i], by_uniform[i])
     # FittedPose without jitter: the seed's fitted rotation itself
     p = FittedPose(fit, jitter_deg=0.0).sample(torch.Generator(), 2, [0.5] * 5)
     assert [p[n] for n in ("alpha", "beta", "gamma")] == pytest.approx(
@@ -249,7 +248,7 @@ def test_bad_pose_sampling_is_refused_with_a_clear_message(small_cache):
     bgs = sky_backgrounds(2, (64, 72), seed=1)
 
     def make(**kw):
-        return SyntheticObjectDataset("quadcopter", bgs, cache=small_cache, length=4, **kw)
+        return SyntheticObjectDataset("quadcopter", bgs, render=small_cache, length=4, **kw)
 
     with pytest.raises(ValueError, match=r"pose_sampling must be 'uniform', 'fitted' or a pose sampler.*'kde'"):
         make(pose_sampling="kde")
@@ -259,9 +258,55 @@ def test_bad_pose_sampling_is_refused_with_a_clear_message(small_cache):
         make(pose_sampling=object())
     with pytest.raises(ValueError, match="give params"):
         make(pose_sampling="fitted")
-    with pytest.raises(ValueError, match="pose_ranges is for"):
-        make(pose_sampling=FixedPose(), pose_ranges={"beta": (0.0, 0.1)})
-    with pytest.raises(ValueError, match="pose_jitter_deg"):
+    with pytest.raises(ValueError, match="jitter_deg"):
         FittedPose(np.zeros((2, 3)), jitter_deg=math.nan)
     with pytest.raises(ValueError, match=r"\(N, 3\)"):
         FittedPose(np.zeros((2, 2)))
+
+
+def test_former_constructor_arguments_still_work_for_one_release(small_cache, tmp_path):
+    """``cache`` / ``cache_options`` (now ``render``) and ``pose_ranges`` / ``pose_jitter_deg`` (now a pose
+    sampler object): each still accepted, with a FutureWarning naming the new spelling, and the same bytes."""
+    bgs = sky_backgrounds(3, (64, 72), seed=1)
+    fit = CaptureParams.sample(3, generator=torch.Generator().manual_seed(9))
+    fit_file = tmp_path / "fit.json"
+    fit.save(fit_file)
+
+    def make(**kw):
+        return SyntheticObjectDataset("quadcopter", bgs, length=6, seed=2, **kw)
+
+    ranges = {"beta": (0.0, 0.1), "t_x": (-0.03, 0.05)}
+    pairs = [
+        ({"cache": small_cache}, {"render": small_cache}, "render=<the ViewCache>"),
+        ({"params": fit, "render": small_cache, "pose_ranges": ranges},
+         {"params": fit, "render": small_cache, "pose_sampling": UniformPose(ranges)}, "UniformPose"),
+        ({"params": fit, "render": small_cache, "pose_sampling": "fitted", "pose_jitter_deg": 7.0},
+         {"params": fit, "render": small_cache, "pose_sampling": FittedPose(fit, 7.0)}, "FittedPose"),
+        # the fit as a file: FittedPose reads it as the dataset does
+        ({"params": fit_file, "render": small_cache, "pose_sampling": "fitted", "pose_jitter_deg": 3.0,
+          "pose_ranges": ranges},
+         {"params": fit_file, "render": small_cache, "pose_sampling": FittedPose(fit_file, 3.0, ranges)}, "FittedPose"),
+    ]
+    for old, new, hint in pairs:
+        with pytest.warns(FutureWarning, match=hint):
+            before = make(**old)
+        after = make(**new)
+        for i in range(6):
+            _same_item(before[i], after[i])
+    # the ranges really changed the poses (the pair above is not vacuous)
+    plain = make(params=fit, render=small_cache)
+    assert not all(torch.equal(plain[i][1]["theta"], make(params=fit, render=small_cache,
+                                                           pose_sampling=UniformPose(ranges))[i][1]["theta"])
+                   for i in range(6))
+    with pytest.warns(FutureWarning), pytest.raises(ValueError, match="leave render at 'cache'"):
+        make(render="exact", cache_options={"step_deg": 30})
+    with pytest.warns(FutureWarning), pytest.raises(ValueError, match="pose_ranges is for"):
+        make(render=small_cache, pose_sampling=FixedPose(), pose_ranges={"beta": (0.0, 0.1)})
+    with pytest.warns(FutureWarning), pytest.raises(ValueError, match="pose_jitter_deg"):
+        make(params=fit, render=small_cache, pose_sampling="fitted", pose_jitter_deg=-1.0)
+    with pytest.raises(TypeError, match="unexpected keyword.*'cache_size'"):
+        make(render=small_cache, cache_size=3)
+    with pytest.raises(ValueError, match="render must be 'cache', 'exact'"):
+        make(render="gl")
+    with pytest.raises(ValueError, match="render must be .* got int"):
+        make(render=3)

@@ -20,7 +20,7 @@ def frames():
 def frame_ds(frames, small_cache, **kw):
     kw.setdefault("length", 24)
     kw.setdefault("effects", ["material"])  # no blur: the object's changed pixels are the rendered ones
-    return SyntheticObjectDataset("quadcopter", frames, cache=small_cache, mode="frame", object_size=(18, 34),
+    return SyntheticObjectDataset("quadcopter", frames, render=small_cache, mode="frame", object_size=(18, 34),
                                   negative_fraction=0.0, **kw)
 
 
@@ -141,20 +141,20 @@ def test_a_users_uint8_patches_collate_with_synthetic_ones(small_cache):
     """The obvious ``real=[(patch, 1) ...]`` with uint8 numpy patches: converted, not passed through."""
     bgs = sky_backgrounds(3, (48, 48), seed=0)
     patches = [np.asarray(b[:40, :40]) for b in bgs]
-    ds = SyntheticObjectDataset("quadcopter", bgs, cache=small_cache, real=[(p, 1) for p in patches],
+    ds = SyntheticObjectDataset("quadcopter", bgs, render=small_cache, real=[(p, 1) for p in patches],
                                 synthetic_per_real=3)
     images, targets = next(iter(DataLoader(ds, batch_size=len(ds))))
     assert images.shape == (12, 1, 40, 40) and images.dtype == torch.float32
     torch.testing.assert_close(images[1, 0], torch.from_numpy(patches[1]).float() / 255)
     assert targets["labels"].dtype == torch.int64 and targets["labels"][:3].tolist() == [1, 1, 1]
     with pytest.raises(ValueError, match=r"real\[0\]: image is 30x30 but patch_size is 40"):
-        SyntheticObjectDataset("quadcopter", bgs, cache=small_cache, real=[(np.zeros((30, 30), np.uint8), 1)],
+        SyntheticObjectDataset("quadcopter", bgs, render=small_cache, real=[(np.zeros((30, 30), np.uint8), 1)],
                                synthetic_per_real=1)[0]
 
 
 def test_epoch_sampler_reaches_persistent_workers(small_cache):
     bgs = sky_backgrounds(2, (48, 48), seed=1)
-    ds = SyntheticObjectDataset("quadcopter", bgs, cache=small_cache, length=8, negative_fraction=0.0)
+    ds = SyntheticObjectDataset("quadcopter", bgs, render=small_cache, length=8, negative_fraction=0.0)
     reference = {e: torch.stack([ds.__getitems__([(e, i)])[0][0] for i in range(8)]) for e in (0, 1)}
     assert not torch.equal(reference[0], reference[1])
     with pytest.raises(IndexError, match=r"an \(epoch, index\) pair"):

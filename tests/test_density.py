@@ -55,11 +55,11 @@ def test_dataset_draws_capture_parameters_from_the_density(small_cache):
 
     bgs = np.full((3, 40, 40), 150, np.uint8)
     params = CaptureParams({"sigma_s": [0.2, 0.5, 1.0], "w_d": [0.2, 0.4, 0.6]})
-    ds = SyntheticObjectDataset("quadcopter", bgs, params, cache=small_cache, length=30, capture_sampling="uniform")
+    ds = SyntheticObjectDataset("quadcopter", bgs, params, render=small_cache, length=30, capture_sampling="uniform")
     w = torch.stack([ds[i][1]["theta"][-1] for i in range(30)])
     assert bool(((w >= 0.2 - 1e-6) & (w <= 0.6 + 1e-6)).all())
     assert len(set(np.round(w.numpy(), 4))) > 10  # not just the three seed values
-    seed_ds = SyntheticObjectDataset("quadcopter", bgs, params, cache=small_cache, length=30)
+    seed_ds = SyntheticObjectDataset("quadcopter", bgs, params, render=small_cache, length=30)
     assert set(np.round([seed_ds[i][1]["theta"][-1].item() for i in range(30)], 4)) <= {0.2, 0.4, 0.6}
 
 
@@ -71,8 +71,8 @@ def test_capture_sampler_object_is_its_name(small_cache, name):
     bgs = np.full((3, 40, 40), 150, np.uint8)
     params = CaptureParams({"sigma_s": [0.2, 0.5, 1.0], "w_d": [0.2, 0.4, 0.6]})
     sampler = CAPTURE_SAMPLERS[name](params)
-    a = SyntheticObjectDataset("quadcopter", bgs, params, cache=small_cache, length=6, capture_sampling=name)
-    b = SyntheticObjectDataset("quadcopter", bgs, params, cache=small_cache, length=6, capture_sampling=sampler)
+    a = SyntheticObjectDataset("quadcopter", bgs, params, render=small_cache, length=6, capture_sampling=name)
+    b = SyntheticObjectDataset("quadcopter", bgs, params, render=small_cache, length=6, capture_sampling=sampler)
     assert b.capture_sampler is sampler and isinstance(sampler, CaptureSampler)
     for i in range(6):
         assert a.make_params(i) == b.make_params(i)
@@ -94,8 +94,8 @@ def test_own_capture_sampler_and_bad_ones(small_cache):
         def rows(self, seed_indices, captures):
             return params[torch.full_like(seed_indices, 2)]
 
-    ds = SyntheticObjectDataset("quadcopter", bgs, params, cache=small_cache, length=8, capture_sampling=Fixed())
+    ds = SyntheticObjectDataset("quadcopter", bgs, params, render=small_cache, length=8, capture_sampling=Fixed())
     assert all(ds[i][1]["theta"][-1].item() == pytest.approx(0.6) for i in range(8))
     for bad in ("gmm", 3):
         with pytest.raises(ValueError, match="capture_sampling must be"):
-            SyntheticObjectDataset("quadcopter", bgs, params, cache=small_cache, length=4, capture_sampling=bad)
+            SyntheticObjectDataset("quadcopter", bgs, params, render=small_cache, length=4, capture_sampling=bad)

@@ -137,7 +137,7 @@ def _dataset(seeds, params, cache, **kw):
     from synthaug.data.synthetic import SyntheticObjectDataset
 
     return SyntheticObjectDataset("quadcopter", SeedSet.load(seeds), params=str(params), length=6, patch_size=40,
-                                  negative_fraction=0.0, seed=5, cache=cache, **kw)
+                                  negative_fraction=0.0, seed=5, render=cache, **kw)
 
 
 def _item_draw(ds, k: int):
@@ -149,7 +149,7 @@ def _item_draw(ds, k: int):
     g = item_generator(5, 0, k)
     u = torch.rand(10, generator=g, dtype=torch.float64).tolist()
     pose = {n: torch.tensor([lo + (hi - lo) * u[2 + j]]) for j, n in enumerate(POSE_NAMES)
-            for lo, hi in [ds.pose_ranges[n]]}
+            for lo, hi in [ds.pose_sampler.ranges[n]]}
     return g, min(int(u[0] * 4), 3), pose
 
 

@@ -54,7 +54,7 @@ def _dataset(seeds_dir, cache, count, negative_fraction=0.0, seed=0):
     """The dataset `synthaug export` builds for FAST options (sampled Θ)."""
     return SyntheticObjectDataset("quadcopter", SeedSet.load(seeds_dir), None, length=count, mode="frame",
                                   negative_fraction=negative_fraction, object_size=OBJECT_SIZE, seed=seed,
-                                  cache=cache)
+                                  render=cache)
 
 
 def _export(fmt, seeds_dir, out, count, *extra) -> int:
@@ -228,7 +228,7 @@ def test_a_matching_fit_file_is_used(seeds_dir, small_cache, tmp_path):
     out = tmp_path / "ds"
     assert _export("coco", seeds_dir, out, 4, "--params", str(p)) == 0
     ds = SyntheticObjectDataset("quadcopter", SeedSet.load(seeds_dir), params, length=4, mode="frame",
-                                negative_fraction=0.0, object_size=OBJECT_SIZE, cache=small_cache)
+                                negative_fraction=0.0, object_size=OBJECT_SIZE, render=small_cache)
     doc = json.loads((out / "annotations.json").read_text())
     for (img, t), im in zip(ds.__getitems__(list(range(4))), doc["images"]):
         png = np.asarray(Image.open(out / "images" / im["file_name"]))
@@ -276,7 +276,7 @@ def test_api_errors(seeds_dir, small_cache, tmp_path):
         export_dataset(ds, tmp_path / "a", "voc", 2)
     with pytest.raises(ValueError, match="count"):
         export_dataset(ds, tmp_path / "a", "coco", 4)
-    patch_ds = SyntheticObjectDataset("quadcopter", [np.full((48, 48), 128, np.uint8)], length=2, cache=small_cache)
+    patch_ds = SyntheticObjectDataset("quadcopter", [np.full((48, 48), 128, np.uint8)], length=2, render=small_cache)
     with pytest.raises(ValueError, match="frame-mode"):
         export_dataset(patch_ds, tmp_path / "a", "coco", 2)
     assert list(tmp_path.iterdir()) == []

@@ -164,7 +164,7 @@ def test_fit_seedset_file_and_dataset_reads_it(tmp_path):
     from synthaug.data.synthetic import SyntheticObjectDataset
 
     ds = SyntheticObjectDataset("quadcopter", SeedSet.load(seeds), out, length=4,
-                                cache_options={"step_deg": 30, "sprite_size": 48})
+                                render={"step_deg": 30, "sprite_size": 48})
     img, t = ds[0]
     row = CaptureParams.load(out)[int(t["seed_index"])].to_vector()[0]
     torch.testing.assert_close(t["theta"][5:], row[5:])

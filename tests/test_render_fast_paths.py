@@ -239,7 +239,7 @@ def _items(ds, idx):
 @pytest.mark.parametrize("mode,channels", [("patch", 1), ("patch", 3), ("frame", 1)])
 def test_dataset_items_equal_reference(cache, reference_path, mode, channels):
     bgs = sky_backgrounds(4, (96, 96) if mode == "patch" else (160, 200), seed=2)
-    ds = SyntheticObjectDataset("quadcopter", bgs, cache=cache, length=64, mode=mode, patch_size=48,
+    ds = SyntheticObjectDataset("quadcopter", bgs, render=cache, length=64, mode=mode, patch_size=48,
                                 channels=channels, negative_fraction=0.0, seed=7,
                                 object_size=(20.0, 40.0))
     idx = list(range(24 if mode == "patch" else 8))
@@ -256,7 +256,7 @@ def test_frame_batches_from_workers_equal_the_main_process(cache):
     from synthaug.data.synthetic import collate_detection
 
     bgs = sky_backgrounds(3, (120, 150), seed=4)
-    ds = SyntheticObjectDataset("quadcopter", bgs, cache=cache, length=12, mode="frame", negative_fraction=0.3,
+    ds = SyntheticObjectDataset("quadcopter", bgs, render=cache, length=12, mode="frame", negative_fraction=0.3,
                                 seed=9, object_size=(20.0, 40.0))
     runs = []
     for workers in (0, 2):
@@ -278,7 +278,7 @@ def test_frame_batches_from_workers_equal_the_main_process(cache):
 def test_items_do_not_depend_on_the_batch_they_are_rendered_in(cache):
     """A large batch is rendered in chunks and shares per-σ operators: its items equal the items alone."""
     bgs = sky_backgrounds(4, (96, 96), seed=5)
-    ds = SyntheticObjectDataset("quadcopter", bgs, cache=cache, length=300, patch_size=32, negative_fraction=0.1,
+    ds = SyntheticObjectDataset("quadcopter", bgs, render=cache, length=300, patch_size=32, negative_fraction=0.1,
                                 seed=11)
     idx = list(range(3, 3 + 150))  # more than one chunk of 32x32 patches
     batch = _items(ds, idx)

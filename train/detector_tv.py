@@ -462,7 +462,7 @@ class SyntheticFramesDataModule(L.LightningDataModule):
             hp.mesh, [seeds.background_frame(i) for i in train], params, mode="frame",
             real=Subset(frames, train), synthetic_per_real=hp.synthetic_per_real, object_size=(lo, hi),
             negative_fraction=hp.negative_fraction, channels=params.channels if params is not None else 1,
-            seed=hp.seed, cache=cache, transforms=self.train_transforms())
+            seed=hp.seed, render=cache, transforms=self.train_transforms())
         self.val_set = RealFrames(Subset(frames, val)) if val else None
 
     def train_dataloader(self) -> DataLoader:

@@ -52,7 +52,7 @@ def run_render(mode: str, args: argparse.Namespace) -> dict:
     t0 = time.perf_counter()
     ds = SyntheticObjectDataset(args.mesh, bgs, length=n_items, mode=mode, patch_size=args.patch_size,
                                 negative_fraction=0.0, seed=args.seed,
-                                cache_options={"step_deg": args.step_deg})
+                                render={"step_deg": args.step_deg})
     setup_s = time.perf_counter() - t0
     loader = DataLoader(ds, batch_size=bs, num_workers=args.workers, shuffle=False,
                         collate_fn=(lambda b: b) if mode == "frame" else None,

@@ -448,7 +448,7 @@ def main(args: argparse.Namespace) -> int:
         ds = SyntheticObjectDataset(args.mesh, seeds, params, length=args.count, mode="frame",
                                     negative_fraction=args.negative_fraction, object_size=(lo, hi),
                                     channels=params.channels if params is not None else 1, seed=args.seed,
-                                    cache=cache)
+                                    render=cache)
     except ValueError as e:
         msg = str(e)
         if "smaller than" in msg:

@@ -22,6 +22,7 @@ Example:
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
 from typing import Any, Protocol, runtime_checkable
 
@@ -29,7 +30,7 @@ import numpy as np
 import torch
 from scipy.spatial.transform import Rotation
 
-from synthaug.params import POSE_NAMES, POSE_SPECS
+from synthaug.params import POSE_NAMES, POSE_SPECS, CaptureParams
 from synthaug.render.pose import rotation_matrix
 
 __all__ = ["PoseSampler", "UniformPose", "FittedPose", "pose_ranges", "jittered_pose"]
@@ -101,7 +102,8 @@ class FittedPose:
 
     Args:
         rotations: the fitted rotations, one per seed: anything with ``alpha``, ``beta``, ``gamma`` rows (a
-            :class:`~synthaug.params.CaptureParams` from a fit) or an ``(N, 3)`` array of (α, β, γ) radians.
+            :class:`~synthaug.params.CaptureParams` from a fit), the path of a fit file (``synthaug fit``'s
+            output) or an ``(N, 3)`` array of (α, β, γ) radians.
         jitter_deg: spread of the random rotation, degrees per component of its rotation vector (0: the
             fitted rotation itself).
         ranges: overrides of the t_x, t_y (and unused α, β, γ) sampling ranges (see :func:`pose_ranges`).
@@ -109,6 +111,8 @@ class FittedPose:
 
     def __init__(self, rotations: Any, jitter_deg: float = 20.0,
                  ranges: Mapping[str, tuple[float, float]] | None = None) -> None:
+        if isinstance(rotations, (str, os.PathLike)):
+            rotations = CaptureParams.load(rotations)
         if all(hasattr(rotations, n) for n in _ROTATION):
             rows = list(zip(*([float(v) for v in getattr(rotations, n)] for n in _ROTATION)))
         else:
@@ -119,7 +123,7 @@ class FittedPose:
         if not all(math.isfinite(v) for r in rows for v in r):
             raise ValueError("rotations must be finite")
         if not (math.isfinite(jitter_deg) and jitter_deg >= 0):
-            raise ValueError(f"pose_jitter_deg must be finite and >= 0, got {jitter_deg}")
+            raise ValueError(f"jitter_deg must be finite and >= 0, got {jitter_deg}")
         self.rotations: list[tuple[float, float, float]] = rows
         self.jitter_deg = float(jitter_deg)
         self._uniform = UniformPose(ranges)

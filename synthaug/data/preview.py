@@ -101,7 +101,7 @@ def main(args: argparse.Namespace) -> int:
             bgs = sky_backgrounds(4, (256, 320), seed=args.seed)
         params = loaded[0] if loaded else None
         ds = SyntheticObjectDataset(args.mesh, bgs, params, length=args.n, mode=args.mode, patch_size=args.patch_size,
-                                    negative_fraction=0.0, effects=args.effects, seed=args.seed, cache=cache)
+                                    negative_fraction=0.0, effects=args.effects, seed=args.seed, render=cache)
         tiles = [_u8(img) for img, _ in ds.__getitems__(list(range(len(ds))))]
         cols = 8 if args.mode == "patch" else 2
         grid = tile_grid(tiles, cols, zoom=args.zoom if args.mode == "patch" else 1,
@@ -121,7 +121,7 @@ def main(args: argparse.Namespace) -> int:
             ds = SyntheticObjectDataset(args.mesh, [seeds.backgrounds[k]], params[k], length=args.per_seed,
                                         patch_size=seeds.patch_size, object_scale=scale,
                                         negative_fraction=0.0, effects=args.effects, seed=args.seed + k,
-                                        cache=cache)
+                                        render=cache)
             tiles.append(seeds.patches[k])
             tiles.append(seeds.backgrounds[k])
             tiles += [_u8(img) for img, _ in ds.__getitems__(list(range(args.per_seed)))]

@@ -45,7 +45,7 @@ its random draws seeded from ``(seed, epoch, index)``.
 Example:
     >>> import numpy as np, torch
     >>> bg = np.full((40, 40), 128, np.uint8)
-    >>> ds = SyntheticObjectDataset("quadcopter", [bg], length=4, cache_options={"step_deg": 30, "sprite_size": 32})  # doctest: +SKIP
+    >>> ds = SyntheticObjectDataset("quadcopter", [bg], length=4, render={"step_deg": 30, "sprite_size": 32})  # doctest: +SKIP
     >>> img, target = ds[0]  # doctest: +SKIP
 """
 
@@ -55,6 +55,7 @@ import dataclasses
 import math
 import numbers
 import os
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -68,7 +69,7 @@ from torchvision import tv_tensors
 from synthaug.data.captures import CAPTURE_SAMPLERS, CaptureSampler
 from synthaug.data.epochs import EpochSampler, item_generator, item_seed
 from synthaug.data.mixing import RealItems, mixed_counts, to_float_image
-from synthaug.data.poses import FittedPose, PoseSampler, UniformPose, pose_ranges
+from synthaug.data.poses import FittedPose, PoseSampler, UniformPose
 from synthaug.effects.pipeline import simulate
 from synthaug.effects.registry import ordered
 from synthaug.params import POSE_NAMES, POSE_SPECS, CaptureParams, fitted_object_scales
@@ -93,7 +94,7 @@ def _is_integral(x: Any) -> bool:
     return isinstance(x, (float, np.floating)) and math.isfinite(x) and float(x).is_integer()
 
 
-def _check_arguments(*, transforms: Any, mode: str, render: str, channels: int, patch_size: Any,
+def _check_arguments(*, transforms: Any, mode: str, channels: int, patch_size: Any,
                      synthetic_per_real: Any, length: Any, real: Any, object_scale: float | None,
                      negative_fraction: float | None, object_size: tuple[float, float]) -> float:
     """:class:`SyntheticObjectDataset`'s plain arguments on their own; returns the negative fraction
@@ -102,8 +103,6 @@ def _check_arguments(*, transforms: Any, mode: str, render: str, channels: int, 
         raise ValueError(f"transforms must be a callable on (image, target), got {type(transforms).__name__}")
     if mode not in ("patch", "frame"):
         raise ValueError(f"mode must be 'patch' or 'frame', got {mode!r}")
-    if render not in ("cache", "exact"):
-        raise ValueError(f"render must be 'cache' or 'exact', got {render!r}")
     if channels not in (1, 3):
         raise ValueError(f"channels must be 1 or 3, got {channels}")
     if not _is_integral(patch_size) or patch_size < 8:
@@ -125,6 +124,62 @@ def _check_arguments(*, transforms: Any, mode: str, render: str, channels: int, 
     if not (0 < lo_sz <= hi_sz):
         raise ValueError(f"object_size must be (min, max) with 0 < min <= max, got {object_size}")
     return neg
+
+
+def _render_backend(render: Any) -> str:
+    """``"cache"`` or ``"exact"``: which renderer ``render`` asks for (a mapping or a view cache: ``"cache"``)."""
+    if isinstance(render, str):
+        if render not in ("cache", "exact"):
+            raise ValueError(f"render must be 'cache', 'exact', a mapping of ViewCache.build options or a ViewCache, "
+                             f"got {render!r}")
+        return render
+    if isinstance(render, Mapping) or callable(getattr(render, "layers", None)):
+        return "cache"
+    raise ValueError(f"render must be 'cache', 'exact', a mapping of ViewCache.build options or a ViewCache, got "
+                     f"{type(render).__name__}")
+
+
+# The constructor's former arguments, accepted for one release (torchvision's way with renamed arguments): each
+# folds into the argument that now holds its concept, with a FutureWarning that names the new spelling.
+_DEPRECATED = {
+    "cache": "render=<the ViewCache>",
+    "cache_options": "render={...ViewCache.build options...}",
+    "pose_ranges": "pose_sampling=UniformPose(ranges) or FittedPose(params, jitter_deg, ranges)",
+    "pose_jitter_deg": "pose_sampling=FittedPose(params, jitter_deg)",
+}
+
+
+def _legacy_arguments(deprecated: Mapping[str, Any], *, render: Any, pose_sampling: Any,
+                      params: Any) -> tuple[Any, Any]:
+    """``render`` and ``pose_sampling`` with the former ``cache`` / ``cache_options`` / ``pose_ranges`` /
+    ``pose_jitter_deg`` folded in (each with a FutureWarning); an unknown keyword is a TypeError."""
+    unknown = sorted(set(deprecated) - set(_DEPRECATED))
+    if unknown:
+        raise TypeError(f"SyntheticObjectDataset got unexpected keyword argument(s) {unknown}")
+    for name in deprecated:
+        warnings.warn(f"SyntheticObjectDataset({name}=...) is deprecated and will be removed in the next release; "
+                      f"use {_DEPRECATED[name]}", FutureWarning, stacklevel=3)
+    cache, options = deprecated.get("cache"), deprecated.get("cache_options")
+    if cache is not None or options is not None:
+        if not (isinstance(render, str) and render == "cache"):
+            raise ValueError("cache / cache_options are for the view cache: leave render at 'cache' "
+                             "(or give render=<the ViewCache> / render={...options...} alone)")
+        render = cache if cache is not None else dict(options)
+    ranges, jitter = deprecated.get("pose_ranges"), deprecated.get("pose_jitter_deg")
+    if jitter is not None and not (isinstance(jitter, numbers.Real) and math.isfinite(jitter) and jitter >= 0):
+        raise ValueError(f"pose_jitter_deg must be finite and >= 0, got {jitter}")
+    if ranges is not None or jitter is not None:
+        if not isinstance(pose_sampling, str):
+            raise ValueError("pose_ranges is for pose_sampling 'uniform' / 'fitted'; a pose sampler of your "
+                             "own draws its own ranges")
+        if pose_sampling == "uniform":
+            pose_sampling = UniformPose(ranges)
+        elif pose_sampling == "fitted":
+            if params is None:
+                raise ValueError("pose_sampling='fitted' draws around each seed's fitted pose: give params (a fit)")
+            fit = CaptureParams.load(Path(params)) if isinstance(params, (str, os.PathLike)) else params
+            pose_sampling = FittedPose(fit, 20.0 if jitter is None else jitter, ranges)
+    return render, pose_sampling
 
 
 @dataclass(frozen=True, eq=False)
@@ -204,17 +259,17 @@ class SyntheticObjectDataset(Dataset):
             background-only patches (label 0); frame mode: fraction of frames
             without an object.
         object_size: frame mode: (min, max) object size in pixels (mesh unit length).
-        pose_ranges: override sampling ranges of α, β, γ, t_x, t_y.
         effects: effects to apply (default: all of ``params``' effects); leaving
             one out is the paper's ablation.
         channels: 1 (grayscale, default) or 3 (the paper's RGB extension, with
             per-channel capture parameters).
         seed: base seed; an item is a pure function of (seed, epoch, index).
         label: class id of the object (frame mode ``labels``; patch positives).
-        render: ``"cache"`` (pre-rendered views posed in torch, fast) or
-            ``"exact"`` (one GL render per item in a private subprocess, slow).
-        cache: a prebuilt :class:`~synthaug.render.cache.ViewCache` to use.
-        cache_options: keyword arguments for ``ViewCache.build``.
+        render: the renderer: ``"cache"`` (default: views pre-rendered once, posed in torch, fast; the
+            :class:`~synthaug.render.cache.ViewCache` is built now), a mapping of
+            :meth:`ViewCache.build <synthaug.render.cache.ViewCache.build>` options (e.g. ``{"step_deg": 30,
+            "sprite_size": 32}``), a prebuilt ``ViewCache`` (shared between datasets), or ``"exact"`` (one GL
+            render per item in a private subprocess, slow).
         capture_sampling: ``"seed"`` (the paper: each item keeps one seed's
             capture parameters), ``"kde"`` (drawn from a kernel density over all
             seeds: combinations no seed had) or ``"uniform"`` (each parameter
@@ -224,6 +279,15 @@ class SyntheticObjectDataset(Dataset):
             :class:`~synthaug.data.captures.UniformCapture`; or a capture sampler of
             your own (:class:`~synthaug.data.captures.CaptureSampler`). The
             background always comes from one seed.
+        pose_sampling: ``"uniform"`` (default, :class:`~synthaug.data.poses.UniformPose`: α, β, γ
+            uniform over their sampling ranges, every view equally likely), ``"fitted"``
+            (:class:`~synthaug.data.poses.FittedPose`: each item's rotation is its seed's *fitted*
+            rotation composed with a random rotation of axis uniform on the sphere and angle
+            ~ N(0, 20°) per axis component: the views the real seeds show, and views near them; needs
+            ``params`` from a fit; t_x, t_y are drawn as with ``"uniform"``), or a pose sampler object:
+            ``UniformPose(ranges)`` / ``FittedPose(params, jitter_deg, ranges)`` for other ranges or spread,
+            or any object with ``sample(generator, seed_index, u) -> {"alpha", "beta", "gamma", "t_x", "t_y"}``
+            (:class:`~synthaug.data.poses.PoseSampler`).
         seed_geometry: patch mode: where each seed's background patch sits in its
             frame, ``{"origin": (N, 2), "frame_size": (N, 2), "frame_scale": (N,)}``
             as :func:`synthaug.data.seedset.seed_geometry` returns it, passed to
@@ -231,24 +295,15 @@ class SyntheticObjectDataset(Dataset):
             lens distortion, the JPEG block grid). ``"auto"`` (default): the seed
             set's own when ``backgrounds`` is a seed set, else None; None: the
             patch is taken as the frame. The paper's four effects do not read it.
-        pose_sampling: ``"uniform"`` (default, :class:`~synthaug.data.poses.UniformPose`: α, β, γ
-            uniform over their sampling ranges, every view equally likely), ``"fitted"``
-            (:class:`~synthaug.data.poses.FittedPose`: each item's rotation is its seed's *fitted*
-            rotation composed with a random rotation of axis uniform on the sphere and angle
-            ~ N(0, ``pose_jitter_deg``) per axis component: the views the real seeds show, and
-            views near them; needs ``params`` from a fit; t_x, t_y are drawn as with
-            ``"uniform"``), or a pose sampler of your own: any object with
-            ``sample(generator, seed_index, u) -> {"alpha", "beta", "gamma", "t_x", "t_y"}``
-            (:class:`~synthaug.data.poses.PoseSampler`; then ``pose_ranges`` and
-            ``pose_jitter_deg`` are the sampler's business).
-        pose_jitter_deg: spread of the random rotation of ``"fitted"`` (degrees, per component of
-            the rotation vector).
         transforms: a callable ``(image, target) -> (image, target)`` applied to
             every item, real and synthetic alike, as torchvision datasets take
             one (e.g. ``transforms.v2.Compose([...])``: frame-mode boxes are
             ``tv_tensors.BoundingBoxes`` and move with the image). Its random
             draws (torch's global generator) are seeded per item from
             ``(seed, epoch, index)``, so items stay reproducible.
+
+    The former arguments ``cache``, ``cache_options`` (now ``render``), ``pose_ranges`` and ``pose_jitter_deg``
+    (now a ``pose_sampling`` object) are still accepted for one release, with a FutureWarning.
     """
 
     def __init__(
@@ -265,22 +320,22 @@ class SyntheticObjectDataset(Dataset):
         object_scale: float | None = None,
         negative_fraction: float | None = None,
         object_size: tuple[float, float] = (20.0, 60.0),
-        pose_ranges: Mapping[str, tuple[float, float]] | None = None,
         effects: Sequence[str] | None = None,
         channels: int = 1,
         seed: int = 0,
         label: int = 1,
-        render: Literal["cache", "exact"] = "cache",
-        cache: Any = None,
-        cache_options: Mapping[str, Any] | None = None,
+        render: Literal["cache", "exact"] | Mapping[str, Any] | Any = "cache",
         capture_sampling: Literal["seed", "kde", "uniform"] | CaptureSampler = "seed",
+        pose_sampling: Literal["uniform", "fitted"] | PoseSampler = "uniform",
         seed_geometry: Mapping[str, Any] | Literal["auto"] | None = "auto",
         transforms: Any = None,
-        pose_sampling: Literal["uniform", "fitted"] | PoseSampler = "uniform",
-        pose_jitter_deg: float = 20.0,
+        **deprecated: Any,
     ) -> None:
         super().__init__()
-        neg = _check_arguments(transforms=transforms, mode=mode, render=render, channels=channels, patch_size=patch_size,
+        render, pose_sampling = _legacy_arguments(deprecated, render=render, pose_sampling=pose_sampling,
+                                                  params=params)
+        backend = _render_backend(render)
+        neg = _check_arguments(transforms=transforms, mode=mode, channels=channels, patch_size=patch_size,
                                synthetic_per_real=synthetic_per_real, length=length, real=real,
                                object_scale=object_scale, negative_fraction=negative_fraction, object_size=object_size)
         self.transforms = transforms
@@ -294,11 +349,11 @@ class SyntheticObjectDataset(Dataset):
         self.seed = int(seed)
         self.epoch = 0
         self.label = int(label)
-        self.backend = render  # "cache" / "exact" (the name render is the method)
+        self.backend = backend  # "cache" / "exact" (the name render is the method)
         self._set_up_capture(backgrounds, params, effects=effects, object_scale=object_scale,
                              capture_sampling=capture_sampling, seed_geometry=seed_geometry)
         # after the capture set-up: "fitted" reads the fit's rotations (given, never the sampled rows)
-        self._set_up_pose(pose_sampling, fitted=params is not None, jitter_deg=pose_jitter_deg, ranges=pose_ranges)
+        self._set_up_pose(pose_sampling, fitted=params is not None)
         # real items first, then the synthetic ones (synthaug.data.mixing says why the layout lives here)
         self.real = real
         self.n_real, self.n_synthetic = mixed_counts(real, synthetic_per_real, length)
@@ -306,7 +361,7 @@ class SyntheticObjectDataset(Dataset):
         self._real_items = None if real is None else RealItems(
             real, mode=self.mode, channels=self.channels, patch_size=self.patch_size, label=self.label,
             theta_size=theta_size)
-        self._set_up_renderer(mesh, cache, cache_options)
+        self._set_up_renderer(mesh, render)
 
     # ----------------------------------------------------------- set-up
     def _set_up_capture(self, backgrounds: Any, params: CaptureParams | str | os.PathLike | None, *,
@@ -349,45 +404,46 @@ class SyntheticObjectDataset(Dataset):
                                                 if isinstance(capture_sampling, str) else capture_sampling)
         self._random_effects = [e for e in ordered(list(self.effects)) if e.is_random]
 
-    def _set_up_pose(self, pose_sampling: Any, *, fitted: bool, jitter_deg: float,
-                     ranges: Mapping[str, tuple[float, float]] | None) -> None:
+    def _set_up_pose(self, pose_sampling: Any, *, fitted: bool) -> None:
         """The pose sampler: ``"uniform"`` / ``"fitted"`` built here, or the user's own object."""
-        if not (math.isfinite(jitter_deg) and jitter_deg >= 0):
-            raise ValueError(f"pose_jitter_deg must be finite and >= 0, got {jitter_deg}")
-        self.pose_ranges = pose_ranges(ranges)
         if isinstance(pose_sampling, str):
             if pose_sampling == "uniform":
-                self.pose_sampler: PoseSampler = UniformPose(ranges)
+                self.pose_sampler: PoseSampler = UniformPose()
             elif pose_sampling == "fitted":
                 if not fitted:
                     raise ValueError("pose_sampling='fitted' draws around each seed's fitted pose: give params "
                                      "(a fit)")
-                self.pose_sampler = FittedPose(self.params, jitter_deg, ranges)
+                self.pose_sampler = FittedPose(self.params)
             else:
                 raise ValueError(f"pose_sampling must be 'uniform', 'fitted' or a pose sampler (an object with "
                                  f"sample(generator, seed_index, u)), got {pose_sampling!r}")
         elif callable(getattr(pose_sampling, "sample", None)):
-            if ranges is not None:
-                raise ValueError("pose_ranges is for pose_sampling 'uniform' / 'fitted'; a pose sampler of your "
-                                 "own draws its own ranges")
             self.pose_sampler = pose_sampling
         else:
             raise ValueError(f"pose_sampling must be 'uniform', 'fitted' or a pose sampler (an object with "
                              f"sample(generator, seed_index, u)), got {type(pose_sampling).__name__}")
+        rotations = getattr(self.pose_sampler, "rotations", None)
+        if isinstance(self.pose_sampler, FittedPose) and len(rotations) != len(self.backgrounds):
+            raise ValueError(f"the FittedPose holds {len(rotations)} rotations but there are "
+                             f"{len(self.backgrounds)} seeds (one fitted rotation per seed)")
 
-    def _set_up_renderer(self, mesh: Any, cache: Any, cache_options: Mapping[str, Any] | None) -> None:
-        """The view cache (built now unless given) or the exact renderer (its GL subprocess starts lazily)."""
+    def _set_up_renderer(self, mesh: Any, render: Any) -> None:
+        """The view cache (given, or built now with the options ``render`` maps) or the exact renderer (its GL
+        subprocess starts lazily)."""
         self._mesh = mesh
-        self._cache = cache
-        self._cache_options = dict(cache_options or {})
+        self._cache = None
         self._renderer = None
-        if self.backend == "cache" and self._cache is None:
-            # built here (in the main process, through a GL subprocess), memory-mapped by workers
-            from synthaug.render.cache import ViewCache
+        if self.backend == "cache":
+            if isinstance(render, str) or isinstance(render, Mapping):
+                # built here (in the main process, through a GL subprocess), memory-mapped by workers
+                from synthaug.render.cache import ViewCache
 
-            opts = {"sprite_size": 96 if self.mode == "patch" else 128, **self._cache_options}
-            self._cache = ViewCache.build(mesh, **opts)
-        elif self.backend == "exact":
+                opts = {"sprite_size": 96 if self.mode == "patch" else 128,
+                        **({} if isinstance(render, str) else dict(render))}
+                self._cache = ViewCache.build(mesh, **opts)
+            else:
+                self._cache = render  # a prebuilt ViewCache
+        else:
             from synthaug.render.server import Renderer
 
             self._renderer = Renderer(mesh)  # starts its GL subprocess lazily, per process

@@ -114,7 +114,7 @@ class SyntheticPatchDataModule(PatchDataModule):
         self.synthetic = SyntheticObjectDataset(self.mesh, seeds, self.params, length=n_syn,
                                                 patch_size=seeds.patch_size,
                                                 negative_fraction=self.synthetic_negative_fraction,
-                                                seed=self.seed, cache_options=self.cache_options)
+                                                seed=self.seed, render=self.cache_options)
         self.train_set = ConcatDataset([*self.train_set.datasets, SyntheticPatches(self.synthetic)])
 
     def train_dataloader(self) -> DataLoader:
