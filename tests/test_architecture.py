@@ -248,3 +248,19 @@ def test_checker_finds_private_names_and_circles(tmp_path):
 def test_checker_rejects_an_unknown_package():
     with pytest.raises(AssertionError, match="no place"):
         rank("plugins")
+
+
+def test_the_import_graph_picture_is_current():
+    """``docs/import_graph.md`` (the Mermaid picture of the package graph) is the graph of the current code:
+    a new package-to-package import, or one removed, means regenerating it with ``python tools/import_graph.py``."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("_import_graph", ROOT.parent / "tools" / "import_graph.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    packages, counts, back = tool.package_edges()
+    assert back == []  # the picture shows no arrow up the pipeline
+    page = (ROOT.parent / "docs" / "import_graph.md").read_text(encoding="utf-8")
+    assert page == tool.mermaid(packages, counts, back), "docs/import_graph.md is stale: run python tools/import_graph.py"
+    # the picture is not vacuous: every package of the pipeline is in it, with its arrows
+    assert set(ORDER) <= set(packages) and ("diagnose", "fit") in counts and ("fit", "data") in counts
