@@ -51,13 +51,9 @@ Example:
 
 from __future__ import annotations
 
-import dataclasses
 import math
-import numbers
 import os
-import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, overload
 
@@ -67,7 +63,9 @@ from torch.utils.data import Dataset
 from torchvision import tv_tensors
 
 from synthaug.data.captures import CAPTURE_SAMPLERS, CaptureSampler
+from synthaug.data.dataset_args import check_arguments, legacy_arguments, render_backend
 from synthaug.data.epochs import EpochSampler, item_generator, item_seed
+from synthaug.data.items import ItemParams
 from synthaug.data.mixing import RealItems, mixed_counts, to_float_image
 from synthaug.data.poses import FittedPose, PoseSampler, UniformPose
 from synthaug.effects.pipeline import simulate
@@ -83,150 +81,6 @@ def collate_detection(batch: Sequence[tuple[Any, Any]]) -> tuple[tuple[Any, ...]
     """Detection collate: ``(images, targets)`` as tuples (torchvision convention)."""
     images, targets = zip(*batch)
     return images, targets
-
-
-def _is_integral(x: Any) -> bool:
-    """An int (Python or numpy), or a float with no fractional part; never a bool."""
-    if isinstance(x, (bool, np.bool_)):
-        return False
-    if isinstance(x, (int, np.integer)):
-        return True
-    return isinstance(x, (float, np.floating)) and math.isfinite(x) and float(x).is_integer()
-
-
-def _check_arguments(*, transforms: Any, mode: str, channels: int, patch_size: Any,
-                     synthetic_per_real: Any, length: Any, real: Any, object_scale: float | None,
-                     negative_fraction: float | None, object_size: tuple[float, float]) -> float:
-    """:class:`SyntheticObjectDataset`'s plain arguments on their own; returns the negative fraction
-    (default 0.5 in patch mode, 0 in frame mode)."""
-    if transforms is not None and not callable(transforms):
-        raise ValueError(f"transforms must be a callable on (image, target), got {type(transforms).__name__}")
-    if mode not in ("patch", "frame"):
-        raise ValueError(f"mode must be 'patch' or 'frame', got {mode!r}")
-    if channels not in (1, 3):
-        raise ValueError(f"channels must be 1 or 3, got {channels}")
-    if not _is_integral(patch_size) or patch_size < 8:
-        raise ValueError(f"patch_size must be an integer >= 8, got {patch_size!r}")
-    # checked whether or not real is given: a bad value is a mistake either way, never silently ignored
-    if isinstance(synthetic_per_real, (bool, np.bool_)) or not isinstance(synthetic_per_real, numbers.Real) or \
-            not math.isfinite(synthetic_per_real) or synthetic_per_real < 0:
-        raise ValueError(f"synthetic_per_real must be a finite number >= 0, got {synthetic_per_real!r}")
-    if length is not None and (not _is_integral(length) or length < 0):
-        raise ValueError(f"length must be an integer >= 0, got {length!r}")
-    if real is not None and length is not None:
-        raise ValueError("give length (synthetic items alone) or real (mixed with synthetic_per_real), not both")
-    if object_scale is not None and not 0 < object_scale <= 1.5:
-        raise ValueError(f"object_scale must be in (0, 1.5], got {object_scale}")
-    neg = (0.5 if mode == "patch" else 0.0) if negative_fraction is None else float(negative_fraction)
-    if not 0.0 <= neg <= 1.0:
-        raise ValueError(f"negative_fraction must be in [0, 1], got {negative_fraction}")
-    lo_sz, hi_sz = object_size
-    if not (0 < lo_sz <= hi_sz):
-        raise ValueError(f"object_size must be (min, max) with 0 < min <= max, got {object_size}")
-    return neg
-
-
-def _render_backend(render: Any) -> str:
-    """``"cache"`` or ``"exact"``: which renderer ``render`` asks for (a mapping or a view cache: ``"cache"``)."""
-    if isinstance(render, str):
-        if render not in ("cache", "exact"):
-            raise ValueError(f"render must be 'cache', 'exact', a mapping of ViewCache.build options or a ViewCache, "
-                             f"got {render!r}")
-        return render
-    if isinstance(render, Mapping) or callable(getattr(render, "layers", None)):
-        return "cache"
-    raise ValueError(f"render must be 'cache', 'exact', a mapping of ViewCache.build options or a ViewCache, got "
-                     f"{type(render).__name__}")
-
-
-# The constructor's former arguments, accepted for one release (torchvision's way with renamed arguments): each
-# folds into the argument that now holds its concept, with a FutureWarning that names the new spelling.
-_DEPRECATED = {
-    "cache": "render=<the ViewCache>",
-    "cache_options": "render={...ViewCache.build options...}",
-    "pose_ranges": "pose_sampling=UniformPose(ranges) or FittedPose(params, jitter_deg, ranges)",
-    "pose_jitter_deg": "pose_sampling=FittedPose(params, jitter_deg)",
-}
-
-
-def _legacy_arguments(deprecated: Mapping[str, Any], *, render: Any, pose_sampling: Any,
-                      params: Any) -> tuple[Any, Any]:
-    """``render`` and ``pose_sampling`` with the former ``cache`` / ``cache_options`` / ``pose_ranges`` /
-    ``pose_jitter_deg`` folded in (each with a FutureWarning); an unknown keyword is a TypeError."""
-    unknown = sorted(set(deprecated) - set(_DEPRECATED))
-    if unknown:
-        raise TypeError(f"SyntheticObjectDataset got unexpected keyword argument(s) {unknown}")
-    for name in deprecated:
-        warnings.warn(f"SyntheticObjectDataset({name}=...) is deprecated and will be removed in the next release; "
-                      f"use {_DEPRECATED[name]}", FutureWarning, stacklevel=3)
-    cache, options = deprecated.get("cache"), deprecated.get("cache_options")
-    if cache is not None or options is not None:
-        if not (isinstance(render, str) and render == "cache"):
-            raise ValueError("cache / cache_options are for the view cache: leave render at 'cache' "
-                             "(or give render=<the ViewCache> / render={...options...} alone)")
-        render = cache if cache is not None else dict(options)
-    ranges, jitter = deprecated.get("pose_ranges"), deprecated.get("pose_jitter_deg")
-    if jitter is not None and not (isinstance(jitter, numbers.Real) and math.isfinite(jitter) and jitter >= 0):
-        raise ValueError(f"pose_jitter_deg must be finite and >= 0, got {jitter}")
-    if ranges is not None or jitter is not None:
-        if not isinstance(pose_sampling, str):
-            raise ValueError("pose_ranges is for pose_sampling 'uniform' / 'fitted'; a pose sampler of your "
-                             "own draws its own ranges")
-        if pose_sampling == "uniform":
-            pose_sampling = UniformPose(ranges)
-        elif pose_sampling == "fitted":
-            if params is None:
-                raise ValueError("pose_sampling='fitted' draws around each seed's fitted pose: give params (a fit)")
-            fit = CaptureParams.load(Path(params)) if isinstance(params, (str, os.PathLike)) else params
-            pose_sampling = FittedPose(fit, 20.0 if jitter is None else jitter, ranges)
-    return render, pose_sampling
-
-
-@dataclass(frozen=True, eq=False)
-class ItemParams:
-    """Every random choice of one item, drawn by :meth:`SyntheticObjectDataset.make_params`.
-
-    :meth:`SyntheticObjectDataset.render` turns it into the item, drawing nothing: the same params give the
-    same bytes (``ds.render(ds.make_params(i)) == ds[i]``), and a changed copy
-    (``dataclasses.replace(p, pose={...})``) renders that change alone.
-
-    Attributes:
-        index, epoch: the item; its draws are a pure function of (dataset seed, epoch, index).
-        real: a real item (index < the number of real items): the user's item, no draws.
-        seed_index: the seed whose background (and, with ``capture_sampling="seed"``, capture parameters)
-            the item uses; -1 for a real item.
-        negative: no object (patch mode: a background patch, label 0; frame mode: the bare frame).
-        pose: ``{"alpha", "beta", "gamma", "t_x", "t_y"}`` (radians; t_x, t_y fractions of the crop side), from the
-            dataset's pose sampler.
-        crop_xy: (x, y) corner of the patch (patch mode) or of the object's crop (frame mode) in the
-            seed's background.
-        object_px: frame mode: the object's size in pixels (mesh unit length); None in patch mode.
-        capture: the capture parameters the dataset's capture sampler drew (``capture_sampling`` ``"kde"`` /
-            ``"uniform"``: the density's vector order), or None (the seed's own, ``"seed"``).
-        fields: the random effects' noise fields, ``{field name: (1, C, crop, crop) tensor}`` (not JSON: everything
-            else is, ``dataclasses.asdict(p)`` without ``fields``).
-    """
-
-    index: int
-    epoch: int
-    real: bool = False
-    seed_index: int = -1
-    negative: bool = False
-    pose: Mapping[str, float] = field(default_factory=dict)
-    crop_xy: tuple[int, int] | None = None
-    object_px: float | None = None
-    capture: tuple[float, ...] | None = None
-    fields: Mapping[str, torch.Tensor] = field(default_factory=dict)
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, ItemParams):
-            return NotImplemented
-        plain = [f.name for f in dataclasses.fields(self) if f.name != "fields"]
-        return (all(getattr(self, n) == getattr(other, n) for n in plain)
-                and self.fields.keys() == other.fields.keys()
-                and all(torch.equal(v, other.fields[k]) for k, v in self.fields.items()))
-
-    __hash__ = None  # type: ignore[assignment]  # holds dicts and tensors
 
 
 class SyntheticObjectDataset(Dataset):
@@ -332,10 +186,10 @@ class SyntheticObjectDataset(Dataset):
         **deprecated: Any,
     ) -> None:
         super().__init__()
-        render, pose_sampling = _legacy_arguments(deprecated, render=render, pose_sampling=pose_sampling,
+        render, pose_sampling = legacy_arguments(deprecated, render=render, pose_sampling=pose_sampling,
                                                   params=params)
-        backend = _render_backend(render)
-        neg = _check_arguments(transforms=transforms, mode=mode, channels=channels, patch_size=patch_size,
+        backend = render_backend(render)
+        neg = check_arguments(transforms=transforms, mode=mode, channels=channels, patch_size=patch_size,
                                synthetic_per_real=synthetic_per_real, length=length, real=real,
                                object_scale=object_scale, negative_fraction=negative_fraction, object_size=object_size)
         self.transforms = transforms
