@@ -165,10 +165,10 @@ def test_cnn_synthetic_share_reaches_the_loss_weights(ws: dict[str, Path], train
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """--synthetic-share for the CNN: the 8 real seeds hold 1 - share of the positive class's weight in its loss."""
     import synthaug.detectors.lightning_module as lm
-    from synthaug.detectors.video_training import _check_options
+    from synthaug.detectors.video_training import AddedPositives, _check_options
 
-    _check_options("cnn", frame_step=1, synthetic_ratio=0.0, params=None, all_frames=False, seedset=None, seed_count=8,
-                   perturb_copies=1, copy_paste_ratio=0.0, synthetic_share=0.5)  # accepted
+    _check_options("cnn", AddedPositives(perturb_copies=1, synthetic_share=0.5), frame_step=1, all_frames=False,
+                   seedset=None, seed_count=8)  # accepted
     seen = []
     real_fit = lm.fit_patch_detector
 

@@ -139,7 +139,7 @@ def main(args: argparse.Namespace) -> int:
     import torch
 
     from synthaug.detectors.training import TrainOptions
-    from synthaug.detectors.video_training import TrainingInputError, train_from_videos
+    from synthaug.detectors.video_training import AddedPositives, TrainingInputError, train_from_videos
 
     if args.threads is not None:
         torch.set_num_threads(args.threads)
@@ -158,9 +158,11 @@ def main(args: argparse.Namespace) -> int:
         det, meta = train_from_videos(
             args.detector, args.class_name, args.videos, args.labels, out=args.out, split=args.split, seed=args.seed,
             seed_count=100 if args.seed_counts is None else args.seed_counts, all_frames=args.all_frames,
-            frame_step=args.frame_step, seedset=args.seed_set, params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
-            perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
-            copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share, options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
+            frame_step=args.frame_step, seedset=args.seed_set,
+            added=AddedPositives(params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
+                                 perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
+                                 copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share),
+            options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,
             command={k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if not k.startswith("_")},

@@ -43,7 +43,7 @@ from synthaug.detectors.training_sets import (
     synthetic_positives,
 )
 
-__all__ = ["TrainingInputError", "VideoSet", "discover_videos", "split_by_video", "train_from_videos", "METADATA_FORMAT"]
+__all__ = ["AddedPositives", "TrainingInputError", "VideoSet", "discover_videos", "split_by_video", "train_from_videos", "METADATA_FORMAT"]
 
 METADATA_FORMAT = "synthaug.trained_detector"
 METADATA_VERSION = 1
@@ -71,6 +71,39 @@ class VideoSet:
     labels_dir: Path
     classes: dict[str, str]
     missing_video: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class AddedPositives:
+    """What :func:`train_from_videos` adds to the real positives of a seed set, and how much weight it gets.
+
+    Attributes:
+        params: ``synthaug fit`` output made on the seed set (one row per seed), or a callable given the seed
+            set's folder once it exists that returns that file (e.g. fits it); needed by the synthetic and
+            copy-paste positives.
+        mesh: mesh of the synthetic object (default: the fit's, else the built-in quadcopter).
+        synthetic_ratio: synthetic patches per real seed (the paper's generator,
+            :func:`~synthaug.detectors.training_sets.synthetic_positives`).
+        pose_sampling: poses of the synthetic positives: ``"uniform"`` (the paper) or ``"fitted"`` (around each
+            seed's fitted pose).
+        copy_paste_ratio: copy-paste patches per real seed: the seeds' objects cut out with their fitted
+            silhouettes and pasted on other seeds' backgrounds (:func:`~synthaug.data.copypaste.copy_paste_positives`;
+            a user's baseline).
+        perturb_copies: perturbed copies of every real positive (the paper's Table 1 baseline,
+            :func:`~synthaug.effects.perturb.perturb_patches`).
+        synthetic_share: the share of the positive class's training weight held by the added positives, the rest
+            shared by the real ones; None: every positive weighs the same, so the added ones hold
+            ``added / (real + added)``. HOG: the SVM's per-sample cost; CNN: the BCE loss's per-sample weight (kept
+            through the flip doubling, the split and the mining rounds); not AdaBoost.
+    """
+
+    params: str | Path | Callable[[Path], str | Path] | None = None
+    mesh: str | None = None
+    synthetic_ratio: float = 0.0
+    pose_sampling: str = "uniform"
+    copy_paste_ratio: float = 0.0
+    perturb_copies: int = 0
+    synthetic_share: float | None = None
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
@@ -218,13 +251,7 @@ def train_from_videos(
     all_frames: bool = False,
     frame_step: int = 1,
     seedset: str | Path | None = None,
-    params: str | Path | Callable[[Path], str | Path] | None = None,
-    mesh: str | None = None,
-    synthetic_ratio: float = 0.0,
-    perturb_copies: int = 0,
-    pose_sampling: str = "uniform",
-    copy_paste_ratio: float = 0.0,
-    synthetic_share: float | None = None,
+    added: AddedPositives = AddedPositives(),
     options: TrainOptions = TrainOptions(),
     work_dir: str | Path | None = None,
     ingest_seed: int = 0,
@@ -241,8 +268,8 @@ def train_from_videos(
     Steps: :func:`discover_videos` -> :func:`split_by_video` -> positives (``seed_count``
     seeds drawn by ``synthaug ingest``'s code into ``work_dir`` — its shards are reused by
     a rerun —, an existing ``seedset``, or with ``all_frames`` every ``frame_step``-th
-    labelled frame of the training videos) + ``synthetic_ratio`` synthetic patches per real
-    seed from ``params`` -> negatives (the seed set's + ``extra_negatives`` object-free crops
+    labelled frame of the training videos) + the ``added`` positives (synthetic, copy-paste,
+    perturbed: :class:`AddedPositives`) -> negatives (the seed set's + ``extra_negatives`` object-free crops
     of the seed frames, or, with ``all_frames``, 60 crops per training video + look-alike
     crops of the negative-class videos) -> :func:`~synthaug.detectors.training.train_with_mining` over every
     ``options.mining_stride``-th frame of all training videos (+ negative-class videos),
@@ -260,22 +287,7 @@ def train_from_videos(
         all_frames: every labelled frame of the training videos (every ``frame_step``-th).
         frame_step: see ``all_frames``.
         seedset: use this seed set (``synthaug ingest`` output) instead of ingesting.
-        params: ``synthaug fit`` output made on the seed set (one row per seed), or a callable
-            given the seed set's folder once it exists that returns that file (e.g. fits it).
-        mesh: mesh of the synthetic object (default: the fit's, else the built-in quadcopter).
-        synthetic_ratio: synthetic patches per real seed (needs ``params``).
-        pose_sampling: poses of the synthetic positives: ``"uniform"`` (the paper) or ``"fitted"``
-            (around each seed's fitted pose).
-        perturb_copies: perturbed copies of every real positive added to the positives (the
-            paper's Table 1 baseline, :func:`~synthaug.effects.perturb.perturb_patches`).
-        copy_paste_ratio: copy-paste patches per real seed (needs ``params``: the seeds' objects cut
-            out with their fitted silhouettes and pasted on other seeds' backgrounds,
-            :func:`~synthaug.data.copypaste.copy_paste_positives`; a user's baseline).
-        synthetic_share: the share of the positive class's training weight held by the positives added to the
-            real ones (synthetic, copy-paste, perturbed), the rest shared by the real ones; None: every positive
-            weighs the same, so the added ones hold ``added / (real + added)``. HOG: the SVM's per-sample cost; CNN:
-            the BCE loss's per-sample weight (kept through the flip doubling, the split and the mining rounds); not
-            AdaBoost.
+        added: positives added to the real ones and their weight (:class:`AddedPositives`; default: none).
         options: budgets (:class:`~synthaug.detectors.training.TrainOptions`).
         work_dir: ingest output folder (default: ``<out>.work``; a temporary folder when ``out`` is None).
         ingest_seed: ``synthaug ingest --seed`` of the seed draw (0: the same seed set as a
@@ -294,16 +306,15 @@ def train_from_videos(
         TrainingInputError: an input that cannot be used; ``.option`` names the option.
     """
     say = log or (lambda m: None)
-    _check_options(kind, frame_step=frame_step, synthetic_ratio=synthetic_ratio, params=params, all_frames=all_frames,
-                   seedset=seedset, seed_count=seed_count, perturb_copies=perturb_copies,
-                   copy_paste_ratio=copy_paste_ratio, synthetic_share=synthetic_share)
+    _check_options(kind, added, frame_step=frame_step, all_frames=all_frames, seedset=seedset, seed_count=seed_count)
     t_start = time.perf_counter()
     vs = discover_videos(videos_dir, labels_dir)
     sp = split_by_video(vs, class_name, split=split, seed=seed, val_fraction=val_fraction, block=split_block,
                         negative_classes=negative_classes)
     say(f"{class_name}: {len(sp['train'])} training videos, {len(sp['val'])} validation videos, "
         f"{len(sp['negative_train'])} negative-class training videos ({sp['source']} split)")
-    _check_against_split(vs, sp, class_name, params=params, all_frames=all_frames, seedset=seedset, seed_count=seed_count)
+    _check_against_split(vs, sp, class_name, params=added.params, all_frames=all_frames, seedset=seedset,
+                         seed_count=seed_count)
 
     # ---------------------------------------------------------------- positives and negatives
     t0 = time.perf_counter()
@@ -315,18 +326,17 @@ def train_from_videos(
     else:
         ts = _all_frames_training_set(vs, sp, frame_step=frame_step, seed=seed)
     n_real = int(ts.positives.shape[0])
-    perturb_info = _add_perturbed(ts, perturb_copies, seed=seed, say=say)
-    synthetic_info = _add_from_fit(ts, params, mesh=mesh, synthetic_ratio=synthetic_ratio, copy_paste_ratio=copy_paste_ratio,
-                                   pose_sampling=pose_sampling, seed=seed, say=say)
+    perturb_info = _add_perturbed(ts, added.perturb_copies, seed=seed, say=say)
+    synthetic_info = _add_from_fit(ts, added, seed=seed, say=say)
     t_data = time.perf_counter() - t0
     say(f"training set: {ts.positives.shape[0]} positives, {ts.negatives.shape[0]} negatives ({t_data:.0f}s)")
 
     # ---------------------------------------------------------------- training with mining
     regressor, box_info = _box_regressor(vs, sp, options, ts.box_in_window, seed=seed, say=say)
     t0 = time.perf_counter()
-    weights = share_weights(n_real, int(ts.positives.shape[0]), synthetic_share)
+    weights = share_weights(n_real, int(ts.positives.shape[0]), added.synthetic_share)
     if weights is not None:
-        ts.info["synthetic_share"] = synthetic_share
+        ts.info["synthetic_share"] = added.synthetic_share
     res = _mine_and_train(kind, ts, vs, sp, options, seed=seed, regressor=regressor, say=say, positive_weights=weights)
     t_train = time.perf_counter() - t0
     meta = _metadata(kind, class_name, seed, videos_dir, labels_dir, sp, ts, res, options=options,
@@ -339,10 +349,11 @@ def train_from_videos(
     return res.detector, meta
 
 
-def _check_options(kind: str, *, frame_step: int, synthetic_ratio: float, params: Any, all_frames: bool,
-                   seedset: str | Path | None, seed_count: int | None, perturb_copies: int,
-                   copy_paste_ratio: float, synthetic_share: float | None = None) -> None:
+def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_frames: bool,
+                   seedset: str | Path | None, seed_count: int | None) -> None:
     """:func:`train_from_videos`' arguments on their own; :class:`TrainingInputError` names the option."""
+    params, synthetic_ratio, copy_paste_ratio = added.params, added.synthetic_ratio, added.copy_paste_ratio
+    perturb_copies, synthetic_share = added.perturb_copies, added.synthetic_share
     if synthetic_share is not None:
         if not 0.0 <= synthetic_share < 1.0:
             raise TrainingInputError("--synthetic-share", f"must be in [0, 1), got {synthetic_share}")
@@ -463,10 +474,11 @@ def _add_perturbed(ts: _TrainingSet, copies: int, *, seed: int, say: Callable[[s
     return info
 
 
-def _add_from_fit(ts: _TrainingSet, params: Any, *, mesh: str | None, synthetic_ratio: float, copy_paste_ratio: float,
-                  pose_sampling: str, seed: int, say: Callable[[str], None]) -> dict[str, Any] | None:
-    """Synthetic (and copy-paste) positives made from the fit ``params`` of the seed set, added to ``ts``."""
-    ss = ts.seedset
+def _add_from_fit(ts: _TrainingSet, added: AddedPositives, *, seed: int,
+                  say: Callable[[str], None]) -> dict[str, Any] | None:
+    """Synthetic (and copy-paste) positives made from the fit ``added.params`` of the seed set, added to ``ts``."""
+    ss, params, pose_sampling = ts.seedset, added.params, added.pose_sampling
+    synthetic_ratio, copy_paste_ratio = added.synthetic_ratio, added.copy_paste_ratio
     if callable(params):  # ss exists: a fit without a seed set was refused before
         params = params(Path(ss.path))
     if params is None:
@@ -481,7 +493,7 @@ def _add_from_fit(ts: _TrainingSet, params: Any, *, mesh: str | None, synthetic_
         raise TrainingInputError("--params", f"{params} has {theta.batch_size} rows but the seed set has {len(ss)} seeds "
                                              f"({ts.info.get('seedset')}): a fit holds one row per seed of the seed set "
                                              f"it was made on")
-    mesh = mesh or fit_meta.get("mesh") or "quadcopter"
+    mesh = added.mesh or fit_meta.get("mesh") or "quadcopter"
     n_syn = int(round(synthetic_ratio * len(ss)))
     if n_syn:
         t0 = time.perf_counter()

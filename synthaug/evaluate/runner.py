@@ -37,7 +37,7 @@ import numpy as np
 
 from synthaug._checks import add_option
 from synthaug.detectors.training import TrainOptions
-from synthaug.detectors.video_training import train_from_videos
+from synthaug.detectors.video_training import AddedPositives, train_from_videos
 from synthaug.evaluate.cells import CellCache
 from synthaug.evaluate.matching import match_videos
 from synthaug.evaluate.patches import patch_eval_set, score_patch_set
@@ -238,10 +238,12 @@ class ProtocolRunner:
         det, meta = train_from_videos(
             condition.kind, self.class_name, self.paths.videos_dir, self.paths.labels_dir,
             split=self.paths.split_file, seed=seed, seed_count=condition.seed_count, all_frames=condition.all_frames,
-            frame_step=condition.frame_step, params=self.params_for(condition, seed), mesh=condition.mesh,
-            synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies,
-            pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio,
-            synthetic_share=condition.synthetic_share, options=options,
+            frame_step=condition.frame_step,
+            added=AddedPositives(params=self.params_for(condition, seed), mesh=condition.mesh,
+                                 synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies,
+                                 pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio,
+                                 synthetic_share=condition.synthetic_share),
+            options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
         t_train = time.perf_counter() - t0
