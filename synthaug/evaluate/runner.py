@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from synthaug._checks import add_option
+from synthaug._checks import add_option, positive_float
 from synthaug.detectors.training import TrainOptions
 from synthaug.detectors.video_training import AddedPositives, train_from_videos
 from synthaug.evaluate.cells import CellCache
@@ -476,6 +476,9 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--split", default=DataPaths.split_file, help="split JSON (by video)")
     q.add_argument("--work", default=DataPaths.work_dir, help="ingest shards, fits and the cell cache live here")
     q.add_argument("--no-scale-check", action="store_true", help="skip the x2 / x0.75 test frames")
+    q.add_argument("--scales", type=positive_float, nargs="+", default=None,
+                   help="image pyramid resize factors of mining, validation and scoring (part of a cell's key; "
+                        "default: synthaug.detectors.sliding.DEFAULT_SCALES)")
     q.add_argument("--no-patches", action="store_true", help="skip the paper's patch protocol")
     q.add_argument("--max-test-videos", type=int, default=None, help="first N test videos only (smoke runs)")
     q.add_argument("--mining-rounds", type=int, default=TrainOptions.mining_rounds, help="hard-negative mining rounds")
@@ -531,6 +534,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     runner = ProtocolRunner(proto, args.class_name, paths, CellCache(Path(args.work) / "cells", read_only=args.read_only),
                             options=dataclasses.replace(TrainOptions(), mining_rounds=args.mining_rounds,
                                                         cnn_shift=args.cnn_shift),
+                            scales=None if args.scales is None else tuple(args.scales),
                             scale_check=not args.no_scale_check, patches=not args.no_patches,
                             max_test_videos=args.max_test_videos, eval_split=args.eval_split)
     t0 = time.perf_counter()
