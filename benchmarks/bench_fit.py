@@ -6,7 +6,9 @@ at ``--reference-budget`` (default 10x the budget) as the reference optimum. Rep
 seed and how many CMA-ES fits land within 5% of the 10x-annealing distance. With ``--fit-path``, the seeds
 are also fitted ``--lockstep`` at a time (``synthaug fit``'s default: the populations of several seeds scored in
 one batch, the same fits) and that path's seconds per seed are reported beside the one-at-a-time figure.
-``--optimizers cmaes cmaes_numpy`` runs the ``cma`` package's CMA-ES and the numpy one side by side in one run.
+``--optimizers cmaes cmaes_numpy`` runs the ``cma`` package's CMA-ES and the numpy one side by side in one run;
+``--opt-seeds 0 1 2`` fits every seed once per optimiser seed (the objective and the reference fixed) and counts
+within-5 % over all those fits; ``--reference-cache`` keeps the annealing runs between invocations.
 
 Usage::
 
@@ -64,6 +66,38 @@ def _seed_objective(seeds, i, cache, dist, cfg, scale):
     obj = RenderObjective(patches_tensor(seeds.patches[i:i + 1]), patches_tensor(seeds.backgrounds[i:i + 1]),
                           cache, dist, space, object_scale=scale, noise_seed=seed_seed(0, i))
     return obj, space
+
+
+def opt_seed(s: int, k: int) -> int:
+    """The optimiser's generator seed of a seed with generator seed ``s`` at optimiser repeat ``k`` (``--opt-seeds``):
+    ``s`` itself for k = 0 (the fit ``synthaug fit`` makes), another stream for each k > 0."""
+    return s if k == 0 else int((s + 0x9E3779B1 * k) % (2**31 - 1))
+
+
+def _fit_at(obj, cache, dist, cfg, s: int, k: int, scale: float) -> dict:
+    """``synthaug fit``'s fit of one seed (its objective's noise field from ``s``, as always) with the optimiser
+    seeded by :func:`opt_seed` (s, k): at k = 0 exactly ``fit_one``; at k > 0 the same objective, another search."""
+    from synthaug.fit.search import fit_objective, fit_one, search
+
+    if k == 0:
+        return fit_one(obj.target, obj.background, cache, dist, cfg, seed=s, object_scale=scale)
+    objective = fit_objective(obj.target, obj.background, cache, dist, cfg, seed=s, object_scale=scale)
+    return search(objective, cfg, seed=opt_seed(s, k), object_scale=scale)
+
+
+def _reference_key(obj, args, name: str, budget: int, s: int) -> str:
+    """What a cached annealing run depends on: the seed's patch and background, the distance, mesh, budget,
+    generator seed and the annealing's implementation."""
+    import hashlib
+
+    from synthaug.fit.optimizers import get_optimizer
+
+    h = hashlib.sha256()
+    for t in (obj.target, obj.background):
+        h.update(t.numpy().tobytes())
+    h.update(json.dumps([name, args.distance, args.mesh, budget, s, obj.object_scale, list(obj.space.free_names()),
+                         get_optimizer("anneal").implementation()]).encode())
+    return h.hexdigest()[:24]
 
 
 def _lockstep(seeds, cache, dist, cfg, rows, args, key: str = "cmaes") -> dict:
@@ -170,6 +204,13 @@ def main() -> int:
                         help="with --fit-path: also fit the seeds K at a time in lockstep (synthaug fit's default path: "
                              "their populations scored in one batch), --repeats times, and report the seconds per seed "
                              "(group wall time / K) beside the one-at-a-time figure; 0: skip")
+    parser.add_argument("--opt-seeds", type=int, nargs="+", default=[0], metavar="K",
+                        help="with --fit-path: fit every seed once per K with the optimiser's generator seeded by "
+                             "opt_seed(seed, K) (0: the fit synthaug fit makes; the objective, its noise field and the "
+                             "reference annealing stay fixed) and count within-5 %% over all of them")
+    parser.add_argument("--reference-cache", default=None, metavar="JSON",
+                        help="read / add the annealing runs (equal budget and reference) here, keyed by the seed's "
+                             "patch, background, distance, budget and the annealing's implementation")
     parser.add_argument("--repeats", type=int, default=3, help="repeats of the lockstep timing (median reported)")
     parser.add_argument("--workers", type=int, default=0, metavar="W",
                         help="also time `synthaug fit`'s whole command path, fit_seedset(workers=W) with its defaults "
@@ -185,7 +226,7 @@ def main() -> int:
 
     torch.set_num_threads(1)
     from synthaug.data.seedset import SeedSet
-    from synthaug.fit.fitting import FitConfig, build_distance, fit_one, seed_seed
+    from synthaug.fit.fitting import FitConfig, build_distance, seed_seed
     from synthaug.fit.optimizers import get_optimizer
     from synthaug.render.cache import ViewCache
 
@@ -196,6 +237,12 @@ def main() -> int:
     dist = build_distance(args.distance, seeds)
     cfgs = {o: FitConfig(distance=args.distance, budget=args.budget, optimizer=o) for o in args.optimizers}
     cfg = cfgs[args.optimizers[0]]
+    if args.opt_seeds != [0] and not args.fit_path:
+        parser.error("--opt-seeds needs --fit-path")
+    if len(set(args.opt_seeds)) != len(args.opt_seeds) or min(args.opt_seeds) < 0:
+        parser.error("--opt-seeds must be distinct and >= 0")
+    cache_path = Path(args.reference_cache) if args.reference_cache else None
+    ref_cache = json.loads(cache_path.read_text()) if cache_path is not None and cache_path.exists() else {}
     rows = []
     for i in range(min(args.n, len(seeds))):
         s = seed_seed(0, i)
@@ -206,26 +253,56 @@ def main() -> int:
         runs = [(o, o, args.budget) for o in args.optimizers] + [
             ("anneal", "anneal", args.budget), ("anneal_10x", "anneal", args.reference_budget or 10 * args.budget)]
         for name, opt, budget in runs:
-            t = time.perf_counter()
             if name in cfgs and args.fit_path:
-                f = fit_one(obj.target, obj.background, cache, dist, cfgs[name], seed=s, object_scale=scale)
-                res[name] = {"distance": f["distance"], "seconds": time.perf_counter() - t,
-                             "evals": f["stats"]["n_evals"]}
+                by_k = []
+                for k in args.opt_seeds:
+                    t = time.perf_counter()
+                    f = _fit_at(obj, cache, dist, cfgs[name], s, k, scale)
+                    by_k.append({"opt_seed": k, "distance": f["distance"], "seconds": time.perf_counter() - t,
+                                 "evals": f["stats"]["n_evals"], "restarts": f["stats"]["restarts"]})
+                res[name] = dict(by_k[0])
+                if args.opt_seeds != [0]:
+                    res[name]["by_opt_seed"] = by_k
                 continue
+            key = _reference_key(obj, args, name, budget, s) if name.startswith("anneal") else None
+            if key is not None and key in ref_cache:
+                res[name] = dict(ref_cache[key], cached=True)
+                continue
+            t = time.perf_counter()
             r = get_optimizer(opt).minimize(obj, space.dim, x0=x0, seed=s, budget=budget)
             res[name] = {"distance": r.fun, "seconds": time.perf_counter() - t, "evals": r.n_evals}
+            if key is not None and cache_path is not None:
+                ref_cache[key] = res[name]
+                cache_path.parent.mkdir(parents=True, exist_ok=True)
+                cache_path.write_text(json.dumps(ref_cache, indent=1))
+        ref = res["anneal_10x"]["distance"]
         for o in args.optimizers:
-            res[f"{o}_within_5pct_of_anneal_10x"] = bool(res[o]["distance"] <= 1.05 * res["anneal_10x"]["distance"])
+            res[f"{o}_within_5pct_of_anneal_10x"] = bool(res[o]["distance"] <= 1.05 * ref)
+            if "by_opt_seed" in res[o]:
+                res[f"{o}_within_5pct_by_opt_seed"] = [bool(r["distance"] <= 1.05 * ref) for r in res[o]["by_opt_seed"]]
         rows.append(res)
         print(json.dumps({"seed": i, **{k: (round(v["distance"], 4), round(v["seconds"], 2)) if isinstance(v, dict) else v
                                          for k, v in res.items()}}), file=sys.stderr)
     med = lambda k, f: statistics.median(r[k][f] for r in rows)  # noqa: E731
 
     def summary(o: str) -> dict:
-        return {"seconds_median": round(med(o, "seconds"), 3), "distance_median": round(med(o, "distance"), 4),
-                "within_5pct_of_anneal_10x": sum(r[f"{o}_within_5pct_of_anneal_10x"] for r in rows),
-                "ratio_anneal_over_distance_equal_budget_median": round(statistics.median(
-                    r["anneal"]["distance"] / max(r[o]["distance"], 1e-12) for r in rows), 3)}
+        out = {"seconds_median": round(med(o, "seconds"), 3), "distance_median": round(med(o, "distance"), 4),
+               "within_5pct_of_anneal_10x": sum(r[f"{o}_within_5pct_of_anneal_10x"] for r in rows),
+               "ratio_anneal_over_distance_equal_budget_median": round(statistics.median(
+                   r["anneal"]["distance"] / max(r[o]["distance"], 1e-12) for r in rows), 3)}
+        if args.opt_seeds != [0]:  # every (seed, optimiser seed) fit
+            fits = [(r, f) for r in rows for f in r[o]["by_opt_seed"]]
+            ratio = lambda r, f: f["distance"] / r["anneal_10x"]["distance"]  # noqa: E731
+            out["opt_seeds"] = list(args.opt_seeds)
+            out["within_5pct_of_anneal_10x_all_fits"] = sum(ratio(r, f) <= 1.05 for r, f in fits)
+            out["fits"] = len(fits)
+            out["distance_over_anneal_10x_median_by_seed"] = [
+                round(statistics.median(f["distance"] / r["anneal_10x"]["distance"] for f in r[o]["by_opt_seed"]), 4)
+                for r in rows]
+            out["distance_over_anneal_10x_median_all_fits"] = round(statistics.median(ratio(r, f) for r, f in fits), 4)
+            out["distance_median_all_fits"] = round(statistics.median(f["distance"] for _, f in fits), 4)
+            out["seconds_median_all_fits"] = round(statistics.median(f["seconds"] for _, f in fits), 3)
+        return out
 
     first = summary(args.optimizers[0])
     out = {
