@@ -160,6 +160,11 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     cond_per = R.Condition(per, "hog", seed_count=6, perturb_copies=2)
     cell = cache.get_or_compute(runner.identity(cond_per, 0), lambda: pytest.fail("perturbed cell not cached"))
     assert cell["train"]["perturbed"] == {"copies": 2, "count": 12}
+    # where the cell was computed (not part of the key): the instruction set torch ran and its threads
+    import torch
+
+    assert cell["machine"]["cpu_capability"] == torch.backends.cpu.get_cpu_capability()
+    assert cell["machine"]["torch"] == torch.__version__ and cell["machine"]["torch_threads"] >= 1
     cond_cp = R.Condition(cp, "hog", seed_count=6, fit_distance="eucl", fit_options=tuple(sorted(fit_opts.items())),
                           copy_paste_ratio=2.0)
     cell = cache.get_or_compute(runner.identity(cond_cp, 1), lambda: pytest.fail("copy-paste cell not cached"))

@@ -247,7 +247,8 @@ class ProtocolRunner:
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
         t_train = time.perf_counter() - t0
-        out: dict[str, Any] = {"train_s": round(t_train, 1), "train": _json_safe(meta), "scales": {}}
+        out: dict[str, Any] = {"train_s": round(t_train, 1), "train": _json_safe(meta), "scales": {},
+                               "machine": machine_info()}
         for s in self.scales_scored():
             es = self.eval_set(s)
             t1 = time.perf_counter()
@@ -461,6 +462,28 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         _write_tables(results, Path(out), "comparison.md",
                       "# Real seeds vs + synthetic vs + perturbed (paired against real only)", seed_count)
     return results
+
+
+def machine_info() -> dict[str, Any]:
+    """Where a cell was computed: the CPU, the instruction set torch dispatches to and the thread count.
+
+    A float32 CNN trained twice in one process set-up gives the same bytes, but another instruction set (AVX2 vs
+    AVX-512 kernels) or thread count changes the last bits, which hard-negative mining then amplifies (issue 15:
+    the CNN's cells moved by up to 0.03 AP between sessions on fresh machines). Recorded with each cell so that a
+    difference can be traced; not part of the key.
+    """
+    import platform
+
+    import torch
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            cpu = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), cpu)
+    except OSError:
+        pass
+    return {"cpu": cpu, "torch": torch.__version__, "cpu_capability": torch.backends.cpu.get_cpu_capability(),
+            "torch_threads": torch.get_num_threads()}
 
 
 # ------------------------------------------------------------------------------------------ command line
