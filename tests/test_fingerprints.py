@@ -159,13 +159,16 @@ def test_the_optimiser_implementation_is_part_of_the_fingerprint(fit_world):
     """A fit made by another implementation of the optimiser (the numpy CMA-ES vs the cma package's, or an older
     numpy engine) visits other points: it is not reused, and the warning says why."""
     from synthaug.fit.fitting import fit_inputs, what_changed
-    from synthaug.fit.optimizers import IMPLEMENTATION_VERSION
+    from synthaug.fit.optimizers import CMASTATE_VERSION, IMPLEMENTATION_VERSION
 
     root, seeds, _, _ = fit_world
     a = fit_inputs(seeds, "quadcopter", _cfg())
     b = fit_inputs(seeds, "quadcopter", _cfg(optimizer="cmaes_numpy"))
     assert a["optimizer"].startswith(f"synthaug cmaes {IMPLEMENTATION_VERSION} (pycma")
-    assert "numpy CMAState" in b["optimizer"]
+    assert f"numpy CMAState {CMASTATE_VERSION})" in b["optimizer"] and "CMAState" not in a["optimizer"]
+    # the numpy engine's own version: a fit of an older numpy engine is recomputed, a pycma fit's key is untouched
+    older_numpy = dict(b, optimizer=b["optimizer"].replace(f"CMAState {CMASTATE_VERSION})", "CMAState)"))
+    assert what_changed(older_numpy, b).startswith("the optimiser's implementation")
     assert what_changed(a, b).startswith('optimizer "cmaes" -> "cmaes_numpy", the optimiser\'s implementation')
     older = dict(a, optimizer=a["optimizer"].replace(f" {IMPLEMENTATION_VERSION} ", " 1 "))
     assert what_changed(older, a).startswith("the optimiser's implementation synthaug cmaes 1")

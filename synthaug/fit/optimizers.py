@@ -35,7 +35,10 @@ import numpy as np
 Objective = Callable[[np.ndarray], np.ndarray]
 
 # raised whenever a change to an optimiser here changes the points it visits (a fit's fingerprint records it)
-IMPLEMENTATION_VERSION = 3
+IMPLEMENTATION_VERSION = 2
+# the numpy engine's own version (CMAState, and the fit's grid refinement run on it): 3 = pycma's default strategy
+# step for step; 4 = the pose-grid start's short refinements on the numpy engine too (synthaug.fit.starts)
+CMASTATE_VERSION = 4
 
 
 @dataclass
@@ -356,7 +359,7 @@ class CMAES(Optimizer):
 
     def implementation(self) -> str:
         if self.engine == "numpy":
-            return super().implementation() + " (numpy CMAState)"
+            return super().implementation() + f" (numpy CMAState {CMASTATE_VERSION})"
         import cma
 
         return super().implementation() + f" (pycma {cma.__version__})"

@@ -83,18 +83,18 @@ def search(objective: Any, cfg: FitConfig, *, seed: int, object_scale: float, x0
     if evaluate is None:
         evaluate = objective
     init = None
+    opt = get_optimizer(cfg.optimizer)
     n_init = int(cfg.init_fraction * cfg.budget)
     rotations_free = {"alpha", "beta", "gamma"} <= set(space.free_names())
     if x0 is None and cfg.init == "grid" and n_init >= 16 and rotations_free:
-        init = pose_grid_starts(evaluate, space, budget=n_init,
-                                object_scale=object_scale, n_starts=cfg.init_starts, seed=seed)
+        init = pose_grid_starts(evaluate, space, budget=n_init, object_scale=object_scale, n_starts=cfg.init_starts,
+                                seed=seed, engine=getattr(opt, "engine", "pycma"))  # the fit's own CMA-ES
     elif x0 is None:
         x0 = np.random.default_rng(seed).random(space.dim)
         names = space.free_names()
         for k in ("t_x", "t_y", "object_scale"):
             if k in names:
                 x0[names.index(k)] = 0.5  # the annotated centre, the middle of the scale range
-    opt = get_optimizer(cfg.optimizer)
     if init is None:
         result = opt.minimize(evaluate, space.dim, x0=x0, seed=seed, budget=cfg.budget)
         best_x, best, stats = result.x, result.fun, result.stats()

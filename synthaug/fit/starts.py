@@ -29,7 +29,7 @@ def neutral_u(space: Any, object_scale: float) -> np.ndarray:
 
 def pose_grid_starts(objective: Callable[[np.ndarray], np.ndarray], space: Any, *, budget: int,
                      object_scale: float, n_starts: int = 3, seed: int = 0, grid_share: float = 0.6,
-                     n_refine: int | None = None) -> dict[str, Any]:
+                     n_refine: int | None = None, engine: str = "pycma") -> dict[str, Any]:
     """Structured start of a fit: a rotation grid, then a short search of the rest at the best poses.
 
     1. the objective on a near-uniform grid of rotations
@@ -43,6 +43,9 @@ def pose_grid_starts(objective: Callable[[np.ndarray], np.ndarray], space: Any, 
        coordinates (translation, capture parameters, scale) with the rotation
        held, sharing the rest of ``budget`` (skipped under 24 each);
     3. the ``n_starts`` best refined points, best first, are the starts.
+
+    ``engine``: the CMA-ES of step 2 (:class:`~synthaug.fit.optimizers.CMAES`'s ``"pycma"`` or ``"numpy"``; a fit
+    passes its optimiser's, so a numpy-engine fit runs no pycma step).
 
     Returns:
         ``starts`` (K, D), ``stds`` (D,) per-coordinate CMA-ES step sizes (about
@@ -103,7 +106,7 @@ def pose_grid_starts(objective: Callable[[np.ndarray], np.ndarray], space: Any, 
                 full = np.repeat(p[None], len(v), axis=0)
                 full[:, other] = v
                 return track(full)
-            r = CMAES(popsize=12, sigma0=0.25, max_restarts=0, explore=0.0).minimize(
+            r = CMAES(popsize=12, sigma0=0.25, max_restarts=0, explore=0.0, engine=engine).minimize(
                 sub, len(other), seed=seed + 7919 * (k + 1), budget=per, starts=p[other][None])
             x = p.copy()
             x[other] = r.x
