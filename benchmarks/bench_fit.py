@@ -6,7 +6,7 @@ at ``--reference-budget`` (default 10x the budget) as the reference optimum. Rep
 seed and how many CMA-ES fits land within 5% of the 10x-annealing distance. With ``--fit-path``, the seeds
 are also fitted ``--lockstep`` at a time (``synthaug fit``'s default: the populations of several seeds scored in
 one batch, the same fits) and that path's seconds per seed are reported beside the one-at-a-time figure.
-``--optimizers cmaes cmaes_numpy`` runs the ``cma`` package's CMA-ES and the numpy one side by side in one run;
+``--optimizers cmaes_pycma cmaes`` runs the ``cma`` package's CMA-ES and the numpy one (the default) side by side;
 ``--opt-seeds 0 1 2`` fits every seed once per optimiser seed (the objective and the reference fixed) and counts
 within-5 % over all those fits; ``--reference-cache`` keeps the annealing runs between invocations.
 
@@ -193,8 +193,8 @@ def main() -> int:
     parser.add_argument("--n", type=int, default=8)
     parser.add_argument("--budget", type=int, default=3500, help="CMA-ES (and equal-budget annealing) evaluations")
     parser.add_argument("--optimizers", nargs="+", default=["cmaes"], metavar="NAME",
-                        help="the CMA-ES columns, side by side in one run (e.g. cmaes cmaes_numpy: the cma package "
-                             "and the numpy engine); the first one's figures are also the top-level keys")
+                        help="the CMA-ES columns, side by side in one run (e.g. cmaes_pycma cmaes: the cma package "
+                             "and the numpy engine, the default); the first one's figures are also the top-level keys")
     parser.add_argument("--reference-budget", type=int, default=None,
                         help="evaluations of the reference annealing run (default 10x --budget)")
     parser.add_argument("--fit-path", action="store_true",

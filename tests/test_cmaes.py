@@ -1,6 +1,6 @@
 """The numpy CMA-ES (synthaug.fit.optimizers.CMAState) against independent references: the ``cma`` package's
 strategy constants, Hansen's tutorial formulas (arXiv:1604.00772, table 1) computed by hand, and the ``cma``
-package's search on the same budgets (``CMAES(engine="pycma")``, the default ``cmaes``)."""
+package's search on the same budgets (``CMAES(engine="pycma")``, ``cmaes_pycma``; the numpy engine is the default ``cmaes``)."""
 
 from __future__ import annotations
 
@@ -231,4 +231,5 @@ def test_tell_needs_ask_and_engine_is_checked():
         es.tell(np.zeros(4))
     with pytest.raises(ValueError, match="engine"):
         CMAES(engine="torch")
-    assert get_optimizer("cmaes_numpy").engine == "numpy" and get_optimizer("cmaes").engine == "pycma"
+    assert get_optimizer("cmaes").engine == "numpy" and get_optimizer("cmaes_pycma").engine == "pycma"
+    assert get_optimizer("cmaes_numpy").engine == "numpy"  # the former name, one release

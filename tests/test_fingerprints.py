@@ -162,16 +162,16 @@ def test_the_optimiser_implementation_is_part_of_the_fingerprint(fit_world):
     from synthaug.fit.optimizers import CMASTATE_VERSION, IMPLEMENTATION_VERSION
 
     root, seeds, _, _ = fit_world
-    a = fit_inputs(seeds, "quadcopter", _cfg())
-    b = fit_inputs(seeds, "quadcopter", _cfg(optimizer="cmaes_numpy"))
-    assert a["optimizer"].startswith(f"synthaug cmaes {IMPLEMENTATION_VERSION} (pycma")
+    a = fit_inputs(seeds, "quadcopter", _cfg(optimizer="cmaes_pycma"))
+    b = fit_inputs(seeds, "quadcopter", _cfg())  # the default: the numpy engine
+    assert a["optimizer"].startswith(f"synthaug cmaes_pycma {IMPLEMENTATION_VERSION} (pycma")
     assert f"numpy CMAState {CMASTATE_VERSION})" in b["optimizer"] and "CMAState" not in a["optimizer"]
     # the numpy engine's own version: a fit of an older numpy engine is recomputed, a pycma fit's key is untouched
     older_numpy = dict(b, optimizer=b["optimizer"].replace(f"CMAState {CMASTATE_VERSION})", "CMAState)"))
     assert what_changed(older_numpy, b).startswith("the optimiser's implementation")
-    assert what_changed(a, b).startswith('optimizer "cmaes" -> "cmaes_numpy", the optimiser\'s implementation')
+    assert what_changed(a, b).startswith('optimizer "cmaes_pycma" -> "cmaes", the optimiser\'s implementation')
     older = dict(a, optimizer=a["optimizer"].replace(f" {IMPLEMENTATION_VERSION} ", " 1 "))
-    assert what_changed(older, a).startswith("the optimiser's implementation synthaug cmaes 1")
+    assert what_changed(older, a).startswith("the optimiser's implementation synthaug cmaes_pycma 1")
 
 # ------------------------------------------------------------------------ ingest
 from synthaug.data.ingest import IngestConfig, ingest_videos  # noqa: E402

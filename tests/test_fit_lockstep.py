@@ -89,7 +89,7 @@ def test_run_lockstep_gives_the_fits_made_alone(cache):
     assert sum(o.n_evals for o in objs) == sum(a["stats"]["n_evals"] for a in alone)
 
 
-@pytest.mark.parametrize("optimizer", ["cmaes", "cmaes_numpy"])
+@pytest.mark.parametrize("optimizer", ["cmaes", "cmaes_pycma"])
 def test_lockstep_fits_do_not_depend_on_thread_timing(cache, optimizer):
     """Random delays before each search's asks (another CPU load, a slow thread): the rounds' company changes
     timing only, every fit is still the one made alone (issue 19: scores are batch-invariant bit for bit)."""
@@ -130,7 +130,7 @@ def test_run_lockstep_error_in_one_search_stops_all(cache):
     assert objs[0].n_evals < 100
 
 
-@pytest.mark.parametrize("name", ["cmaes", "cmaes_numpy"])
+@pytest.mark.parametrize("name", ["cmaes", "cmaes_pycma"])
 def test_cmaes_leaves_numpys_global_generator_alone(name):
     # pycma draws from np.random unless given its own "randn": searches in threads must not share it
     np.random.seed(5)

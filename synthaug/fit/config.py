@@ -25,8 +25,8 @@ class FitConfig:
 
     Attributes:
         distance: registered distance name (``eucl``, ``hog``, ``wl_random``, ``wl_learned``, ``cnn``...).
-        optimizer: ``cmaes`` (default), ``cmaes_numpy`` (the same with a numpy CMA-ES),
-            ``anneal`` (the paper's simulated annealing) or ``random``.
+        optimizer: ``cmaes`` (default: CMA-ES on the numpy engine), ``cmaes_pycma`` (the same steps on the ``cma``
+            package, the reference), ``anneal`` (the paper's simulated annealing) or ``random``.
         budget: objective evaluations per seed.
         seed: base seed; seed i uses a hash of (seed, i).
         object_scale: mesh unit length / patch side; None = the seed set's object_fraction.

@@ -1,9 +1,9 @@
 """Optimisers behind one interface, all minimising a batched objective over [0, 1]^D.
 
-- ``cmaes``: CMA-ES (the ``cma`` package) with IPOP restarts; each generation
-  is scored in one batched call — the default.
-- ``cmaes_numpy``: the same restarts with :class:`CMAState`'s runs (pycma's default strategy in numpy, its
-  bound transform vectorised, its normal stream: the same runs up to rounding, ~6x less optimiser time).
+- ``cmaes``: CMA-ES with IPOP restarts, each generation scored in one batched call — the default; its runs are
+  :class:`CMAState`'s (pycma's default strategy in numpy, its bound transform vectorised, its normal stream:
+  pycma's runs up to rounding at ~6x less optimiser time). ``cmaes_numpy`` is its former name (one release).
+- ``cmaes_pycma``: the same restarts on the ``cma`` package itself (the reference; the default until stop 27).
 - ``anneal``: simulated annealing as in the paper, via
   ``scipy.optimize.dual_annealing`` without local search (one candidate per
   call): the reference.
@@ -336,16 +336,17 @@ class CMAES(Optimizer):
         share_budget: split the remaining budget evenly between runs (else a run
             goes on until CMA-ES's own stopping rules).
         grow: population factor per restart.
-        engine: ``"pycma"`` (the ``cma`` package, the default) or ``"numpy"``
-            (:class:`CMAState` with the same seeded normal stream: pycma's runs up to rounding; ``cmaes_numpy``,
-            compared side by side by ``benchmarks/bench_fit.py --optimizers cmaes cmaes_numpy``).
+        engine: ``"numpy"`` (the default: :class:`CMAState`, pycma's default strategy step for step with the same
+            seeded normal stream, so pycma's runs up to rounding at a fraction of its per-generation cost) or
+            ``"pycma"`` (the ``cma`` package itself: ``cmaes_pycma``; the two side by side:
+            ``benchmarks/bench_fit.py --optimizers cmaes_pycma cmaes``).
     """
 
     name = "cmaes"
 
     def __init__(self, popsize: int | None = None, sigma0: float = 0.2, max_restarts: int = 3,
                  explore: float = 0.25, share_budget: bool = False, grow: float = 2.0,
-                 explore_dims: tuple[int, ...] | None = None, engine: str = "pycma") -> None:
+                 explore_dims: tuple[int, ...] | None = None, engine: str = "numpy") -> None:
         if sigma0 <= 0:
             raise ValueError(f"sigma0 must be > 0, got {sigma0}")
         if not 0 <= explore < 1:
@@ -504,12 +505,25 @@ class RandomSearch(Optimizer):
         return OptimResult(track.best_x, track.best, track.n, time.perf_counter() - t0, 0, track.trace)
 
 
+class PyCMAES(CMAES):
+    """:class:`CMAES` on the ``cma`` package (``engine="pycma"``), the reference the numpy engine follows.
+
+    The default engine changed to numpy in stop 27: quiet box, ``benchmarks/bench_fit.py --n 8 --budget 3500
+    --reference-budget 15000 --fit-path --lockstep 8 --repeats 3 --workers 2 --fit-seeds 32 --optimizers cmaes_pycma
+    cmaes`` (``results/bench/fit_quiet_stop27.json``): the same 7 of 8 seeds within 5 % of the reference annealing and
+    the same median distance, ``synthaug fit --workers 2`` 0.419 s per seed against pycma's 0.525 (lockstep, one
+    core: 0.609 vs 0.810); over 3 optimiser seeds 20 of 24 fits within 5 % for both (the same fits to 3 digits on 22).
+    """
+
+    name = "cmaes_pycma"
+
+    def __init__(self, **kwargs) -> None:
+        kwargs.setdefault("engine", "pycma")
+        super().__init__(**kwargs)
+
+
 class NumpyCMAES(CMAES):
-    """:class:`CMAES` with the numpy engine (:class:`CMAState`, ``engine="numpy"``): pycma's runs up to rounding
-    (tests/test_cmaes.py) at ~6x less optimiser time per run. On the fit benchmark (``benchmarks/bench_fit.py
-    --fit-path --optimizers cmaes cmaes_numpy --opt-seeds 0 1 2``, 8 seeds x 3 optimiser seeds) 20 of 24 fits within
-    5 % of the reference annealing, as pycma (the same fits to 3 digits; implementation 2, the tutorial's step-size
-    rules and stopping, 17 of 24); lockstep 0.73 s per seed against pycma's 0.86 (loaded box)."""
+    """The former name of the default :class:`CMAES` (numpy engine), kept for one release: ``cmaes_numpy``."""
 
     name = "cmaes_numpy"
 
@@ -518,7 +532,8 @@ class NumpyCMAES(CMAES):
         super().__init__(**kwargs)
 
 
-_OPTIMIZERS = {"cmaes": CMAES, "cmaes_numpy": NumpyCMAES, "anneal": SimulatedAnnealing, "random": RandomSearch}
+_OPTIMIZERS = {"cmaes": CMAES, "cmaes_pycma": PyCMAES, "cmaes_numpy": NumpyCMAES, "anneal": SimulatedAnnealing,
+               "random": RandomSearch}
 
 
 def get_optimizer(name: str, **kwargs) -> Optimizer:

@@ -88,7 +88,7 @@ def search(objective: Any, cfg: FitConfig, *, seed: int, object_scale: float, x0
     rotations_free = {"alpha", "beta", "gamma"} <= set(space.free_names())
     if x0 is None and cfg.init == "grid" and n_init >= 16 and rotations_free:
         init = pose_grid_starts(evaluate, space, budget=n_init, object_scale=object_scale, n_starts=cfg.init_starts,
-                                seed=seed, engine=getattr(opt, "engine", "pycma"))  # the fit's own CMA-ES
+                                seed=seed, engine=getattr(opt, "engine", "numpy"))  # the fit's own CMA-ES
     elif x0 is None:
         x0 = np.random.default_rng(seed).random(space.dim)
         names = space.free_names()

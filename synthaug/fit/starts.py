@@ -29,7 +29,7 @@ def neutral_u(space: Any, object_scale: float) -> np.ndarray:
 
 def pose_grid_starts(objective: Callable[[np.ndarray], np.ndarray], space: Any, *, budget: int,
                      object_scale: float, n_starts: int = 3, seed: int = 0, grid_share: float = 0.6,
-                     n_refine: int | None = None, engine: str = "pycma") -> dict[str, Any]:
+                     n_refine: int | None = None, engine: str = "numpy") -> dict[str, Any]:
     """Structured start of a fit: a rotation grid, then a short search of the rest at the best poses.
 
     1. the objective on a near-uniform grid of rotations
