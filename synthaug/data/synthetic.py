@@ -276,9 +276,8 @@ class SyntheticObjectDataset(Dataset):
         else:
             raise ValueError(f"pose_sampling must be 'uniform', 'fitted' or a pose sampler (an object with "
                              f"sample(generator, seed_index, u)), got {type(pose_sampling).__name__}")
-        rotations = getattr(self.pose_sampler, "rotations", None)
-        if isinstance(self.pose_sampler, FittedPose) and len(rotations) != len(self.backgrounds):
-            raise ValueError(f"the FittedPose holds {len(rotations)} rotations but there are "
+        if isinstance(self.pose_sampler, FittedPose) and len(self.pose_sampler.rotations) != len(self.backgrounds):
+            raise ValueError(f"the FittedPose holds {len(self.pose_sampler.rotations)} rotations but there are "
                              f"{len(self.backgrounds)} seeds (one fitted rotation per seed)")
 
     def _set_up_renderer(self, mesh: Any, render: Any) -> None:
@@ -288,7 +287,7 @@ class SyntheticObjectDataset(Dataset):
         self._cache = None
         self._renderer = None
         if self.backend == "cache":
-            if isinstance(render, str) or isinstance(render, Mapping):
+            if isinstance(render, (str, Mapping)):
                 # built here (in the main process, through a GL subprocess), memory-mapped by workers
                 from synthaug.render.cache import ViewCache
 
