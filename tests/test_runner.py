@@ -176,3 +176,15 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     k0 = runner.identity(given, 0)["condition"]["params_sha256"]
     assert k0 and k0 != runner.identity(given, 1)["condition"]["params_sha256"]
     assert "perturb_copies" not in R.Condition("r", "hog", seed_count=6).identity()
+
+
+def test_runner_scales_option_parses_and_refuses_a_non_positive_factor(capsys):
+    """``--scales`` (the pyramid of mining, validation and scoring; part of a cell's key) for both subcommands."""
+    args = R.build_parser().parse_args(["learning-curve", "--scales", "1.25", "0.33", "--out", "x"])
+    assert args.scales == [1.25, 0.33]
+    assert R.build_parser().parse_args(["synthetic", "--out", "x"]).scales is None
+    for bad in ("0", "-0.5", "nan"):
+        with pytest.raises(SystemExit) as e:
+            R.build_parser().parse_args(["synthetic", "--scales", "1", bad, "--out", "x"])
+        assert e.value.code == 2
+        assert "--scales" in capsys.readouterr().err
