@@ -224,7 +224,7 @@ def _time_detector(
         "nms_meets_target": nms_ms <= NMS_TARGET_MS,
         # CPU seconds of this process: robust to other jobs sharing the machine
         "median_cpu_ms_per_frame": round(1000 * statistics.median(cpu), 1),
-        "box_regression": getattr(det, "box_regressor", None) is not None,
+        "box_regression": None if getattr(det, "box_regressor", None) is None else type(det.box_regressor).__name__,
         "median_ms_per_frame_window_boxes": round(1000 * statistics.median(unrefined), 1),
         "window": det.window,
         "stride": det.stride,
@@ -250,6 +250,8 @@ def main() -> int:
     p.add_argument("--no-box-regression", action="store_true",
                    help="toy detectors without a box regressor (default: one, as `synthaug train` writes; its cost "
                         "does not depend on its weights)")
+    p.add_argument("--box-model", choices=("cnn", "ridge", "ensemble"), default="ensemble",
+                   help="the toy detectors' box regressor (TrainOptions.box_model; default ensemble, as `synthaug train` writes)")
     args = p.parse_args()
 
     from synthaug.detectors.base import get_detector_class, list_detectors, load_detector
@@ -284,9 +286,13 @@ def main() -> int:
                 results[kind] = {"skipped": "no toy builder for this kind (pass --checkpoint)"}
                 continue
             if not args.no_box_regression:
+                from synthaug.detectors.box_cnn import CNNBoxRegressor
                 from synthaug.detectors.boxes import BoxRegressor
 
-                det.box_regressor = BoxRegressor.identity()
+                from synthaug.detectors.box_cnn import EnsembleBoxRegressor
+
+                det.box_regressor = {"cnn": CNNBoxRegressor.untrained, "ridge": BoxRegressor.identity,
+                                     "ensemble": lambda: EnsembleBoxRegressor([BoxRegressor.identity(), CNNBoxRegressor.untrained()])}[args.box_model]()
             results[kind] = {**_time_detector(det, frame, scales, args.repeats, **timing), "toy_training_seconds": round(train_s, 1)}
     for name, r in results.items():
         kind = name.split(":")[0]

@@ -188,3 +188,40 @@ def test_runner_scales_option_parses_and_refuses_a_non_positive_factor(capsys):
             R.build_parser().parse_args(["synthetic", "--scales", "1", bad, "--out", "x"])
         assert e.value.code == 2
         assert "--scales" in capsys.readouterr().err
+
+
+def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(capsys):
+    """``--mining-select`` / ``--mining-patience`` / ``--box-model`` (TrainOptions fields added after cells were
+    cached): at ``fp`` / 0 / ``ridge`` a cell's key is the one before them; any other value is a new cell, and the
+    default box model (``ensemble``) is one: cells of the default options were trained again."""
+    from synthaug.evaluate.cells import cell_key
+
+    proto = Protocol.from_dict(example_protocol_dict(name="tiny", split_file="split.json"))
+    paths = R.DataPaths("videos", "labels", "split.json", "work")
+    c = R.Condition("cnn / 12 seeds", "cnn", seed_count=12)
+
+    def ident(**kw):
+        return R.ProtocolRunner(proto, "drone", paths, options=TrainOptions(**kw), log=lambda m: None).identity(c, 1)
+
+    base = ident(box_model="ridge")
+    later = ("mining_select", "mining_patience", "box_model")
+    assert base["options"] == {k: v for k, v in dataclasses.asdict(TrainOptions()).items() if k not in later}
+    assert ident(mining_select="fp", mining_patience=0, box_model="ridge") == base
+    if R.TRAINING_VERSION == 6:  # the key computed before the three options existed (same protocol, paths, condition)
+        assert cell_key(base) == "6475b1e4fead8163625ca26e"
+    assert ident()["options"]["box_model"] == "ensemble" and cell_key(ident()) != cell_key(base)
+    base = ident(box_model="ridge")
+    keys = {cell_key(base), cell_key(ident(box_model="ridge", mining_select="ap")),
+            cell_key(ident(box_model="ridge", mining_patience=1)),
+            cell_key(ident(box_model="ridge", mining_select="ap", mining_patience=1)), cell_key(ident())}
+    assert len(keys) == 5
+    # the command line reaches them; a negative patience is a usage error naming the option
+    args = R.build_parser().parse_args(["synthetic", "--mining-select", "ap", "--mining-patience", "1", "--out", "x"])
+    assert (args.mining_select, args.mining_patience) == ("ap", 1)
+    args = R.build_parser().parse_args(["learning-curve", "--out", "x"])
+    assert (args.mining_select, args.mining_patience, args.box_model) == ("fp", 0, "ensemble")
+    assert R.build_parser().parse_args(["learning-curve", "--box-model", "ridge", "--out", "x"]).box_model == "ridge"
+    for bad in (["--mining-patience", "-1"], ["--mining-select", "recall"], ["--box-model", "svm"]):
+        with pytest.raises(SystemExit) as e:
+            R.build_parser().parse_args(["synthetic", *bad, "--out", "x"])
+        assert e.value.code == 2 and bad[0] in capsys.readouterr().err

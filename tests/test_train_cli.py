@@ -42,6 +42,24 @@ def trained(ws: dict[str, Path]) -> dict[str, Any]:
     return {"out": out, "meta": json.loads(out.with_suffix(".json").read_text())}
 
 
+@pytest.mark.parametrize("model", ["ridge", "cnn"])
+def test_box_model_option_fits_that_map(ws: dict[str, Path], tmp_path: Path, model: str) -> None:
+    from synthaug.detectors.base import load_detector
+    from synthaug.detectors.box_cnn import CNNBoxRegressor, EnsembleBoxRegressor
+    from synthaug.detectors.boxes import BoxRegressor
+
+    out = tmp_path / f"{model}.pt"
+    assert _train(ws, out, "--detector", "hog", "--seed-counts", "8", "--seed", "0", "--mining-rounds", "0",
+                  "--box-model", model) == 0
+    box = json.loads(out.with_suffix(".json").read_text())["box_regression"]
+    reg = load_detector(out).box_regressor
+    assert box["model"] == model
+    if model == "ridge":
+        assert float(box["ridge"]) in [float(r) for r in box["cv_mse"]] and isinstance(reg, BoxRegressor)
+    else:
+        assert box["samples"] > 0 and isinstance(reg, CNNBoxRegressor) and not isinstance(reg, EnsembleBoxRegressor)
+
+
 def test_train_then_detect_end_to_end(ws: dict[str, Path], trained: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
     from synthaug.detectors.base import load_detector
 
@@ -50,7 +68,12 @@ def test_train_then_detect_end_to_end(ws: dict[str, Path], trained: dict[str, An
     assert det.box_regressor is not None  # the annotators' box convention, learned from the training labels
     box = trained["meta"]["box_regression"]
     assert box["videos"] == len(trained["meta"]["split"]["train"])  # every drone training video (not the bird)
-    assert box["samples"] > 0 and float(box["ridge"]) in [float(r) for r in box["cv_mse"]]
+    assert box["model"] == "ensemble"  # TrainOptions.box_model's default: the ridge and the CNN maps' mean
+    ridge, cnn = box["parts"]
+    assert (ridge["model"], cnn["model"]) == ("ridge", "cnn") and ridge["samples"] > 0 and cnn["samples"] > 0
+    assert float(ridge["ridge"]) in [float(r) for r in ridge["cv_mse"]]
+    assert cnn["held_out_mse"] is None and cnn["epoch_kept"] == cnn["epochs"] - 1  # 2 training videos: none held out
+    assert [type(p).__name__ for p in det.box_regressor.parts] == ["BoxRegressor", "CNNBoxRegressor"]
     val_video = trained["meta"]["split"]["val"][0]
     dets = ws["root"] / "dets.json"
     capsys.readouterr()

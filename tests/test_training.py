@@ -140,7 +140,7 @@ def test_validation_false_positives_hand_counted() -> None:
     r = validation_false_positives(Darkness(), frames, scales=[1.0], top_k=1)
     # top-1 per frame is each frame's distractor: 3 FPs, no object found
     assert r == {"fp": 3, "recall_reached": False, "threshold": None, "max_recall": 0.0, "tp": 0, "detections": 3,
-                 "frames": 3, "objects": 2}
+                 "frames": 3, "objects": 2, "ap": 0.0, "ap_envelope": 0.0}
     r = validation_false_positives(Darkness(), frames, scales=[1.0], top_k=2)
     # by score: the 3 distractors (1.0), then the objects: recall 1/2 is reached at the 4th detection with 3 FPs above
     assert r["fp"] == 3 and r["recall_reached"] and r["max_recall"] == 1.0 and r["tp"] == 2
@@ -187,6 +187,131 @@ def test_mining_rounds_stop_when_validation_fp_stops_falling() -> None:
                             val_frames=val, fit=fit, box_regressor=off)
     assert res.detector.box_regressor is off
     assert res.log["rounds"][0]["val"]["fp"] > 4 and not res.log["rounds"][0]["val"]["recall_reached"]
+
+
+def test_validation_ap_matches_an_independent_computation() -> None:
+    """The validation AP of the stopping rule = the protocol's AP (synthaug.evaluate.ap: its own matching and curve) and
+    torchmetrics' binary average precision rescaled to recall over all objects, on the same detections."""
+    from torchmetrics.functional.classification import binary_average_precision
+
+    from synthaug.detectors.frames import _image_tensor
+    from synthaug.detectors.mining import _pooled_ap
+    from synthaug.detectors.sliding import detect_multiscale
+    from synthaug.evaluate.ap import average_precision, evaluate_detections, match_detections, precision_recall
+
+    # objects and distractors of interleaved darkness: the ranking mixes hits and misses; one object-free frame and
+    # one object never detected (recall < 1)
+    frames = [MiningFrame(_frame([(8, 8, o), (100, 64, d)]), np.array([[8.0, 8.0, 40.0, 40.0]]))
+              for o, d in [(60, 80), (110, 20), (90, 120), (150, 170), (30, 100)]]
+    frames += [MiningFrame(_frame([(60, 40, 50)]), None),
+               MiningFrame(_frame([(60, 40, 250)]), np.array([[0.0, 70.0, 40.0, 40.0]]))]
+    r = validation_false_positives(Darkness(), frames, scales=[1.0], top_k=2)
+    dets = [detect_multiscale(Darkness(), _image_tensor(f.image), scales=[1.0], nms_iou=0.3, max_detections=2).numpy()
+            for f in frames]
+    gts = [f.boxes for f in frames]
+    ref = evaluate_detections(dets, gts, 0.5)
+    assert r["objects"] == ref.n_ground_truth == 6 and r["tp"] == ref.n_true_positives == 5
+    assert 0.2 < r["ap"] < 0.9 and r["ap"] == pytest.approx(ref.ap, abs=1e-9)
+    assert r["ap_envelope"] == pytest.approx(ref.ap_envelope, abs=1e-9)
+    scores, is_tp, n_gt, _ = match_detections(dets, gts, 0.5)
+    tm = float(binary_average_precision(torch.as_tensor(scores), torch.as_tensor(is_tp).long()))
+    assert r["ap"] == pytest.approx(tm * is_tp.sum() / n_gt, abs=1e-6)  # torchmetrics' recall is over detected objects
+    # ties enter together, and the envelope differs from the step curve: both as the protocol's functions
+    sc, tp = np.array([0.9, 0.8, 0.8, 0.7, 0.6, 0.6]), np.array([False, True, False, True, True, False])
+    p_, rc, _ = precision_recall(sc, tp, 5)
+    ap, env = _pooled_ap(sc, tp, 5)
+    assert ap == pytest.approx(average_precision(p_, rc)) and env == pytest.approx(average_precision(p_, rc, envelope=True))
+    assert env > ap
+    # by hand: recall 1/5 at precision 1/3 (0.8 ties), 2/5 at 1/2, 3/5 at 1/2 (0.6 ties)
+    assert ap == pytest.approx(0.2 / 3 + 0.2 / 2 + 0.2 / 2)
+    assert _pooled_ap(np.zeros(0), np.zeros(0, bool), 3) == (0.0, 0.0) and _pooled_ap(sc, tp, 0) == (None, None)
+
+
+class _Scripted:
+    """A detector whose validation result is scripted (``fp``, ``ap``): one per call of ``fit``."""
+
+    window, stride = 40, 4
+
+    def __init__(self, i: int, fp: int, ap: float | None) -> None:
+        self.i, self.fp, self.ap = i, fp, ap
+
+
+def _scripted_mining(monkeypatch: pytest.MonkeyPatch, fps: list[int], aps: list[float | None], options: TrainOptions):
+    """``train_with_mining`` over a scripted sequence: round r's detector has validation FP ``fps[r]`` and AP ``aps[r]``;
+    every scan mines one new window (no frame is scanned: mining and validation are stubbed)."""
+    import synthaug.detectors.training as T
+    from synthaug.detectors.mining import MinedNegatives
+
+    made: list[_Scripted] = []
+
+    def fit(p: torch.Tensor, n: torch.Tensor) -> _Scripted:
+        made.append(_Scripted(len(made), fps[len(made)], aps[len(made)]))
+        return made[-1]
+
+    def mine(det: Any, source: Any, **k: Any) -> MinedNegatives:
+        return MinedNegatives(torch.full((1, 1, 40, 40), det.i / 100), torch.zeros(1, 4), torch.ones(1), [("V", det.i)],
+                              [("V", det.i, 0, 0, 0)], 1, 0.0)
+
+    monkeypatch.setattr(T, "mine_hard_negatives", mine)
+    monkeypatch.setattr(T, "validation_false_positives", lambda det, val, **k: {"fp": det.fp, "ap": det.ap})
+    res = train_with_mining("toy", torch.ones(2, 1, 40, 40), torch.zeros(10, 1, 40, 40), 0, options=options,
+                            mining_source=[object()], val_frames=[MiningFrame(np.zeros((8, 8), np.uint8), None)], fit=fit)
+    assert res.detector is made[res.log["chosen_round"]]  # the chosen round's detector and its negatives
+    assert res.negatives.shape[0] == 10 + res.log["chosen_round"]
+    return res
+
+
+def test_mining_patience_runs_rounds_without_a_new_best(monkeypatch: pytest.MonkeyPatch) -> None:
+    fps = [36, 38, 20, 25, 30, 10]
+    aps = [0.30, 0.35, 0.32, 0.50, 0.40, 0.45]
+
+    def run(**kw: Any) -> dict[str, Any]:
+        return _scripted_mining(monkeypatch, fps, aps, TrainOptions(mining_rounds=5, **kw)).log
+
+    log = run()  # today's rule: the first round without fewer FPs stops; round 2's 20 is never seen
+    assert [r["round"] for r in log["rounds"]] == [0, 1] and log["chosen_round"] == 0
+    assert log["stop_reason"] == "validation false positives stopped falling (36 -> 38)"
+    assert log["mining"]["select"] == "fp" and log["mining"]["patience"] == 0
+    log = run(mining_patience=1)  # 38 is tolerated, 20 is a new best, 25 and 30 are two rounds without one: stop
+    assert [r["round"] for r in log["rounds"]] == [0, 1, 2, 3, 4] and log["chosen_round"] == 2
+    assert "patience 1" in log["stop_reason"] and "FP 20" in log["stop_reason"]
+    log = run(mining_patience=2)  # ... one more round: 10 is found, the budget ends the rounds
+    assert len(log["rounds"]) == 6 and log["chosen_round"] == 5 and log["stop_reason"] == "mining_rounds reached"
+    log = run(mining_patience=9)  # patience beyond the budget: every round, the best kept
+    assert len(log["rounds"]) == 6 and log["chosen_round"] == 5
+
+
+def test_mining_select_ap_keeps_the_round_of_highest_validation_ap(monkeypatch: pytest.MonkeyPatch) -> None:
+    fps = [36, 38, 20, 25, 30, 10]
+    aps = [0.30, 0.35, 0.32, 0.50, 0.40, 0.45]
+
+    def run(fps: list[int] = fps, aps: list[float | None] = aps, **kw: Any) -> dict[str, Any]:
+        return _scripted_mining(monkeypatch, fps, aps, TrainOptions(mining_rounds=5, mining_select="ap", **kw)).log
+
+    log = run()  # 0.35 is a new best, 0.32 is not: stop, keep round 1 (by FP the same rounds would keep round 0)
+    assert [r["round"] for r in log["rounds"]] == [0, 1, 2] and log["chosen_round"] == 1
+    assert "higher validation AP" in log["stop_reason"] and "AP 0.3500" in log["stop_reason"]
+    log = run(mining_patience=1)  # 0.50 at round 3, then 0.40 and 0.45: stop at round 5, keep round 3 (FP would keep 5)
+    assert len(log["rounds"]) == 6 and log["chosen_round"] == 3 and "patience 1" in log["stop_reason"]
+    log = run(aps=[0.4, 0.4, 0.4, 0.4, 0.4, 0.4], mining_patience=1)  # ties are not a new best: the earliest round
+    assert len(log["rounds"]) == 3 and log["chosen_round"] == 0
+    log = run(aps=[None, 0.1, None, 0.2, 0.2, 0.2], mining_patience=1)  # no AP (no object) is never better
+    assert log["chosen_round"] == 3 and len(log["rounds"]) == 6
+
+
+@pytest.mark.parametrize("field, value", [("mining_select", "recall"), ("mining_patience", -1), ("mining_patience", 1.5)])
+def test_train_options_refuse_a_bad_mining_rule(field: str, value: Any) -> None:
+    with pytest.raises(ValueError, match=field):
+        TrainOptions(**{field: value})
+
+
+def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults() -> None:
+    from dataclasses import asdict
+
+    old = {k: v for k, v in asdict(TrainOptions()).items() if k not in ("mining_select", "mining_patience")}
+    assert TrainOptions().key_fields() == old
+    assert TrainOptions(mining_select="ap").key_fields() == {**old, "mining_select": "ap"}
+    assert TrainOptions(mining_patience=1).key_fields() == {**old, "mining_patience": 1}
 
 
 def test_cnn_positive_weights_reach_every_mining_round(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -369,12 +369,12 @@ def load_detector(path: str | Path, *, map_location: str | torch.device = "cpu")
         detector.box_in_window = tuple(float(v) for v in box)
     reg = payload.get("box_regressor")
     if reg is not None:
-        from synthaug.detectors.boxes import BoxRegressor
+        from synthaug.detectors.box_cnn import regressor_from_state_dict
 
         if not isinstance(reg, dict):
             raise ValueError(f"{path}: box_regressor must be a state dict, got {type(reg).__name__}")
         try:
-            detector.box_regressor = BoxRegressor.from_state_dict(reg)
+            detector.box_regressor = regressor_from_state_dict(reg)
         except ValueError as e:
             raise ValueError(f"{path}: {e}") from e
     return detector

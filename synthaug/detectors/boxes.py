@@ -31,7 +31,7 @@ Example:
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,7 +42,7 @@ from torchvision.ops import box_convert, box_iou, roi_align
 
 from synthaug.detectors.hog import HOGConfig, hog
 
-__all__ = ["BoxRegressor", "decode_deltas", "encode_deltas", "jitter_boxes"]
+__all__ = ["BoxRegressor", "DeltaRegressor", "context_rois", "decode_deltas", "encode_deltas", "jitter_boxes", "jittered_samples"]
 
 # Deltas beyond these are clamped when decoding (torchvision's BoxCoder clamps dw/dh at log(1000/16)).
 _MAX_LOG_SIZE = math.log(4.0)
@@ -127,8 +127,30 @@ def jitter_boxes(
     return p[keep], index[keep]
 
 
+class DeltaRegressor:
+    """What every box regressor shares: :meth:`refine` decodes the deltas its ``predict(image, boxes)`` returns
+    (:class:`BoxRegressor`, :class:`~synthaug.detectors.box_cnn.CNNBoxRegressor`)."""
+
+    def predict(self, image: Tensor, boxes_xyxy: Tensor) -> Tensor:  # pragma: no cover - each model's own
+        raise NotImplementedError
+
+    def refine(self, image: Tensor, boxes_xyxy: Tensor) -> Tensor:
+        """The boxes an annotator would draw for these detections (XYXY, same order).
+
+        Shape:
+            - image: (1, 1, H, W) or (H, W) float in [0, 1]
+            - boxes_xyxy: (N, 4)
+            - output: (N, 4)
+        """
+        if image.dim() == 2:
+            image = image[None, None]
+        if boxes_xyxy.shape[0] == 0:
+            return boxes_xyxy
+        return decode_deltas(boxes_xyxy.float(), self.predict(image, boxes_xyxy))
+
+
 @dataclass
-class BoxRegressor:
+class BoxRegressor(DeltaRegressor):
     """Ridge regression from a box's context (HOG cells) to the annotators' box.
 
     Attributes:
@@ -161,11 +183,8 @@ class BoxRegressor:
             - boxes_xyxy: (N, 4)
             - output: (N, D)
         """
-        boxes = boxes_xyxy.float()
-        cx, cy = 0.5 * (boxes[:, 0] + boxes[:, 2]), 0.5 * (boxes[:, 1] + boxes[:, 3])
-        half = 0.5 * context * torch.maximum(boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1])
-        rois = torch.stack([torch.zeros_like(cx), cx - half, cy - half, cx + half, cy + half], dim=1)
-        crops = roi_align(image.float(), rois, (size, size), spatial_scale=1.0, sampling_ratio=2, aligned=True)
+        crops = roi_align(image.float(), context_rois(boxes_xyxy, context), (size, size), spatial_scale=1.0,
+                          sampling_ratio=2, aligned=True)
         return hog(crops.clamp(0.0, 1.0), HOGConfig(cell_size=cell_size))
 
     def predict(self, image: Tensor, boxes_xyxy: Tensor) -> Tensor:
@@ -174,20 +193,6 @@ class BoxRegressor:
             return boxes_xyxy.new_zeros(0, 4)
         x = self.crop_features(image, boxes_xyxy, context=self.context, size=self.size, cell_size=self.cell_size)
         return ((x.double() - self.mean_x.double()) @ self.weights.double() + self.mean_y.double()).float()
-
-    def refine(self, image: Tensor, boxes_xyxy: Tensor) -> Tensor:
-        """The boxes an annotator would draw for these detections (XYXY, same order).
-
-        Shape:
-            - image: (1, 1, H, W) or (H, W) float in [0, 1]
-            - boxes_xyxy: (N, 4)
-            - output: (N, 4)
-        """
-        if image.dim() == 2:
-            image = image[None, None]
-        if boxes_xyxy.shape[0] == 0:
-            return boxes_xyxy
-        return decode_deltas(boxes_xyxy.float(), self.predict(image, boxes_xyxy))
 
     @classmethod
     def identity(cls, *, context: float = 2.0, size: int = 32, cell_size: int = 4) -> "BoxRegressor":
@@ -230,24 +235,14 @@ class BoxRegressor:
         Raises:
             ValueError: when the frames hold no labelled box.
         """
-        gen = torch.Generator().manual_seed(int(seed))
         xs: list[Tensor] = []
         ys: list[Tensor] = []
         groups: list[str] = []
-        for item in frames:
-            if item.boxes is None or np.asarray(item.boxes).size == 0:
-                continue
-            image = torch.as_tensor(np.asarray(item.image))
-            image = image.float() / 255.0 if image.dtype == torch.uint8 else image.float()
-            image = image.reshape(1, 1, *image.shape[-2:])
-            g = box_convert(torch.as_tensor(np.asarray(item.boxes, np.float64), dtype=torch.float32).reshape(-1, 4), "xywh", "xyxy")
-            g = g[(g[:, 2] > g[:, 0]) & (g[:, 3] > g[:, 1])]
-            p, idx = jitter_boxes(g, jitters, aspect=aspect, generator=gen, log_size_sigma=log_size_sigma, shift_sigma=shift_sigma)
-            if p.shape[0] == 0:
-                continue
+        for image, p, g, video in jittered_samples(frames, jitters, aspect=aspect, seed=seed, log_size_sigma=log_size_sigma,
+                                                   shift_sigma=shift_sigma):
             xs.append(cls.crop_features(image, p, context=context, size=size, cell_size=cell_size))
-            ys.append(encode_deltas(p, g[idx]))
-            groups += [str(getattr(item, "video", ""))] * p.shape[0]
+            ys.append(encode_deltas(p, g))
+            groups += [video] * p.shape[0]
         if not xs:
             raise ValueError("BoxRegressor.fit: the frames hold no labelled box to learn from")
         x, y = torch.cat(xs).double(), torch.cat(ys).double()
@@ -264,7 +259,7 @@ class BoxRegressor:
     # ------------------------------------------------------------------ serialisation
     def state_dict(self) -> dict[str, Any]:
         """Tensors and plain types only (loads with ``torch.load(weights_only=True)``)."""
-        return {"mean_x": self.mean_x.clone(), "weights": self.weights.clone(), "mean_y": self.mean_y.clone(),
+        return {"model": "ridge", "mean_x": self.mean_x.clone(), "weights": self.weights.clone(), "mean_y": self.mean_y.clone(),
                 "ridge": float(self.ridge), "context": float(self.context), "size": int(self.size),
                 "cell_size": int(self.cell_size), "meta": _plain(self.meta or {})}
 
@@ -282,6 +277,42 @@ class BoxRegressor:
             raise ValueError(f"box regressor state has shapes mean_x {tuple(reg.mean_x.shape)}, weights {tuple(reg.weights.shape)}, "
                              f"mean_y {tuple(reg.mean_y.shape)}; expected ({d},), ({d}, 4), (4,)")
         return reg
+
+
+def jittered_samples(frames: Iterable[Any], jitters: int, *, aspect: float, seed: int, log_size_sigma: float = 0.35,
+                     shift_sigma: float = 0.12) -> Iterator[tuple[Tensor, Tensor, Tensor, str]]:
+    """The training samples of a box regressor: per labelled frame, boxes jittered around its labelled boxes.
+
+    Args:
+        frames: items with ``image`` (uint8 or float gray ``(H, W)``), ``boxes`` (``(G, 4)`` XYWH, or None)
+            and ``video``; frames without a box are skipped.
+        jitters, aspect, log_size_sigma, shift_sigma: :func:`jitter_boxes`.
+        seed: seed of the draws (one generator for the whole stream).
+
+    Yields:
+        ``(image (1, 1, H, W) float in [0, 1], proposals (M, 4) XYXY, their labelled boxes (M, 4) XYXY, video)``.
+    """
+    gen = torch.Generator().manual_seed(int(seed))
+    for item in frames:
+        if item.boxes is None or np.asarray(item.boxes).size == 0:
+            continue
+        image = torch.as_tensor(np.asarray(item.image))
+        image = image.float() / 255.0 if image.dtype == torch.uint8 else image.float()
+        image = image.reshape(1, 1, *image.shape[-2:])
+        g = box_convert(torch.as_tensor(np.asarray(item.boxes, np.float64), dtype=torch.float32).reshape(-1, 4), "xywh", "xyxy")
+        g = g[(g[:, 2] > g[:, 0]) & (g[:, 3] > g[:, 1])]
+        p, idx = jitter_boxes(g, jitters, aspect=aspect, generator=gen, log_size_sigma=log_size_sigma, shift_sigma=shift_sigma)
+        if p.shape[0]:
+            yield image, p, g[idx], str(getattr(item, "video", ""))
+
+
+def context_rois(boxes_xyxy: Tensor, context: float) -> Tensor:
+    """``roi_align`` rows ``[0, x1, y1, x2, y2]`` of each box's square context: its longest side times ``context``,
+    centred on the box."""
+    boxes = boxes_xyxy.float()
+    cx, cy = 0.5 * (boxes[:, 0] + boxes[:, 2]), 0.5 * (boxes[:, 1] + boxes[:, 3])
+    half = 0.5 * context * torch.maximum(boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1])
+    return torch.stack([torch.zeros_like(cx), cx - half, cy - half, cx + half, cy + half], dim=1)
 
 
 def _ridge(x: Tensor, y: Tensor, ridge: float) -> Tensor:

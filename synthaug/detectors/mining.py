@@ -15,6 +15,16 @@ the count is the number of false positives scoring at or above the detection at
 which recall first reaches ``val_target_recall`` (50 %) — the clutter a user must
 accept to find half of the drones. When that recall is never reached every
 kept false positive counts (:func:`validation_false_positives`).
+
+The same matched detections, pooled over the validation frames, also give a
+**validation AP** (``"ap"``: ``∫ p(r) dr`` of the step precision-recall curve,
+recall over all labelled objects, detections of equal score entering together:
+the protocol's AP convention of :mod:`synthaug.evaluate.ap`; ``"ap_envelope"``:
+the same integral of the monotone precision envelope, VOC's "all points"). It
+costs nothing beyond the count and is what ``TrainOptions(mining_select="ap")``
+selects the round on. Unlike the count it uses every kept detection, not the one
+operating point. It is capped by ``val_top_k`` detections per frame, so it is a
+selection score, not the protocol's test AP.
 """
 
 from __future__ import annotations
@@ -274,7 +284,9 @@ def validation_false_positives(
 
     Returns:
         ``{"fp": count, "recall_reached": bool, "threshold": score at the operating point
-        (None when not reached), "max_recall", "tp", "detections", "frames", "objects"}``.
+        (None when not reached), "max_recall", "tp", "detections", "frames", "objects", "ap", "ap_envelope"}``;
+        ``"ap"`` / ``"ap_envelope"``: the validation AP of the same pooled detections (module docstring; 0.0
+        with objects but no detection, None without any labelled object).
 
     Example:
         >>> # the toy "darkness" scorer finds one of two dark squares above a darker distractor
@@ -290,8 +302,8 @@ def validation_false_positives(
         ...     def from_state_dict(cls, s): return cls()
         >>> f = np.full((120, 160), 200, np.uint8); f[40:80, 40:80] = 50; f[0:40, 100:140] = 0
         >>> r = validation_false_positives(Dark(), [MiningFrame(f, np.array([[40., 40, 40, 40]]))], scales=[1.0], top_k=2)
-        >>> r["fp"], r["recall_reached"], r["max_recall"]
-        (1, True, 1.0)
+        >>> r["fp"], r["recall_reached"], r["max_recall"], r["ap"]   # FP then TP: precision 1/2 at recall 1
+        (1, True, 1.0, 0.5)
     """
     from synthaug.detectors.sliding import DEFAULT_SCALES, detect_multiscale
 
@@ -333,5 +345,34 @@ def validation_false_positives(
             reached = True
             fp = int(i + 1 - cum_tp[i])
             threshold = float(np.asarray(scores)[order][i])
+    ap, ap_env = _pooled_ap(np.asarray(scores, np.float64)[order], tp_sorted, n_obj)
     return {"fp": fp, "recall_reached": reached, "threshold": threshold, "max_recall": round(max_recall, 4),
-            "tp": int(cum_tp[-1]) if len(cum_tp) else 0, "detections": len(scores), "frames": n_frames, "objects": n_obj}
+            "tp": int(cum_tp[-1]) if len(cum_tp) else 0, "detections": len(scores), "frames": n_frames, "objects": n_obj,
+            "ap": ap, "ap_envelope": ap_env}
+
+
+def _pooled_ap(scores: np.ndarray, is_tp: np.ndarray, n_objects: int) -> tuple[float | None, float | None]:
+    """``(AP, envelope AP)`` of detections sorted by decreasing score (recall over ``n_objects``).
+
+    Precision and recall are taken at the last detection of each run of equal scores (ties enter
+    together), ``AP = Σ (r_k - r_{k-1}) p_k`` and the envelope variant replaces ``p_k`` by
+    ``max_{j >= k} p_j``: :func:`synthaug.evaluate.ap.average_precision`'s two conventions, rewritten
+    here because detector modules never import ``synthaug.evaluate``. Both None when there is no object
+    (AP undefined; JSON has no NaN), 0.0 when there are objects but no detection.
+
+    Example:
+        >>> ap, env = _pooled_ap(np.array([0.9, 0.8, 0.7]), np.array([False, True, True]), 2)
+        >>> round(ap, 4), round(env, 4)   # (1/2)(1/2) + (1/2)(2/3); the envelope lifts the first 1/2 to 2/3
+        (0.5833, 0.6667)
+    """
+    if n_objects <= 0:
+        return None, None
+    if scores.size == 0:
+        return 0.0, 0.0
+    tp = np.cumsum(is_tp)
+    last = np.r_[np.nonzero(np.diff(scores))[0], scores.size - 1]
+    precision = tp[last] / (last + 1.0)
+    recall = tp[last] / float(n_objects)
+    steps = np.diff(np.r_[0.0, recall])
+    envelope = np.maximum.accumulate(precision[::-1])[::-1]
+    return float(np.sum(steps * precision)), float(np.sum(steps * envelope))

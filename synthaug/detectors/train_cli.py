@@ -61,7 +61,7 @@ def budget_options(args: argparse.Namespace) -> dict[str, int]:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug._checks import add_option, dataclass_defaults
-    from synthaug.detectors.training import TrainOptions
+    from synthaug.detectors.training import BOX_MODELS, TrainOptions
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
     parser.add_argument("--detector", required=True, help=f"detector family: {' | '.join(_DETECTORS)}")
@@ -106,6 +106,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scales", type=float, nargs="+", default=None,
                         help="pyramid of mining and validation (default: synthaug.detectors.sliding.DEFAULT_SCALES)")
     add_budget_options(parser)
+    parser.add_argument("--box-model", choices=list(BOX_MODELS), default=d["box_model"],
+                        help="box regression from the detection's context: a small CNN on its pixels, ridge on its HOG cells, or the "
+                             "mean of both (ensemble)")
     parser.add_argument("--cnn-shift", type=int, default=d["cnn_shift"],
                         help="CNN positives moved by random whole-pixel offsets up to this (0: off)")
     parser.add_argument("--extra-negatives", type=int, default=3000, help="object-free crops of the seed frames added to the seed set's negatives")
@@ -146,7 +149,7 @@ def main(args: argparse.Namespace) -> int:
     try:
         options = TrainOptions(**budget_options(args), cnn_shift=args.cnn_shift, mining_rounds=args.mining_rounds,
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
-                               val_stride=args.val_frame_stride, scales=None if args.scales is None else tuple(args.scales))
+                               val_stride=args.val_frame_stride, box_model=args.box_model, scales=None if args.scales is None else tuple(args.scales))
     except ValueError as e:
         return _err(str(e))
 

@@ -13,6 +13,9 @@ same functions):
   (:func:`~synthaug.detectors.mining.validation_false_positives`);
   stop when it stops falling (or after ``mining_rounds``) and keep the detector
   with the fewest; every round's added negatives and count go into a log.
+  ``TrainOptions.mining_select`` / ``mining_patience`` choose the round by the
+  validation AP of the same detections instead, and allow rounds without a new
+  best before stopping (defaults: the rule above).
 
 Beside it: :mod:`synthaug.detectors.frames` (the memory-bounded frame streams mined
 and validated on), :mod:`synthaug.detectors.mining` (the scan and the count),
@@ -37,8 +40,8 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Literal, Sequence
+from dataclasses import asdict, dataclass
+from typing import Any, Callable, ClassVar, Iterable, Literal, Sequence
 
 import numpy as np
 import torch
@@ -49,6 +52,7 @@ from synthaug.detectors.mining import mine_hard_negatives, validation_false_posi
 
 __all__ = [
     "DETECTORS",
+    "MINING_SELECT",
     "TrainOptions",
     "check_kind",
     "train_detector",
@@ -58,6 +62,10 @@ __all__ = [
 
 DetectorKind = Literal["hog", "adaboost", "cnn"]
 DETECTORS: tuple[str, ...] = ("hog", "adaboost", "cnn")
+MINING_SELECT: tuple[str, ...] = ("fp", "ap")
+"""What the mining rounds are chosen by (``TrainOptions.mining_select``)."""
+BOX_MODELS: tuple[str, ...] = ("cnn", "ridge", "ensemble")
+"""The box regression's models (``TrainOptions.box_model``)."""
 
 
 # =========================================================================== options
@@ -101,6 +109,33 @@ class TrainOptions:
             Measured on the halmstad drone test split (HOG, 100 seeds, seed 0): frame AP@0.5
             0.206 -> 0.333 on the same detections.
         box_stride: every k-th labelled frame of the training videos feeds the box regression.
+        mining_select: what the validation frames choose the round by: ``"fp"`` (the fewest validation
+            false positives at recall ``val_target_recall``; the earliest on ties) or ``"ap"`` (the highest
+            validation AP of the same pooled detections, ``validation_false_positives(...)["ap"]``; the
+            earliest on ties). A round is a *new best* when it is strictly better by this criterion.
+            ``"ap"`` uses every kept detection instead of the one operating point (the count of the CNN
+            moved 28 -> 52 between rounds of one training), and it is the quantity the protocol scores.
+        mining_patience: rounds in a row without a new best that are still run before stopping; 0 stops
+            at the first round that is not a new best (the rule before these options). Mining always
+            continues from the latest round's detector and negatives; the chosen round is the best one,
+            wherever the rounds stopped. Each extra round costs one scan + one training + one
+            validation (about 90 s for the CNN on the halmstad drone videos).
+
+        box_model: the box regression's model: ``"ensemble"`` (the default,
+            :class:`~synthaug.detectors.box_cnn.EnsembleBoxRegressor`: the mean of the two maps' deltas),
+            ``"cnn"`` (:class:`~synthaug.detectors.box_cnn.CNNBoxRegressor`, a small CNN on the box's context
+            pixels) or ``"ridge"`` (:class:`~synthaug.detectors.boxes.BoxRegressor`, ridge regression on HOG
+            cells; the model before this option). Validation split of the halmstad drones (100 seeds, training
+            seed 0, the same raw detections), frame AP@0.5 at x1 / x2 (frames resized, the scale check): HOG
+            ridge 0.671 / 0.335, cnn 0.667 / 0.567, ensemble 0.686 / 0.456; CNN detector 0.638 / 0.490,
+            0.666 / 0.616, 0.676 / 0.597: the ensemble is the best at x1 for both. On the test split (3
+            training seeds, full pipeline) the CNN detector's x1: ridge 0.409, cnn 0.357, ensemble 0.392; x2
+            0.312, 0.359, 0.353 (``results/learning_curve/drone_box_cnn/README.md``). The CNN map costs
+            ~2 min to fit (ridge ~20 s).
+
+    The two ``mining_*`` selection fields and ``box_model`` were added after cells had been cached; at
+    ``"fp"``, 0 and ``"ridge"`` the training is the one before them, and
+    :data:`LATER_FIELDS` lets a cache key leave them out (:meth:`key_fields`).
     """
 
     hog_components: int = 3
@@ -125,6 +160,35 @@ class TrainOptions:
     val_target_recall: float = 0.5
     box_regression: bool = True
     box_stride: int = 15
+    mining_select: str = "fp"
+    mining_patience: int = 0
+    box_model: str = "ensemble"
+
+    LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
+                                                           ("box_model", "ridge"))
+    """Fields added after cells were cached, with the value at which the training is the one before them
+    (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys)."""
+
+    def key_fields(self) -> dict[str, Any]:
+        """``dataclasses.asdict(self)`` without the :data:`LATER_FIELDS` that are at their former values.
+
+        A cache key built from it is unchanged for the options that existed before those fields
+        (older cells stay valid) and differs whenever one of them is set.
+
+        Example:
+            >>> TrainOptions().key_fields() == {k: v for k, v in asdict(TrainOptions()).items()
+            ...                                 if k not in ("mining_select", "mining_patience")}
+            True
+            >>> TrainOptions(mining_patience=1).key_fields()["mining_patience"]
+            1
+            >>> "box_model" in TrainOptions(box_model="ridge").key_fields()  # the cells before box_model
+            False
+        """
+        d = asdict(self)
+        for name, default in self.LATER_FIELDS:
+            if d[name] == default:
+                d.pop(name)
+        return d
 
     def __post_init__(self) -> None:
         for name in ("mining_stride", "mining_per_frame", "mining_max_per_round", "val_stride", "val_top_k", "box_stride"):
@@ -138,6 +202,13 @@ class TrainOptions:
             raise ValueError(f"cnn_shift must be in [0, 20) pixels, got {self.cnn_shift}")
         if not 0 < self.val_target_recall <= 1 or not 0 < self.val_iou <= 1:
             raise ValueError(f"val_target_recall and val_iou must be in (0, 1], got {self.val_target_recall}, {self.val_iou}")
+        if self.mining_select not in MINING_SELECT:
+            raise ValueError(f"mining_select must be one of {list(MINING_SELECT)}, got {self.mining_select!r}")
+        if isinstance(self.mining_patience, bool) or int(self.mining_patience) != self.mining_patience \
+                or self.mining_patience < 0:
+            raise ValueError(f"mining_patience must be an integer >= 0, got {self.mining_patience!r}")
+        if self.box_model not in BOX_MODELS:
+            raise ValueError(f"box_model must be one of {list(BOX_MODELS)}, got {self.box_model!r}")
         if self.scales is not None:
             object.__setattr__(self, "scales", tuple(float(s) for s in self.scales))
 
@@ -247,8 +318,8 @@ def train_detector(
         log: progress printer.
 
     Returns:
-        A :class:`~synthaug.detectors.base.PatchDetector` (the lowest validation FP count
-        of the rounds; :func:`train_with_mining` also returns the per-round log).
+        A :class:`~synthaug.detectors.base.PatchDetector` (the round chosen by ``options.mining_select``:
+        by default the lowest validation FP count; :func:`train_with_mining` also returns the per-round log).
 
     Shape:
         - positives: (P, 1, 40, 40), negatives: (N, 1, 40, 40)
@@ -267,7 +338,8 @@ class TrainResult:
     """A detector trained with mining rounds, and what happened.
 
     Attributes:
-        detector: the chosen detector (fewest validation false positives).
+        detector: the chosen detector (fewest validation false positives, or the highest validation AP
+            with ``TrainOptions(mining_select="ap")``).
         log: ``{"rounds": [{"round", "added", "negatives", "val", "mine_s", "train_s", "val_s",
             "frames_scanned"}], "chosen_round", "stop_reason", "mining": {...}}``.
         negatives: the negatives the chosen detector was trained on.
@@ -305,6 +377,12 @@ def train_with_mining(
     best so far, when nothing new is mined, or after ``options.mining_rounds``; the
     detector with the fewest is returned (the earliest on ties). Without validation
     frames every round runs and the last detector is returned.
+
+    ``options.mining_select = "ap"`` ranks the rounds by the validation AP of the same
+    detections instead (highest wins, the earliest on ties), and ``options.mining_patience = p``
+    runs up to ``p`` further rounds without a new best before stopping (mining goes on from the
+    latest detector); the best round is returned either way. At ``"fp"`` and 0 (the defaults)
+    this is exactly the rule above.
 
     Args:
         kind, positives, negatives, seed, box_in_window, mining_frames, mining_boxes, options:
@@ -358,7 +436,7 @@ def train_with_mining(
     v, t_val = count(det)
     rounds = [{"round": 0, "added": 0, "negatives": int(negatives.shape[0]), "frames_scanned": 0, "val": v,
                "mine_s": 0.0, "train_s": round(t_train, 1), "val_s": round(t_val, 1)}]
-    say(f"round 0: {negatives.shape[0]} negatives, train {t_train:.0f}s" + (f", validation FP {v['fp']}" if v else ""))
+    say(f"round 0: {negatives.shape[0]} negatives, train {t_train:.0f}s" + _val_text(v))
     best = (det, v, 0, negatives)
     current_neg = negatives
     seen: set[tuple[str, int, int, int, int]] = set()
@@ -385,18 +463,58 @@ def train_with_mining(
                        "train_s": round(t_train, 1), "val_s": round(t_val, 1),
                        "videos": len({s for s, _ in mined.sources})})
         say(f"round {r}: +{len(mined)} negatives from {mined.frames_scanned} frames (scan {mined.seconds:.0f}s), "
-            f"{current_neg.shape[0]} in all, train {t_train:.0f}s" + (f", validation FP {v['fp']}" if v else ""))
+            f"{current_neg.shape[0]} in all, train {t_train:.0f}s" + _val_text(v))
         if v is None:
             best = (det, v, r, current_neg)
             continue
-        if best[1] is not None and v["fp"] >= best[1]["fp"]:
-            stop = f"validation false positives stopped falling ({best[1]['fp']} -> {v['fp']})"
+        if best[1] is None or _better(v, best[1], options.mining_select):
+            best = (det, v, r, current_neg)
+            continue
+        if r - best[2] > options.mining_patience:
+            stop = _stop_reason(options, best[1], v, r - best[2])
             say(f"stop: {stop}; keeping round {best[2]}")
             break
-        best = (det, v, r, current_neg)
+        say(f"no new best ({_criterion(options.mining_select, v)} vs {_criterion(options.mining_select, best[1])} at "
+            f"round {best[2]}); {options.mining_patience - (r - best[2]) + 1} more round(s) of patience")
+    if stop == "mining_rounds reached" and best[2] != rounds[-1]["round"]:
+        say(f"keeping round {best[2]} ({_criterion(options.mining_select, best[1])})")
     out_log = {"rounds": rounds, "chosen_round": best[2], "stop_reason": stop,
                **_settings_log(options, scales, mining_source, val)}
     return TrainResult(best[0], out_log, best[3])
+
+
+def _val_text(v: dict[str, Any] | None) -> str:
+    """A round's validation result in the progress line (``", validation FP 28, AP 0.412"``)."""
+    if not v:
+        return ""
+    return f", validation FP {v['fp']}" + ("" if v.get("ap") is None else f", AP {v['ap']:.3f}")
+
+
+def _criterion(select: str, v: dict[str, Any]) -> str:
+    """A validation result as the selection reads it (``"FP 28"``, ``"AP 0.4120"``)."""
+    if select == "fp":
+        return f"FP {v['fp']}"
+    return "AP none" if v.get("ap") is None else f"AP {v['ap']:.4f}"
+
+
+def _better(v: dict[str, Any], best: dict[str, Any], select: str) -> bool:
+    """Whether validation result ``v`` is a new best over ``best`` (strictly: ties keep the earlier round).
+
+    ``"fp"``: fewer false positives; ``"ap"``: a higher AP (a None AP, no labelled object, is never better).
+    """
+    if select == "fp":
+        return v["fp"] < best["fp"]
+    a, b = v.get("ap"), best.get("ap")
+    return a is not None and (b is None or a > b)
+
+
+def _stop_reason(options: TrainOptions, best: dict[str, Any], v: dict[str, Any], since: int) -> str:
+    """The log's ``stop_reason`` when the rounds stop for want of a new best (the old wording at the defaults)."""
+    if options.mining_select == "fp" and options.mining_patience == 0:
+        return f"validation false positives stopped falling ({best['fp']} -> {v['fp']})"
+    what = {"fp": "fewer validation false positives", "ap": "higher validation AP"}[options.mining_select]
+    return (f"no {what} in {since} round(s) (patience {options.mining_patience}; "
+            f"best {_criterion(options.mining_select, best)}, last {_criterion(options.mining_select, v)})")
 
 
 def _decoded_validation(val_frames: Iterable[Any] | None, say: Callable[[str], None]) -> list[Any] | None:
@@ -416,6 +534,7 @@ def _settings_log(options: TrainOptions, scales: Sequence[float], mining_source:
     """The ``"mining"`` and ``"validation"`` settings of :func:`train_with_mining`'s log."""
     return {"mining": {"stride": getattr(mining_source, "stride", None), "per_frame": options.mining_per_frame,
                        "max_per_round": options.mining_max_per_round, "margin": options.mining_margin,
-                       "scales": list(scales), "max_rounds": options.mining_rounds},
+                       "scales": list(scales), "max_rounds": options.mining_rounds,
+                       "select": options.mining_select, "patience": options.mining_patience},
             "validation": None if val is None else {"frames": len(val), "top_k": options.val_top_k, "iou": options.val_iou,
                                                     "target_recall": options.val_target_recall}}

@@ -518,15 +518,43 @@ def _box_regressor(vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, b
     """The box regressor fitted on the training videos (``options.box_regression``), and its metadata."""
     if not (options.box_regression and sp["train"]):
         return None, None
-    from synthaug.detectors.boxes import BoxRegressor
-
     t0 = time.perf_counter()
     reg_src = VideoFrames(vs.videos_dir, vs.labels_dir, positive=sp["train"], stride=options.box_stride)
-    regressor = BoxRegressor.fit(reg_src, aspect=float(box_in_window[2]) / float(box_in_window[3]), seed=seed)
-    box_info = dict(regressor.meta or {}, ridge=regressor.ridge, seconds=round(time.perf_counter() - t0, 1))
-    say(f"box regression: {box_info['samples']} jittered boxes of {box_info['videos']} training videos, ridge "
-        f"{regressor.ridge:g} by grouped CV ({box_info['seconds']:.0f}s)")
+    aspect = float(box_in_window[2]) / float(box_in_window[3])
+    if options.box_model == "ensemble":
+        from synthaug.detectors.box_cnn import EnsembleBoxRegressor
+
+        (ridge, ridge_info), (cnn, cnn_info) = (_fit_box_map(m, reg_src, aspect, seed) for m in ("ridge", "cnn"))
+        regressor: Any = EnsembleBoxRegressor([ridge, cnn])
+        box_info = {"model": "ensemble", "videos": ridge_info.get("videos"), "parts": [ridge_info, cnn_info],
+                    "seconds": round(time.perf_counter() - t0, 1)}
+        say(f"box regression (ensemble of ridge {ridge.ridge:g} and cnn): {ridge_info['samples']} + "
+            f"{cnn_info['samples']} jittered boxes ({box_info['seconds']:.0f}s)")
+        return regressor, box_info
+    regressor, box_info = _fit_box_map(options.box_model, reg_src, aspect, seed)
+    box_info["seconds"] = round(time.perf_counter() - t0, 1)
+    if options.box_model == "cnn":
+        say(f"box regression (cnn): {box_info['samples']} jittered boxes of {box_info['videos']} training videos, "
+            + (f"held-out MSE {min(box_info['held_out_mse']):.4f} " if box_info["held_out_mse"] else "no held-out video ")
+            + f"(epoch {box_info['epoch_kept']}) ({box_info['seconds']:.0f}s)")
+    else:
+        say(f"box regression: {box_info['samples']} jittered boxes of {box_info['videos']} training videos, ridge "
+            f"{regressor.ridge:g} by grouped CV ({box_info['seconds']:.0f}s)")
     return regressor, box_info
+
+
+def _fit_box_map(model: str, frames: Any, aspect: float, seed: int) -> tuple[Any, dict[str, Any]]:
+    """One box map (``"ridge"`` or ``"cnn"``) fitted on ``frames``, and its metadata (``model`` added; the ridge's
+    strength too)."""
+    if model == "cnn":
+        from synthaug.detectors.box_cnn import CNNBoxRegressor
+
+        reg: Any = CNNBoxRegressor.fit(frames, aspect=aspect, seed=seed)
+        return reg, dict(reg.meta or {}, model="cnn")
+    from synthaug.detectors.boxes import BoxRegressor
+
+    reg = BoxRegressor.fit(frames, aspect=aspect, seed=seed)
+    return reg, dict(reg.meta or {}, model="ridge", ridge=reg.ridge)
 
 
 def share_weights(n_real: int, n_all: int, share: float | None) -> Tensor | None:

@@ -35,8 +35,8 @@ from typing import Any
 
 import numpy as np
 
-from synthaug._checks import add_option, positive_float
-from synthaug.detectors.training import TrainOptions
+from synthaug._checks import add_option, int_at_least, positive_float
+from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import AddedPositives, train_from_videos
 from synthaug.evaluate.cells import CellCache
 from synthaug.evaluate.matching import match_videos
@@ -134,7 +134,8 @@ class ProtocolRunner:
         class_name: the class to detect.
         paths: data folders and the split.
         cache: the cell cache.
-        options: training budgets (part of every cell's key).
+        options: training budgets (part of every cell's key: :meth:`TrainOptions.key_fields`, which leaves out
+            the fields added later while they are at their former values, so older cells stay valid).
         scales: pyramid factors of detection (None: the detectors' default; part of the key).
         scale_check: also score the protocol's ``scale_check`` factors.
         patches: also score the paper's patch protocol.
@@ -204,7 +205,7 @@ class ProtocolRunner:
             path = Path(condition.params.format(seed=seed))
             cond["params_sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()[:16] if path.is_file() else None
         return {"what": "protocol_cell", "protocol": self.protocol.fingerprint(), "class": self.class_name,
-                "condition": cond, "seed": int(seed), "options": dataclasses.asdict(self.options),
+                "condition": cond, "seed": int(seed), "options": self.options.key_fields(),
                 "scales": None if self.scales is None else list(self.scales), "scored_scales": list(self.scales_scored()),
                 "patches": self.patches, "max_test_videos": self.max_test_videos,
                 **({} if self.eval_split == "test" else {"eval_split": self.eval_split}),
@@ -506,6 +507,16 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--max-test-videos", type=int, default=None, help="first N test videos only (smoke runs)")
     q.add_argument("--mining-rounds", type=int, default=TrainOptions.mining_rounds, help="hard-negative mining rounds")
     q.add_argument("--cnn-shift", type=int, default=TrainOptions.cnn_shift, help="CNN positives' random shift (pixels)")
+    q.add_argument("--mining-select", default=TrainOptions.mining_select, choices=list(MINING_SELECT),
+                   help="the mining round kept: fewest validation false positives (fp) or highest validation AP of "
+                        "the same detections (ap); part of a cell's key only when not fp")
+    q.add_argument("--mining-patience", type=int_at_least(0), default=TrainOptions.mining_patience,
+                   help="mining rounds without a new best still run before stopping (0: stop at the first); part of "
+                        "a cell's key only when not 0")
+    q.add_argument("--box-model", default=TrainOptions.box_model, choices=list(BOX_MODELS),
+                   help="the box regression: a small CNN on the detection's context pixels (cnn), ridge on its HOG "
+                        "cells (ridge, the model before this option: its cells keep their keys) or the mean of both "
+                        "(ensemble)")
     q.add_argument("--eval-split", default="test", choices=["test", "val"],
                    help="score on the protocol's test frames, or its validation frames (to choose a setting)")
     q.add_argument("--threads", type=int, default=1, help="torch threads")
@@ -556,7 +567,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     paths = DataPaths(args.videos, args.labels, args.split, args.work)
     runner = ProtocolRunner(proto, args.class_name, paths, CellCache(Path(args.work) / "cells", read_only=args.read_only),
                             options=dataclasses.replace(TrainOptions(), mining_rounds=args.mining_rounds,
-                                                        cnn_shift=args.cnn_shift),
+                                                        cnn_shift=args.cnn_shift, mining_select=args.mining_select,
+                                                        mining_patience=args.mining_patience, box_model=args.box_model),
                             scales=None if args.scales is None else tuple(args.scales),
                             scale_check=not args.no_scale_check, patches=not args.no_patches,
                             max_test_videos=args.max_test_videos, eval_split=args.eval_split)
