@@ -1,0 +1,165 @@
+"""Stop 28 (a steadier mining stop): today's rule vs the new rule on the 12-seed comparison, test split (trains nothing).
+
+    OMP_NUM_THREADS=1 python results/synthetic/drone_v1/combine_stop28.py          # -> tables_stop28_cnn.md
+    OMP_NUM_THREADS=1 python results/synthetic/drone_v1/combine_stop28.py hog      # -> tables_stop28_hog.md
+
+Rules: *old* = the validation false-positive count, stop at the first round without fewer (``--mining-select fp
+--mining-patience 0``, the cells of run_cnn_12seeds*.sh / run_hog_12seeds.sh, whose keys the new options leave
+unchanged); *new* = the highest validation AP of the same detections, one round of patience (``--mining-select ap
+--mining-patience 1``, run_stop28.sh). Conditions (training seeds 0 1 2): (a) 12 real seeds, (b) 12 seeds + 20x
+synthetic, (c) 100 real seeds (when run). Every interval is a percentile interval over the protocol's video resamples
+(``resample_indices(V, 2000, seed 0)``, the same resamples for every condition, rule and seed): per condition and rule
+the mean over seeds; the paired difference new - old; the synthetic gain (b) - (a) under each rule and the difference
+of the two gains. The validation part (rounds, FP and AP per round, the round each rule keeps) is read from the cells'
+training logs in data/runs/cells.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from synthaug.evaluate.results import ProtocolResult
+from synthaug.evaluate.stats import percentile_interval, resample_counts, resample_indices, seed_mean_samples
+
+D = Path("results/synthetic/drone_v1")
+CELLS = Path("data/runs/cells")
+K = sys.argv[1] if len(sys.argv) > 1 else "cnn"
+FILES = {
+    ("a", "old"): D / f"{K}_12seeds" / f"{K}_12_seeds.json",
+    ("b", "old"): D / f"{K}_12seeds" / f"{K}_12_seeds_20x_synthetic_{K}.json",
+    ("c", "old"): D / f"{K}_12seeds_real100" / f"{K}_100_seeds.json",
+    ("a", "new"): D / f"{K}_12seeds_stop28" / f"{K}_12_seeds.json",
+    ("b", "new"): D / f"{K}_12seeds_stop28" / f"{K}_12_seeds_20x_synthetic_{K}.json",
+    ("c", "new"): D / f"{K}_12seeds_real100_stop28" / f"{K}_100_seeds.json",
+}
+FIT = {"hog": "d_HOG", "cnn": "d_CNN"}[K]
+LABEL = {"a": "(a) 12 real seeds", "b": f"(b) 12 seeds + 20x synthetic ({FIT})", "c": "(c) 100 real seeds"}
+RULE = {"old": "old: fewest val. FP, patience 0", "new": "new: highest val. AP, patience 1"}
+RULE_OPTS = {"old": ("fp", 0), "new": ("ap", 1)}
+COND = {"a": (12, 0.0), "b": (12, 20.0), "c": (100, 0.0)}
+
+
+def fmt(x: float, signed: bool = False) -> str:
+    return "nan" if x is None or not np.isfinite(x) else (f"{x:+.3f}" if signed else f"{x:.3f}")
+
+
+def iv(samples: np.ndarray, est: float, ci: float, signed: bool = False) -> str:
+    lo, hi = percentile_interval(samples, ci)
+    return f"{fmt(est, signed)} [{fmt(lo, signed)}, {fmt(hi, signed)}]"
+
+
+def mining_logs() -> dict[tuple[str, str, int], dict]:
+    """(condition, rule, seed) -> the cell's mining log (test-split cells of this detector, no scale check, no patches)."""
+    out = {}
+    for p in sorted(CELLS.glob("*.json")):
+        doc = json.loads(p.read_text())
+        i = doc["identity"]
+        c = i["condition"]
+        if (c["kind"] != K or i.get("eval_split", "test") != "test" or i["patches"] or i["scored_scales"] != [1.0]
+                or c.get("perturb_copies") or c.get("copy_paste_ratio") or c.get("synthetic_share") is not None
+                or c.get("pose_sampling", "uniform") != "uniform"):
+            continue
+        rule = (i["options"].get("mining_select", "fp"), i["options"].get("mining_patience", 0))
+        names = [r for r, o in RULE_OPTS.items() if o == rule]
+        conds = [k for k, (n, ratio) in COND.items() if c.get("seed_count") == n and float(c.get("synthetic_ratio", 0)) == ratio]
+        if names and conds:
+            m = doc["result"]["train"]["mining"]
+            m["_seconds"] = doc.get("seconds")
+            out[(conds[0], names[0], int(i["seed"]))] = m
+    return out
+
+
+def main() -> int:
+    res = {k: ProtocolResult.load(p) for k, p in FILES.items() if p.is_file()}
+    missing = [str(p) for k, p in FILES.items() if k not in res and k[0] != "c"]
+    if missing:
+        print("missing " + ", ".join(missing), file=sys.stderr)
+    first = next(iter(res.values()))
+    p = first.protocol
+    bs, iou = p.bootstrap, p.main_iou
+    for k, r in res.items():
+        assert r.stems == first.stems, f"{k}: other videos"
+        assert r.protocol.fingerprint() == p.fingerprint(), f"{k}: other protocol"
+    v = len(first.stems)
+    counts = resample_counts(resample_indices(v, bs.resamples, bs.seed), v)
+    samples = {k: seed_mean_samples(r.pools(iou), counts) for k, r in res.items()}
+    est = {k: r.mean_ap(iou) for k, r in res.items()}
+    logs = mining_logs()
+
+    lines = [f"# Stop 28: a steadier mining stop — {K.upper()}, test split (protocol halmstad_v1, training seeds 0 1 2)", "",
+             f"Generated by `python results/synthetic/drone_v1/combine_stop28.py{'' if K == 'cnn' else ' ' + K}` from the "
+             f"result JSONs of `run_{K}_12seeds*.sh` (old rule) and `run_stop28.sh` (new rule), and the cells' mining logs.", "",
+             f"AP@{iou:g} of all test videos pooled, mean over seeds; [95 % CI]: percentile interval over {bs.resamples} "
+             f"bootstrap resamples of the {v} test videos (seed {bs.seed}), the same resamples for every row.", "",
+             "## AP@0.5 per condition and rule", "",
+             "| condition | rule | AP@0.5 [95 % CI] | per seed (0 / 1 / 2) | round kept per seed | Δ new - old [CI] |",
+             "|---|---|---|---|---|---|"]
+    for c in "abc":
+        for rule in ("old", "new"):
+            if (c, rule) not in res:
+                continue
+            r = res[(c, rule)]
+            per = " / ".join(fmt(x) for _, x in sorted(r.per_seed_ap(iou).items()))
+            kept = " / ".join(str(logs[(c, rule, s)]["chosen_round"]) if (c, rule, s) in logs else "?" for s in r.seed_ids)
+            delta = ""
+            if rule == "new" and (c, "old") in res:
+                delta = iv(samples[(c, "new")] - samples[(c, "old")], est[(c, "new")] - est[(c, "old")], bs.ci, True)
+            lines.append(f"| {LABEL[c]} | {RULE[rule]} | {iv(samples[(c, rule)], est[(c, rule)], bs.ci)} | {per} | {kept} | {delta} |")
+    lines.append("")
+
+    lines += ["## Synthetic gain (b) - (a) under each rule (paired by seed and resample)", "",
+              "| rule | (b) - (a) [95 % CI] | per seed (0 / 1 / 2) |", "|---|---|---|"]
+    gains = {}
+    for rule in ("old", "new"):
+        if ("a", rule) in res and ("b", rule) in res:
+            gains[rule] = samples[("b", rule)] - samples[("a", rule)]
+            ga, gb = res[("a", rule)].per_seed_ap(iou), res[("b", rule)].per_seed_ap(iou)
+            per = " / ".join(fmt(gb[s] - ga[s], True) for s in sorted(ga) if s in gb)
+            lines.append(f"| {RULE[rule]} | {iv(gains[rule], est[('b', rule)] - est[('a', rule)], bs.ci, True)} | {per} |")
+    if len(gains) == 2:
+        d_est = (est[("b", "new")] - est[("a", "new")]) - (est[("b", "old")] - est[("a", "old")])
+        lines.append(f"| gain(new) - gain(old) | {iv(gains['new'] - gains['old'], d_est, bs.ci, True)} | |")
+    if ("c", "old") in res and ("c", "new") in res:
+        lines += ["", "Gap (c) - (a) under each rule: " + "; ".join(
+            f"{rule} {iv(samples[('c', rule)] - samples[('a', rule)], est[('c', rule)] - est[('a', rule)], bs.ci, True)}"
+            for rule in ("old", "new"))]
+    lines.append("")
+
+    lines += ["## Validation (the mining's own count): rounds per cell", "",
+              "FP = validation false positives above the score reaching recall 0.5; AP = validation AP of the same "
+              "detections (new cells only: the old cells predate it). Old and new cells train identical rounds "
+              "until the old rule stops (same seeds, same code path): the FP columns agree where both exist (checked; a "
+              "mismatch is flagged).", "",
+              "| condition | seed | old rule: FP per round -> kept | new rule: FP / AP per round -> kept | val. AP of the round kept: old / new | stop (new) | cell s (old / new) |",
+              "|---|---|---|---|---|---|---|"]
+    for c in "abc":
+        for s in (0, 1, 2):
+            o, n = logs.get((c, "old", s)), logs.get((c, "new", s))
+            if o is None and n is None:
+                continue
+            old_txt = "–" if o is None else " ".join(str(r["val"]["fp"]) for r in o["rounds"] if r.get("val")) + f" -> {o['chosen_round']}"
+            new_txt = "–" if n is None else " ".join(
+                f"{r['val']['fp']}/{r['val']['ap']:.3f}" for r in n["rounds"] if r.get("val")) + f" -> {n['chosen_round']}"
+            stop = "" if n is None else n["stop_reason"]
+            if o is not None and n is not None:
+                fo = [r["val"]["fp"] for r in o["rounds"] if r.get("val")]
+                if fo != [r["val"]["fp"] for r in n["rounds"] if r.get("val")][:len(fo)]:
+                    old_txt += " (**not the new cell's rounds**)"
+            kept_ap = "–"
+            if o is not None and n is not None and o["chosen_round"] < len(n["rounds"]):
+                kept_ap = f"{n['rounds'][o['chosen_round']]['val']['ap']:.3f} / {n['rounds'][n['chosen_round']]['val']['ap']:.3f}"
+            secs = " / ".join("–" if m is None or m.get("_seconds") is None else f"{m['_seconds']:.0f}" for m in (o, n))
+            lines.append(f"| {LABEL[c]} | {s} | {old_txt} | {new_txt} | {kept_ap} | {stop} | {secs} |")
+    lines.append("")
+    out = D / f"tables_stop28_{K}.md"
+    out.write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
