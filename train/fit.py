@@ -78,14 +78,30 @@ def _with_subcommand(argv: list[str]) -> list[str]:
     return ["fit", *argv]
 
 
+def _close_process_group() -> None:
+    """Destroy the DDP process group, if this process made one.
+
+    Lightning leaves it open after ``fit``; a gloo group still open when the
+    interpreter exits can abort the process ("terminate called without an
+    active exception", exit -6) after the work is done.
+    """
+    import torch.distributed as dist
+
+    if dist.is_available() and dist.is_initialized():
+        dist.destroy_process_group()
+
+
 def main(argv: list[str] | None = None) -> PatchCLI:
     """Run the CLI on ``argv`` (default: the command line), ``fit`` when no subcommand is given."""
     kwargs = {"save_config_kwargs": {"overwrite": True}, "subclass_mode_data": True}
-    if argv is None:
-        # rewrite sys.argv itself: Lightning's DDP launcher re-runs it for the other ranks
-        sys.argv[1:] = _with_subcommand(sys.argv[1:])
-        return PatchCLI(PatchDetectorModule, PatchDataModule, **kwargs)
-    return PatchCLI(PatchDetectorModule, PatchDataModule, args=_with_subcommand(list(argv)), **kwargs)
+    try:
+        if argv is None:
+            # rewrite sys.argv itself: Lightning's DDP launcher re-runs it for the other ranks
+            sys.argv[1:] = _with_subcommand(sys.argv[1:])
+            return PatchCLI(PatchDetectorModule, PatchDataModule, **kwargs)
+        return PatchCLI(PatchDetectorModule, PatchDataModule, args=_with_subcommand(list(argv)), **kwargs)
+    finally:
+        _close_process_group()
 
 
 if __name__ == "__main__":
