@@ -83,7 +83,10 @@ def _close_process_group() -> None:
 
     Lightning leaves it open after ``fit``; a gloo group still open when the
     interpreter exits can abort the process ("terminate called without an
-    active exception", exit -6) after the work is done.
+    active exception", exit -6) after the work is done: gloo's worker threads
+    still hold tensors when the interpreter is torn down (pytorch/pytorch
+    #190489; PyTorch's shutdown documentation asks each rank to call
+    ``destroy_process_group`` at the end of its main).
     """
     import torch.distributed as dist
 
@@ -94,14 +97,15 @@ def _close_process_group() -> None:
 def main(argv: list[str] | None = None) -> PatchCLI:
     """Run the CLI on ``argv`` (default: the command line), ``fit`` when no subcommand is given."""
     kwargs = {"save_config_kwargs": {"overwrite": True}, "subclass_mode_data": True}
-    try:
-        if argv is None:
-            # rewrite sys.argv itself: Lightning's DDP launcher re-runs it for the other ranks
-            sys.argv[1:] = _with_subcommand(sys.argv[1:])
-            return PatchCLI(PatchDetectorModule, PatchDataModule, **kwargs)
-        return PatchCLI(PatchDetectorModule, PatchDataModule, args=_with_subcommand(list(argv)), **kwargs)
-    finally:
-        _close_process_group()
+    if argv is None:
+        # rewrite sys.argv itself: Lightning's DDP launcher re-runs it for the other ranks
+        sys.argv[1:] = _with_subcommand(sys.argv[1:])
+        cli = PatchCLI(PatchDetectorModule, PatchDataModule, **kwargs)
+    else:
+        cli = PatchCLI(PatchDetectorModule, PatchDataModule, args=_with_subcommand(list(argv)), **kwargs)
+    # only after success: destroying the group while another rank still waits in a collective would hang
+    _close_process_group()
+    return cli
 
 
 if __name__ == "__main__":
