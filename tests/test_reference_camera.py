@@ -31,7 +31,8 @@ def sets(tmp_path_factory):
     made = {}
     for name, hidden in (("clean", {}), ("vignetting", {"vignetting": {"vignette_k": 0.3}}),
                          ("rotor", ["rotor_blur"]), ("jpeg", {"compression": {"jpeg_quality": 35}}),
-                         ("interlacing", {"interlacing": {"interlace_shift": 2.5}})):
+                         ("interlacing", {"interlacing": {"interlace_shift": 2.5}}),
+                         ("columns", {"column_pattern": {"column_gain_sd": 0.03}})):
         made[name] = SeedSet.load(make_measured_seedset(root / name, hidden=hidden, **FAST))
     return made
 
@@ -116,6 +117,30 @@ def test_compression_shows_8x8_blocks_in_frames_and_backgrounds(sets):
     for i in range(len(clean)):
         assert _blockiness(jpeg.background_frame(i)) > 1.3 > 1.1 > _blockiness(clean.background_frame(i))
         assert _blockiness(jpeg.frame(i)) > 1.3
+
+
+def test_the_fixed_column_pattern_is_the_cameras_in_every_frame_and_background(sets):
+    from synthaug.diagnose.reference_camera import column_gains
+
+    clean, cols = sets["clean"], sets["columns"]
+    rc = cols.metadata["reference_camera"]
+    assert "column_pattern" in rc["whole_frame"] and "column_pattern" not in rc["object_only"]
+    gains = column_gains(128, 0.03, FAST["seed"])  # the camera's stream: the case's seed
+    for i in range(len(clean)):
+        for frame in ("frame", "background_frame"):
+            a = getattr(cols, frame)(i).astype(float)
+            b = getattr(clean, frame)(i).astype(float)
+            ok = (b > 20) & (b < 235) & (a < 250)  # away from 8-bit clipping
+            cols_ok = ok.sum(0) >= 10
+            assert cols_ok.mean() > 0.5, (i, frame)
+            # per column: the median ratio over rows is the column's gain, to the 8-bit rounding
+            ratio = np.array([np.median(a[ok[:, c], c] / b[ok[:, c], c]) if cols_ok[c] else np.nan
+                              for c in range(128)])
+            np.testing.assert_allclose(ratio[cols_ok], gains[cols_ok], atol=0.008)
+    theta, _, _ = load_truth(cols.path)
+    assert theta.effects == PAPER_EFFECTS  # not a candidate
+    assert cols.records[0]["truth"]["hidden"]["column_pattern"] == {"column_gain_sd": 0.03,
+                                                                     "pattern_seed": float(FAST["seed"])}
 
 
 def test_the_outside_effect_combs_the_moving_object(sets):

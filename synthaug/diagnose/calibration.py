@@ -59,7 +59,7 @@ __all__ = ["HAND_FLOORS", "HAND_MIN_GAIN", "structure_significant", "gain_floor"
 HAND_FLOORS: dict[str, float] = {
     "interior_bias": 0.03, "boundary_bias": 0.03, "background_bias": 0.03, "radial": 0.5, "tone_curve": 0.3,
     "noise_vs_signal": 0.02, "high_frequency": 0.7, "block_8x8": 0.3, "motion_direction": 0.5,
-    "periodic_rows": 0.7, "periodic_columns": 0.7, "rotor_parts": 0.05,
+    "periodic_rows": 0.7, "periodic_columns": 0.7, "rotor_parts": 0.05, "column_pattern": 0.5, "row_pattern": 0.5,
 }
 HAND_MIN_GAIN = 0.02  # the smallest raw relative gain over all seeds worth an extension (utility, not significance)
 FAMILY_RATE = 0.05  # the false-alarm rate per clean case the floors are set for

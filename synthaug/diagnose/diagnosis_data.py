@@ -58,6 +58,7 @@ class DiagnosisData:
     object_px: torch.Tensor | None = None  # (N,) the fitted object's size in frame px (object scale x crop side)
     frame_brightness: torch.Tensor | None = None  # (N,) mean of the whole frame (what auto-exposure meters)
     noise_levels: list[dict[str, np.ndarray]] | None = None  # per seed: its frame's noise level function
+    frame_lines: list[dict[str, np.ndarray]] | None = None  # per seed: its frame's line profiles (frame_pattern)
     real_rgb: torch.Tensor | None = None  # (N, 3, P, P) the RGB seed patches, when the seed set has them
     background_rgb: torch.Tensor | None = None  # (N, 3, P, P)
     colour_note: str | None = None  # why there is no colour channel (gray or single-channel data)
@@ -78,6 +79,7 @@ class DiagnosisData:
             resample_sigma=take(self.resample_sigma), object_px=take(self.object_px),
             frame_brightness=take(self.frame_brightness),
             noise_levels=None if self.noise_levels is None else [self.noise_levels[int(i)] for i in idx_t],
+            frame_lines=None if self.frame_lines is None else [self.frame_lines[int(i)] for i in idx_t],
             real_rgb=take(self.real_rgb), background_rgb=take(self.background_rgb), colour_note=self.colour_note)
 
 
@@ -158,7 +160,18 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
         frame_brightness=None if frames is None else torch.tensor([float(f.mean()) / 255.0 for f in frames],
                                                                   dtype=torch.float64),
         noise_levels=None if frames is None else seed_noise_levels(seeds, frames=frames),
+        frame_lines=None if frames is None else _frame_lines(frames, geo, p),
         **_colour_patches(seeds))
+
+
+def _frame_lines(frames: list[np.ndarray], geo: dict[str, torch.Tensor], p: int) -> list[dict[str, np.ndarray]]:
+    """Each frame's line profiles (:func:`~synthaug.diagnose.frame_pattern.line_profiles`), its seed's crop left
+    out."""
+    from synthaug.diagnose.frame_pattern import line_profiles
+
+    return [line_profiles(f, exclude=(float(geo["origin"][i, 0]), float(geo["origin"][i, 1]),
+                                      p * float(geo["frame_scale"][i])))
+            for i, f in enumerate(frames)]
 
 
 # Largest |R - G| or |B - G| (grey levels) of RGB seed patches that still count as single-channel: a gray

@@ -46,6 +46,8 @@ HINTS: dict[str, tuple[str, ...]] = {
     "boundary_bias": ("defocus", "sharpening", "haze"),
     "periodic_rows": ("compression",),
     "periodic_columns": ("compression",),
+    "column_pattern": ("compression",),
+    "row_pattern": ("compression",),
 }
 _FITTED_PARAMS = ("sigma_s", "sigma_u", "sigma_n")
 
@@ -376,7 +378,7 @@ def _unexplained_finding(remaining: dict[str, dict[str, Any]], picked: list[tupl
     return {
         "effect": "unexplained", "significant": True,
         "structure": {n_: {"description": m["description"], "p": m["p"], "value": m["value"],
-                           **{kk: m[kk] for kk in ("frequency", "period_px") if kk in m}}
+                           **{kk: m[kk] for kk in ("frequency", "period_px", "amplitude", "periodic") if kk in m}}
                       for n_, m in sig_struct.items()},
         "evidence": {"note": ("the residual has significant structure, and no candidate's extension helps "
                               "on held-out seeds") if not picked else

@@ -25,6 +25,10 @@ rows / columns       peak of the residual's row (column) spectrum over the
                      column (row) spectrum, in frame frequencies; t-test
                      over the seeds that resolve it
 rotor_parts          mean residual on the rotor discs vs the body; t-test
+column_pattern /     a gain pattern fixed in the frame's columns (rows): the
+row_pattern          whole frames' high-passed line profiles agree across
+                     videos at the same frame column (row); permutation test
+                     of circular shifts per video (:mod:`frame_pattern`)
 colour               per-channel bias (grayscale seed sets: not applicable; RGB
                      seed sets are screened in chroma by the colour channel of
                      :mod:`synthaug.diagnose.screening`)
@@ -356,6 +360,7 @@ def structure_measures(data: DiagnosisData, syn: torch.Tensor, *, rng: np.random
         put(f"periodic_{label}", mean, pv, f"{what} periodic structure: peak at {f:.3f} cycles per frame px "
             f"(period {1 / f:.1f} frame px), {math.exp(mean):.1f}x the power of the other direction",
             frequency=f, period_px=float(1 / f), n_seeds=int(np.isfinite(lr_f[:, j]).sum()))
+    _frame_fixed_patterns(data, rng, put, out)
     if data.part_rotor is not None:
         rot = (data.part_rotor > 0.3) & obj
         body = obj & ~rot
@@ -373,6 +378,39 @@ def structure_measures(data: DiagnosisData, syn: torch.Tensor, *, rng: np.random
             continue
         v["significant"], v["floor"] = structure_significant(k, v["value"], v["p"], alpha / n_tests)
     return out
+
+
+# a line pattern is called periodic when its spectrum's peak is this many times the spectrum's median: the
+# largest of ~128 exponential periodogram values of a white pattern exceeds 20 x their median (13.9 x their
+# mean) with probability about 128 * exp(-13.9) = 1e-4
+PERIODIC_PEAK_RATIO = 20.0
+
+
+def _frame_fixed_patterns(data: DiagnosisData, rng: np.random.Generator, put: Any, out: dict[str, Any]) -> None:
+    """``column_pattern`` / ``row_pattern``: gains fixed in the frame's columns (rows), the same in every video,
+    measured on the whole frames (:mod:`synthaug.diagnose.frame_pattern`); skipped without frames or with
+    fewer than two videos. Draws from a generator spawned from ``rng`` (``rng``'s own stream is untouched)."""
+    from synthaug.diagnose.frame_pattern import fixed_line_pattern
+
+    sub = rng.spawn(1)[0]
+    groups = [r.get("video") for r in data.records] if len(data.records) == len(data) else [None] * len(data)
+    for label, axis, lines in (("column_pattern", "x", "column"), ("row_pattern", "y", "row")):
+        fp = None if data.frame_lines is None else \
+            fixed_line_pattern([fl[axis] for fl in data.frame_lines], groups, sub)
+        if fp is None:
+            why = "the seed set has no frames" if data.frame_lines is None else "fewer than two videos of one size"
+            out[label] = {"value": 0.0, "p": 1.0, "skipped": True,
+                          "description": f"{lines} pattern fixed in the frame: not measured ({why})"}
+            continue
+        periodic = fp["peak_ratio"] >= PERIODIC_PEAK_RATIO
+        shape = (f"periodic, period {fp['period_px']:.1f} frame px" if periodic else
+                 f"not periodic (each {lines} its own gain)")
+        put(label, fp["rho"], fp["p"],
+            f"{lines} gains fixed in the frame: the whole frames' high-passed {lines} profiles of {fp['groups']} "
+            f"videos agree {fp['rho']:+.2f} at the same frame {lines} (1: one pattern in every video); the common "
+            f"pattern varies by {100 * fp['amplitude']:.2f} %, {shape}",
+            amplitude=fp["amplitude"], period_px=fp["period_px"], peak_ratio=fp["peak_ratio"], periodic=periodic,
+            videos=fp["groups"], n_frames=fp["seeds"])
 
 
 def parameter_dependence(values: dict[str, np.ndarray], meta: dict[str, np.ndarray], *,

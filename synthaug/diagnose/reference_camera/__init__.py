@@ -59,7 +59,7 @@ from __future__ import annotations
 
 from synthaug.data.seedset import seed_geometry  # re-exported (it lives next to crop_patch)
 from synthaug.diagnose.nuisances import Nuisances
-from synthaug.diagnose.reference_camera.capture import wb_gains
+from synthaug.diagnose.reference_camera.capture import column_gains, wb_gains
 from synthaug.diagnose.reference_camera.real_object import perturb_mesh, quadcopter_parts
 from synthaug.diagnose.reference_camera.settings import (
     OBJECT_ONLY_EFFECTS,
@@ -89,4 +89,5 @@ __all__ = [
     "Nuisances",
     "MeasuredSeed",
     "wb_gains",
+    "column_gains",
 ]

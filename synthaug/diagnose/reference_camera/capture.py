@@ -40,6 +40,23 @@ def _sharpening(img: torch.Tensor, p: dict[str, float], tint: np.ndarray | None)
     return Cx.unsharp_mask(img, _one(p["sharpen_amount"], img), _one(s, img), pad=_blur_pad(s), border="replicate")
 
 
+def column_gains(width: int, sd: float, pattern_seed: int) -> np.ndarray:
+    """A sensor's fixed column pattern: each frame column's gain ``1 + sd * N(0, 1)``, from the stream
+    ``[pattern_seed, 5]`` (the camera's: the same in every frame and background it captures).
+
+    Example:
+        >>> g = column_gains(4000, 0.02, 7)
+        >>> round(float(g.mean()), 3), round(float(g.std()), 3), bool((column_gains(4000, 0.02, 7) == g).all())
+        (1.0, 0.02, True)
+    """
+    return 1.0 + float(sd) * np.random.default_rng([int(pattern_seed), 5]).standard_normal(int(width))
+
+
+def _column_pattern(img: torch.Tensor, p: dict[str, float], tint: np.ndarray | None) -> torch.Tensor:
+    g = column_gains(img.shape[-1], p["column_gain_sd"], int(p["pattern_seed"]))
+    return img * torch.as_tensor(g, dtype=img.dtype)
+
+
 # each whole-frame effect on a (1, C, H, W) image, given its settings (shot noise and JPEG: see capture / to_u8)
 _FRAME_STEPS: dict[str, Callable[[torch.Tensor, dict[str, float], np.ndarray | None], torch.Tensor]] = {
     "haze": _haze,
@@ -52,6 +69,7 @@ _FRAME_STEPS: dict[str, Callable[[torch.Tensor, dict[str, float], np.ndarray | N
     "white_balance": lambda img, p, t: Cx.white_balance(img, wb_gains(p["wb_gain"], img.shape[1], img.dtype)),
     "gamma": lambda img, p, t: Cx.gamma_curve(img.clamp(0.0, 1.0), _one(p["gamma_g"], img)),
     "sharpening": _sharpening,
+    "column_pattern": _column_pattern,
 }
 
 

@@ -34,6 +34,7 @@ REALISTIC_STRENGTHS: dict[str, dict[str, Strength]] = {
     "rotor_blur": {"rotor_opacity": (0.15, 0.4)},
     "exposure": {"exposure_auto": 0.5, "exposure_offset": 0.04},
     "interlacing": {"interlace_shift": (1.0, 2.0)},
+    "column_pattern": {"column_gain_sd": 0.02},
 }
 
 # The realistic span of each setting (documentation, and for tests drawing strengths).
@@ -53,15 +54,18 @@ REALISTIC_RANGES: dict[str, dict[str, tuple[float, float]]] = {
     "rotor_blur": {"rotor_opacity": (0.1, 0.5)},
     "exposure": {"exposure_gain": (0.8, 1.3), "exposure_auto": (0.3, 0.8), "exposure_offset": (-0.05, 0.05)},
     "interlacing": {"interlace_shift": (0.5, 2.5)},
+    "column_pattern": {"column_gain_sd": (0.01, 0.04)},
 }
 
 # Effects the reference camera can hide that are NOT candidates of the model
-# (for the "unexplained" case): interlaced fields of a moving object.
-OUTSIDE_EFFECTS: tuple[str, ...] = ("interlacing",)
+# (for the "unexplained" case): interlaced fields of a moving object; a sensor's fixed column pattern (each
+# frame column's gain 1 + column_gain_sd * N(0, 1), the same in every frame and background of the camera:
+# column fixed-pattern noise of a CMOS read-out).
+OUTSIDE_EFFECTS: tuple[str, ...] = ("interlacing", "column_pattern")
 
 WHOLE_FRAME_EFFECTS: tuple[str, ...] = (
     "haze", "defocus", "chromatic_aberration", "lens_distortion", "vignetting", "exposure", "white_balance",
-    "shot_noise", "gamma", "sharpening", "compression",
+    "column_pattern", "shot_noise", "gamma", "sharpening", "compression",
 )
 OBJECT_ONLY_EFFECTS: tuple[str, ...] = ("specular", "rotor_blur", "rolling_shutter", "interlacing")
 
@@ -148,7 +152,8 @@ def _check_strength(effect: str, name: str, v: Any) -> Strength:
     return x
 
 
-_REFERENCE_SPECS = {"haze_extinction_px": (0.0, 100.0), "exposure_auto": (0.0, 1.5), "rs_magnitude": (-1.0, 1.0)}
+_REFERENCE_SPECS = {"haze_extinction_px": (0.0, 100.0), "exposure_auto": (0.0, 1.5), "rs_magnitude": (-1.0, 1.0),
+                    "column_gain_sd": (0.0, 0.2)}
 
 
 def _check_in_spec(effect: str, name: str, x: float) -> None:

@@ -212,6 +212,8 @@ def _draw_seed(setup: _Setup, index: int, scene: np.ndarray) -> MeasuredSeed:
     video = i % setup.n_videos
     rng = np.random.default_rng([seed, i, 0])
     cam = _draw_strengths(setup.settings, np.random.default_rng([seed, i, 1]))
+    if "column_pattern" in cam:  # the sensor's pattern: the camera's, the same for every seed
+        cam["column_pattern"]["pattern_seed"] = float(seed)
     paper = {k: float(rng.uniform(*setup.ranges[k])) for k in _PAPER_NAMES}
     video_rng = np.random.default_rng([seed, video, 2])
     for k in setup.per_video:  # the scene's light on the object's paint: one value per video
