@@ -94,6 +94,24 @@ def make_case(work: Path, k: int, a: argparse.Namespace) -> tuple[Path, Path, di
     return seeds, fit, info, prep
 
 
+# The residual structure that names each effect outside the candidate list (reference_camera.OUTSIDE_EFFECTS)
+OUTSIDE_STRUCTURE = {"interlacing": "periodic_rows", "column_pattern": "column_pattern"}
+
+
+def _first_name(findings: list[str], hidden: str | None) -> str | None:
+    """The name a case's findings give first: the first finding's effect; for an effect outside the candidates,
+    the effect itself when an "unexplained" finding lists its structure (a candidate named before it is not a
+    misnaming then: it may explain a part, as a blur explains part of interlacing's comb)."""
+    if not findings:
+        return None
+    if hidden in OUTSIDE_STRUCTURE:
+        for f in findings:
+            if f.startswith("unexplained: ") and OUTSIDE_STRUCTURE[hidden] in f[len("unexplained: "):].split(", "):
+                return hidden
+        return "unexplained" if findings[0].startswith("unexplained") else findings[0].split(" ")[0]
+    return findings[0].split(" ")[0]
+
+
 def case_statistics(report: dict[str, Any]) -> dict[str, Any]:
     """The statistics of one report that can raise a finding, flat: ``{name: {value, p, significant}}``."""
     out: dict[str, Any] = {}
@@ -202,11 +220,14 @@ def main() -> int:
     lo, hi = wilson(n_alarm, len(cases))
     power = None
     if a.hidden:
-        first = [c["findings"][0].split(" ")[0] if c["findings"] else None for c in cases]
+        first = [_first_name(c["findings"], a.hidden) for c in cases]
         named = sum(f == a.hidden for f in first)
         wrong = sum(f is not None and f != a.hidden for f in first)
         power = {"hidden": a.hidden, "named_first": named, "misnamed_first": wrong, "missed": first.count(None),
-                 "named_first_rate": named / len(cases), "wilson95": list(wilson(named, len(cases)))}
+                 "named_first_rate": named / len(cases), "wilson95": list(wilson(named, len(cases))),
+                 **({"rule": f"an effect outside the candidates counts as named when an 'unexplained' finding "
+                             f"lists its structure ({OUTSIDE_STRUCTURE[a.hidden]})"}
+                    if a.hidden in OUTSIDE_STRUCTURE else {})}
 
     result = {
         "bench": "diagnose_null", "command": " ".join(["python"] + sys.argv), "cases": len(cases),
