@@ -60,6 +60,19 @@ def test_box_model_option_fits_that_map(ws: dict[str, Path], tmp_path: Path, mod
         assert box["samples"] > 0 and isinstance(reg, CNNBoxRegressor) and not isinstance(reg, EnsembleBoxRegressor)
 
 
+def test_mining_round_choice_options_reach_the_training(ws: dict[str, Path], tmp_path: Path) -> None:
+    # --mining-select / --mining-patience (the runner's options) are synthaug train's too, and recorded
+    out = tmp_path / "ap.pt"
+    assert _train(ws, out, "--detector", "hog", "--seed-counts", "8", "--seed", "0", "--box-model", "ridge",
+                  "--mining-select", "ap", "--mining-patience", "1") == 0
+    meta = json.loads(out.with_suffix(".json").read_text())
+    assert meta["options"]["mining_select"] == "ap" and meta["options"]["mining_patience"] == 1
+    assert meta["mining"]["mining"]["select"] == "ap" and meta["mining"]["mining"]["patience"] == 1
+    rounds = meta["mining"]["rounds"]
+    aps = [r["val"]["ap"] for r in rounds if r.get("val")]
+    assert aps and rounds[meta["mining"]["chosen_round"]]["val"]["ap"] == max(aps)  # the round of the highest AP
+
+
 def test_train_then_detect_end_to_end(ws: dict[str, Path], trained: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
     from synthaug.detectors.base import load_detector
 
@@ -227,6 +240,7 @@ def test_cnn_synthetic_share_reaches_the_loss_weights(ws: dict[str, Path], train
         ("share_out_of_range", "--synthetic-share"),
         ("share_without_added", "--synthetic-share"),
         ("share_for_adaboost", "--synthetic-share"),
+        ("negative_patience", "--mining-patience"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -266,6 +280,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
     elif case == "share_for_adaboost":
         base["--detector"] = "adaboost"
         extra += ["--perturb-copies", "1", "--synthetic-share", "0.5"]
+    elif case == "negative_patience":
+        extra += ["--mining-patience", "-1"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
     capsys.readouterr()

@@ -61,7 +61,7 @@ def budget_options(args: argparse.Namespace) -> dict[str, int]:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug._checks import add_option, dataclass_defaults
-    from synthaug.detectors.training import BOX_MODELS, TrainOptions
+    from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
     parser.add_argument("--detector", required=True, help=f"detector family: {' | '.join(_DETECTORS)}")
@@ -101,6 +101,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mining-rounds", type=int, default=d["mining_rounds"], help="hard-negative mining rounds at most (0: none)")
     parser.add_argument("--mining-stride", type=int, default=d["mining_stride"], help="mine every K-th frame of every training video")
     parser.add_argument("--mining-per-frame", type=int, default=d["mining_per_frame"], help="false positives kept per mined frame")
+    parser.add_argument("--mining-select", choices=list(MINING_SELECT), default=d["mining_select"],
+                        help="the mining round kept: fewest validation false positives (fp) or highest validation AP of "
+                             "the same detections (ap)")
+    parser.add_argument("--mining-patience", type=int, default=d["mining_patience"],
+                        help="mining rounds without a new best still run before stopping (0: stop at the first)")
     add_option(parser, "--val-frame-stride", aliases=["--val-stride"], type=int, default=d["val_stride"],
                help="validation false positives counted on every K-th validation frame")
     parser.add_argument("--scales", type=float, nargs="+", default=None,
@@ -128,7 +133,8 @@ def main(args: argparse.Namespace) -> int:
         return _err(f"--detector: unknown detector {args.detector!r}; choose from {list(_DETECTORS)}")
     for opt, value, low in (("--frame-step", args.frame_step, 1), ("--mining-stride", args.mining_stride, 1),
                             ("--mining-per-frame", args.mining_per_frame, 1), ("--val-frame-stride", args.val_frame_stride, 1),
-                            ("--mining-rounds", args.mining_rounds, 0), ("--workers", args.workers, 1)):
+                            ("--mining-rounds", args.mining_rounds, 0), ("--mining-patience", args.mining_patience, 0),
+                            ("--workers", args.workers, 1)):
         if value < low:
             return _err(f"{opt}: must be >= {low}, got {value}")
     if args.seed_counts is not None and args.seed_counts < 1:
@@ -149,6 +155,7 @@ def main(args: argparse.Namespace) -> int:
     try:
         options = TrainOptions(**budget_options(args), cnn_shift=args.cnn_shift, mining_rounds=args.mining_rounds,
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
+                               mining_select=args.mining_select, mining_patience=args.mining_patience,
                                val_stride=args.val_frame_stride, box_model=args.box_model, scales=None if args.scales is None else tuple(args.scales))
     except ValueError as e:
         return _err(str(e))
