@@ -111,12 +111,19 @@ def fixed_line_pattern(profiles: Sequence[np.ndarray], groups: Sequence[Any], rn
     prof = np.stack([np.asarray(profiles[i], np.float64) for i in keep])
     lab = np.asarray(names)
     d = np.stack([prof[lab == v].mean(0) for v in vids])  # (V, L)
-    rho = float(_agreement(d))
     n_v = d.shape[0]
+    sq = float((d ** 2).sum())  # a circular shift keeps every profile's norm: only the sum over videos changes
+    rho = _agreement(d.sum(0)[None], sq, n_v)[0]
     off = rng.integers(0, size, (int(n_perm), n_v))
     off[:, 0] = 0  # only the videos' relative shifts matter
-    idx = (np.arange(size)[None, None, :] - off[:, :, None]) % size
-    null = _agreement(np.take_along_axis(np.broadcast_to(d, (int(n_perm), n_v, size)), idx, -1))
+    null = np.empty(int(n_perm))
+    cols = np.arange(size)
+    for a in range(0, int(n_perm), 512):  # chunks: memory (chunk, length), not (n_perm, videos, length)
+        o = off[a:a + 512]
+        total = np.zeros((o.shape[0], size))
+        for v in range(n_v):
+            total += d[v][(cols[None, :] - o[:, v:v + 1]) % size]
+        null[a:a + 512] = _agreement(total, sq, n_v)
     pattern = d.mean(0)
     power = np.abs(np.fft.rfft(pattern - pattern.mean())) ** 2
     freqs = np.fft.rfftfreq(size)
@@ -124,15 +131,13 @@ def fixed_line_pattern(profiles: Sequence[np.ndarray], groups: Sequence[Any], rn
     in_band = np.where(band, power, -np.inf)
     # the fundamental: the lowest frequency within half the strongest peak (a comb's harmonics are as strong)
     j = int(np.flatnonzero(in_band >= 0.5 * in_band.max())[0])
-    return {"rho": rho, "p": float((1 + np.sum(null >= rho)) / (int(n_perm) + 1)), "pattern": pattern,
+    return {"rho": float(rho), "p": float((1 + np.sum(null >= rho)) / (int(n_perm) + 1)), "pattern": pattern,
             "amplitude": float(pattern.std()), "period_px": float(1.0 / freqs[j]),
             "peak_ratio": float(power[j] / max(float(np.median(power[band])), 1e-30)),
             "groups": int(n_v), "seeds": len(keep), "length": int(size)}
 
 
-def _agreement(d: np.ndarray) -> np.ndarray:
-    """ρ of (..., V, L) group profiles: mean cross-group inner product over the mean squared norm."""
-    s = d.sum(-2)
-    sq = (d ** 2).sum((-2, -1))
-    n_v = d.shape[-2]
-    return 0.5 * ((s ** 2).sum(-1) - sq) / np.maximum(0.5 * (n_v - 1) * sq, 1e-30)
+def _agreement(total: np.ndarray, sq: float, n_v: int) -> np.ndarray:
+    """ρ from the (K, L) sums over the groups' profiles, the groups' summed squared norms ``sq`` and their
+    number: the mean cross-group inner product over the mean squared norm."""
+    return 0.5 * ((total ** 2).sum(-1) - sq) / max(0.5 * (n_v - 1) * sq, 1e-30)
