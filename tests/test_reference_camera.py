@@ -255,6 +255,11 @@ def test_resolve_hidden_and_bad_inputs(tmp_path):
     assert resolve_hidden(["exposure"])["exposure"]["exposure_auto"] == 0.5
     with pytest.raises(ValueError, match="exposure_auto"):
         resolve_hidden({"exposure": {"exposure_auto": 3.0}})
+    # the sensor's column pattern: a gain spread beyond 20 % is no camera's
+    with pytest.raises(ValueError, match=r"hidden\['column_pattern'\]\['column_gain_sd'\] must be in \[0.0, 0.2\], got 0.5"):
+        resolve_hidden({"column_pattern": {"column_gain_sd": 0.5}})
+    with pytest.raises(ValueError, match=r"hidden\['column_pattern'\]: unknown parameter\(s\) \['pattern_seed'\]"):
+        resolve_hidden({"column_pattern": {"pattern_seed": 3}})  # the camera's own stream, not a setting
     with pytest.raises(ValueError, match=r"unknown hidden effect\(s\) \['fog'\]"):
         resolve_hidden(["fog"])
     with pytest.raises(ValueError, match=r"hidden\['gamma'\]: unknown parameter\(s\) \['gamma'\]"):
