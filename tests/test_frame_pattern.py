@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from synthaug.diagnose.frame_pattern import fixed_line_pattern, line_profiles
+from synthaug.diagnose.frame_pattern import (
+    falloff_k,
+    fixed_line_pattern,
+    frame_falloff,
+    line_profiles,
+    radial_falloff,
+    scene_clusters,
+)
 
 
 def test_line_profiles_against_a_hand_computed_frame():
@@ -16,8 +23,10 @@ def test_line_profiles_against_a_hand_computed_frame():
     p = line_profiles(f, exclude=(30, 5, 10), high_pass=5)
     m = np.log(np.full(50, 100 / 255.0))
     m[20] = np.log(120 / 255.0)
-    box = np.convolve(np.pad(m, 2, mode="edge"), np.ones(5) / 5, mode="valid")  # a 5-px running mean, edges kept
-    np.testing.assert_allclose(p["x"], m - box, atol=1e-12)
+    # the local quadratic over 5 px (Savitzky-Golay's hand-tabled weights); the ends are flat, so exact there too
+    quad = m.copy()
+    quad[2:-2] = np.convolve(m, np.array([-3, 12, 17, 12, -3]) / 35.0, mode="valid")
+    np.testing.assert_allclose(p["x"], m - quad, atol=1e-12)
     # every row has the same mean once the object's square is left out: the row profile is flat
     assert np.abs(p["y"]).max() < 1e-3
     # colour: the mean of the channels
@@ -88,3 +97,77 @@ def test_a_periodic_pattern_gets_its_period():
     white = fixed_line_pattern([0.01 * rng.standard_normal(256)] * 4, list(range(4)), np.random.default_rng(0),
                                n_perm=99)
     assert white["peak_ratio"] < 20
+
+
+# ------------------------------------------------------------------ radial fall-off (vignetting)
+def _frame_grid(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)
+    radius = 0.5 * np.hypot(w, h)  # r = 1 at the corners, as the camera's vignetting
+    return (xx - (w - 1) / 2) / radius, (yy - (h - 1) / 2) / radius
+
+
+def test_frame_falloff_recovers_an_exact_log_quadratic_frame():
+    # log I = a + b dx + c dy - s r² exactly: the block fit (block means over the usable pixels) recovers s to
+    # rounding; the crop and clipped pixels are left out, blocks cut by them included
+    h, w = 96, 128
+    dx, dy = _frame_grid(h, w)
+    f = np.exp(np.log(0.4) + 0.1 * dx - 0.2 * dy - 0.25 * (dx ** 2 + dy ** 2))
+    assert frame_falloff(f)["log_slope"] == pytest.approx(0.25, abs=1e-9)
+    g = f.copy()
+    g[30:50, 60:80] = 0.9  # the object, in its crop
+    g[:10, :20] = 1.0  # a clipped sky corner
+    out = frame_falloff(g, exclude=(60, 30, 20))
+    assert out["log_slope"] == pytest.approx(0.25, abs=1e-9)
+    assert out["texture"].shape == (h // 4, w // 4) and np.isnan(out["repeat"]) and out["shape"] == (h, w)
+    # colour: the channels' mean; uint8 frames are read as such
+    assert frame_falloff(np.dstack([f, f, f]))["log_slope"] == pytest.approx(0.25, abs=1e-9)
+    assert frame_falloff(np.round(255 * f).astype(np.uint8))["log_slope"] == pytest.approx(0.25, abs=0.01)
+    with pytest.raises(ValueError, match="shape"):
+        frame_falloff(np.zeros((2, 3, 4, 5)))
+
+
+@pytest.mark.parametrize("k", [-0.2, 0.1, 0.3, 0.6])
+def test_falloff_k_inverts_the_fit_of_a_vignetted_frame(k):
+    h, w = 120, 160
+    dx, dy = _frame_grid(h, w)
+    f = 0.5 * (1.0 - k * (dx ** 2 + dy ** 2))  # the camera's vignetting: 1 - k r²
+    assert falloff_k(frame_falloff(f)["log_slope"], (h, w)) == pytest.approx(k, abs=1e-4)
+
+
+def test_scene_clusters_join_chains_of_one_scene_and_place_textureless_frames_by_video():
+    rng = np.random.default_rng(0)
+    a, b, c = rng.standard_normal((3, 24, 32))
+    ab = (a + b) / np.sqrt(2)  # a panning camera: a ~ ab ~ b, but a and b themselves do not correlate
+    f = [{"texture": t + 0.05 * rng.standard_normal(t.shape), "repeat": 0.9} for t in (a, ab, b, c)]
+    f.append({"texture": rng.standard_normal((24, 32)), "repeat": 0.1})  # video v0, cannot be placed
+    f.append({"texture": rng.standard_normal((24, 32)), "repeat": float("nan")})  # v0 too: one scene with it
+    f.append({"texture": rng.standard_normal((24, 32)), "repeat": 0.1})  # v1's: its own
+    f.append({"texture": a[:12], "repeat": 0.9})  # another frame size: never the same scene by texture
+    lab = scene_clusters(f, ["v0", "v1", "v2", "v0", "v0", "v0", "v1", "v0"])
+    assert lab.tolist() == [0, 0, 0, 1, 2, 2, 3, 4]
+
+
+def test_radial_falloff_p_values_are_uniform_over_scenes_not_frames():
+    # 8 scenes of 6 frames each (a static camera: one texture and one scene slope per video, the frames' own
+    # noise small), no vignetting: the test over scenes keeps its level; over frames it would not
+    rng = np.random.default_rng(3)
+    ps, naive = [], []
+    for _ in range(300):
+        frames, groups = [], []
+        for v in range(8):
+            tex, slope = rng.standard_normal((12, 16)), 0.15 * rng.standard_normal()
+            for _ in range(6):
+                frames.append({"log_slope": slope + 0.02 * rng.standard_normal(), "repeat": 0.9, "shape": (48, 64),
+                               "texture": tex + 0.1 * rng.standard_normal(tex.shape)})
+                groups.append(f"v{v}")
+        out = radial_falloff(frames, groups)
+        assert out["scenes"] == 8 and out["frames"] == 48
+        ps.append(out["p"])
+        naive.append(stats.ttest_1samp([f["log_slope"] for f in frames], 0.0, alternative="greater").pvalue)
+    assert stats.kstest(ps, "uniform").pvalue > 0.01
+    assert np.mean(np.array(naive) < 0.01) > 0.1  # frames as if independent: many false alarms at 1 %
+    # a camera's fall-off shared by every scene is found, at its strength
+    frames = [{**f, "log_slope": f["log_slope"] + 0.357} for f in frames]  # log(1 - 0.3) at the corners ~ -0.357
+    out = radial_falloff(frames, groups)
+    assert out["p"] < 1e-3 and 0.1 < out["k"] < 0.5
+    assert radial_falloff(frames[:12], groups[:12]) is None  # two scenes: nothing to test over

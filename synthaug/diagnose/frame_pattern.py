@@ -21,17 +21,35 @@ A pattern fixed in frame rows is the same statistic on the rows' profiles.
 
 Frames of other sizes than the most common one are left out (their columns are other columns); with fewer
 than two videos (or two seeds) there is nothing to compare and the measure is not applicable.
+
+**A radial fall-off (vignetting)** is the other gain fixed in the frame: ``1 - k r²`` (r = 1 at the corners),
+the same in every frame. On the object it is a gain of 0.9-1 that the fitted albedo w_d absorbs, but the whole
+frames carry it: each frame's least-squares fit ``log I = a + b dx + c dy - s r²`` over 4-px blocks (the seed's
+crop and saturated pixels left out) gives its log fall-off ``s`` (:func:`frame_falloff`). A scene has radial
+structure of its own (a bright cloud in the middle, a dark corner), so ``s`` of one frame is the camera's plus
+its scene's, and frames of the same scene are not independent: the test runs over **scenes**, not frames
+(:func:`scene_clusters`: frames whose band-passed textures correlate ≥ :data:`SAME_SCENE` are one scene; a
+frame whose texture does not repeat in its own background frame — a bare sky, noise — cannot be placed by its
+texture and joins the other such frames of its video). :func:`radial_falloff` is the one-sided t-test of the
+scenes' mean ``s`` against 0 (one value per scene, ≥ 3 scenes) and the fall-off ``k`` it implies
+(:func:`falloff_k`).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS"]
+__all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_falloff", "scene_clusters", "radial_falloff",
+           "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK"]
 
-HIGH_PASS = 7  # frame px: the running mean removed from a profile (the scene's slow changes)
+HIGH_PASS = 7  # frame px: the window of the local quadratic removed from a profile (the scene's slow changes)
+FALLOFF_BLOCK = 4  # frame px: the side of the blocks a frame's fall-off is fitted on
+SCENE_BAND = (3, 15)  # blocks: a scene's texture is its block image's running mean over 3 minus over 15 blocks
+SAME_SCENE = 0.6  # textures correlating at least this much show the same scene (measured: a frame and its own
+# background frame 0.88-0.94 median, two independent sky scenes at most 0.57, on the reference camera's cases)
 
 
 def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
@@ -42,7 +60,9 @@ def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
     Args:
         frame: (H, W) or (H, W, C) uint8 or float in [0, 1] (colour: the mean of the channels).
         exclude: ``(x0, y0, side)`` frame px: a square left out of the means (the object's crop).
-        high_pass: width (px) of the running mean subtracted from each profile.
+        high_pass: window (px, odd) of the local quadratic (Savitzky-Golay) subtracted from each profile: a
+            smooth trend — a scene's slow change, a vignetting's parabola — leaves nothing, at the frame's edges
+            too (a running mean there leaves a vignetting's edge in every video alike: a false column pattern).
 
     Example:
         >>> f = np.full((40, 60), 100, np.uint8); f[:, 30] = 110  # one brighter column
@@ -50,7 +70,7 @@ def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         >>> int(np.argmax(p["x"])), bool(abs(p["y"]).max() < 1e-12)
         (30, True)
     """
-    from scipy.ndimage import uniform_filter1d
+    from scipy.signal import savgol_filter
 
     f = np.asarray(frame, np.float64)
     if f.ndim == 3:
@@ -70,7 +90,7 @@ def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
     out = {}
     for name, axis in (("x", 0), ("y", 1)):
         m = (log * w).sum(axis) / np.maximum(w.sum(axis), 1.0)
-        out[name] = m - uniform_filter1d(m, int(high_pass), mode="nearest")
+        out[name] = m - savgol_filter(m, int(high_pass), 2, mode="interp")
     return out
 
 
@@ -141,3 +161,226 @@ def _agreement(total: np.ndarray, sq: float, n_v: int) -> np.ndarray:
     """ρ from the (K, L) sums over the groups' profiles, the groups' summed squared norms ``sq`` and their
     number: the mean cross-group inner product over the mean squared norm."""
     return 0.5 * ((total ** 2).sum(-1) - sq) / max(0.5 * (n_v - 1) * sq, 1e-30)
+
+
+# ------------------------------------------------------------------ radial fall-off (vignetting)
+def _gray_log(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A frame's log intensity (colour: the mean of the channels) and its unsaturated pixels."""
+    a = np.asarray(frame)
+    f = a.astype(np.float64)
+    if f.ndim == 3:
+        f = f.mean(-1)
+    if f.ndim != 2:
+        raise ValueError(f"frame must be (H, W) or (H, W, C), got shape {np.shape(frame)}")
+    if a.dtype == np.uint8:
+        f = f / 255.0
+    ok = (f > 2.5 / 255.0) & (f < 252.5 / 255.0)  # a clipped pixel's log says nothing of its gain
+    return np.log(np.clip(f, 1.0 / 255.0, None)), ok
+
+
+def _blocks(log: np.ndarray, ok: np.ndarray, step: int) -> tuple[np.ndarray, np.ndarray]:
+    """Block means of ``log`` over ``ok`` pixels (step x step blocks), and whether a block has ≥ half its pixels."""
+    h, w = log.shape[0] // step * step, log.shape[1] // step * step
+    sm = (log * ok)[:h, :w].reshape(h // step, step, w // step, step).sum((1, 3))
+    n = ok[:h, :w].reshape(h // step, step, w // step, step).sum((1, 3))
+    return sm / np.maximum(n, 1), n >= step * step / 2
+
+
+def _pixel_radius(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Normalised frame position (dx, dy) of every pixel of a frame ``shape`` = (H, W): relative to the frame
+    centre over the half diagonal, as :func:`synthaug.effects.camera_functional.frame_coordinates`."""
+    h, w = shape
+    ys, xs = np.mgrid[0:h, 0:w].astype(np.float64)
+    radius = 0.5 * math.hypot(w, h)
+    return (xs - (w - 1) / 2.0) / radius, (ys - (h - 1) / 2.0) / radius
+
+
+def _block_fit(values: np.ndarray, ok: np.ndarray, step: int) -> float:
+    """``s`` of the least-squares fit ``v = a + b dx + c dy - s r²`` over the blocks with ≥ half their pixels
+    usable, each block's ``v``, dx, dy and r² the means over its usable pixels (NaN under 16 blocks)."""
+    dx, dy = _pixel_radius(values.shape)
+    v, keep = _blocks(values, ok, step)
+    if int(keep.sum()) < 16:
+        return float("nan")
+    cols = [np.ones(int(keep.sum()))] + [_blocks(c, ok, step)[0][keep] for c in (dx, dy, dx ** 2 + dy ** 2)]
+    coef, *_ = np.linalg.lstsq(np.stack(cols, 1), v[keep], rcond=None)
+    return -float(coef[3])
+
+
+def _texture(log: np.ndarray, step: int) -> np.ndarray:
+    from scipy.ndimage import uniform_filter
+
+    b, _ = _blocks(log, np.ones(log.shape, bool), step)
+    t = uniform_filter(b, SCENE_BAND[0], mode="nearest") - uniform_filter(b, SCENE_BAND[1], mode="nearest")
+    return (t - t.mean()).astype(np.float32)
+
+
+def _corr(a: np.ndarray, b: np.ndarray) -> float:
+    a, b = a.ravel().astype(np.float64), b.ravel().astype(np.float64)
+    den = math.sqrt(float((a * a).sum()) * float((b * b).sum()))
+    return float((a * b).sum() / den) if den > 0 else 0.0
+
+
+def frame_falloff(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
+                  background: np.ndarray | None = None, step: int = FALLOFF_BLOCK) -> dict[str, Any]:
+    """One frame's radial log fall-off and its scene's texture.
+
+    Args:
+        frame: (H, W) or (H, W, C) uint8 or float in [0, 1].
+        exclude: ``(x0, y0, side)`` frame px: a square left out of the fit (the object's crop), widened by 2 px.
+        background: the seed's background frame (the same scene without the object), or None: whether the
+            frame's texture repeats there (``repeat``) says if the texture can tell its scene.
+        step: block side (px).
+
+    Returns:
+        ``log_slope`` (``s`` of ``log I = a + b dx + c dy - s r²``, least squares over the blocks; ``s > 0``:
+        darker toward the corners; NaN with fewer than 16 usable blocks), ``texture`` (float32 (H/step, W/step):
+        the band-passed block log image), ``repeat`` (its correlation with the background's texture; NaN without
+        one) and ``shape`` (H, W).
+
+    Example:
+        >>> h, w = 96, 128
+        >>> yy, xx = np.mgrid[0:h, 0:w]
+        >>> r2 = ((xx - (w - 1) / 2) ** 2 + (yy - (h - 1) / 2) ** 2) / (0.25 * (w * w + h * h))
+        >>> out = frame_falloff(0.5 * (1 - 0.3 * r2))
+        >>> round(falloff_k(out["log_slope"], (h, w)), 2)
+        0.3
+    """
+    log, ok = _gray_log(frame)
+    h, w = log.shape
+    if exclude is not None:
+        x0, y0, side = (float(v) for v in exclude)
+        xa, xb = int(np.clip(np.floor(x0 - 2), 0, w)), int(np.clip(np.ceil(x0 + side + 2), 0, w))
+        ya, yb = int(np.clip(np.floor(y0 - 2), 0, h)), int(np.clip(np.ceil(y0 + side + 2), 0, h))
+        ok = ok.copy()
+        ok[ya:yb, xa:xb] = False
+    slope = _block_fit(log, ok, step)
+    tex = _texture(log, step)
+    repeat = float("nan")
+    if background is not None:
+        blog, _ = _gray_log(background)
+        if blog.shape == log.shape:
+            repeat = _corr(tex, _texture(blog, step))
+    return {"log_slope": slope, "texture": tex, "repeat": repeat, "shape": (int(h), int(w))}
+
+
+def scene_clusters(falloffs: Sequence[dict[str, Any]], groups: Sequence[Any], *,
+                   same: float = SAME_SCENE) -> np.ndarray:
+    """Which frames show the same scene: connected components of "same scene" pairs.
+
+    Two frames are one scene when their textures (:func:`frame_falloff`) correlate ≥ ``same``; a frame whose
+    texture does not repeat in its own background frame (``repeat`` < ``same`` or unknown: a bare sky, a noisy
+    frame) cannot be placed by its texture and is one scene with every other such frame of its group (video).
+
+    Returns:
+        (N,) int labels, 0..C-1 in order of first appearance.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> a, b = rng.standard_normal((2, 24, 32)).astype(np.float32)
+        >>> f = [{"texture": t + 0.1 * rng.standard_normal(t.shape), "repeat": 0.9} for t in (a, a, b)]
+        >>> f.append({"texture": rng.standard_normal(a.shape), "repeat": float("nan")})  # cannot be placed
+        >>> f.append({"texture": rng.standard_normal(a.shape), "repeat": 0.2})           # nor this one
+        >>> scene_clusters(f, ["v0", "v0", "v0", "v1", "v1"]).tolist()
+        [0, 0, 1, 2, 2]
+    """
+    n = len(falloffs)
+    parent = list(range(n))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    def union(i: int, j: int) -> None:
+        a, b = find(i), find(j)
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+
+    placed = [bool(np.isfinite(f.get("repeat", np.nan)) and f["repeat"] >= same) for f in falloffs]
+    names = [str(g) if g is not None else f"seed{i}" for i, g in enumerate(groups)]
+    by_shape: dict[tuple, list[int]] = {}
+    for i, f in enumerate(falloffs):
+        by_shape.setdefault(np.shape(f["texture"]), []).append(i)
+    for idx in by_shape.values():
+        t = np.stack([np.asarray(falloffs[i]["texture"], np.float64).ravel() for i in idx])
+        norm = np.linalg.norm(t, axis=1)
+        c = (t @ t.T) / np.maximum(np.outer(norm, norm), 1e-30)
+        for a, b in zip(*np.nonzero(np.triu(c >= same, 1))):
+            union(idx[a], idx[b])
+    first: dict[str, int] = {}
+    for i in range(n):
+        if not placed[i]:
+            j = first.setdefault(names[i], i)
+            union(i, j)
+    roots = [find(i) for i in range(n)]
+    order = {r: k for k, r in enumerate(dict.fromkeys(roots))}
+    return np.array([order[r] for r in roots], dtype=np.int64)
+
+
+def falloff_k(log_slope: float, shape: tuple[int, int], *, step: int = FALLOFF_BLOCK) -> float:
+    """The vignetting strength ``k`` (``1 - k r²``, the fraction of light lost at the corners) whose log the fit of
+    :func:`frame_falloff` gives the slope ``log_slope`` on a frame of ``shape`` (H, W) (clipped to [-1, 0.99]).
+
+    Example:
+        >>> round(falloff_k(0.0, (96, 128)), 6), falloff_k(5.0, (96, 128))
+        (0.0, 0.99)
+    """
+    from scipy.optimize import brentq
+
+    dx, dy = _pixel_radius(shape)
+    r2 = dx ** 2 + dy ** 2
+    ok = np.ones(r2.shape, bool)
+
+    def g(k: float) -> float:
+        return _block_fit(np.log(np.clip(1.0 - k * r2, 1e-6, None)), ok, step) - log_slope
+
+    lo, hi = -1.0, 0.99
+    if not math.isfinite(log_slope):
+        return float("nan")
+    if g(hi) <= 0:
+        return hi
+    if g(lo) >= 0:
+        return lo
+    return float(brentq(g, lo, hi, xtol=1e-6))
+
+
+def radial_falloff(falloffs: Sequence[dict[str, Any]], groups: Sequence[Any], *,
+                   same: float = SAME_SCENE) -> dict[str, Any] | None:
+    """The camera's radial fall-off over the frames, tested over scenes.
+
+    Args:
+        falloffs: one :func:`frame_falloff` per seed.
+        groups: each seed's video (None: its own).
+        same: :func:`scene_clusters`' threshold.
+
+    Returns:
+        None with fewer than 3 scenes that have a slope; else ``log_slope`` (the mean over scenes of each
+        scene's mean ``s``), ``t``, ``p`` (one-sided: darker toward the corners), ``k`` (:func:`falloff_k` of
+        ``log_slope`` on the most common frame size), ``scenes``, ``frames``.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> f = [{"log_slope": 0.35 + 0.2 * rng.standard_normal(), "texture": rng.standard_normal((24, 32)),
+        ...       "repeat": 0.9, "shape": (96, 128)} for _ in range(30)]
+        >>> out = radial_falloff(f, [i % 5 for i in range(30)])
+        >>> out["scenes"], out["p"] < 1e-6, 0.2 < out["k"] < 0.4
+        (30, True, True)
+    """
+    from scipy import stats
+
+    keep = [i for i, f in enumerate(falloffs) if math.isfinite(f.get("log_slope", float("nan")))]
+    if not keep:
+        return None
+    lab = scene_clusters([falloffs[i] for i in keep], [groups[i] for i in keep], same=same)
+    s = np.array([falloffs[i]["log_slope"] for i in keep])
+    means = np.array([s[lab == c].mean() for c in range(int(lab.max()) + 1)])
+    if len(means) < 3:
+        return None
+    t = stats.ttest_1samp(means, 0.0, alternative="greater")
+    shapes = [tuple(falloffs[i]["shape"]) for i in keep]
+    shape = max(set(shapes), key=shapes.count)
+    m = float(means.mean())
+    return {"log_slope": m, "t": float(t.statistic), "p": float(t.pvalue), "k": falloff_k(m, shape),
+            "scenes": int(len(means)), "frames": len(keep)}

@@ -82,6 +82,8 @@ def _jsonable(x: Any) -> Any:
 def _setting(row: dict[str, Any]) -> dict[str, float]:
     if row["channel"] == "noise_level" and row.get("noise_setting"):
         return row["noise_setting"]
+    if row["channel"] == "frame" and row.get("frame_setting"):
+        return row["frame_setting"]
     if row["channel"] == "distance:colour":
         return row["screen"]["colour"]["setting"]
     space = "feature" if row["channel"] == "distance:feature" else "pixel"
@@ -328,6 +330,7 @@ def _effect_findings(data: Any, picked: list[tuple[dict, dict]], folds: Any, acc
                       "absorbed_parameter_r2": None if row["absorption"] is None else row["absorption"]["gain"],
                       "noise_loglik_per_px": None if row.get("noise") is None else row["noise"]["gain"],
                       "heldout_colour": sc["colour"]["gain"] if "colour" in sc else None,
+                      "frame_falloff_k": next((c["gain"] for c in row["channels"] if c["channel"] == "frame"), None),
                       "realism_accuracy_before": acc_base, "realism_accuracy_after": acc},
             "evidence": {"channels": row["channels"], "absorption": row["absorption"],
                          "noise_level_function": None if row.get("noise") is None else {
@@ -386,6 +389,17 @@ def _unexplained_finding(remaining: dict[str, dict[str, Any]], picked: list[tupl
                       "of a kind those effects do not produce")},
         "gains": {},
     }
+
+
+def _frame_text(f: dict[str, Any]) -> str:
+    """The frame channel's evidence, for a finding's line of report.md."""
+    ch = next((c for c in f["evidence"]["channels"] if c["channel"] == "frame"), None)
+    if ch is None:
+        return ""
+    return (f"; the whole frames fall off toward the corners: log fall-off {ch['log_slope']:+.3f} over "
+            f"{ch['scenes']} distinct scenes ({ch['frames']} frames), a gain 1 - {ch['gain']:.2f} r² (clean floor "
+            f"{ch['floor'] if ch['floor'] is None else round(ch['floor'], 3)}); on the object it is absorbed by the "
+            "fitted w_d")
 
 
 def _screened_row(r: dict[str, Any]) -> dict[str, Any]:
@@ -508,6 +522,7 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                 + (f"; noise level function log-log slope {f['evidence']['noise_level_function']['slope']:+.2f} "
                    f"(flat = read noise only), held-out likelihood gain {g['noise_loglik_per_px']:.4f} nats/px"
                    if f["channel"] == "noise_level" else "")
+                + (_frame_text(f) if f["channel"] == "frame" else "")
                 + _tone_text(f)
                 + (f"; real-vs-synthetic accuracy {100 * g['realism_accuracy_before']:.0f} % → {100 * acc:.0f} %"
                    if acc is not None else "")

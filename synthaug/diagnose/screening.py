@@ -33,7 +33,12 @@ out wrong in every synthetic sample. Auto-exposure is found that way too: the
 re-solved w_d follows the brightness of the whole frame (what the camera
 meters), within videos.
 
-Two more channels do not rest on the fitted patches. The camera's noise level
+Three more channels do not rest on the fitted patches. Vignetting is a gain
+of 0.9-1 on an object near the centre, which w_d absorbs seed by seed; the
+whole frames around the objects carry it as a radial fall-off of brightness
+(the **frame** channel, :func:`frame_channel`: each frame's log fall-off,
+tested over distinct scenes, :mod:`synthaug.diagnose.frame_pattern`), and the
+fall-off it implies is the setting. The camera's noise level
 function, measured on the seed frames off the object
 (:mod:`synthaug.diagnose.noise`), testifies for ``shot_noise`` (rising with
 brightness) and ``gamma`` (falling: a compressive tone curve after the sensor);
@@ -74,7 +79,8 @@ from synthaug.diagnose.diagnosis_data import DiagnosisData, pairwise_distance, p
 from synthaug.diagnose.residuals import seed_metadata
 
 __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "screen_candidates", "screen_one", "absorption_gain",
-           "realism_accuracy", "kfold", "offered_candidates", "tone_evidence"]
+           "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
+           "frame_evidence", "frame_channel"]
 
 Setting = dict[str, float]
 
@@ -118,6 +124,10 @@ ABSORPTION: dict[str, tuple[str, str, int]] = {
 # Haze is screened in colour too: its airlight has the sky's colour (aerial perspective: a far object takes
 # on the colour of the air in front of it).
 COLOUR_CANDIDATES: tuple[str, ...] = ("chromatic_aberration", "white_balance", "haze")
+
+# Candidates with evidence on the whole frames: a gain fixed in the frame that the background around the object
+# carries as well (synthaug.diagnose.frame_pattern), where the fitted w_d hides it on the object.
+FRAME_CANDIDATES: tuple[str, ...] = ("vignetting",)
 # Candidates that exist only in colour: a single channel has no lateral colour shift and no colour cast (in gray
 # chromatic aberration is a ~1 px radial blur, white balance a gain that w_d absorbs), so on single-channel data
 # they are not offered (:func:`offered_candidates`); haze stays: its extinction and airlight act on gray too.
@@ -368,9 +378,10 @@ def absorption_gain(data: DiagnosisData, effect: str, w_d: np.ndarray, folds: li
 
 def n_screening_tests(names: Sequence[str]) -> int:
     """The Bonferroni count of screening ``names``: two distance spaces each, plus the absorbed, the
-    noise-level and the colour channels."""
+    noise-level, the colour and the frame channels."""
     return (max(len(names), 1) * 2 + sum(1 for c in names if c in ABSORPTION)
-            + sum(1 for c in names if c in NOISE_CANDIDATES) + sum(1 for c in names if c in COLOUR_CANDIDATES))
+            + sum(1 for c in names if c in NOISE_CANDIDATES) + sum(1 for c in names if c in COLOUR_CANDIDATES)
+            + sum(1 for c in names if c in FRAME_CANDIDATES))
 
 
 def _z(p: float) -> float:
@@ -456,6 +467,31 @@ def tone_evidence(data: DiagnosisData, nc: dict[str, Any] | None, base_pixel: np
             "explains": "gamma" if m > 0 else "shot_noise"}
 
 
+def frame_evidence(data: DiagnosisData) -> dict[str, Any] | None:
+    """The whole frames' radial fall-off, tested over scenes (:func:`synthaug.diagnose.frame_pattern.radial_falloff`);
+    None without frames or with fewer than 3 scenes."""
+    from synthaug.diagnose.frame_pattern import radial_falloff
+
+    if data.frame_falloff is None:
+        return None
+    groups = [r.get("video") for r in data.records] if len(data.records) == len(data) else [None] * len(data)
+    return radial_falloff(data.frame_falloff, groups)
+
+
+def frame_channel(effect: str, ev: dict[str, Any] | None, n_tests: int, alpha: float) -> dict[str, Any] | None:
+    """The frame channel of ``effect`` (:data:`FRAME_CANDIDATES`): vignetting's radial fall-off on the whole frames.
+    Its statistic (``gain``) is the fall-off ``k`` the frames imply (the fraction of light lost at the corners);
+    significant when the one-sided test over scenes rejects at α (Bonferroni) and ``k`` exceeds its calibrated
+    clean floor."""
+    if effect not in FRAME_CANDIDATES or ev is None:
+        return None
+    p_adj = min(1.0, ev["p"] * n_tests)
+    floor = gain_floor(effect, "frame")
+    return {"channel": "frame", "p_adjusted": p_adj, "z": _z(ev["p"]), "gain": ev["k"], "floor": floor,
+            "log_slope": ev["log_slope"], "scenes": ev["scenes"], "frames": ev["frames"],
+            "significant": bool(p_adj < alpha and ev["k"] > max(floor or 0.0, 0.0))}
+
+
 def noise_setting(effect: str, nc: dict[str, Any]) -> Setting | None:
     """The camera setting the NLF implies: a tone curve x^g with slope 2(g - 1)/g when read noise
     dominates, so g = 2 / (2 - slope); None for effects it does not set."""
@@ -534,7 +570,8 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         one dict per candidate, ranked (significant distance gains by size, then significant absorbed
         parameters, then the rest by evidence):
         ``effect``, ``significant``, ``channel`` (``"distance:feature"``,
-        ``"distance:pixel"``, ``"absorbed"`` or ``"noise_level"``), ``score`` (z), ``p_adjusted``,
+        ``"distance:pixel"``, ``"absorbed"``, ``"noise_level"``, ``"distance:colour"`` or ``"frame"``),
+        ``score`` (z), ``p_adjusted``,
         ``gain`` (held-out), ``screen``, ``absorption``, ``noise`` (the noise level function's
         evidence, for its candidates), ``noise_setting``.
     """
@@ -554,6 +591,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         nc = noise_channel(data.noise_levels, folds)
         if tone is None:
             tone = tone_evidence(data, nc, base[1], given=given)
+    frame_ev = frame_evidence(data) if any(c in FRAME_CANDIDATES for c in names) else None
     base_colour = None
     if data.real_rgb is not None and any(c in COLOUR_CANDIDATES for c in names):
         from synthaug.diagnose.diagnosis_data import chroma_distance, render_rgb, solve_albedo_rgb
@@ -594,6 +632,9 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         nl = noise_level_channel(name, nc, n_tests, alpha, tone)
         if nl is not None:
             channels.append(nl)
+        fc = frame_channel(name, frame_ev, n_tests, alpha)
+        if fc is not None:
+            channels.append(fc)
         col = None if base_colour is None else screen_colour(data, name, folds, base_colour, penalty=penalty,
                                                             given=given)
         if col is not None:
@@ -604,13 +645,14 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
                              "gain": col["gain"], "significant": bool(p_adj < alpha and col["gain"] > 0
                                                                       and col["raw_gain_all"] >= min_gain)})
         sig = [c for c in channels if c["significant"]]
-        sig_dist = [c for c in sig if c["channel"] != "absorbed"]
+        sig_dist = [c for c in sig if c["channel"] not in ("absorbed", "frame")]
         best = max(sig_dist, key=lambda c: c["gain"]) if sig_dist else max(sig or channels, key=lambda c: c["z"])
         rows.append({"effect": name, "significant": bool(sig), "channel": best["channel"], "score": best["z"],
                      "p_adjusted": best["p_adjusted"], "gain": best["gain"], "channels": channels,
                      "screen": sc, "absorption": ab, "noise": nc if nl is not None else None,
                      "tone": tone if nl is not None else None,
-                     "noise_setting": noise_setting(name, nc) if nl is not None else None})
+                     "noise_setting": noise_setting(name, nc) if nl is not None else None,
+                     "frame_setting": {"vignette_k": fc["gain"]} if fc is not None else None})
     rows.sort(key=_rank)
     return rows
 
@@ -620,6 +662,6 @@ def _rank(row: dict[str, Any]) -> tuple[int, float]:
     most precisely measured sliver); then absorbed-parameter findings; then the rest by evidence."""
     if not row["significant"]:
         return 2, -row["score"]
-    if row["channel"] in ("absorbed", "noise_level"):
+    if row["channel"] in ("absorbed", "noise_level", "frame"):
         return 1, -row["score"]
     return 0, -row["gain"]
