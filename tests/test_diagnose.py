@@ -208,7 +208,7 @@ def test_a_hidden_effect_is_named_first_and_significant(tmp_path, effect):
     # the extended model's held-out gain: distance, absorbed-parameter R², noise-model likelihood, chroma, or the
     # frames' fall-off
     assert max(g["heldout_feature"], g["heldout_pixel"], g["absorbed_parameter_r2"] or -1,
-               g["noise_loglik_per_px"] or -1, g["heldout_colour"] or -1, g["frame_falloff_k"] or -1) > 0
+               g["noise_loglik_per_px"] or -1, g["heldout_colour"] or -1, g["frame_statistic"] or -1) > 0
     # the files: report.json (same content) and the human report with its plots
     assert json.loads((tmp_path / "out" / "report.json").read_text())["findings"][0]["effect"] == effect
     md = (tmp_path / "out" / "report.md").read_text()
@@ -283,7 +283,7 @@ def test_vignetting_on_a_nuisance_varied_camera_is_named_from_the_frames_at_its_
     first = report["findings"][0]
     assert (first["effect"], first["channel"]) == ("vignetting", "frame"), report["findings"]
     assert first["setting"]["vignette_k"] == pytest.approx(k, abs=0.1)
-    assert first["gains"]["frame_falloff_k"] == first["setting"]["vignette_k"]
+    assert first["gains"]["frame_statistic"] == first["setting"]["vignette_k"]
     assert not report["residuals"]["column_pattern"]["significant"] and not report["residuals"]["row_pattern"]["significant"]
     assert "fall off toward the corners" in (tmp_path / "out" / "report.md").read_text()
 

@@ -7,9 +7,10 @@ import pytest
 from scipy import stats
 
 from synthaug.diagnose.frame_pattern import (
+    block_grid,
     falloff_k,
     fixed_line_pattern,
-    frame_falloff,
+    frame_summary,
     line_profiles,
     radial_falloff,
     scene_clusters,
@@ -106,24 +107,24 @@ def _frame_grid(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
     return (xx - (w - 1) / 2) / radius, (yy - (h - 1) / 2) / radius
 
 
-def test_frame_falloff_recovers_an_exact_log_quadratic_frame():
+def test_frame_summary_recovers_an_exact_log_quadratic_frame():
     # log I = a + b dx + c dy - s r² exactly: the block fit (block means over the usable pixels) recovers s to
     # rounding; the crop and clipped pixels are left out, blocks cut by them included
     h, w = 96, 128
     dx, dy = _frame_grid(h, w)
     f = np.exp(np.log(0.4) + 0.1 * dx - 0.2 * dy - 0.25 * (dx ** 2 + dy ** 2))
-    assert frame_falloff(f)["log_slope"] == pytest.approx(0.25, abs=1e-9)
+    assert frame_summary(f)["log_slope"] == pytest.approx(0.25, abs=1e-9)
     g = f.copy()
     g[30:50, 60:80] = 0.9  # the object, in its crop
     g[:10, :20] = 1.0  # a clipped sky corner
-    out = frame_falloff(g, exclude=(60, 30, 20))
+    out = frame_summary(g, exclude=(60, 30, 20))
     assert out["log_slope"] == pytest.approx(0.25, abs=1e-9)
     assert out["texture"].shape == (h // 4, w // 4) and np.isnan(out["repeat"]) and out["shape"] == (h, w)
     # colour: the channels' mean; uint8 frames are read as such
-    assert frame_falloff(np.dstack([f, f, f]))["log_slope"] == pytest.approx(0.25, abs=1e-9)
-    assert frame_falloff(np.round(255 * f).astype(np.uint8))["log_slope"] == pytest.approx(0.25, abs=0.01)
+    assert frame_summary(np.dstack([f, f, f]))["log_slope"] == pytest.approx(0.25, abs=1e-9)
+    assert frame_summary(np.round(255 * f).astype(np.uint8))["log_slope"] == pytest.approx(0.25, abs=0.01)
     with pytest.raises(ValueError, match="shape"):
-        frame_falloff(np.zeros((2, 3, 4, 5)))
+        frame_summary(np.zeros((2, 3, 4, 5)))
 
 
 @pytest.mark.parametrize("k", [-0.2, 0.1, 0.3, 0.6])
@@ -131,7 +132,7 @@ def test_falloff_k_inverts_the_fit_of_a_vignetted_frame(k):
     h, w = 120, 160
     dx, dy = _frame_grid(h, w)
     f = 0.5 * (1.0 - k * (dx ** 2 + dy ** 2))  # the camera's vignetting: 1 - k r²
-    assert falloff_k(frame_falloff(f)["log_slope"], (h, w)) == pytest.approx(k, abs=1e-4)
+    assert falloff_k(frame_summary(f)["log_slope"], (h, w)) == pytest.approx(k, abs=1e-4)
 
 
 def test_scene_clusters_join_chains_of_one_scene_and_place_textureless_frames_by_video():
@@ -171,3 +172,29 @@ def test_radial_falloff_p_values_are_uniform_over_scenes_not_frames():
     out = radial_falloff(frames, groups)
     assert out["p"] < 1e-3 and 0.1 < out["k"] < 0.5
     assert radial_falloff(frames[:12], groups[:12]) is None  # two scenes: nothing to test over
+
+
+def test_blockiness_by_hand_and_on_an_opencv_jpeg():
+    # columns rise by 1 level per pixel and by 3 more across every 8th column line (between x = 8m - 1 and 8m):
+    # steps on the lines 4, elsewhere 1 -> log 4 for the columns; the rows are flat -> 0; the mean of the two
+    x = np.arange(128)
+    f = np.tile(20 + x + 3 * (x // 8), (64, 1)).astype(np.uint8)
+    assert frame_summary(f)["blockiness"] == pytest.approx(np.log(4.0) / 2, abs=1e-9)
+    g = f.copy()
+    g[8:40, 40:72] = np.where(np.arange(32) % 8 == 0, 250, 10)[None, :]  # the object's square: left out
+    assert frame_summary(g, exclude=(42, 10, 28))["blockiness"] == pytest.approx(np.log(4.0) / 2, abs=1e-9)
+    # OpenCV's JPEG codec on a textured frame: its 8x8 grid shows; the frame itself has none
+    import cv2
+
+    rng = np.random.default_rng(0)
+    scene = cv2.GaussianBlur(rng.uniform(40, 200, (192, 256)), (0, 0), 3).astype(np.uint8)
+    jpeg = cv2.imdecode(cv2.imencode(".jpg", scene, [cv2.IMWRITE_JPEG_QUALITY, 30])[1], cv2.IMREAD_GRAYSCALE)
+    assert abs(frame_summary(scene)["blockiness"]) < 0.05
+    assert frame_summary(jpeg)["blockiness"] > 0.3
+    # over scenes: ten JPEG frames of ten scenes against their originals
+    scenes = [cv2.GaussianBlur(rng.uniform(40, 200, (96, 128)), (0, 0), 3).astype(np.uint8) for _ in range(10)]
+    enc = [cv2.imdecode(cv2.imencode(".jpg", s_, [cv2.IMWRITE_JPEG_QUALITY, 30])[1], cv2.IMREAD_GRAYSCALE)
+           for s_ in scenes]
+    found = block_grid([frame_summary(e, background=e) for e in enc], [None] * 10)
+    assert found["scenes"] == 10 and found["p"] < 1e-6 and found["log_ratio"] > 0.3
+    assert block_grid([frame_summary(s_, background=s_) for s_ in scenes], [None] * 10)["log_ratio"] < 0.05

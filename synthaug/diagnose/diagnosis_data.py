@@ -59,7 +59,7 @@ class DiagnosisData:
     frame_brightness: torch.Tensor | None = None  # (N,) mean of the whole frame (what auto-exposure meters)
     noise_levels: list[dict[str, np.ndarray]] | None = None  # per seed: its frame's noise level function
     frame_lines: list[dict[str, np.ndarray]] | None = None  # per seed: its frame's line profiles (frame_pattern)
-    frame_falloff: list[dict[str, Any]] | None = None  # per seed: its frame's radial fall-off (frame_pattern)
+    frame_summaries: list[dict[str, Any]] | None = None  # per seed: frame_pattern.frame_summary of its frame
     real_rgb: torch.Tensor | None = None  # (N, 3, P, P) the RGB seed patches, when the seed set has them
     background_rgb: torch.Tensor | None = None  # (N, 3, P, P)
     colour_note: str | None = None  # why there is no colour channel (gray or single-channel data)
@@ -81,7 +81,7 @@ class DiagnosisData:
             frame_brightness=take(self.frame_brightness),
             noise_levels=None if self.noise_levels is None else [self.noise_levels[int(i)] for i in idx_t],
             frame_lines=None if self.frame_lines is None else [self.frame_lines[int(i)] for i in idx_t],
-            frame_falloff=None if self.frame_falloff is None else [self.frame_falloff[int(i)] for i in idx_t],
+            frame_summaries=None if self.frame_summaries is None else [self.frame_summaries[int(i)] for i in idx_t],
             real_rgb=take(self.real_rgb), background_rgb=take(self.background_rgb), colour_note=self.colour_note)
 
 
@@ -163,7 +163,7 @@ def load_diagnosis_data(seeds: Any, fit_path: str | Any, mesh: Any, *, distance:
                                                                   dtype=torch.float64),
         noise_levels=None if frames is None else seed_noise_levels(seeds, frames=frames),
         frame_lines=None if frames is None else _frame_lines(frames, geo, p),
-        frame_falloff=None if frames is None else _frame_falloff(seeds, frames, geo, p),
+        frame_summaries=None if frames is None else _frame_summaries(seeds, frames, geo, p),
         **_colour_patches(seeds))
 
 
@@ -177,12 +177,12 @@ def _frame_lines(frames: list[np.ndarray], geo: dict[str, torch.Tensor], p: int)
             for i, f in enumerate(frames)]
 
 
-def _frame_falloff(seeds: Any, frames: list[np.ndarray], geo: dict[str, torch.Tensor], p: int
-                   ) -> list[dict[str, Any]]:
-    """Each frame's radial fall-off and scene texture (:func:`~synthaug.diagnose.frame_pattern.frame_falloff`), its
-    seed's crop left out, with its background frame (where the seed set has one) to tell whether its texture
-    repeats."""
-    from synthaug.diagnose.frame_pattern import frame_falloff
+def _frame_summaries(seeds: Any, frames: list[np.ndarray], geo: dict[str, torch.Tensor], p: int
+                     ) -> list[dict[str, Any]]:
+    """Each frame's radial fall-off, blockiness and scene texture
+    (:func:`~synthaug.diagnose.frame_pattern.frame_summary`), its seed's crop left out, with its background frame
+    (where the seed set has one) to tell whether its texture repeats."""
+    from synthaug.diagnose.frame_pattern import frame_summary
 
     out = []
     for i, f in enumerate(frames):
@@ -190,7 +190,7 @@ def _frame_falloff(seeds: Any, frames: list[np.ndarray], geo: dict[str, torch.Te
             bg = np.asarray(seeds.background_frame(i))
         except (FileNotFoundError, OSError, KeyError, IndexError, ValueError, AttributeError):
             bg = None
-        out.append(frame_falloff(f, background=bg, exclude=(float(geo["origin"][i, 0]), float(geo["origin"][i, 1]),
+        out.append(frame_summary(f, background=bg, exclude=(float(geo["origin"][i, 0]), float(geo["origin"][i, 1]),
                                                             p * float(geo["frame_scale"][i]))))
     return out
 

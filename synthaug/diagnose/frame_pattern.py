@@ -25,7 +25,7 @@ than two videos (or two seeds) there is nothing to compare and the measure is no
 **A radial fall-off (vignetting)** is the other gain fixed in the frame: ``1 - k r²`` (r = 1 at the corners),
 the same in every frame. On the object it is a gain of 0.9-1 that the fitted albedo w_d absorbs, but the whole
 frames carry it: each frame's least-squares fit ``log I = a + b dx + c dy - s r²`` over 4-px blocks (the seed's
-crop and saturated pixels left out) gives its log fall-off ``s`` (:func:`frame_falloff`). A scene has radial
+crop and saturated pixels left out) gives its log fall-off ``s`` (:func:`frame_summary`). A scene has radial
 structure of its own (a bright cloud in the middle, a dark corner), so ``s`` of one frame is the camera's plus
 its scene's, and frames of the same scene are not independent: the test runs over **scenes**, not frames
 (:func:`scene_clusters`: frames whose band-passed textures correlate ≥ :data:`SAME_SCENE` are one scene; a
@@ -33,6 +33,12 @@ frame whose texture does not repeat in its own background frame — a bare sky, 
 texture and joins the other such frames of its video). :func:`radial_falloff` is the one-sided t-test of the
 scenes' mean ``s`` against 0 (one value per scene, ≥ 3 scenes) and the fall-off ``k`` it implies
 (:func:`falloff_k`).
+
+**A codec's block grid** is fixed in the frame too: JPEG (and a video codec's transform) quantises 8x8 blocks
+counted from the frame's top-left, so the intensity jumps across the grid's lines more than between the other
+columns (rows). Each frame's ``blockiness`` is the log ratio of the mean absolute step across the grid lines to
+the mean step elsewhere, the columns' and the rows' averaged (the crop left out; 0 without a grid);
+:func:`block_grid` tests it over scenes as the fall-off is.
 """
 
 from __future__ import annotations
@@ -42,11 +48,12 @@ from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_falloff", "scene_clusters", "radial_falloff",
-           "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK"]
+__all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_summary", "scene_clusters", "radial_falloff",
+           "block_grid", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK"]
 
 HIGH_PASS = 7  # frame px: the window of the local quadratic removed from a profile (the scene's slow changes)
 FALLOFF_BLOCK = 4  # frame px: the side of the blocks a frame's fall-off is fitted on
+CODEC_BLOCK = 8  # frame px: the block grid of JPEG and of video codecs' transforms, from the frame's top-left
 SCENE_BAND = (3, 15)  # blocks: a scene's texture is its block image's running mean over 3 minus over 15 blocks
 SAME_SCENE = 0.6  # textures correlating at least this much show the same scene (measured: a frame and its own
 # background frame 0.88-0.94 median, two independent sky scenes at most 0.57, on the reference camera's cases)
@@ -207,6 +214,24 @@ def _block_fit(values: np.ndarray, ok: np.ndarray, step: int) -> float:
     return -float(coef[3])
 
 
+def _blockiness(f: np.ndarray, ok: np.ndarray, block: int) -> float:
+    """Log ratio of the mean |step| between neighbouring pixels across the block grid's lines (between pixel
+    ``block·m - 1`` and ``block·m``) to the mean |step| elsewhere, for columns and rows, averaged (NaN when a
+    direction has no usable step)."""
+    out = []
+    for axis in (1, 0):
+        d = np.abs(np.diff(f, axis=axis))
+        m = ok[:, 1:] & ok[:, :-1] if axis == 1 else ok[1:] & ok[:-1]
+        idx = np.arange(d.shape[axis]) + 1
+        line = (idx % block == 0)
+        line = line[None, :] if axis == 1 else line[:, None]
+        on, off = m & line, m & ~line
+        if not on.any() or not off.any():
+            return float("nan")
+        out.append(math.log(max(float(d[on].mean()), 1e-6) / max(float(d[off].mean()), 1e-6)))
+    return float(np.mean(out))
+
+
 def _texture(log: np.ndarray, step: int) -> np.ndarray:
     from scipy.ndimage import uniform_filter
 
@@ -221,9 +246,9 @@ def _corr(a: np.ndarray, b: np.ndarray) -> float:
     return float((a * b).sum() / den) if den > 0 else 0.0
 
 
-def frame_falloff(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
+def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
                   background: np.ndarray | None = None, step: int = FALLOFF_BLOCK) -> dict[str, Any]:
-    """One frame's radial log fall-off and its scene's texture.
+    """One frame's radial log fall-off, its codec blockiness and its scene's texture.
 
     Args:
         frame: (H, W) or (H, W, C) uint8 or float in [0, 1].
@@ -242,33 +267,34 @@ def frame_falloff(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         >>> h, w = 96, 128
         >>> yy, xx = np.mgrid[0:h, 0:w]
         >>> r2 = ((xx - (w - 1) / 2) ** 2 + (yy - (h - 1) / 2) ** 2) / (0.25 * (w * w + h * h))
-        >>> out = frame_falloff(0.5 * (1 - 0.3 * r2))
+        >>> out = frame_summary(0.5 * (1 - 0.3 * r2))
         >>> round(falloff_k(out["log_slope"], (h, w)), 2)
         0.3
     """
-    log, ok = _gray_log(frame)
+    log, unclipped = _gray_log(frame)
     h, w = log.shape
+    outside = np.ones((h, w), bool)  # outside the object's crop
     if exclude is not None:
         x0, y0, side = (float(v) for v in exclude)
         xa, xb = int(np.clip(np.floor(x0 - 2), 0, w)), int(np.clip(np.ceil(x0 + side + 2), 0, w))
         ya, yb = int(np.clip(np.floor(y0 - 2), 0, h)), int(np.clip(np.ceil(y0 + side + 2), 0, h))
-        ok = ok.copy()
-        ok[ya:yb, xa:xb] = False
-    slope = _block_fit(log, ok, step)
+        outside[ya:yb, xa:xb] = False
+    slope = _block_fit(log, unclipped & outside, step)
+    blockiness = _blockiness(np.exp(log), outside, CODEC_BLOCK)
     tex = _texture(log, step)
     repeat = float("nan")
     if background is not None:
         blog, _ = _gray_log(background)
         if blog.shape == log.shape:
             repeat = _corr(tex, _texture(blog, step))
-    return {"log_slope": slope, "texture": tex, "repeat": repeat, "shape": (int(h), int(w))}
+    return {"log_slope": slope, "blockiness": blockiness, "texture": tex, "repeat": repeat, "shape": (int(h), int(w))}
 
 
-def scene_clusters(falloffs: Sequence[dict[str, Any]], groups: Sequence[Any], *,
+def scene_clusters(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
                    same: float = SAME_SCENE) -> np.ndarray:
     """Which frames show the same scene: connected components of "same scene" pairs.
 
-    Two frames are one scene when their textures (:func:`frame_falloff`) correlate ≥ ``same``; a frame whose
+    Two frames are one scene when their textures (:func:`frame_summary`) correlate ≥ ``same``; a frame whose
     texture does not repeat in its own background frame (``repeat`` < ``same`` or unknown: a bare sky, a noisy
     frame) cannot be placed by its texture and is one scene with every other such frame of its group (video).
 
@@ -284,7 +310,7 @@ def scene_clusters(falloffs: Sequence[dict[str, Any]], groups: Sequence[Any], *,
         >>> scene_clusters(f, ["v0", "v0", "v0", "v1", "v1"]).tolist()
         [0, 0, 1, 2, 2]
     """
-    n = len(falloffs)
+    n = len(summaries)
     parent = list(range(n))
 
     def find(i: int) -> int:
@@ -298,13 +324,13 @@ def scene_clusters(falloffs: Sequence[dict[str, Any]], groups: Sequence[Any], *,
         if a != b:
             parent[max(a, b)] = min(a, b)
 
-    placed = [bool(np.isfinite(f.get("repeat", np.nan)) and f["repeat"] >= same) for f in falloffs]
+    placed = [bool(np.isfinite(f.get("repeat", np.nan)) and f["repeat"] >= same) for f in summaries]
     names = [str(g) if g is not None else f"seed{i}" for i, g in enumerate(groups)]
     by_shape: dict[tuple, list[int]] = {}
-    for i, f in enumerate(falloffs):
+    for i, f in enumerate(summaries):
         by_shape.setdefault(np.shape(f["texture"]), []).append(i)
     for idx in by_shape.values():
-        t = np.stack([np.asarray(falloffs[i]["texture"], np.float64).ravel() for i in idx])
+        t = np.stack([np.asarray(summaries[i]["texture"], np.float64).ravel() for i in idx])
         norm = np.linalg.norm(t, axis=1)
         c = (t @ t.T) / np.maximum(np.outer(norm, norm), 1e-30)
         for a, b in zip(*np.nonzero(np.triu(c >= same, 1))):
@@ -321,7 +347,7 @@ def scene_clusters(falloffs: Sequence[dict[str, Any]], groups: Sequence[Any], *,
 
 def falloff_k(log_slope: float, shape: tuple[int, int], *, step: int = FALLOFF_BLOCK) -> float:
     """The vignetting strength ``k`` (``1 - k r²``, the fraction of light lost at the corners) whose log the fit of
-    :func:`frame_falloff` gives the slope ``log_slope`` on a frame of ``shape`` (H, W) (clipped to [-1, 0.99]).
+    :func:`frame_summary` gives the slope ``log_slope`` on a frame of ``shape`` (H, W) (clipped to [-1, 0.99]).
 
     Example:
         >>> round(falloff_k(0.0, (96, 128)), 6), falloff_k(5.0, (96, 128))
@@ -346,12 +372,31 @@ def falloff_k(log_slope: float, shape: tuple[int, int], *, step: int = FALLOFF_B
     return float(brentq(g, lo, hi, xtol=1e-6))
 
 
-def radial_falloff(falloffs: Sequence[dict[str, Any]], groups: Sequence[Any], *,
+def _over_scenes(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], key: str, same: float
+                 ) -> dict[str, Any] | None:
+    """The one-sided t-test (> 0) of ``key`` over scenes: each scene's mean over its frames (None under 3)."""
+    from scipy import stats
+
+    keep = [i for i, f in enumerate(summaries) if math.isfinite(f.get(key, float("nan")))]
+    if not keep:
+        return None
+    lab = scene_clusters([summaries[i] for i in keep], [groups[i] for i in keep], same=same)
+    v = np.array([summaries[i][key] for i in keep])
+    means = np.array([v[lab == c].mean() for c in range(int(lab.max()) + 1)])
+    if len(means) < 3:
+        return None
+    t = stats.ttest_1samp(means, 0.0, alternative="greater")
+    shapes = [tuple(summaries[i]["shape"]) for i in keep]
+    return {"mean": float(means.mean()), "t": float(t.statistic), "p": float(t.pvalue), "scenes": int(len(means)),
+            "frames": len(keep), "shape": max(set(shapes), key=shapes.count)}
+
+
+def radial_falloff(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
                    same: float = SAME_SCENE) -> dict[str, Any] | None:
     """The camera's radial fall-off over the frames, tested over scenes.
 
     Args:
-        falloffs: one :func:`frame_falloff` per seed.
+        summaries: one :func:`frame_summary` per seed.
         groups: each seed's video (None: its own).
         same: :func:`scene_clusters`' threshold.
 
@@ -368,19 +413,30 @@ def radial_falloff(falloffs: Sequence[dict[str, Any]], groups: Sequence[Any], *,
         >>> out["scenes"], out["p"] < 1e-6, 0.2 < out["k"] < 0.4
         (30, True, True)
     """
-    from scipy import stats
+    r = _over_scenes(summaries, groups, "log_slope", same)
+    if r is None:
+        return None
+    return {"log_slope": r["mean"], "t": r["t"], "p": r["p"], "k": falloff_k(r["mean"], r["shape"]),
+            "scenes": r["scenes"], "frames": r["frames"]}
 
-    keep = [i for i, f in enumerate(falloffs) if math.isfinite(f.get("log_slope", float("nan")))]
-    if not keep:
+
+def block_grid(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
+               same: float = SAME_SCENE) -> dict[str, Any] | None:
+    """A codec's block grid over the frames (their ``blockiness``), tested over scenes as :func:`radial_falloff`.
+
+    Returns:
+        None with fewer than 3 scenes; else ``log_ratio`` (the mean over scenes: the steps across the grid's
+        lines are ``exp(log_ratio)`` times those elsewhere), ``t``, ``p`` (one-sided), ``scenes``, ``frames``.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> f = [{"blockiness": 0.2 + 0.05 * rng.standard_normal(), "texture": rng.standard_normal((24, 32)),
+        ...       "repeat": 0.9, "shape": (96, 128)} for _ in range(10)]
+        >>> out = block_grid(f, [None] * 10)
+        >>> out["scenes"], out["p"] < 1e-6
+        (10, True)
+    """
+    r = _over_scenes(summaries, groups, "blockiness", same)
+    if r is None:
         return None
-    lab = scene_clusters([falloffs[i] for i in keep], [groups[i] for i in keep], same=same)
-    s = np.array([falloffs[i]["log_slope"] for i in keep])
-    means = np.array([s[lab == c].mean() for c in range(int(lab.max()) + 1)])
-    if len(means) < 3:
-        return None
-    t = stats.ttest_1samp(means, 0.0, alternative="greater")
-    shapes = [tuple(falloffs[i]["shape"]) for i in keep]
-    shape = max(set(shapes), key=shapes.count)
-    m = float(means.mean())
-    return {"log_slope": m, "t": float(t.statistic), "p": float(t.pvalue), "k": falloff_k(m, shape),
-            "scenes": int(len(means)), "frames": len(keep)}
+    return {"log_ratio": r["mean"], "t": r["t"], "p": r["p"], "scenes": r["scenes"], "frames": r["frames"]}

@@ -330,7 +330,7 @@ def _effect_findings(data: Any, picked: list[tuple[dict, dict]], folds: Any, acc
                       "absorbed_parameter_r2": None if row["absorption"] is None else row["absorption"]["gain"],
                       "noise_loglik_per_px": None if row.get("noise") is None else row["noise"]["gain"],
                       "heldout_colour": sc["colour"]["gain"] if "colour" in sc else None,
-                      "frame_falloff_k": next((c["gain"] for c in row["channels"] if c["channel"] == "frame"), None),
+                      "frame_statistic": next((c["gain"] for c in row["channels"] if c["channel"] == "frame"), None),
                       "realism_accuracy_before": acc_base, "realism_accuracy_after": acc},
             "evidence": {"channels": row["channels"], "absorption": row["absorption"],
                          "noise_level_function": None if row.get("noise") is None else {
@@ -396,10 +396,13 @@ def _frame_text(f: dict[str, Any]) -> str:
     ch = next((c for c in f["evidence"]["channels"] if c["channel"] == "frame"), None)
     if ch is None:
         return ""
-    return (f"; the whole frames fall off toward the corners: log fall-off {ch['log_slope']:+.3f} over "
-            f"{ch['scenes']} distinct scenes ({ch['frames']} frames), a gain 1 - {ch['gain']:.2f} r² (clean floor "
-            f"{ch['floor'] if ch['floor'] is None else round(ch['floor'], 3)}); on the object it is absorbed by the "
-            "fitted w_d")
+    floor = "none" if ch["floor"] is None else f"{ch['floor']:.3g}"
+    where = f"over {ch['scenes']} distinct scenes ({ch['frames']} frames; clean floor {floor})"
+    if f["effect"] == "vignetting":
+        return (f"; the whole frames fall off toward the corners: log fall-off {ch['log_slope']:+.3f} {where}, a "
+                f"gain 1 - {ch['gain']:.2f} r²; on the object the fitted w_d absorbs it")
+    return (f"; the whole frames carry an 8x8 block grid: steps across its lines {math.exp(ch['gain']):.2f}x those "
+            f"elsewhere {where}")
 
 
 def _screened_row(r: dict[str, Any]) -> dict[str, Any]:

@@ -38,7 +38,10 @@ of 0.9-1 on an object near the centre, which w_d absorbs seed by seed; the
 whole frames around the objects carry it as a radial fall-off of brightness
 (the **frame** channel, :func:`frame_channel`: each frame's log fall-off,
 tested over distinct scenes, :mod:`synthaug.diagnose.frame_pattern`), and the
-fall-off it implies is the setting. The camera's noise level
+fall-off it implies is the setting. A codec's 8x8 block grid is as visible on
+the whole frames (the steps across its lines), where a 20-30 px object holds a
+few of its edges: compression's frame channel (its setting, the quality, comes
+from the distance screening). The camera's noise level
 function, measured on the seed frames off the object
 (:mod:`synthaug.diagnose.noise`), testifies for ``shot_noise`` (rising with
 brightness) and ``gamma`` (falling: a compressive tone curve after the sensor);
@@ -125,9 +128,10 @@ ABSORPTION: dict[str, tuple[str, str, int]] = {
 # on the colour of the air in front of it).
 COLOUR_CANDIDATES: tuple[str, ...] = ("chromatic_aberration", "white_balance", "haze")
 
-# Candidates with evidence on the whole frames: a gain fixed in the frame that the background around the object
-# carries as well (synthaug.diagnose.frame_pattern), where the fitted w_d hides it on the object.
-FRAME_CANDIDATES: tuple[str, ...] = ("vignetting",)
+# Candidates with evidence on the whole frames (synthaug.diagnose.frame_pattern), fixed in the frame and carried by
+# the background around the object as well: vignetting's radial fall-off (on the object a gain that w_d absorbs),
+# a codec's 8x8 block grid (on a 20-30 px object a few block edges).
+FRAME_CANDIDATES: tuple[str, ...] = ("vignetting", "compression")
 # Candidates that exist only in colour: a single channel has no lateral colour shift and no colour cast (in gray
 # chromatic aberration is a ~1 px radial blur, white balance a gain that w_d absorbs), so on single-channel data
 # they are not offered (:func:`offered_candidates`); haze stays: its extinction and airlight act on gray too.
@@ -467,29 +471,39 @@ def tone_evidence(data: DiagnosisData, nc: dict[str, Any] | None, base_pixel: np
             "explains": "gamma" if m > 0 else "shot_noise"}
 
 
-def frame_evidence(data: DiagnosisData) -> dict[str, Any] | None:
-    """The whole frames' radial fall-off, tested over scenes (:func:`synthaug.diagnose.frame_pattern.radial_falloff`);
-    None without frames or with fewer than 3 scenes."""
-    from synthaug.diagnose.frame_pattern import radial_falloff
+def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | None:
+    """The whole frames' evidence of each frame candidate, tested over scenes: ``{"vignetting":``
+    :func:`~synthaug.diagnose.frame_pattern.radial_falloff`, ``"compression":``
+    :func:`~synthaug.diagnose.frame_pattern.block_grid` ``}`` (a value None with fewer than 3 scenes); None
+    without frames."""
+    from synthaug.diagnose.frame_pattern import block_grid, radial_falloff
 
-    if data.frame_falloff is None:
+    if data.frame_summaries is None:
         return None
     groups = [r.get("video") for r in data.records] if len(data.records) == len(data) else [None] * len(data)
-    return radial_falloff(data.frame_falloff, groups)
+    return {"vignetting": radial_falloff(data.frame_summaries, groups),
+            "compression": block_grid(data.frame_summaries, groups)}
 
 
-def frame_channel(effect: str, ev: dict[str, Any] | None, n_tests: int, alpha: float) -> dict[str, Any] | None:
-    """The frame channel of ``effect`` (:data:`FRAME_CANDIDATES`): vignetting's radial fall-off on the whole frames.
-    Its statistic (``gain``) is the fall-off ``k`` the frames imply (the fraction of light lost at the corners);
-    significant when the one-sided test over scenes rejects at α (Bonferroni) and ``k`` exceeds its calibrated
-    clean floor."""
-    if effect not in FRAME_CANDIDATES or ev is None:
+def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_tests: int, alpha: float
+                  ) -> dict[str, Any] | None:
+    """The frame channel of ``effect`` (:data:`FRAME_CANDIDATES`, evidence from :func:`frame_evidence`). Its
+    statistic (``gain``): for vignetting the fall-off ``k`` the frames imply (the fraction of light lost at the
+    corners), for compression the log ratio of the frames' steps across the 8x8 grid's lines to those elsewhere.
+    Significant when the one-sided test over scenes rejects at α (Bonferroni) and the statistic exceeds its
+    calibrated clean floor."""
+    e = None if ev is None or effect not in FRAME_CANDIDATES else ev.get(effect)
+    if e is None:
         return None
-    p_adj = min(1.0, ev["p"] * n_tests)
+    value = e["k"] if effect == "vignetting" else e["log_ratio"]
+    p_adj = min(1.0, e["p"] * n_tests)
     floor = gain_floor(effect, "frame")
-    return {"channel": "frame", "p_adjusted": p_adj, "z": _z(ev["p"]), "gain": ev["k"], "floor": floor,
-            "log_slope": ev["log_slope"], "scenes": ev["scenes"], "frames": ev["frames"],
-            "significant": bool(p_adj < alpha and ev["k"] > max(floor or 0.0, 0.0))}
+    out = {"channel": "frame", "p_adjusted": p_adj, "z": _z(e["p"]), "gain": value, "floor": floor,
+           "scenes": e["scenes"], "frames": e["frames"],
+           "significant": bool(p_adj < alpha and value > max(floor or 0.0, 0.0))}
+    if effect == "vignetting":
+        out["log_slope"] = e["log_slope"]
+    return out
 
 
 def noise_setting(effect: str, nc: dict[str, Any]) -> Setting | None:
@@ -652,7 +666,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
                      "screen": sc, "absorption": ab, "noise": nc if nl is not None else None,
                      "tone": tone if nl is not None else None,
                      "noise_setting": noise_setting(name, nc) if nl is not None else None,
-                     "frame_setting": {"vignette_k": fc["gain"]} if fc is not None else None})
+                     "frame_setting": {"vignette_k": fc["gain"]} if fc is not None and name == "vignetting" else None})
     rows.sort(key=_rank)
     return rows
 
