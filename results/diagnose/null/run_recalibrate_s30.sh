@@ -1,5 +1,6 @@
 #!/bin/bash
-# Stop 30: the null calibration rerun after vignetting's frame channel was added (the frames' radial fall-off,
+# Stop 30: the null calibration rerun after the frame channels were added (vignetting: the frames' radial fall-off;
+# compression: their 8x8 block grid; both
 # tested over scenes) and the line profiles' high-pass became a local quadratic (column_pattern / row_pattern
 # change). The same four calibration and fresh sets as run_recalibrate_s29.sh, the same seeds and fits,
 # regenerated on this machine; the two calibration sets run side by side, then the floors, then the two fresh sets
