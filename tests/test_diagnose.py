@@ -289,6 +289,25 @@ def test_vignetting_on_a_nuisance_varied_camera_is_named_from_the_frames_at_its_
 
 
 @pytest.mark.slow
+def test_compression_on_a_nuisance_varied_camera_is_named_from_the_frames_at_its_quality(tmp_path):
+    # libjpeg (OpenCV) at the realistic quality 40 on the whole frames of a nuisance-varied camera: named first,
+    # from the frames' 8x8 block grid tested over scenes, its setting the quality the blocks' DCT steps read
+    from synthaug.diagnose.nuisances import Nuisances
+    from synthaug.diagnose.reference_camera import REALISTIC_STRENGTHS, make_measured_seedset
+    from synthaug.diagnose.report import diagnose
+
+    q = REALISTIC_STRENGTHS["compression"]["jpeg_quality"]
+    seeds = make_measured_seedset(tmp_path / "seeds", hidden=["compression"], seed=13,
+                                  nuisances=Nuisances.draw(np.random.default_rng([8000, 13])), **MEASURED)
+    fit = converged_fit(seeds, tmp_path / "fit.json")
+    report = diagnose(seeds, "quadcopter", fit, out_dir=tmp_path / "out")
+    first = report["findings"][0]
+    assert (first["effect"], first["channel"]) == ("compression", "frame"), report["findings"]
+    assert first["setting"]["jpeg_quality"] == pytest.approx(q, abs=3)
+    assert "JPEG quality" in (tmp_path / "out" / "report.md").read_text()
+
+
+@pytest.mark.slow
 def test_a_fixed_column_pattern_is_unexplained_with_its_structure(tmp_path):
     # a sensor's fixed column pattern at its realistic strength (each frame column's gain 1 + 0.02 N(0, 1)), on a
     # nuisance-varied camera: not a candidate, so "unexplained", described as gains fixed in the frame's columns

@@ -198,3 +198,37 @@ def test_blockiness_by_hand_and_on_an_opencv_jpeg():
     found = block_grid([frame_summary(e, background=e) for e in enc], [None] * 10)
     assert found["scenes"] == 10 and found["p"] < 1e-6 and found["log_ratio"] > 0.3
     assert block_grid([frame_summary(s_, background=s_) for s_ in scenes], [None] * 10)["log_ratio"] < 0.05
+
+
+@pytest.mark.parametrize("quality", [20, 30, 45, 65, 80, 90])
+def test_jpeg_quality_reads_libjpeg_and_the_model_coding(quality):
+    # OpenCV's libjpeg and the model's own JPEG coding (jpeg_quantize, rounded to 8 bits) at a known quality:
+    # the DCT steps read back give that quality within 3 (neighbouring qualities share most steps); the object's
+    # crop does not disturb it; a frame never coded has no table
+    import cv2
+    import torch
+
+    from synthaug.diagnose.frame_pattern import jpeg_quality
+    from synthaug.effects.camera_functional import jpeg_quantize
+
+    rng = np.random.default_rng(quality)
+    scene = cv2.GaussianBlur(rng.uniform(30, 220, (192, 256)), (0, 0), 1.5)
+    lib = cv2.imdecode(cv2.imencode(".jpg", scene.astype(np.uint8), [cv2.IMWRITE_JPEG_QUALITY, quality])[1], 0)
+    model = jpeg_quantize(torch.tensor(scene / 255.0)[None, None], float(quality))[0, 0].numpy()
+    model = np.clip(np.round(model * 255.0), 0, 255).astype(np.uint8)
+    for frame in (lib, model):
+        out = jpeg_quality([frame_summary(frame, exclude=(100, 60, 40))])
+        assert out is not None and abs(out["quality"] - quality) <= 3, out
+    assert jpeg_quality([frame_summary(scene.astype(np.uint8))]) is None
+    assert jpeg_quality([]) is None
+
+
+def test_compression_frame_setting_is_the_read_quality_within_the_grid():
+    from synthaug.diagnose.screening import CANDIDATE_GRIDS, frame_setting
+
+    top = max(g["jpeg_quality"] for g in CANDIDATE_GRIDS["compression"])
+    assert frame_setting("compression", {"jpeg_quality": 37.5, "gain": 0.3}) == {"jpeg_quality": 37.5}
+    assert frame_setting("compression", {"jpeg_quality": 97.0, "gain": 0.3}) == {"jpeg_quality": top}
+    assert frame_setting("compression", {"jpeg_quality": None, "gain": 0.3}) is None  # the distance setting stands
+    assert frame_setting("vignetting", {"gain": 0.25}) == {"vignette_k": 0.25}
+    assert frame_setting("vignetting", None) is None

@@ -38,7 +38,9 @@ scenes' mean ``s`` against 0 (one value per scene, ≥ 3 scenes) and the fall-of
 counted from the frame's top-left, so the intensity jumps across the grid's lines more than between the other
 columns (rows). Each frame's ``blockiness`` is the log ratio of the mean absolute step across the grid lines to
 the mean step elsewhere, the columns' and the rows' averaged (the crop left out; 0 without a grid);
-:func:`block_grid` tests it over scenes as the fall-off is.
+:func:`block_grid` tests it over scenes as the fall-off is. A JPEG's quality is read from the same grid
+(:func:`jpeg_quality`): the decoded blocks' DCT coefficients sit on multiples of the quantisation steps, the
+steps of libjpeg's table at that quality.
 """
 
 from __future__ import annotations
@@ -49,11 +51,12 @@ from typing import Any, Sequence
 import numpy as np
 
 __all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_summary", "scene_clusters", "radial_falloff",
-           "block_grid", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK"]
+           "block_grid", "jpeg_quality", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK"]
 
 HIGH_PASS = 7  # frame px: the window of the local quadratic removed from a profile (the scene's slow changes)
 FALLOFF_BLOCK = 4  # frame px: the side of the blocks a frame's fall-off is fitted on
 CODEC_BLOCK = 8  # frame px: the block grid of JPEG and of video codecs' transforms, from the frame's top-left
+DCT_POSITIONS = ((0, 0), (0, 1), (1, 0), (1, 1), (0, 2), (2, 0))  # the 8x8 DCT coefficients a quality is read from
 SCENE_BAND = (3, 15)  # blocks: a scene's texture is its block image's running mean over 3 minus over 15 blocks
 SAME_SCENE = 0.6  # textures correlating at least this much show the same scene (measured: a frame and its own
 # background frame 0.88-0.94 median, two independent sky scenes at most 0.57, on the reference camera's cases)
@@ -232,6 +235,25 @@ def _blockiness(f: np.ndarray, ok: np.ndarray, block: int) -> float:
     return float(np.mean(out))
 
 
+def _dct_matrix(n: int = CODEC_BLOCK) -> np.ndarray:
+    """The orthonormal DCT-II matrix (JPEG's forward DCT is ``D @ block @ D.T``)."""
+    k, x = np.mgrid[0:n, 0:n].astype(np.float64)
+    d = np.cos((2 * x + 1) * k * np.pi / (2 * n)) * np.sqrt(2.0 / n)
+    d[0] /= np.sqrt(2.0)
+    return d
+
+
+def _block_dct(f: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """:data:`DCT_POSITIONS` coefficients of the 8x8 grid blocks of ``f`` (0-255) whose pixels are all ``ok``."""
+    b = CODEC_BLOCK
+    h, w = f.shape[0] // b * b, f.shape[1] // b * b
+    blocks = (f[:h, :w] - 128.0).reshape(h // b, b, w // b, b).transpose(0, 2, 1, 3).reshape(-1, b, b)
+    good = ok[:h, :w].reshape(h // b, b, w // b, b).all((1, 3)).ravel()
+    d = _dct_matrix(b)
+    c = d @ blocks[good] @ d.T
+    return np.stack([c[:, u, v] for u, v in DCT_POSITIONS], 1).astype(np.float32)
+
+
 def _texture(log: np.ndarray, step: int) -> np.ndarray:
     from scipy.ndimage import uniform_filter
 
@@ -281,13 +303,15 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         outside[ya:yb, xa:xb] = False
     slope = _block_fit(log, unclipped & outside, step)
     blockiness = _blockiness(np.exp(log), outside, CODEC_BLOCK)
+    dct = _block_dct(np.exp(log) * 255.0, outside & unclipped)
     tex = _texture(log, step)
     repeat = float("nan")
     if background is not None:
         blog, _ = _gray_log(background)
         if blog.shape == log.shape:
             repeat = _corr(tex, _texture(blog, step))
-    return {"log_slope": slope, "blockiness": blockiness, "texture": tex, "repeat": repeat, "shape": (int(h), int(w))}
+    return {"log_slope": slope, "blockiness": blockiness, "dct": dct, "texture": tex, "repeat": repeat,
+            "shape": (int(h), int(w))}
 
 
 def scene_clusters(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
@@ -440,3 +464,68 @@ def block_grid(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
     if r is None:
         return None
     return {"log_ratio": r["mean"], "t": r["t"], "p": r["p"], "scenes": r["scenes"], "frames": r["frames"]}
+
+
+def _step_of(coef: np.ndarray, max_step: int = 64, min_values: int = 30) -> tuple[int, float]:
+    """The quantisation step of one DCT coefficient's values: for each step ``q``, the phase coherence
+    ``mean cos(2π c / q)`` (1: every value on a multiple of ``q``) of the values off its zero bin (``|c| >= q / 2``: a value inside it says nothing of
+    ``q``); the largest ``q`` within 0.95 of the best coherence (a step's divisors are as coherent, its multiples and
+    its neighbours are not). Returns (step, its coherence); (0, 0) when no step has ``min_values`` values."""
+    c = np.abs(coef.astype(np.float64))
+    best_q, coh = [], []
+    for q in range(2, max_step + 1):
+        v = c[c >= q / 2.0]
+        if len(v) >= min_values:
+            best_q.append(q)
+            coh.append(float(np.cos(2.0 * np.pi * v / q).mean()))
+    if not coh:
+        return 0, 0.0
+    coh_a = np.asarray(coh)
+    if coh_a.max() <= 0:
+        return 0, float(coh_a.max())
+    j = int(np.flatnonzero(coh_a >= 0.95 * coh_a.max())[-1])
+    return best_q[j], float(coh_a[j])
+
+
+def jpeg_quality(summaries: Sequence[dict[str, Any]], *, min_coherence: float = 0.5) -> dict[str, Any] | None:
+    """The JPEG quality of the frames: the quantisation steps their 8x8 blocks' DCT coefficients sit on
+    (:func:`frame_summary`'s ``dct``, pooled over the frames of the most common size), matched to libjpeg's
+    luminance table (:func:`synthaug.effects.camera_functional.jpeg_table`, the model's compression).
+
+    Returns:
+        None when no coefficient sits on a step (a frame that was never JPEG-coded, or a codec with other
+        transforms: coherence below ``min_coherence``); else ``quality`` (the middle of the qualities whose table
+        matches the measured steps best), ``steps`` ({"u,v": step}), ``coherence`` and ``mismatch`` (the median
+        over the positions of |log(step / table step)| at the best quality).
+
+    Example:
+        >>> import cv2
+        >>> rng = np.random.default_rng(0)
+        >>> scene = cv2.GaussianBlur(rng.uniform(30, 220, (192, 256)), (0, 0), 2).astype(np.uint8)
+        >>> jpeg = cv2.imdecode(cv2.imencode(".jpg", scene, [cv2.IMWRITE_JPEG_QUALITY, 40])[1], 0)
+        >>> q = jpeg_quality([frame_summary(jpeg)])["quality"]
+        >>> 35 <= q <= 45, jpeg_quality([frame_summary(scene)])
+        (True, None)
+    """
+    import torch
+
+    from synthaug.effects.camera_functional import jpeg_table
+
+    rows = [f for f in summaries if f.get("dct") is not None and len(f["dct"])]
+    if not rows:
+        return None
+    coef = np.concatenate([f["dct"] for f in rows])
+    steps, cohs = {}, {}
+    for j, (u, v) in enumerate(DCT_POSITIONS):
+        q, coh = _step_of(coef[:, j])
+        if q and coh >= min_coherence:
+            steps[(u, v)], cohs[(u, v)] = q, coh
+    if not steps:
+        return None
+    qualities = np.arange(1, 101, dtype=np.float64)
+    table = jpeg_table(torch.as_tensor(qualities)).numpy()  # (100, 8, 8)
+    # the median over the positions: one position misread (a divisor of its step) does not move the quality
+    err = np.median([np.abs(np.log(q / table[:, u, v])) for (u, v), q in steps.items()], 0)
+    best = np.flatnonzero(err <= err.min() + 1e-9)
+    return {"quality": float(qualities[best].mean()), "steps": {f"{u},{v}": q for (u, v), q in steps.items()},
+            "coherence": float(np.mean(list(cohs.values()))), "mismatch": float(err.min())}

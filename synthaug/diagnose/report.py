@@ -401,8 +401,11 @@ def _frame_text(f: dict[str, Any]) -> str:
     if f["effect"] == "vignetting":
         return (f"; the whole frames fall off toward the corners: log fall-off {ch['log_slope']:+.3f} {where}, a "
                 f"gain 1 - {ch['gain']:.2f} r²; on the object the fitted w_d absorbs it")
+    q = ch.get("jpeg_quality")
     return (f"; the whole frames carry an 8x8 block grid: steps across its lines {math.exp(ch['gain']):.2f}x those "
-            f"elsewhere {where}")
+            f"elsewhere {where}"
+            + (f"; their blocks' DCT coefficients sit on the steps of JPEG quality {q:.0f}" if q is not None else
+               "; their blocks' DCT coefficients show no JPEG table (another codec's transform)"))
 
 
 def _screened_row(r: dict[str, Any]) -> dict[str, Any]:

@@ -474,15 +474,19 @@ def tone_evidence(data: DiagnosisData, nc: dict[str, Any] | None, base_pixel: np
 def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | None:
     """The whole frames' evidence of each frame candidate, tested over scenes: ``{"vignetting":``
     :func:`~synthaug.diagnose.frame_pattern.radial_falloff`, ``"compression":``
-    :func:`~synthaug.diagnose.frame_pattern.block_grid` ``}`` (a value None with fewer than 3 scenes); None
-    without frames."""
-    from synthaug.diagnose.frame_pattern import block_grid, radial_falloff
+    :func:`~synthaug.diagnose.frame_pattern.block_grid` with ``"quality"``, the JPEG quality its DCT steps read
+    (:func:`~synthaug.diagnose.frame_pattern.jpeg_quality`; None for frames not JPEG-coded) ``}`` (a value None
+    with fewer than 3 scenes); None without frames."""
+    from synthaug.diagnose.frame_pattern import block_grid, jpeg_quality, radial_falloff
 
     if data.frame_summaries is None:
         return None
     groups = [r.get("video") for r in data.records] if len(data.records) == len(data) else [None] * len(data)
-    return {"vignetting": radial_falloff(data.frame_summaries, groups),
-            "compression": block_grid(data.frame_summaries, groups)}
+    grid = block_grid(data.frame_summaries, groups)
+    if grid is not None:
+        jq = jpeg_quality(data.frame_summaries)
+        grid = {**grid, "quality": None if jq is None else jq["quality"], "jpeg": jq}
+    return {"vignetting": radial_falloff(data.frame_summaries, groups), "compression": grid}
 
 
 def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_tests: int, alpha: float
@@ -503,7 +507,24 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
            "significant": bool(p_adj < alpha and value > max(floor or 0.0, 0.0))}
     if effect == "vignetting":
         out["log_slope"] = e["log_slope"]
+    else:
+        out["jpeg_quality"] = e.get("quality")
     return out
+
+
+def frame_setting(effect: str, fc: dict[str, Any] | None) -> Setting | None:
+    """The camera setting a frame channel implies: vignetting's fall-off ``k``; compression's JPEG quality
+    read from the frames' DCT steps, within the screening grid's range (None when the frames show no JPEG
+    table, e.g. a video codec's other transforms: the distance screen's setting then stands)."""
+    if fc is None:
+        return None
+    if effect == "vignetting":
+        return {"vignette_k": fc["gain"]}
+    q = fc.get("jpeg_quality")
+    if effect == "compression" and q is not None:
+        grid = [g["jpeg_quality"] for g in CANDIDATE_GRIDS["compression"]]
+        return {"jpeg_quality": float(np.clip(q, min(grid), max(grid)))}
+    return None
 
 
 def noise_setting(effect: str, nc: dict[str, Any]) -> Setting | None:
@@ -666,7 +687,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
                      "screen": sc, "absorption": ab, "noise": nc if nl is not None else None,
                      "tone": tone if nl is not None else None,
                      "noise_setting": noise_setting(name, nc) if nl is not None else None,
-                     "frame_setting": {"vignette_k": fc["gain"]} if fc is not None and name == "vignetting" else None})
+                     "frame_setting": frame_setting(name, fc)})
     rows.sort(key=_rank)
     return rows
 
