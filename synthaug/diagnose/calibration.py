@@ -23,7 +23,8 @@ channels):
    measure (either sign is a finding) and ``max(max(μ, 0) + zσ, max)`` for a
    candidate channel's held-out gain (distance channels: the penalised held-out
    relative gain; absorbed: the held-out R²; noise level: the log-log slope in
-   the candidate's direction; frame: the radial fall-off k of the frames), μ and σ the clean cases' mean and standard
+   the candidate's direction; frame: the frames' radial fall-off k for vignetting, the log ratio of their steps
+   across the 8x8 grid's lines to those elsewhere for compression), μ and σ the clean cases' mean and standard
    deviation, z = Φ⁻¹(1 - 0.05 / (s·M)) for M calibrated statistics (s = 2
    two-sided, 1 one-sided): if the null values are normal, a clean case raises
    a finding with probability ≤ 5 %. The null family holds both the nuisance
@@ -233,7 +234,7 @@ def write_floors_module(path: str | Path, stats: Sequence[dict[str, Any]], *, co
         "# residual structure measure -> [lo, hi]: the range of its value on clean nuisance-varied data\n"
         f"STRUCTURE = {pprint.pformat(structure, width=110, sort_dicts=True)}\n\n"
         "# 'effect:channel' -> floor of its held-out gain (absorbed: held-out R2; noise_level: slope in the\n"
-        "# candidate's direction; frame: the frames' radial fall-off k) on clean nuisance-varied data\n"
+        "# candidate's direction; frame: the frames' fall-off k or block-grid log ratio) on clean nuisance-varied data\n"
         f"SCREEN = {pprint.pformat(screen, width=110, sort_dicts=True)}\n"
     )
     json.dumps(source)  # the source must stay JSON-able (the report quotes it)
