@@ -108,7 +108,7 @@ def _frame_grid(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def test_frame_summary_recovers_an_exact_log_quadratic_frame():
-    # log I = a + b dx + c dy - s r² exactly: the block fit (block means over the usable pixels) recovers s to
+    # log I = a + b dx + c dy - s r² exactly: the row-wise block fit (block means over the usable pixels) recovers s to
     # rounding; the crop and clipped pixels are left out, blocks cut by them included
     h, w = 96, 128
     dx, dy = _frame_grid(h, w)
@@ -221,6 +221,9 @@ def test_jpeg_quality_reads_libjpeg_and_the_model_coding(quality):
         assert out is not None and abs(out["quality"] - quality) <= 3, out
     assert jpeg_quality([frame_summary(scene.astype(np.uint8))]) is None
     assert jpeg_quality([]) is None
+    # flat 8x8 blocks never coded (a clear sky): every DC on a multiple of 8, no AC step: not a JPEG table
+    flat = np.kron(rng.integers(40, 200, (24, 32)), np.ones((8, 8))).astype(np.uint8)
+    assert jpeg_quality([frame_summary(flat)]) is None
 
 
 def test_compression_frame_setting_is_the_read_quality_within_the_grid():

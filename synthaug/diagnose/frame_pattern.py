@@ -24,8 +24,13 @@ than two videos (or two seeds) there is nothing to compare and the measure is no
 
 **A radial fall-off (vignetting)** is the other gain fixed in the frame: ``1 - k r²`` (r = 1 at the corners),
 the same in every frame. On the object it is a gain of 0.9-1 that the fitted albedo w_d absorbs, but the whole
-frames carry it: each frame's least-squares fit ``log I = a + b dx + c dy - s r²`` over 4-px blocks (the seed's
-crop and saturated pixels left out) gives its log fall-off ``s`` (:func:`frame_summary`). A scene has radial
+frames carry it: each frame's least-squares fit ``log I = a_j + b_j dx - s dx²`` over 4-px blocks, each row of
+blocks ``j`` with its own level and tilt (the seed's crop and saturated pixels left out), gives its log fall-off
+``s`` (:func:`frame_summary`). Read along the rows, a camera's ``1 - k r²`` gives the same ``s`` in every row,
+while whatever changes with height — the sky's gradient with elevation, a horizon with the ground below it, as
+in nearly every real outdoor frame — goes into the rows' levels (a fit of ``r²`` over the whole frame read the
+real drone videos' horizons as a fall-off: its ``dy²`` coefficient was 6x its ``dx²`` one, positive in 56 of 56
+videos). A scene has radial
 structure of its own (a bright cloud in the middle, a dark corner), so ``s`` of one frame is the camera's plus
 its scene's, and frames of the same scene are not independent: the test runs over **scenes**, not frames
 (:func:`scene_clusters`: frames whose band-passed textures correlate ≥ :data:`SAME_SCENE` are one scene; a
@@ -206,15 +211,32 @@ def _pixel_radius(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _block_fit(values: np.ndarray, ok: np.ndarray, step: int) -> float:
-    """``s`` of the least-squares fit ``v = a + b dx + c dy - s r²`` over the blocks with ≥ half their pixels
-    usable, each block's ``v``, dx, dy and r² the means over its usable pixels (NaN under 16 blocks)."""
+    """``s`` of the least-squares fit ``v = a_j + b_j dx + c dy - s r²`` within each row ``j`` of blocks (each row its own
+    level and tilt, one fall-off ``s`` for the frame) over the blocks with ≥ half their pixels usable, each block's
+    ``v``, dx and r² the means over its usable pixels; rows with under 4 such blocks left out (NaN under 16 blocks
+    in all). ``1 - k r²`` is ``-k (dx² + dy²)`` in log to first order and ``dy²`` is constant along a row, so the
+    fall-off is read across the frame's width alone: whatever changes with height in the frame (the sky's gradient
+    with elevation, a horizon, the ground at the bottom) goes into the rows' own levels."""
     dx, dy = _pixel_radius(values.shape)
     v, keep = _blocks(values, ok, step)
-    if int(keep.sum()) < 16:
+    # the block means of r² and dy: constant along a row of whole blocks (the row's level absorbs them), not in
+    # the blocks the crop cuts (the mean over their usable rows), so both stay regressors
+    x = _blocks(dx, ok, step)[0]
+    common = np.stack([_blocks(dx ** 2 + dy ** 2, ok, step)[0], _blocks(dy, ok, step)[0]], -1)
+    gram, rhs = np.zeros((2, 2)), np.zeros(2)
+    used = 0
+    for j in range(v.shape[0]):
+        m = keep[j]
+        if int(m.sum()) < 4:
+            continue
+        q, _ = np.linalg.qr(np.stack([np.ones(int(m.sum())), x[j, m]], 1))  # the row's level and tilt
+        rv = v[j, m] - q @ (q.T @ v[j, m])
+        rc = common[j, m] - q @ (q.T @ common[j, m])
+        gram, rhs, used = gram + rc.T @ rc, rhs + rc.T @ rv, used + int(m.sum())
+    if used < 16 or gram[0, 0] <= 0:
         return float("nan")
-    cols = [np.ones(int(keep.sum()))] + [_blocks(c, ok, step)[0][keep] for c in (dx, dy, dx ** 2 + dy ** 2)]
-    coef, *_ = np.linalg.lstsq(np.stack(cols, 1), v[keep], rcond=None)
-    return -float(coef[3])
+    coef = np.linalg.lstsq(gram, rhs, rcond=None)[0]
+    return -float(coef[0])
 
 
 def _blockiness(f: np.ndarray, ok: np.ndarray, block: int) -> float:
@@ -493,8 +515,8 @@ def jpeg_quality(summaries: Sequence[dict[str, Any]], *, min_coherence: float = 
     luminance table (:func:`synthaug.effects.camera_functional.jpeg_table`, the model's compression).
 
     Returns:
-        None when no coefficient sits on a step (a frame that was never JPEG-coded, or a codec with other
-        transforms: coherence below ``min_coherence``); else ``quality`` (the middle of the qualities whose table
+        None when fewer than 3 coefficients (2 of them AC) sit on a step (a frame that was never JPEG-coded, or
+        a codec with other transforms: coherence below ``min_coherence``); else ``quality`` (the middle of the qualities whose table
         matches the measured steps best), ``steps`` ({"u,v": step}), ``coherence`` and ``mismatch`` (the median
         over the positions of |log(step / table step)| at the best quality).
 
@@ -520,8 +542,8 @@ def jpeg_quality(summaries: Sequence[dict[str, Any]], *, min_coherence: float = 
         q, coh = _step_of(coef[:, j])
         if q and coh >= min_coherence:
             steps[(u, v)], cohs[(u, v)] = q, coh
-    if not steps:
-        return None
+    if len(steps) < 3 or len(set(steps) - {(0, 0)}) < 2:  # a table, not one coefficient's chance lattice: a flat
+        return None  # sky's blocks put the DC on multiples of 8 (8 x the block's level) whatever the codec
     qualities = np.arange(1, 101, dtype=np.float64)
     table = jpeg_table(torch.as_tensor(qualities)).numpy()  # (100, 8, 8)
     # the median over the positions: one position misread (a divisor of its step) does not move the quality
