@@ -67,4 +67,4 @@ SCREEN = {'compression:distance:feature': 0.03165,
  'vignetting:absorbed': 0.080022,
  'vignetting:distance:feature': 0.000788,
  'vignetting:distance:pixel': 0.001083,
- 'vignetting:frame': 0.117134}
+ 'vignetting:frame': 0.145895}
