@@ -183,6 +183,10 @@ def test_blockiness_by_hand_and_on_an_opencv_jpeg():
     g = f.copy()
     g[8:40, 40:72] = np.where(np.arange(32) % 8 == 0, 250, 10)[None, :]  # the object's square: left out
     assert frame_summary(g, exclude=(42, 10, 28))["blockiness"] == pytest.approx(np.log(4.0) / 2, abs=1e-9)
+    # one scene edge on a grid line (x = 64) is not a grid: the median over the lines stays 0
+    e = np.tile(20 + x, (64, 1)).astype(np.uint8)
+    e[:, 64:] += 10
+    assert frame_summary(e)["blockiness"] == pytest.approx(0.0, abs=1e-9)
     # OpenCV's JPEG codec on a textured frame: its 8x8 grid shows; the frame itself has none
     import cv2
 

@@ -403,7 +403,7 @@ def _frame_text(f: dict[str, Any]) -> str:
                 f"gain 1 - {ch['gain']:.2f} r²; on the object the fitted w_d absorbs it")
     q = ch.get("jpeg_quality")
     return (f"; the whole frames carry an 8x8 block grid: steps across its lines {math.exp(ch['gain']):.2f}x those "
-            f"elsewhere {where}"
+            f"inside the blocks beside them (median over the lines) {where}"
             + (f"; their blocks' DCT coefficients sit on the steps of JPEG quality {q:.0f}" if q is not None else
                "; their blocks' DCT coefficients show no JPEG table (another codec's transform)"))
 

@@ -493,7 +493,8 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
                   ) -> dict[str, Any] | None:
     """The frame channel of ``effect`` (:data:`FRAME_CANDIDATES`, evidence from :func:`frame_evidence`). Its
     statistic (``gain``): for vignetting the fall-off ``k`` the frames imply (the fraction of light lost at the
-    corners), for compression the log ratio of the frames' steps across the 8x8 grid's lines to those elsewhere.
+    corners), for compression the log ratio of the frames' steps across the 8x8 grid's lines to those inside the
+    blocks beside them (median over the lines).
     Significant when the one-sided test over scenes rejects at α (Bonferroni) and the statistic exceeds its
     calibrated clean floor."""
     e = None if ev is None or effect not in FRAME_CANDIDATES else ev.get(effect)
