@@ -11,8 +11,10 @@ from collections import Counter
 from pathlib import Path
 
 COLOUR_EFFECTS = {"chromatic_aberration", "white_balance", "haze"}  # judged on colour cases (gray rows kept for reference)
-rows = ["| hidden | strength | data | named first | misnamed first | missed | Wilson 95 % (named) | what was said |",
-        "|---|---|---|---|---|---|---|---|"]
+from synthaug.diagnose import null_floors  # noqa: E402
+
+rows = ["| hidden | strength | data | floors | named first | misnamed first | missed | Wilson 95 % (named) | what was said |",
+        "|---|---|---|---|---|---|---|---|---|"]
 tot = Counter()
 ok_by_effect: dict[str, list[bool]] = {}
 for f in sorted(Path("results/diagnose/null").glob("power5_*.json")):
@@ -27,7 +29,10 @@ for f in sorted(Path("results/diagnose/null").glob("power5_*.json")):
 
         settings = REALISTIC_STRENGTHS[p["hidden"]]
     strength = ", ".join(f"{k} {v}" for k, v in settings.items())
-    rows.append(f"| {p['hidden']} | {strength} | {'colour' if colour else 'gray'} | {p['named_first']}/{d['cases']} | {p['misnamed_first']} | {p['missed']} | "
+    # the floors the run used: the current null_floors.py's, or an earlier calibration's (a row not rerun since)
+    current = (d.get("floors_in_use") or {}).get("screen") == null_floors.SCREEN
+    rows.append(f"| {p['hidden']} | {strength} | {'colour' if colour else 'gray'} | {'current' if current else 'earlier'} | "
+                f"{p['named_first']}/{d['cases']} | {p['misnamed_first']} | {p['missed']} | "
                 f"{lo:.2f}–{hi:.2f} | {', '.join(f'{k} ×{v}' for k, v in said.most_common())} |")
     if (p["hidden"] in COLOUR_EFFECTS) != colour:
         continue
