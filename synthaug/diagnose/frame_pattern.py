@@ -270,21 +270,17 @@ def _blockiness(f: np.ndarray, ok: np.ndarray, block: int) -> float:
     return float(np.mean(out))
 
 
-def _dct_matrix(n: int = CODEC_BLOCK) -> np.ndarray:
-    """The orthonormal DCT-II matrix (JPEG's forward DCT is ``D @ block @ D.T``)."""
-    k, x = np.mgrid[0:n, 0:n].astype(np.float64)
-    d = np.cos((2 * x + 1) * k * np.pi / (2 * n)) * np.sqrt(2.0 / n)
-    d[0] /= np.sqrt(2.0)
-    return d
-
-
 def _block_dct(f: np.ndarray, ok: np.ndarray) -> np.ndarray:
     """:data:`DCT_POSITIONS` coefficients of the 8x8 grid blocks of ``f`` (0-255) whose pixels are all ``ok``."""
+    import torch
+
+    from synthaug.effects.camera_functional import _dct_matrix  # the model's own JPEG DCT (orthonormal)
+
     b = CODEC_BLOCK
     h, w = f.shape[0] // b * b, f.shape[1] // b * b
     blocks = (f[:h, :w] - 128.0).reshape(h // b, b, w // b, b).transpose(0, 2, 1, 3).reshape(-1, b, b)
     good = ok[:h, :w].reshape(h // b, b, w // b, b).all((1, 3)).ravel()
-    d = _dct_matrix(b)
+    d = _dct_matrix(torch.float64, "cpu").numpy()
     c = d @ blocks[good] @ d.T
     return np.stack([c[:, u, v] for u, v in DCT_POSITIONS], 1).astype(np.float32)
 
@@ -337,8 +333,9 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         ya, yb = int(np.clip(np.floor(y0 - 2), 0, h)), int(np.clip(np.ceil(y0 + side + 2), 0, h))
         outside[ya:yb, xa:xb] = False
     slope = _block_fit(log, unclipped & outside, step)
-    blockiness = _blockiness(np.exp(log), outside, CODEC_BLOCK)
-    dct = _block_dct(np.exp(log) * 255.0, outside & unclipped)
+    lin = np.exp(log)
+    blockiness = _blockiness(lin, outside, CODEC_BLOCK)
+    dct = _block_dct(lin * 255.0, outside & unclipped)
     tex = _texture(log, step)
     repeat = float("nan")
     if background is not None:

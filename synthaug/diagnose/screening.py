@@ -485,7 +485,7 @@ def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | No
     grid = block_grid(data.frame_summaries, groups)
     if grid is not None:
         jq = jpeg_quality(data.frame_summaries)
-        grid = {**grid, "quality": None if jq is None else jq["quality"], "jpeg": jq}
+        grid = {**grid, "quality": None if jq is None else jq["quality"]}
     return {"vignetting": radial_falloff(data.frame_summaries, groups), "compression": grid}
 
 
