@@ -374,6 +374,15 @@ def test_jpeg_quantize_matches_opencv(quality):
     assert np.corrcoef((mine - u8).ravel(), (ref - u8).ravel())[0, 1] > 0.9
 
 
+def test_dct_matrix_is_scipys_orthonormal_dct_ii():
+    from scipy.fft import dctn
+
+    block = np.random.default_rng(3).normal(size=(8, 8))
+    d = Cx.dct_matrix(torch.float64).numpy()
+    np.testing.assert_allclose(d @ block @ d.T, dctn(block, type=2, norm="ortho"), atol=1e-12)
+    np.testing.assert_allclose(d @ d.T, np.eye(8), atol=1e-12)
+
+
 def test_jpeg_block_phase_aligns_a_crop_with_the_frame_grid():
     frame = _rand(1, 1, 48, 56)
     full = Cx.jpeg_quantize(_t(frame), _t([40.0])).numpy()

@@ -274,13 +274,13 @@ def _block_dct(f: np.ndarray, ok: np.ndarray) -> np.ndarray:
     """:data:`DCT_POSITIONS` coefficients of the 8x8 grid blocks of ``f`` (0-255) whose pixels are all ``ok``."""
     import torch
 
-    from synthaug.effects.camera_functional import _dct_matrix  # the model's own JPEG DCT (orthonormal)
+    from synthaug.effects.camera_functional import dct_matrix  # the model's own JPEG DCT (orthonormal)
 
     b = CODEC_BLOCK
     h, w = f.shape[0] // b * b, f.shape[1] // b * b
     blocks = (f[:h, :w] - 128.0).reshape(h // b, b, w // b, b).transpose(0, 2, 1, 3).reshape(-1, b, b)
     good = ok[:h, :w].reshape(h // b, b, w // b, b).all((1, 3)).ravel()
-    d = _dct_matrix(torch.float64, "cpu").numpy()
+    d = dct_matrix(torch.float64, "cpu").numpy()
     c = d @ blocks[good] @ d.T
     return np.stack([c[:, u, v] for u, v in DCT_POSITIONS], 1).astype(np.float32)
 

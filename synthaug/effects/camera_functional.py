@@ -57,6 +57,7 @@ __all__ = [
     "chromatic_aberration",
     "lens_distortion",
     "shot_noise",
+    "dct_matrix",
     "jpeg_table",
     "jpeg_difference_on_frame_grid",
     "jpeg_quantize",
@@ -535,7 +536,8 @@ def shot_noise(image: torch.Tensor, coverage: torch.Tensor, shot_sigma: torch.Te
 
 # ------------------------------------------------------------------- JPEG
 @lru_cache(maxsize=8)
-def _dct_matrix(dtype: torch.dtype, device: str) -> torch.Tensor:
+def dct_matrix(dtype: torch.dtype = torch.float32, device: str = "cpu") -> torch.Tensor:
+    """The orthonormal 8-point DCT-II matrix ``D`` of JPEG's block transform: coefficients ``D @ block @ D.T``."""
     n = np.arange(8)
     d = np.cos((2 * n[None, :] + 1) * n[:, None] * np.pi / 16) * np.sqrt(2 / 8)
     d[0] /= np.sqrt(2)
@@ -657,7 +659,7 @@ def _jpeg_blocks(image: torch.Tensor, quality: torch.Tensor, py: int, px: int) -
     hp = int(math.ceil((h + py) / 8)) * 8
     wp = int(math.ceil((w + px) / 8)) * 8
     x = F.pad(image * 255.0 - 128.0, (px, wp - w - px, py, hp - h - py), mode="replicate")
-    d = _dct_matrix(image.dtype, str(image.device))
+    d = dct_matrix(image.dtype, str(image.device))
     blocks = x.reshape(b, c, hp // 8, 8, wp // 8, 8).permute(0, 1, 2, 4, 3, 5)
     coef = d @ blocks @ d.T
     step = jpeg_table(quality.detach()).to(image.dtype)[:, :, None, None]  # (B, C, 1, 1, 8, 8)
