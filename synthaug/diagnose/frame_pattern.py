@@ -42,8 +42,10 @@ scenes' mean ``s`` against 0 (one value per scene, ≥ 3 scenes) and the fall-of
 **A codec's block grid** is fixed in the frame too: JPEG (and a video codec's transform) quantises 8x8 blocks
 counted from the frame's top-left, so the intensity jumps across the grid's lines more than between the other
 columns (rows). Each frame's ``blockiness`` is the median over the grid's lines of the log ratio of the mean
-absolute step across a line to the mean step inside the blocks beside it, the columns' and the rows' averaged
-(the crop left out; 0 without a grid);
+absolute step across a line to the mean step inside the blocks beside it, the smaller of the columns' and the
+rows' (the crop left out; 0 without a grid): a codec's blocks are square, so its grid shows in both directions,
+while a sensor's fixed column (row) pattern, whose random steps may fall larger on the grid's columns in every
+frame of the camera, shows in one;
 :func:`block_grid` tests it over scenes as the fall-off is. A JPEG's quality is read from the same grid
 (:func:`jpeg_quality`): the decoded blocks' DCT coefficients sit on multiples of the quantisation steps, the
 steps of libjpeg's table at that quality.
@@ -243,8 +245,9 @@ def _block_fit(values: np.ndarray, ok: np.ndarray, step: int) -> float:
 def _blockiness(f: np.ndarray, ok: np.ndarray, block: int) -> float:
     """The median over the block grid's lines (between pixel ``block·m - 1`` and ``block·m``) of the log ratio of
     the mean |step| across the line to the mean |step| of the ``block - 1`` steps around it inside the two
-    half-blocks beside it (each position's mean over the usable pixel pairs), for columns and rows, averaged
-    (NaN when a direction has no line with its neighbours). The median over lines, against each line's own
+    half-blocks beside it (each position's mean over the usable pixel pairs), for columns and rows, the smaller of
+    the two (NaN when a direction has no line with its neighbours): a codec's square blocks lift both, a fixed
+    column or row pattern one. The median over lines, against each line's own
     neighbours: a codec lifts every line; a few lines that step more for other reasons (a scene's edge, the centre
     line and the borders of a lens-distortion resampling, which an average over lines read as a 1-2 % grid) do not
     move it."""
@@ -267,7 +270,7 @@ def _blockiness(f: np.ndarray, ok: np.ndarray, block: int) -> float:
         if not logs:
             return float("nan")
         out.append(float(np.median(logs)))
-    return float(np.mean(out))
+    return float(min(out))
 
 
 def _block_dct(f: np.ndarray, ok: np.ndarray) -> np.ndarray:
