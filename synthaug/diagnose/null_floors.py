@@ -38,7 +38,7 @@ STRUCTURE = {'background_bias': [-0.002488, 0.001969],
 # candidate's direction; frame: the frames' fall-off k or block-grid log ratio) on clean nuisance-varied data
 SCREEN = {'compression:distance:feature': 0.03165,
  'compression:distance:pixel': 0.017123,
- 'compression:frame': 0.004124,
+ 'compression:frame': 0.00427,
  'defocus:absorbed': 0.207789,
  'defocus:distance:feature': 0.024816,
  'defocus:distance:pixel': 0.040685,
