@@ -24,7 +24,8 @@ channels):
    candidate channel's held-out gain (distance channels: the penalised held-out
    relative gain; absorbed: the held-out R²; noise level: the log-log slope in
    the candidate's direction; frame: the frames' radial fall-off k for vignetting, the log ratio of their steps
-   across the 8x8 grid's lines to those inside the blocks beside them, median over lines, for compression), μ and
+   across the 8x8 grid's lines to those inside the blocks beside them, median over lines, the smaller of columns
+   and rows, for compression), μ and
    σ the clean cases' mean and standard
    deviation, z = Φ⁻¹(1 - 0.05 / (s·M)) for M calibrated statistics (s = 2
    two-sided, 1 one-sided): if the null values are normal, a clean case raises
