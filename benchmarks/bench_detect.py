@@ -110,7 +110,7 @@ def _toy_data() -> tuple[torch.Tensor, torch.Tensor]:
         return pos, torch.rand(400, 1, 40, 40, generator=g)
 
 
-def _builders() -> dict[str, Callable[[torch.Tensor, torch.Tensor], Any]]:
+def _builders(ada_rounds: int = 100) -> dict[str, Callable[[torch.Tensor, torch.Tensor], Any]]:
     def hog(pos: torch.Tensor, neg: torch.Tensor) -> Any:
         from synthaug.detectors.hog_dpm import HOGDetector
 
@@ -119,7 +119,7 @@ def _builders() -> dict[str, Callable[[torch.Tensor, torch.Tensor], Any]]:
     def adaboost(pos: torch.Tensor, neg: torch.Tensor) -> Any:
         from synthaug.detectors.adaboost import train_adaboost
 
-        det = train_adaboost(pos, neg, n_rounds=100, candidates=2000, seed=0)
+        det = train_adaboost(pos, neg, n_rounds=ada_rounds, candidates=2000, seed=0)
         if hasattr(det, "calibrate_cascade"):
             det.calibrate_cascade(pos)
         return det
@@ -252,6 +252,8 @@ def main() -> int:
                         "does not depend on its weights)")
     p.add_argument("--box-model", choices=("cnn", "ridge", "ensemble"), default="ensemble",
                    help="the toy detectors' box regressor (TrainOptions.box_model; default ensemble, as `synthaug train` writes)")
+    p.add_argument("--ada-rounds", type=int, default=None,
+                   help="the toy AdaBoost's boosting rounds (default: TrainOptions.ada_rounds, as `synthaug train`)")
     args = p.parse_args()
 
     from synthaug.detectors.base import get_detector_class, list_detectors, load_detector
@@ -271,7 +273,9 @@ def main() -> int:
             results[f"{det.kind}:{path.name}"] = _time_detector(det, frame, scales, args.repeats, **timing)
     else:
         pos, neg = _toy_data()
-        builders = _builders()
+        from synthaug.detectors.training import TrainOptions
+
+        builders = _builders(args.ada_rounds or TrainOptions.ada_rounds)
         for kind in args.kinds or list_detectors():
             cls = get_detector_class(kind)
             build = builders.get(kind) or (lambda pos, neg, cls=cls: cls.example(torch.Generator().manual_seed(0)) if hasattr(cls, "example") else None)
@@ -294,6 +298,8 @@ def main() -> int:
                 det.box_regressor = {"cnn": CNNBoxRegressor.untrained, "ridge": BoxRegressor.identity,
                                      "ensemble": lambda: EnsembleBoxRegressor([BoxRegressor.identity(), CNNBoxRegressor.untrained()])}[args.box_model]()
             results[kind] = {**_time_detector(det, frame, scales, args.repeats, **timing), "toy_training_seconds": round(train_s, 1)}
+            if kind == "adaboost" and hasattr(det, "learners"):
+                results[kind]["stumps"] = len(det.learners.weights)
     for name, r in results.items():
         kind = name.split(":")[0]
         if kind in TARGETS and "frames_per_second" in r:

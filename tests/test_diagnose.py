@@ -534,3 +534,44 @@ def test_tone_evidence_sees_a_tone_curve_and_not_added_noise(tmp_path):
         assert (tone["gain"] > 0) == (kind == "gamma"), (kind, tone)
         named[kind] = [e for e in ("gamma", "shot_noise") if noise_level_channel(e, nc, 30, 0.01, tone)["significant"]]
     assert named == {"gamma": ["gamma"], "shot_noise": ["shot_noise"]}
+
+
+# ----------------------------------------------------------------- residual hints
+@pytest.mark.parametrize("period, periodic, hinted", [
+    (8.0, True, True), (4.0, True, True), (8 / 3, True, True), (2.0, True, True),  # the 8-px grid's harmonics k/8
+    (1 / (0.125 + 0.0125), True, True),  # one step of the periodic measures' frequency grid off 1/8
+    (4.9, True, False), (1 / 0.1875, True, False), (3.3, True, False), (10.0, True, False),  # off the grid
+    (8.0, False, False), (None, True, False), (float("nan"), True, False),  # no period: not a codec's grid
+])
+def test_line_structures_point_at_compression_only_on_the_8px_block_grid(period, periodic, hinted):
+    from synthaug.diagnose.report import HINTS, structure_hints
+
+    for name in ("periodic_rows", "periodic_columns", "column_pattern", "row_pattern"):
+        m = {"p": 1e-6, "significant": True, "period_px": period}
+        if name.endswith("_pattern"):
+            m["periodic"] = periodic
+        elif not periodic:
+            continue  # the periodic_* measures always report a peak
+        assert structure_hints(name, m) == (("compression",) if hinted else ()), (name, period)
+    for name in ("tone_curve", "high_frequency", "block_8x8", "radial"):  # other structures: the table as it is
+        assert structure_hints(name, {"p": 1e-6, "period_px": 4.9}) == HINTS[name]
+
+
+def test_a_column_pattern_off_the_block_grid_is_neither_a_compression_hint_nor_explained_by_it():
+    # the real drones' case (stop 32): compression accepted from the frames, and a fixed column pattern with a
+    # 4.9-px period left in the residual; it must stay in the "unexplained" list, and not put compression first
+    from synthaug.diagnose.report import _order, left_unexplained
+
+    off = {"p": 1e-5, "significant": True, "period_px": 4.9, "periodic": True, "value": 0.4}
+    on = dict(off, period_px=8.0)
+    tone = {"p": 1e-4, "significant": True, "value": -0.6}
+    cands = ["defocus", "compression", "gamma", "exposure", "haze"]
+    order, hinted = _order({"column_pattern": off, "tone_curve": tone}, cands)
+    assert hinted == ["gamma", "exposure", "haze"] and order == ["gamma", "exposure", "haze", "defocus", "compression"]
+    order, hinted = _order({"column_pattern": on, "tone_curve": tone}, cands)
+    assert hinted == ["compression", "gamma", "exposure", "haze"]
+    left = left_unexplained({"column_pattern": off, "tone_curve": tone, "block_8x8": {"p": 1e-7}}, ["compression"])
+    assert sorted(left) == ["column_pattern", "tone_curve"]
+    left = left_unexplained({"column_pattern": on, "tone_curve": tone, "block_8x8": {"p": 1e-7}}, ["compression"])
+    assert sorted(left) == ["tone_curve"]
+    assert sorted(left_unexplained({"column_pattern": off, "tone_curve": tone}, ["gamma"])) == ["column_pattern"]

@@ -225,3 +225,31 @@ def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(caps
         with pytest.raises(SystemExit) as e:
             R.build_parser().parse_args(["synthetic", *bad, "--out", "x"])
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err
+
+
+def test_runner_budget_options_reach_the_cell_key(capsys):
+    """``--ada-rounds`` / ``--ada-candidates`` / ... (the families' budgets, one spelling with ``synthaug train``)
+    reach the runner's TrainOptions and so the cell key; the defaults are TrainOptions' own; a budget below its
+    floor is a usage error naming the flag."""
+    from synthaug.evaluate.cells import cell_key
+
+    default = R.train_options(R.build_parser().parse_args(["learning-curve", "--out", "x"]))
+    assert default == TrainOptions()
+    args = R.build_parser().parse_args(["synthetic", "--ada-rounds", "300", "--ada-candidates", "4000",
+                                        "--cnn-epochs", "5", "--mining-rounds", "2", "--out", "x"])
+    opts = R.train_options(args)
+    assert (opts.ada_rounds, opts.ada_candidates, opts.cnn_epochs, opts.mining_rounds) == (300, 4000, 5, 2)
+    assert dataclasses.replace(opts, ada_rounds=100, ada_candidates=2000, cnn_epochs=12, mining_rounds=3) == default
+    proto = Protocol.from_dict(example_protocol_dict(name="tiny", split_file="split.json"))
+    paths = R.DataPaths("videos", "labels", "split.json", "work")
+    c = R.Condition("adaboost / 12 seeds", "adaboost", seed_count=12)
+
+    def key(o):
+        return cell_key(R.ProtocolRunner(proto, "drone", paths, options=o, log=lambda m: None).identity(c, 0))
+
+    assert key(dataclasses.replace(default, ada_rounds=300)) != key(default)
+    assert key(dataclasses.replace(default, ada_candidates=4000)) != key(default)
+    for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"]):
+        with pytest.raises(SystemExit) as e:
+            R.build_parser().parse_args(["learning-curve", *bad, "--out", "x"])
+        assert e.value.code == 2 and bad[0] in capsys.readouterr().err

@@ -60,6 +60,64 @@ def test_box_model_option_fits_that_map(ws: dict[str, Path], tmp_path: Path, mod
         assert box["samples"] > 0 and isinstance(reg, CNNBoxRegressor) and not isinstance(reg, EnsembleBoxRegressor)
 
 
+def test_box_regressor_is_cached_in_the_work_folder_by_its_inputs(ws: dict[str, Path], tmp_path: Path) -> None:
+    # the box map depends on the training videos' labels, the model, the stride, the aspect and the seed, not on
+    # the detector: a second training into the same --work reads it back (the same state); another seed, a changed
+    # label file or a damaged cache file fits it again
+    import shutil
+
+    from synthaug.detectors.base import load_detector
+    from synthaug.detectors.training import TrainOptions
+    from synthaug.detectors.video_training import box_regressor_key, discover_videos
+
+    work = tmp_path / "work"
+
+    def train(name: str, *extra: str) -> tuple[dict[str, Any], Any]:
+        out = tmp_path / f"{name}.pt"
+        assert _train(ws, out, "--seed-counts", "8", "--mining-rounds", "0", "--box-model", "ridge",
+                      "--work", str(work), *extra) == 0
+        return json.loads(out.with_suffix(".json").read_text())["box_regression"], load_detector(out).box_regressor
+
+    first, reg1 = train("hog", "--detector", "hog", "--seed", "0")
+    assert "cached" not in first and len(list((work / "box_regressors").glob("ridge_*.pt"))) == 1
+    again, reg2 = train("ada", "--detector", "adaboost", "--seed", "0", "--ada-rounds", "5")
+    assert again["cached"].startswith(str(work / "box_regressors")) and again["fit_seconds"] == first["seconds"]
+
+    def same(a: Any, b: Any) -> bool:
+        if isinstance(a, torch.Tensor):
+            return isinstance(b, torch.Tensor) and torch.equal(a, b)
+        if isinstance(a, dict):
+            return isinstance(b, dict) and a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
+        if isinstance(a, (list, tuple)):
+            return isinstance(b, (list, tuple)) and len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
+        return a == b
+
+    assert same(reg1.state_dict(), reg2.state_dict()) and type(reg1) is type(reg2)
+    other, _ = train("hog1", "--detector", "hog", "--seed", "1")
+    assert "cached" not in other and len(list((work / "box_regressors").glob("ridge_*.pt"))) == 2
+    for f in (work / "box_regressors").glob("ridge_*.pt"):
+        f.write_bytes(b"not a checkpoint")
+    damaged, _ = train("hog0", "--detector", "hog", "--seed", "0")
+    assert "cached" not in damaged and torch.load(next(iter(sorted((work / "box_regressors").glob("ridge_*.pt")))),
+                                                  weights_only=False)["format"] == "synthaug.box_regressor_cache"
+    # the key: every input of the fit, and nothing else
+    vs = discover_videos(ws["videos"], ws["labels"])
+    stems = sorted(s for s, c in vs.classes.items() if c == "drone")
+    base = box_regressor_key(vs, stems, TrainOptions(), 1.0, 0)
+    assert base == box_regressor_key(vs, list(reversed(stems)), TrainOptions(mining_rounds=0, ada_rounds=7), 1.0, 0)
+    changed = {box_regressor_key(vs, stems, TrainOptions(), 1.0, 1), box_regressor_key(vs, stems[:2], TrainOptions(), 1.0, 0),
+               box_regressor_key(vs, stems, TrainOptions(box_model="cnn"), 1.0, 0),
+               box_regressor_key(vs, stems, TrainOptions(box_stride=3), 1.0, 0),
+               box_regressor_key(vs, stems, TrainOptions(), 1.2, 0)}
+    assert base not in changed and len(changed) == 5
+    copy = tmp_path / "labels_copy"
+    shutil.copytree(ws["labels"], copy)
+    doc = json.loads((copy / f"{stems[0]}.json").read_text())
+    doc["boxes"][0] = [v + 1 for v in doc["boxes"][0]] if doc["boxes"][0] else doc["boxes"][0]
+    (copy / f"{stems[0]}.json").write_text(json.dumps(doc))
+    assert box_regressor_key(discover_videos(ws["videos"], copy), stems, TrainOptions(), 1.0, 0) != base
+
+
 def test_mining_round_choice_options_reach_the_training(ws: dict[str, Path], tmp_path: Path) -> None:
     # --mining-select / --mining-patience (the runner's options) are synthaug train's too, and recorded
     out = tmp_path / "ap.pt"

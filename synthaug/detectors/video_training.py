@@ -31,6 +31,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from synthaug._io import check_header
 from synthaug.data.video import find_video
 from synthaug.detectors.frames import VideoFrames
 from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mining
@@ -332,7 +333,8 @@ def train_from_videos(
     say(f"training set: {ts.positives.shape[0]} positives, {ts.negatives.shape[0]} negatives ({t_data:.0f}s)")
 
     # ---------------------------------------------------------------- training with mining
-    regressor, box_info = _box_regressor(vs, sp, options, ts.box_in_window, seed=seed, say=say)
+    box_cache = _box_cache_dir(work_dir, out)
+    regressor, box_info = _box_regressor(vs, sp, options, ts.box_in_window, seed=seed, say=say, cache_dir=box_cache)
     t0 = time.perf_counter()
     weights = share_weights(n_real, int(ts.positives.shape[0]), added.synthetic_share)
     if weights is not None:
@@ -513,14 +515,82 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, *, seed: int,
     return info
 
 
+BOX_CACHE_FORMAT = "synthaug.box_regressor_cache"
+BOX_CACHE_VERSION = 1
+"""Part of every cached box regressor's key: bump it when the box maps' fitting changes."""
+
+
+def _box_cache_dir(work_dir: str | Path | None, out: str | Path | None) -> Path | None:
+    """Where fitted box regressors are kept between trainings: ``<work>/box_regressors`` (the ingest folder, as
+    :func:`train_from_videos` resolves it: ``work_dir``, else ``<out>.work``); None when neither is given."""
+    if work_dir is not None:
+        return Path(work_dir) / "box_regressors"
+    return None if out is None else Path(str(out) + ".work") / "box_regressors"
+
+
+def box_regressor_key(vs: VideoSet, videos: Sequence[str], options: TrainOptions, aspect: float, seed: int) -> str:
+    """The cache key of a box regressor: everything its fit reads — the training videos (name, size and
+    modification time of each video file, the bytes of its label file), the box model, the frame stride, the
+    window's aspect, the seed (its jitter and initialisation) and :data:`BOX_CACHE_VERSION`. The detector, its
+    positives and the mining do not enter: the box map is fitted on the labelled boxes alone, before them."""
+    import hashlib
+
+    files = []
+    for stem in sorted(videos):
+        video = find_video(vs.videos_dir, stem)
+        st = video.stat() if video is not None else None
+        label = Path(vs.labels_dir) / f"{stem}.json"
+        files.append([stem, None if st is None else [video.name, st.st_size, st.st_mtime_ns],
+                      hashlib.sha256(label.read_bytes()).hexdigest() if label.is_file() else None])
+    ident = {"what": "box_regressor", "version": BOX_CACHE_VERSION, "model": options.box_model,
+             "stride": int(options.box_stride), "aspect": round(float(aspect), 9), "seed": int(seed), "videos": files}
+    return hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()[:24]
+
+
 def _box_regressor(vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, box_in_window: Any, *, seed: int,
-                   say: Callable[[str], None]) -> tuple[Any, dict[str, Any] | None]:
-    """The box regressor fitted on the training videos (``options.box_regression``), and its metadata."""
+                   say: Callable[[str], None], cache_dir: Path | None = None) -> tuple[Any, dict[str, Any] | None]:
+    """The box regressor fitted on the training videos (``options.box_regression``), and its metadata.
+
+    With ``cache_dir``, a regressor fitted earlier from the same inputs (:func:`box_regressor_key`) is read back
+    instead of fitted again (the ensemble's CNN map costs minutes); a new fit is written there (atomically, so two
+    trainings writing the same key leave one whole file)."""
     if not (options.box_regression and sp["train"]):
         return None, None
+    aspect = float(box_in_window[2]) / float(box_in_window[3])
+    path = None if cache_dir is None else \
+        cache_dir / f"{options.box_model}_{box_regressor_key(vs, sp['train'], options, aspect, seed)}.pt"
+    if path is not None and path.is_file():
+        from synthaug.detectors.box_cnn import regressor_from_state_dict
+
+        t0 = time.perf_counter()
+        try:
+            saved = check_header(torch.load(path, map_location="cpu", weights_only=False), format=BOX_CACHE_FORMAT,
+                                 version=BOX_CACHE_VERSION, what="cached box regressor", source=path)
+            regressor = regressor_from_state_dict(saved["state"])
+        except Exception as e:  # a damaged file is fitted again and replaced
+            say(f"box regression: cached {path} unreadable ({type(e).__name__}: {e}); fitting again")
+        else:
+            box_info = dict(saved["info"], cached=str(path), fit_seconds=saved["info"].get("seconds"),
+                            seconds=round(time.perf_counter() - t0, 1))
+            say(f"box regression ({options.box_model}): reused {path} (fitted in {box_info['fit_seconds']} s)")
+            return regressor, box_info
+    regressor, box_info = _fit_box_regressor(vs, sp, options, aspect, seed=seed, say=say)
+    if path is not None:
+        import io
+
+        from synthaug._io import atomic_write_bytes
+
+        buf = io.BytesIO()
+        torch.save({"format": BOX_CACHE_FORMAT, "version": BOX_CACHE_VERSION, "state": regressor.state_dict(),
+                    "info": box_info}, buf)
+        atomic_write_bytes(path, buf.getvalue())
+    return regressor, box_info
+
+
+def _fit_box_regressor(vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, aspect: float, *, seed: int,
+                       say: Callable[[str], None]) -> tuple[Any, dict[str, Any]]:
     t0 = time.perf_counter()
     reg_src = VideoFrames(vs.videos_dir, vs.labels_dir, positive=sp["train"], stride=options.box_stride)
-    aspect = float(box_in_window[2]) / float(box_in_window[3])
     if options.box_model == "ensemble":
         from synthaug.detectors.box_cnn import EnsembleBoxRegressor
 

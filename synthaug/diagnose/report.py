@@ -29,7 +29,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import torch
 
-__all__ = ["diagnose", "HINTS", "REPORT_FORMAT", "write_markdown"]
+__all__ = ["diagnose", "HINTS", "REPORT_FORMAT", "left_unexplained", "structure_hints", "write_markdown"]
 
 REPORT_FORMAT = "synthaug.diagnosis"
 
@@ -49,14 +49,47 @@ HINTS: dict[str, tuple[str, ...]] = {
     "column_pattern": ("compression",),
     "row_pattern": ("compression",),
 }
+BLOCK_GRID_STRUCTURES = ("periodic_rows", "periodic_columns", "column_pattern", "row_pattern")
+"""Structures whose :data:`HINTS` hold only when they lie on a codec's 8-px block grid (:func:`structure_hints`)."""
+BLOCK_GRID_TOLERANCE = 0.0125
+"""Cycles per frame px a periodic structure's peak may sit from a multiple of 1/8 and still be the block grid's
+(one step of the ``periodic_*`` measures' frequency grid)."""
 _FITTED_PARAMS = ("sigma_s", "sigma_u", "sigma_n")
+
+
+def structure_hints(name: str, measure: dict[str, Any]) -> tuple[str, ...]:
+    """The candidate effects a residual structure points at: :data:`HINTS`, except that a line structure
+    (:data:`BLOCK_GRID_STRUCTURES`) points at compression only when it is periodic on the 8-px block grid of a
+    codec's transform (JPEG's and H.264's 8x8 and 4x4 blocks: a spectral peak at k/8 cycles per frame px,
+    within :data:`BLOCK_GRID_TOLERANCE`). A sensor's column pattern with a 4.9-px period, or one with no period,
+    is not a codec's, and no candidate explains it.
+
+    Example:
+        >>> structure_hints("periodic_columns", {"period_px": 8.0})
+        ('compression',)
+        >>> structure_hints("column_pattern", {"period_px": 4.9, "periodic": True})
+        ()
+        >>> structure_hints("column_pattern", {"period_px": 4.0, "periodic": False})
+        ()
+        >>> structure_hints("tone_curve", {})
+        ('gamma', 'exposure', 'haze')
+    """
+    hints = HINTS.get(name, ())
+    if name not in BLOCK_GRID_STRUCTURES:
+        return hints
+    period = measure.get("period_px")
+    if measure.get("periodic") is False or period is None or not (np.isfinite(period) and period > 0):
+        return ()
+    k = 8.0 / float(period)  # the peak in units of 1/8 cycle per px
+    on_grid = round(k) >= 1 and abs(k - round(k)) / 8.0 <= BLOCK_GRID_TOLERANCE + 1e-9
+    return hints if on_grid else ()
 
 
 def _order(structure: dict[str, dict[str, Any]], candidates: Sequence[str]) -> tuple[list[str], list[str]]:
     hinted: list[str] = []
     for name, m in sorted(structure.items(), key=lambda kv: kv[1]["p"]):
         if m.get("significant") or m["p"] < 0.01:
-            hinted += [c for c in HINTS.get(name, ()) if c in candidates and c not in hinted]
+            hinted += [c for c in structure_hints(name, m) if c in candidates and c not in hinted]
     return hinted + [c for c in candidates if c not in hinted], hinted
 
 
@@ -337,7 +370,7 @@ def _effect_findings(data: Any, picked: list[tuple[dict, dict]], folds: Any, acc
                              k_: row["noise"][k_] for k_ in ("slope", "t", "p", "n_seeds", "fitted_slope", "gain")},
                          "hinted_by_residuals": row["effect"] in hinted,
                          "residual_structure": [m["description"] for n_, m in structure.items()
-                                                if m["significant"] and row["effect"] in HINTS.get(n_, ())]},
+                                                if m["significant"] and row["effect"] in structure_hints(n_, m)]},
         })
     return findings, ext_images
 
@@ -354,8 +387,18 @@ def _remaining_structure(data: Any, picked: list[tuple[dict, dict]], structure: 
     accepted = {r["effect"]: _setting(r) for r, _ in picked}
     syn_acc = base_render(data, accepted)[0]
     remaining = structure_measures(data, syn_acc, rng=np.random.default_rng(seed + 2), alpha=alpha)
-    explains = {h for e in accepted for h, cands in HINTS.items() if e in cands}
-    return {n_: m for n_, m in remaining.items() if n_ not in explains}
+    return left_unexplained(remaining, accepted)
+
+
+def left_unexplained(structure: dict[str, dict[str, Any]], accepted: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """The residual structures that none of the ``accepted`` effects explains (:func:`structure_hints`).
+
+    Example:
+        >>> s = {"block_8x8": {"p": 1e-6}, "column_pattern": {"p": 1e-5, "period_px": 4.9, "periodic": True}}
+        >>> sorted(left_unexplained(s, ["compression"]))
+        ['column_pattern']
+    """
+    return {n_: m for n_, m in structure.items() if not set(structure_hints(n_, m)) & set(accepted)}
 
 
 def _gap_report(data: Any, syn0: torch.Tensor, seeds_dir: Any, mesh: Any, fit_path: str | os.PathLike, *,

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from synthaug._checks import add_option, int_at_least, positive_float
+from synthaug.detectors.train_cli import add_budget_options, budget_options
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import AddedPositives, train_from_videos
 from synthaug.evaluate.cells import CellCache
@@ -47,7 +48,7 @@ from synthaug.evaluate.summary import report_table, summarize
 from synthaug.evaluate.videos import detect_on_eval_set, load_eval_set, refine_detections, scale_eval_set
 
 __all__ = ["TRAINING_VERSION", "OWN_DISTANCE", "Condition", "DataPaths", "ProtocolRunner", "learning_curve",
-           "synthetic_comparison", "main"]
+           "synthetic_comparison", "train_options", "main"]
 
 OWN_DISTANCE = {"hog": "hog", "adaboost": "wl_learned", "cnn": "cnn"}
 """Each detector family's own distance of the paper's fits (d_HOG, d_WL^L, d_CNN)."""
@@ -517,6 +518,7 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
                    help="the box regression: a small CNN on the detection's context pixels (cnn), ridge on its HOG "
                         "cells (ridge, the model before this option: its cells keep their keys) or the mean of both "
                         "(ensemble)")
+    add_budget_options(q.add_argument_group("training budgets (part of a cell's key)"))
     q.add_argument("--eval-split", default="test", choices=["test", "val"],
                    help="score on the protocol's test frames, or its validation frames (to choose a setting)")
     q.add_argument("--threads", type=int, default=1, help="torch threads")
@@ -558,6 +560,13 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def train_options(args: argparse.Namespace) -> TrainOptions:
+    """The :class:`TrainOptions` of parsed runner arguments (budgets, mining, box model; the rest at defaults)."""
+    return dataclasses.replace(TrainOptions(), **budget_options(args), mining_rounds=args.mining_rounds,
+                               cnn_shift=args.cnn_shift, mining_select=args.mining_select,
+                               mining_patience=args.mining_patience, box_model=args.box_model)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     import torch
@@ -566,9 +575,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     proto = load_protocol(args.protocol)
     paths = DataPaths(args.videos, args.labels, args.split, args.work)
     runner = ProtocolRunner(proto, args.class_name, paths, CellCache(Path(args.work) / "cells", read_only=args.read_only),
-                            options=dataclasses.replace(TrainOptions(), mining_rounds=args.mining_rounds,
-                                                        cnn_shift=args.cnn_shift, mining_select=args.mining_select,
-                                                        mining_patience=args.mining_patience, box_model=args.box_model),
+                            options=train_options(args),
                             scales=None if args.scales is None else tuple(args.scales),
                             scale_check=not args.no_scale_check, patches=not args.no_patches,
                             max_test_videos=args.max_test_videos, eval_split=args.eval_split)
