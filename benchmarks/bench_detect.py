@@ -255,6 +255,8 @@ def main() -> int:
     p.add_argument("--ada-rounds", type=int, default=None,
                    help="the toy AdaBoost's boosting rounds (default: TrainOptions.ada_rounds, as `synthaug train`)")
     args = p.parse_args()
+    if args.ada_rounds is not None and args.ada_rounds < 1:
+        p.error(f"--ada-rounds must be >= 1, got {args.ada_rounds}")
 
     from synthaug.detectors.base import get_detector_class, list_detectors, load_detector
     from synthaug.detectors.sliding import DEFAULT_SCALES
@@ -275,7 +277,7 @@ def main() -> int:
         pos, neg = _toy_data()
         from synthaug.detectors.training import TrainOptions
 
-        builders = _builders(args.ada_rounds or TrainOptions.ada_rounds)
+        builders = _builders(TrainOptions.ada_rounds if args.ada_rounds is None else args.ada_rounds)
         for kind in args.kinds or list_detectors():
             cls = get_detector_class(kind)
             build = builders.get(kind) or (lambda pos, neg, cls=cls: cls.example(torch.Generator().manual_seed(0)) if hasattr(cls, "example") else None)

@@ -31,7 +31,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from synthaug._io import check_header
+from synthaug._io import atomic_write_bytes, check_header, digest, sha256_file
 from synthaug.data.video import find_video
 from synthaug.detectors.frames import VideoFrames
 from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mining
@@ -414,6 +414,13 @@ class _TrainingSet:
     seedset: Any = None
 
 
+def _given_work_dir(work_dir: str | Path | None, out: str | Path | None) -> Path | None:
+    """The ingest folder of :func:`train_from_videos`: ``work_dir``, else ``<out>.work``; None without either."""
+    if work_dir is not None:
+        return Path(work_dir)
+    return None if out is None else Path(str(out) + ".work")
+
+
 def _seed_set(vs: VideoSet, sp: Mapping[str, Any], *, seedset: str | Path | None, seed_count: int | None,
               work_dir: str | Path | None, out: str | Path | None, ingest_seed: int, ingest_workers: int,
               negative_classes: Sequence[str], say: Callable[[str], None]) -> Any:
@@ -423,14 +430,12 @@ def _seed_set(vs: VideoSet, sp: Mapping[str, Any], *, seedset: str | Path | None
 
     if seedset is not None:
         return SeedSet.load(seedset)
-    if work_dir is None:
-        if out is None:
-            import tempfile
+    work = _given_work_dir(work_dir, out)
+    if work is None:
+        import tempfile
 
-            work_dir = Path(tempfile.mkdtemp(prefix="synthaug_train_"))
-        else:
-            work_dir = Path(str(out) + ".work")
-    return _seed_set_by_ingest(vs, sp, int(seed_count), Path(work_dir), ingest_seed=ingest_seed,  # type: ignore[arg-type]
+        work = Path(tempfile.mkdtemp(prefix="synthaug_train_"))
+    return _seed_set_by_ingest(vs, sp, int(seed_count), work, ingest_seed=ingest_seed,  # type: ignore[arg-type]
                                workers=ingest_workers, log=say, negative_classes=negative_classes)
 
 
@@ -521,11 +526,10 @@ BOX_CACHE_VERSION = 1
 
 
 def _box_cache_dir(work_dir: str | Path | None, out: str | Path | None) -> Path | None:
-    """Where fitted box regressors are kept between trainings: ``<work>/box_regressors`` (the ingest folder, as
-    :func:`train_from_videos` resolves it: ``work_dir``, else ``<out>.work``); None when neither is given."""
-    if work_dir is not None:
-        return Path(work_dir) / "box_regressors"
-    return None if out is None else Path(str(out) + ".work") / "box_regressors"
+    """Where fitted box regressors are kept between trainings: ``<work>/box_regressors`` of the ingest folder
+    (:func:`_given_work_dir`); None when neither ``work_dir`` nor ``out`` is given."""
+    work = _given_work_dir(work_dir, out)
+    return None if work is None else work / "box_regressors"
 
 
 def box_regressor_key(vs: VideoSet, videos: Sequence[str], options: TrainOptions, aspect: float, seed: int) -> str:
@@ -533,18 +537,16 @@ def box_regressor_key(vs: VideoSet, videos: Sequence[str], options: TrainOptions
     modification time of each video file, the bytes of its label file), the box model, the frame stride, the
     window's aspect, the seed (its jitter and initialisation) and :data:`BOX_CACHE_VERSION`. The detector, its
     positives and the mining do not enter: the box map is fitted on the labelled boxes alone, before them."""
-    import hashlib
-
     files = []
     for stem in sorted(videos):
         video = find_video(vs.videos_dir, stem)
         st = video.stat() if video is not None else None
         label = Path(vs.labels_dir) / f"{stem}.json"
         files.append([stem, None if st is None else [video.name, st.st_size, st.st_mtime_ns],
-                      hashlib.sha256(label.read_bytes()).hexdigest() if label.is_file() else None])
+                      sha256_file(label) if label.is_file() else None])
     ident = {"what": "box_regressor", "version": BOX_CACHE_VERSION, "model": options.box_model,
              "stride": int(options.box_stride), "aspect": round(float(aspect), 9), "seed": int(seed), "videos": files}
-    return hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()[:24]
+    return digest(ident, length=24)
 
 
 def _box_regressor(vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, box_in_window: Any, *, seed: int,
@@ -577,8 +579,6 @@ def _box_regressor(vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, b
     regressor, box_info = _fit_box_regressor(vs, sp, options, aspect, seed=seed, say=say)
     if path is not None:
         import io
-
-        from synthaug._io import atomic_write_bytes
 
         buf = io.BytesIO()
         torch.save({"format": BOX_CACHE_FORMAT, "version": BOX_CACHE_VERSION, "state": regressor.state_dict(),
