@@ -112,6 +112,42 @@ def test_cells_are_reused_and_keyed_by_what_changes_a_result(ws, curve, monkeypa
     assert base.identity(R.Condition("renamed", "hog", seed_count=6), 0) == ident  # the label is not the condition
 
 
+def test_cells_that_only_score_differently_read_the_trained_detector_back(ws, curve, monkeypatch):
+    store = Path(ws["paths"].work_dir) / "cells" / "detectors"
+    assert len(list(store.glob("*.pt"))) == 4 and len(CellCache(store)) == 4  # one per (condition, seed)
+    real_train = R.train_from_videos
+    calls = []
+
+    def no_training(*a, **k):
+        calls.append(1)
+        return real_train(*a, **k)
+
+    monkeypatch.setattr(R, "train_from_videos", no_training)
+    c = R.Condition("hog / 6 seeds", "hog", seed_count=6)
+    runner = make_runner(ws, scale_check=False, patches=False)  # a new cell (other scored scales, no patches)
+    assert runner.identity(c, 1) != make_runner(ws).identity(c, 1)
+    assert runner.training_identity(c, 1) == make_runner(ws).training_identity(c, 1)
+    assert runner.training_identity(c, 1) != make_runner(ws, options=dataclasses.replace(FAST, mining_rounds=2)
+                                                         ).training_identity(c, 1)
+    res = runner.run(c, seeds=[1])[1.0]
+    assert calls == []
+    # the detector read back makes the very detections the trained one made in the learning curve's cell
+    ref = curve["results"]["hog"]["hog / 6 seeds"]
+    for va, vb in zip(res.seeds[1].videos, ref.seeds[1].videos):
+        assert va.scores.tolist() == vb.scores.tolist() and va.tp.tolist() == vb.tp.tolist()
+    cell = CellCache(Path(ws["paths"].work_dir) / "cells").get(runner.identity(c, 1))
+    assert cell["detector_read_back"] is True
+    # a damaged stored detector is trained again (once) and replaced
+    ckpt = CellCache(store).path(runner.training_identity(c, 1)).with_suffix(".pt")
+    ckpt.write_bytes(b"not a checkpoint")
+    val = make_runner(ws, eval_split="val", patches=False, scale_check=False)
+    val.run(c, seeds=[1])
+    assert calls == [1]
+    from synthaug.detectors.base import load_detector
+
+    assert load_detector(ckpt).kind == "hog"
+
+
 def test_eval_split_val_scores_the_validation_videos_in_their_own_cells(ws, curve):
     c = R.Condition("hog / 6 seeds", "hog", seed_count=6)
     val = make_runner(ws, eval_split="val", patches=False, scale_check=False)

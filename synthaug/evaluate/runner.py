@@ -10,7 +10,10 @@ optionally, the scale check and the patch protocol). Each (condition, seed) is
 one cell of a :class:`~synthaug.evaluate.cells.CellCache`, keyed by the
 protocol's fingerprint, the condition, the seed, the training budgets, the
 pyramid scales and :data:`TRAINING_VERSION`; several processes may run the
-same experiment at once (each cell is computed once).
+same experiment at once (each cell is computed once). The trained detectors are
+kept beside the cells (``<cache>/detectors/``): a cell that differs only in what
+it scores (the validation split, the scale check, the patch protocol) reads its
+detector back instead of training it again.
 
 Results are :class:`~synthaug.evaluate.results.ProtocolResult`: bootstrap CIs
 over test videos, paired differences between conditions (same seeds, same
@@ -234,7 +237,53 @@ class ProtocolRunner:
 
         return make
 
-    def _train_and_score(self, condition: Condition, seed: int) -> dict[str, Any]:
+    def training_identity(self, condition: Condition, seed: int) -> dict[str, Any]:
+        """What the trained detector of a cell depends on: the cell's identity without what is only scored.
+
+        Cells that differ only in the split they score, the scale check, the patch protocol or the number of
+        test videos share one trained detector (the mining's validation frames are the protocol's either way).
+        """
+        ident = self.identity(condition, seed)
+        for k in ("scored_scales", "patches", "max_test_videos", "eval_split"):
+            ident.pop(k, None)
+        return {**ident, "what": "trained_detector"}
+
+    def _trained(self, condition: Condition, seed: int) -> tuple[Any, dict[str, Any], float, bool]:
+        """The cell's detector, its training metadata, its training seconds and whether it was read back.
+
+        Trained detectors are kept in ``<cache>/detectors/<key>.pt``, with a cell of the same key holding the
+        training's metadata, so a cell that only scores differently reads the detector back instead of training
+        it again. A second process asking for the same detector waits on the first one's lock; a stored file
+        that is missing or unreadable is trained again and replaced.
+        """
+        from synthaug.detectors.base import load_detector, save_detector
+
+        store = CellCache(self.cache.root / "detectors")  # type: ignore[union-attr]
+        ident = self.training_identity(condition, seed)
+        ckpt = store.path(ident).with_suffix(".pt")
+        doc = store.get(ident)
+        if doc is not None:
+            try:
+                det = load_detector(ckpt)
+            except (FileNotFoundError, ValueError) as e:
+                self.log(f"    stored detector unusable ({e}); training it again")
+                store.path(ident).unlink(missing_ok=True)
+            else:
+                self.log(f"    detector read back from {ckpt} (trained in {doc['train_s']:.0f} s)")
+                return det, doc["meta"], doc["train_s"], True
+        trained: list[Any] = []
+
+        def train() -> dict[str, Any]:
+            det, meta, seconds = self._train(condition, seed)
+            save_detector(det, ckpt)
+            trained.append(det)
+            return {"meta": _json_safe(meta), "train_s": round(seconds, 1), "file": ckpt.name}
+
+        doc = store.get_or_compute(ident, train)
+        det = trained[0] if trained else load_detector(ckpt)  # else: another process trained it while we waited
+        return det, doc["meta"], doc["train_s"], not trained
+
+    def _train(self, condition: Condition, seed: int) -> tuple[Any, dict[str, Any], float]:
         t0 = time.perf_counter()
         options = self.options if self.scales is None else dataclasses.replace(self.options, scales=tuple(self.scales))
         det, meta = train_from_videos(
@@ -248,9 +297,13 @@ class ProtocolRunner:
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
-        t_train = time.perf_counter() - t0
+        return det, meta, time.perf_counter() - t0
+
+    def _train_and_score(self, condition: Condition, seed: int) -> dict[str, Any]:
+        t0 = time.perf_counter()
+        det, meta, t_train, read_back = self._trained(condition, seed)
         out: dict[str, Any] = {"train_s": round(t_train, 1), "train": _json_safe(meta), "scales": {},
-                               "machine": machine_info()}
+                               "machine": machine_info(), "detector_read_back": read_back}
         for s in self.scales_scored():
             es = self.eval_set(s)
             t1 = time.perf_counter()
