@@ -277,7 +277,7 @@ def main() -> int:
         pos, neg = _toy_data()
         from synthaug.detectors.training import TrainOptions
 
-        builders = _builders(TrainOptions.ada_rounds if args.ada_rounds is None else args.ada_rounds)
+        builders = _builders(TrainOptions().for_family("adaboost").ada_rounds if args.ada_rounds is None else args.ada_rounds)
         for kind in args.kinds or list_detectors():
             cls = get_detector_class(kind)
             build = builders.get(kind) or (lambda pos, neg, cls=cls: cls.example(torch.Generator().manual_seed(0)) if hasattr(cls, "example") else None)

@@ -241,7 +241,7 @@ def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(caps
 
     base = ident(box_model="ridge")
     later = ("mining_select", "mining_patience", "box_model")
-    assert base["options"] == {k: v for k, v in dataclasses.asdict(TrainOptions()).items() if k not in later}
+    assert base["options"] == {k: v for k, v in dataclasses.asdict(TrainOptions(ada_rounds=100)).items() if k not in later}
     assert ident(mining_select="fp", mining_patience=0, box_model="ridge") == base
     if R.TRAINING_VERSION == 6:  # the key computed before the three options existed (same protocol, paths, condition)
         assert cell_key(base) == "6475b1e4fead8163625ca26e"
@@ -255,7 +255,7 @@ def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(caps
     args = R.build_parser().parse_args(["synthetic", "--mining-select", "ap", "--mining-patience", "1", "--out", "x"])
     assert (args.mining_select, args.mining_patience) == ("ap", 1)
     args = R.build_parser().parse_args(["learning-curve", "--out", "x"])
-    assert (args.mining_select, args.mining_patience, args.box_model) == ("fp", 0, "ensemble")
+    assert (args.mining_select, args.mining_patience, args.box_model) == (None, None, "ensemble")  # the family's
     assert R.build_parser().parse_args(["learning-curve", "--box-model", "ridge", "--out", "x"]).box_model == "ridge"
     for bad in (["--mining-patience", "-1"], ["--mining-select", "recall"], ["--box-model", "svm"]):
         with pytest.raises(SystemExit) as e:
@@ -275,7 +275,7 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
                                         "--cnn-epochs", "5", "--mining-rounds", "2", "--out", "x"])
     opts = R.train_options(args)
     assert (opts.ada_rounds, opts.ada_candidates, opts.cnn_epochs, opts.mining_rounds) == (300, 4000, 5, 2)
-    assert dataclasses.replace(opts, ada_rounds=100, ada_candidates=2000, cnn_epochs=12, mining_rounds=3) == default
+    assert dataclasses.replace(opts, ada_rounds=None, ada_candidates=2000, cnn_epochs=12, mining_rounds=3) == default
     proto = Protocol.from_dict(example_protocol_dict(name="tiny", split_file="split.json"))
     paths = R.DataPaths("videos", "labels", "split.json", "work")
     c = R.Condition("adaboost / 12 seeds", "adaboost", seed_count=12)
@@ -283,7 +283,16 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
     def key(o):
         return cell_key(R.ProtocolRunner(proto, "drone", paths, options=o, log=lambda m: None).identity(c, 0))
 
-    assert key(dataclasses.replace(default, ada_rounds=300)) != key(default)
+    assert key(dataclasses.replace(default, ada_rounds=100)) != key(default)
+    # AdaBoost's family defaults (300 rounds, mining by validation AP with one round of patience) written out or
+    # left at None are one cell; HOG's key does not see AdaBoost's defaults
+    assert key(dataclasses.replace(default, ada_rounds=300, mining_select="ap", mining_patience=1)) == key(default)
+    assert key(dataclasses.replace(default, mining_patience=0)) != key(default)
+    hog = R.Condition("hog / 12 seeds", "hog", seed_count=12)
+    ident = R.ProtocolRunner(proto, "drone", paths, options=default, log=lambda m: None).identity(hog, 0)
+    assert ident == R.ProtocolRunner(proto, "drone", paths, options=TrainOptions(ada_rounds=100, mining_select="fp",
+                                                                                   mining_patience=0),
+                                     log=lambda m: None).identity(hog, 0)
     assert key(dataclasses.replace(default, ada_candidates=4000)) != key(default)
     for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"]):
         with pytest.raises(SystemExit) as e:

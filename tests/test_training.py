@@ -15,7 +15,7 @@ import torch
 from synthaug.detectors.base import PatchDetector
 from synthaug.detectors.frames import MiningFrame, VideoFrames
 from synthaug.detectors.mining import mine_hard_negatives, validation_false_positives
-from synthaug.detectors.training import TrainOptions, train_with_mining
+from synthaug.detectors.training import TrainOptions, train_detector, train_with_mining
 from synthaug.detectors.video_training import TrainingInputError, discover_videos, split_by_video
 
 GREY = 200
@@ -308,10 +308,36 @@ def test_train_options_refuse_a_bad_mining_rule(field: str, value: Any) -> None:
 def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults() -> None:
     from dataclasses import asdict
 
-    old = {k: v for k, v in asdict(TrainOptions()).items() if k not in ("mining_select", "mining_patience")}
-    assert TrainOptions().key_fields() == old
-    assert TrainOptions(mining_select="ap").key_fields() == {**old, "mining_select": "ap"}
-    assert TrainOptions(mining_patience=1).key_fields() == {**old, "mining_patience": 1}
+    old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items() if k not in ("mining_select", "mining_patience")}
+    for kind in ("hog", "cnn", None):  # the keys of before the family defaults
+        assert TrainOptions().key_fields(kind) == old
+        assert TrainOptions(mining_select="ap").key_fields(kind) == {**old, "mining_select": "ap"}
+        assert TrainOptions(mining_patience=1).key_fields(kind) == {**old, "mining_patience": 1}
+    ada = TrainOptions().key_fields("adaboost")
+    assert (ada["ada_rounds"], ada["mining_select"], ada["mining_patience"]) == (300, "ap", 1)
+    assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100).key_fields("adaboost") == old
+
+
+def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Fields left at None take the family's default where a detector is trained: AdaBoost gets 300 rounds and
+    one round of patience by validation AP, HOG and the CNN keep the fewest validation FPs without patience;
+    a value given is kept."""
+    import synthaug.detectors.adaboost as ab
+
+    seen = []
+    monkeypatch.setattr(ab, "train_adaboost", lambda pos, neg, n_rounds, candidates, seed: seen.append(n_rounds) or 1 / 0)
+    from synthaug.detectors.toy import toy_patches
+
+    pos, neg = toy_patches(8, 8, seed=0)
+    for opts, want in ((TrainOptions(), 300), (TrainOptions(ada_rounds=7), 7)):
+        with pytest.raises(ZeroDivisionError):
+            train_detector("adaboost", pos, neg, 0, options=opts)
+        assert seen[-1] == want
+    assert TrainOptions().for_family("cnn") == TrainOptions(ada_rounds=100, mining_select="fp", mining_patience=0)
+    assert TrainOptions().for_family("adaboost") == TrainOptions(ada_rounds=300, mining_select="ap", mining_patience=1)
+    assert TrainOptions().for_family("some_plugin") == TrainOptions().for_family("hog")
+    with pytest.raises(ValueError, match="ada_rounds"):
+        TrainOptions(ada_rounds=0)
 
 
 def test_cnn_positive_weights_reach_every_mining_round(monkeypatch: pytest.MonkeyPatch) -> None:

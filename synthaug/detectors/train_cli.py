@@ -36,7 +36,7 @@ _DETECTORS = ("hog", "adaboost", "cnn")
 _BUDGETS = {
     "hog_components": ("--hog-components", 1, "HOG mixture components (aspect clusters)"),
     "hog_mining_rounds": ("--hog-mining-rounds", 0, "HOG's own cache-mining rounds per training"),
-    "ada_rounds": ("--ada-rounds", 1, "AdaBoost boosting rounds"),
+    "ada_rounds": ("--ada-rounds", 1, "AdaBoost boosting rounds (default 300)"),
     "ada_candidates": ("--ada-candidates", 1, "AdaBoost weak-learner candidates scored per round"),
     "cnn_epochs": ("--cnn-epochs", 1, "CNN passes over the training patches"),
     "cnn_max_steps": ("--cnn-max-steps", 1, "cap on CNN optimiser steps"),
@@ -103,9 +103,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mining-per-frame", type=int, default=d["mining_per_frame"], help="false positives kept per mined frame")
     parser.add_argument("--mining-select", choices=list(MINING_SELECT), default=d["mining_select"],
                         help="the mining round kept: fewest validation false positives (fp) or highest validation AP of "
-                             "the same detections (ap)")
+                             "the same detections (ap); default: the family's (fp for hog and cnn, ap for adaboost)")
     parser.add_argument("--mining-patience", type=int, default=d["mining_patience"],
-                        help="mining rounds without a new best still run before stopping (0: stop at the first)")
+                        help="mining rounds without a new best still run before stopping (0: stop at the first); "
+                             "default: the family's (0 for hog and cnn, 1 for adaboost)")
     add_option(parser, "--val-frame-stride", aliases=["--val-stride"], type=int, default=d["val_stride"],
                help="validation false positives counted on every K-th validation frame")
     parser.add_argument("--scales", type=float, nargs="+", default=None,
@@ -135,7 +136,7 @@ def main(args: argparse.Namespace) -> int:
                             ("--mining-per-frame", args.mining_per_frame, 1), ("--val-frame-stride", args.val_frame_stride, 1),
                             ("--mining-rounds", args.mining_rounds, 0), ("--mining-patience", args.mining_patience, 0),
                             ("--workers", args.workers, 1)):
-        if value < low:
+        if value is not None and value < low:  # None: the family's default
             return _err(f"{opt}: must be >= {low}, got {value}")
     if args.seed_counts is not None and args.seed_counts < 1:
         return _err(f"--seed-counts: must be >= 1, got {args.seed_counts}")

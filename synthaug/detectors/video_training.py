@@ -678,7 +678,7 @@ def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, lab
                                               "negative-class videos")},
         "box_in_window": [float(v) for v in ts.box_in_window],
         "box_regression": box_info,
-        "options": asdict(options), "mining": res.log,
+        "options": asdict(options.for_family(kind)), "mining": res.log,
         "seconds": seconds,
         "command": command,
         "checkpoint": None if out is None else str(out),

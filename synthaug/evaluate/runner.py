@@ -209,7 +209,7 @@ class ProtocolRunner:
             path = Path(condition.params.format(seed=seed))
             cond["params_sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()[:16] if path.is_file() else None
         return {"what": "protocol_cell", "protocol": self.protocol.fingerprint(), "class": self.class_name,
-                "condition": cond, "seed": int(seed), "options": self.options.key_fields(),
+                "condition": cond, "seed": int(seed), "options": self.options.key_fields(condition.kind),
                 "scales": None if self.scales is None else list(self.scales), "scored_scales": list(self.scales_scored()),
                 "patches": self.patches, "max_test_videos": self.max_test_videos,
                 **({} if self.eval_split == "test" else {"eval_split": self.eval_split}),
@@ -563,10 +563,11 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--cnn-shift", type=int, default=TrainOptions.cnn_shift, help="CNN positives' random shift (pixels)")
     q.add_argument("--mining-select", default=TrainOptions.mining_select, choices=list(MINING_SELECT),
                    help="the mining round kept: fewest validation false positives (fp) or highest validation AP of "
-                        "the same detections (ap); part of a cell's key only when not fp")
+                        "the same detections (ap); default: the family's (fp for hog and cnn, ap for adaboost); part "
+                        "of a cell's key only when not fp")
     q.add_argument("--mining-patience", type=int_at_least(0), default=TrainOptions.mining_patience,
-                   help="mining rounds without a new best still run before stopping (0: stop at the first); part of "
-                        "a cell's key only when not 0")
+                   help="mining rounds without a new best still run before stopping (0: stop at the first; default: "
+                        "the family's, 0 for hog and cnn, 1 for adaboost); part of a cell's key only when not 0")
     q.add_argument("--box-model", default=TrainOptions.box_model, choices=list(BOX_MODELS),
                    help="the box regression: a small CNN on the detection's context pixels (cnn), ridge on its HOG "
                         "cells (ridge, the model before this option: its cells keep their keys) or the mean of both "
