@@ -280,8 +280,10 @@ class ProtocolRunner:
             return {"meta": _json_safe(meta), "train_s": round(seconds, 1), "file": ckpt.name}
 
         doc = store.get_or_compute(ident, train)
-        det = trained[0] if trained else load_detector(ckpt)  # else: another process trained it while we waited
-        return det, doc["meta"], doc["train_s"], not trained
+        if trained:
+            return trained[0], doc["meta"], doc["train_s"], False
+        self.log(f"    detector read back from {ckpt}, trained by another process while this one waited")
+        return load_detector(ckpt), doc["meta"], doc["train_s"], True
 
     def _train(self, condition: Condition, seed: int) -> tuple[Any, dict[str, Any], float]:
         t0 = time.perf_counter()
