@@ -69,11 +69,10 @@ BOX_MODELS: tuple[str, ...] = ("cnn", "ridge", "ensemble")
 """The box regression's models (``TrainOptions.box_model``)."""
 FAMILY_DEFAULTS: dict[str | None, dict[str, Any]] = {
     None: {"ada_rounds": 100, "mining_select": "fp", "mining_patience": 0},
-    "hog": {"ada_rounds": 100, "mining_select": "fp", "mining_patience": 0},
-    "cnn": {"ada_rounds": 100, "mining_select": "fp", "mining_patience": 0},
     "adaboost": {"ada_rounds": 300, "mining_select": "ap", "mining_patience": 1},
 }
-"""What :class:`TrainOptions` fields left at None mean for each family (``None``: any other registered family).
+"""What :class:`TrainOptions` fields left at None mean for each family (``None``: HOG, the CNN and any other
+registered family).
 
 AdaBoost's: its validation false-positive count jumps after the first mining round (184 -> 313, 222 -> 347 on the
 halmstad drones) and the old rule kept round 0, unmined; with one round of patience the next rounds fall to 49 / 89.
@@ -199,7 +198,7 @@ class TrainOptions:
             >>> (o.for_family("hog").mining_select, TrainOptions(mining_patience=2).for_family("adaboost").mining_patience)
             ('fp', 2)
         """
-        fam = FAMILY_DEFAULTS.get(kind or "", FAMILY_DEFAULTS[None])
+        fam = FAMILY_DEFAULTS.get(kind, FAMILY_DEFAULTS[None])
         return replace(self, **{k: v for k, v in fam.items() if getattr(self, k) is None})
 
     def key_fields(self, kind: str | None = None) -> dict[str, Any]:

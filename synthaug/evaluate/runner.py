@@ -304,7 +304,7 @@ class ProtocolRunner:
     def _train_and_score(self, condition: Condition, seed: int) -> dict[str, Any]:
         t0 = time.perf_counter()
         det, meta, t_train, read_back = self._trained(condition, seed)
-        out: dict[str, Any] = {"train_s": round(t_train, 1), "train": _json_safe(meta), "scales": {},
+        out: dict[str, Any] = {"train_s": round(t_train, 1), "train": meta, "scales": {},  # meta: plain JSON already
                                "machine": machine_info(), "detector_read_back": read_back}
         for s in self.scales_scored():
             es = self.eval_set(s)
