@@ -148,6 +148,42 @@ def test_cells_that_only_score_differently_read_the_trained_detector_back(ws, cu
     assert load_detector(ckpt).kind == "hog"
 
 
+def test_detect_scales_score_another_pyramid_with_the_stored_detector(ws, curve, monkeypatch):
+    """``detect_scales``: the scored detections use another pyramid than the training's; the cell is new, the
+    trained detector is the stored one (no training), and the detections are those of the detector run directly
+    with that pyramid."""
+    from synthaug.detectors.base import load_detector
+    from synthaug.evaluate.matching import match_videos
+    from synthaug.evaluate.videos import detect_on_eval_set, refine_detections
+
+    def no_training(*a, **k):
+        raise AssertionError("a stored detector was trained again")
+
+    monkeypatch.setattr(R, "train_from_videos", no_training)
+    c = R.Condition("hog / 6 seeds", "hog", seed_count=6)
+    plain = make_runner(ws, scale_check=False, patches=False)
+    fine = make_runner(ws, scale_check=False, patches=False, detect_scales=(1.25, 1.0))
+    assert fine.identity(c, 0) != plain.identity(c, 0)
+    assert fine.identity(c, 0)["detect_scales"] == [1.25, 1.0] and "detect_scales" not in plain.identity(c, 0)
+    assert fine.training_identity(c, 0) == plain.training_identity(c, 0)
+    res = fine.run(c, seeds=[0])[1.0]
+    det = load_detector(CellCache(Path(ws["paths"].work_dir) / "cells" / "detectors").path(
+        plain.training_identity(c, 0)).with_suffix(".pt"))
+    es, nms = fine.eval_set(1.0), ws["proto"].detection.nms_iou
+
+    def direct(scales):
+        raw = detect_on_eval_set(det, es, scales=scales, nms_iou=nms,
+                                   max_detections=ws["proto"].detection.max_detections, refine_boxes=False)
+        return match_videos(es.stems, refine_detections(det, es, raw, nms_iou=nms), es.boxes, ws["proto"])
+
+    ref, train_pyramid = direct((1.25, 1.0)), direct((1.0, 0.8))
+    assert [v.scores.tolist() for v in res.seeds[0].videos] == [v.scores.tolist() for v in ref]
+    assert [v.tp.tolist() for v in res.seeds[0].videos] == [v.tp.tolist() for v in ref]
+    assert [v.scores.tolist() for v in ref] != [v.scores.tolist() for v in train_pyramid]
+    args = R.build_parser().parse_args(["learning-curve", "--detect-scales", "1.5", "1", "--out", "x"])
+    assert args.detect_scales == [1.5, 1.0] and args.scales is None
+
+
 def test_eval_split_val_scores_the_validation_videos_in_their_own_cells(ws, curve):
     c = R.Condition("hog / 6 seeds", "hog", seed_count=6)
     val = make_runner(ws, eval_split="val", patches=False, scale_check=False)

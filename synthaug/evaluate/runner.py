@@ -140,7 +140,11 @@ class ProtocolRunner:
         cache: the cell cache.
         options: training budgets (part of every cell's key: :meth:`TrainOptions.key_fields`, which leaves out
             the fields added later while they are at their former values, so older cells stay valid).
-        scales: pyramid factors of detection (None: the detectors' default; part of the key).
+        scales: pyramid factors of mining, validation and detection (None: the detectors' default; part of the
+            key and of the trained detector's).
+        detect_scales: pyramid factors of the scored detections only (None: ``scales``). Part of the cell's key
+            when set, not of the trained detector's: a detector that is slow to train is scored with another
+            pyramid without training it again.
         scale_check: also score the protocol's ``scale_check`` factors.
         patches: also score the paper's patch protocol.
         max_test_videos: use only the first this-many test videos (smoke runs; part of the key).
@@ -155,6 +159,7 @@ class ProtocolRunner:
     cache: CellCache | None = None
     options: TrainOptions = field(default_factory=TrainOptions)
     scales: tuple[float, ...] | None = None
+    detect_scales: tuple[float, ...] | None = None
     scale_check: bool = True
     patches: bool = True
     max_test_videos: int | None = None
@@ -213,6 +218,7 @@ class ProtocolRunner:
                 "scales": None if self.scales is None else list(self.scales), "scored_scales": list(self.scales_scored()),
                 "patches": self.patches, "max_test_videos": self.max_test_videos,
                 **({} if self.eval_split == "test" else {"eval_split": self.eval_split}),
+                **({} if self.detect_scales is None else {"detect_scales": list(self.detect_scales)}),
                 "split_file": self.paths.split_file, "training_version": TRAINING_VERSION}
 
     def params_for(self, condition: Condition, seed: int) -> Any:
@@ -240,11 +246,12 @@ class ProtocolRunner:
     def training_identity(self, condition: Condition, seed: int) -> dict[str, Any]:
         """What the trained detector of a cell depends on: the cell's identity without what is only scored.
 
-        Cells that differ only in the split they score, the scale check, the patch protocol or the number of
-        test videos share one trained detector (the mining's validation frames are the protocol's either way).
+        Cells that differ only in the split they score, the scale check, the patch protocol, the pyramid of
+        the scored detections or the number of test videos share one trained detector (the mining's validation
+        frames are the protocol's either way).
         """
         ident = self.identity(condition, seed)
-        for k in ("scored_scales", "patches", "max_test_videos", "eval_split"):
+        for k in ("scored_scales", "patches", "max_test_videos", "eval_split", "detect_scales"):
             ident.pop(k, None)
         return {**ident, "what": "trained_detector"}
 
@@ -309,7 +316,8 @@ class ProtocolRunner:
         for s in self.scales_scored():
             es = self.eval_set(s)
             t1 = time.perf_counter()
-            raw = detect_on_eval_set(det, es, scales=self.scales, nms_iou=self.protocol.detection.nms_iou,
+            raw = detect_on_eval_set(det, es, scales=self.scales if self.detect_scales is None else self.detect_scales,
+                                     nms_iou=self.protocol.detection.nms_iou,
                                      max_detections=self.protocol.detection.max_detections, refine_boxes=False)
             t_det = time.perf_counter() - t1
             dets = refine_detections(det, es, raw, nms_iou=self.protocol.detection.nms_iou)  # what detect_multiscale reports
@@ -559,6 +567,9 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--scales", type=positive_float, nargs="+", default=None,
                    help="image pyramid resize factors of mining, validation and scoring (part of a cell's key; "
                         "default: synthaug.detectors.sliding.DEFAULT_SCALES)")
+    q.add_argument("--detect-scales", type=positive_float, nargs="+", default=None,
+                   help="image pyramid of the scored detections only (default: --scales); part of a cell's key but "
+                        "not of its trained detector's, which is read back when stored")
     q.add_argument("--no-patches", action="store_true", help="skip the paper's patch protocol")
     q.add_argument("--max-test-videos", type=int, default=None, help="first N test videos only (smoke runs)")
     q.add_argument("--mining-rounds", type=int, default=TrainOptions.mining_rounds, help="hard-negative mining rounds")
@@ -633,6 +644,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     runner = ProtocolRunner(proto, args.class_name, paths, CellCache(Path(args.work) / "cells", read_only=args.read_only),
                             options=train_options(args),
                             scales=None if args.scales is None else tuple(args.scales),
+                            detect_scales=None if args.detect_scales is None else tuple(args.detect_scales),
                             scale_check=not args.no_scale_check, patches=not args.no_patches,
                             max_test_videos=args.max_test_videos, eval_split=args.eval_split)
     t0 = time.perf_counter()
