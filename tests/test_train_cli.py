@@ -118,6 +118,44 @@ def test_box_regressor_is_cached_in_the_work_folder_by_its_inputs(ws: dict[str, 
     assert box_regressor_key(discover_videos(ws["videos"], copy), stems, TrainOptions(), 1.0, 0) != base
 
 
+def test_two_trainings_needing_one_box_regressor_fit_it_once(ws: dict[str, Path], tmp_path: Path,
+                                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    # two trainings started side by side (threads here; processes in the experiments) with the same inputs: the
+    # first fits the box map under its lock, the second waits and reads the very same map back
+    import threading
+    import time
+
+    from synthaug.detectors import video_training as VT
+    from synthaug.detectors.training import TrainOptions
+
+    vs = VT.discover_videos(ws["videos"], ws["labels"])
+    sp = {"train": sorted(s for s, c in vs.classes.items() if c == "drone")}
+    fits: list[int] = []
+    real_fit = VT._fit_box_regressor
+
+    def slow_fit(*a: Any, **k: Any) -> Any:
+        fits.append(1)
+        time.sleep(1.0)  # long enough for the other thread to reach the lock
+        return real_fit(*a, **k)
+
+    monkeypatch.setattr(VT, "_fit_box_regressor", slow_fit)
+    out: dict[int, Any] = {}
+
+    def run(i: int) -> None:
+        out[i] = VT._box_regressor(vs, sp, TrainOptions(box_model="ridge"), (0, 0, 20, 20), seed=0,
+                                   say=lambda m: None, cache_dir=tmp_path / "box")
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert fits == [1] and len(list((tmp_path / "box").glob("ridge_*.pt"))) == 1
+    infos = sorted((out[0][1], out[1][1]), key=lambda d: "cached" in d)
+    assert "cached" not in infos[0] and infos[1]["fit_seconds"] == infos[0]["seconds"]  # one fitted, one read back
+    assert torch.equal(out[0][0].state_dict()["weights"], out[1][0].state_dict()["weights"])
+
+
 def test_mining_round_choice_options_reach_the_training(ws: dict[str, Path], tmp_path: Path) -> None:
     # --mining-select / --mining-patience (the runner's options) are synthaug train's too, and recorded
     out = tmp_path / "ap.pt"

@@ -31,7 +31,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from synthaug._io import atomic_write_bytes, check_header, digest, sha256_file
+from synthaug._io import atomic_write_bytes, check_header, digest, exclusive_lock, sha256_file
 from synthaug.data.video import find_video
 from synthaug.detectors.frames import VideoFrames
 from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mining
@@ -554,36 +554,44 @@ def _box_regressor(vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, b
     """The box regressor fitted on the training videos (``options.box_regression``), and its metadata.
 
     With ``cache_dir``, a regressor fitted earlier from the same inputs (:func:`box_regressor_key`) is read back
-    instead of fitted again (the ensemble's CNN map costs minutes); a new fit is written there (atomically, so two
-    trainings writing the same key leave one whole file)."""
+    instead of fitted again (the ensemble's CNN map costs minutes); a new fit is written there atomically. Two
+    trainings needing the same regressor at once share its lock: one fits it, the other waits and reads it back."""
     if not (options.box_regression and sp["train"]):
         return None, None
     aspect = float(box_in_window[2]) / float(box_in_window[3])
-    path = None if cache_dir is None else \
-        cache_dir / f"{options.box_model}_{box_regressor_key(vs, sp['train'], options, aspect, seed)}.pt"
-    if path is not None and path.is_file():
-        from synthaug.detectors.box_cnn import regressor_from_state_dict
-
-        t0 = time.perf_counter()
-        try:
-            saved = check_header(torch.load(path, map_location="cpu", weights_only=False), format=BOX_CACHE_FORMAT,
-                                 version=BOX_CACHE_VERSION, what="cached box regressor", source=path)
-            regressor = regressor_from_state_dict(saved["state"])
-        except Exception as e:  # a damaged file is fitted again and replaced
-            say(f"box regression: cached {path} unreadable ({type(e).__name__}: {e}); fitting again")
-        else:
-            box_info = dict(saved["info"], cached=str(path), fit_seconds=saved["info"].get("seconds"),
-                            seconds=round(time.perf_counter() - t0, 1))
-            say(f"box regression ({options.box_model}): reused {path} (fitted in {box_info['fit_seconds']} s)")
-            return regressor, box_info
-    regressor, box_info = _fit_box_regressor(vs, sp, options, aspect, seed=seed, say=say)
-    if path is not None:
+    if cache_dir is None:
+        return _fit_box_regressor(vs, sp, options, aspect, seed=seed, say=say)
+    path = cache_dir / f"{options.box_model}_{box_regressor_key(vs, sp['train'], options, aspect, seed)}.pt"
+    with exclusive_lock(path.with_name(f".{path.name}.lock")):  # two trainings needing it: one fits, one waits
+        cached = _cached_box_regressor(path, options, say) if path.is_file() else None
+        if cached is not None:
+            return cached
+        regressor, box_info = _fit_box_regressor(vs, sp, options, aspect, seed=seed, say=say)
         import io
 
         buf = io.BytesIO()
         torch.save({"format": BOX_CACHE_FORMAT, "version": BOX_CACHE_VERSION, "state": regressor.state_dict(),
                     "info": box_info}, buf)
         atomic_write_bytes(path, buf.getvalue())
+    return regressor, box_info
+
+
+def _cached_box_regressor(path: Path, options: TrainOptions,
+                          say: Callable[[str], None]) -> tuple[Any, dict[str, Any]] | None:
+    """The regressor stored at ``path`` and its metadata, or None when the file is damaged (then fitted again)."""
+    from synthaug.detectors.box_cnn import regressor_from_state_dict
+
+    t0 = time.perf_counter()
+    try:
+        saved = check_header(torch.load(path, map_location="cpu", weights_only=False), format=BOX_CACHE_FORMAT,
+                             version=BOX_CACHE_VERSION, what="cached box regressor", source=path)
+        regressor = regressor_from_state_dict(saved["state"])
+    except Exception as e:  # a damaged file is fitted again and replaced
+        say(f"box regression: cached {path} unreadable ({type(e).__name__}: {e}); fitting again")
+        return None
+    box_info = dict(saved["info"], cached=str(path), fit_seconds=saved["info"].get("seconds"),
+                    seconds=round(time.perf_counter() - t0, 1))
+    say(f"box regression ({options.box_model}): reused {path} (fitted in {box_info['fit_seconds']} s)")
     return regressor, box_info
 
 

@@ -29,7 +29,6 @@ Example:
 
 from __future__ import annotations
 
-import fcntl
 import hashlib
 import json
 import os
@@ -39,7 +38,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from synthaug._io import read_versioned_json
+from synthaug._io import exclusive_lock, read_versioned_json
 
 __all__ = ["CellCache", "cell_key", "canonical_json"]
 
@@ -114,19 +113,14 @@ class CellCache:
         if hit is not None or self.read_only:
             return hit
         self.root.mkdir(parents=True, exist_ok=True)
-        lock_path = self.root / f".{cell_key(identity)}.lock"
-        with open(lock_path, "a+") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
-            try:
-                hit = self.get(identity)  # computed by another process while we waited
-                if hit is not None:
-                    return hit
-                t0 = time.perf_counter()
-                result = compute()
-                self.put(identity, result, seconds=time.perf_counter() - t0)
-                return result
-            finally:
-                fcntl.flock(lock, fcntl.LOCK_UN)
+        with exclusive_lock(self.root / f".{cell_key(identity)}.lock"):
+            hit = self.get(identity)  # computed by another process while we waited
+            if hit is not None:
+                return hit
+            t0 = time.perf_counter()
+            result = compute()
+            self.put(identity, result, seconds=time.perf_counter() - t0)
+            return result
 
     def __len__(self) -> int:
         return sum(1 for _ in self.root.glob("*.json")) if self.root.is_dir() else 0

@@ -463,7 +463,10 @@ def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], pa
         ax.set_ylabel("AP, mean over seeds [95 % CI]")
         ax.set_title(titles[panel], fontsize=10)
         ax.set_ylim(0, 1)
-        ax.legend(fontsize=8)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8)
+        else:  # e.g. the patch panel of a run with --no-patches
+            ax.text(0.5, 0.5, "not scored in this run", ha="center", va="center", transform=ax.transAxes)
     fig.suptitle("Learning curve, real data only (CI: bootstrap over test videos)", fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
