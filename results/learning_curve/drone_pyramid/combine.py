@@ -2,9 +2,8 @@
 
     python results/learning_curve/drone_pyramid/combine.py
 
-For each family and split with both runs present: the default pyramid (1.25 ... 0.41) against the same with
-1.5625 added (HOG and CNN: mining, validation and scoring, ``--scales``; AdaBoost: scoring only,
-``--detect-scales``, its stored detectors), paired by training seed and video resample.
+For each family and split with both runs present: the default pyramid (1.25 ... 0.41) against the same trained
+detectors scored with the level 1.5625 added (``--detect-scales``), paired by training seed and video resample.
 """
 from pathlib import Path
 
@@ -12,21 +11,20 @@ from synthaug.evaluate.results import ProtocolResult
 from synthaug.evaluate.summary import report_table
 
 HERE = Path(__file__).resolve().parent
-RUNS = {"hog": ("hog_{split}_default", "hog_{split}_fine", "hog_100_seeds.json", "mining and scoring"),
-        "cnn": ("cnn_{split}_default", "cnn_{split}_fine", "cnn_100_seeds.json", "mining and scoring"),
-        "adaboost": ("adaboost_{split}_default_s012", "adaboost_{split}_fine_s012", "adaboost_100_seeds.json",
-                     "scoring only")}
+RUNS = {"hog": ("hog_{split}_default", "hog_{split}_detectfine", "hog_100_seeds.json"),
+        "cnn": ("cnn_{split}_default", "cnn_{split}_detectfine", "cnn_100_seeds.json"),
+        "adaboost": ("adaboost_{split}_default_s012", "adaboost_{split}_detectfine_s012", "adaboost_100_seeds.json")}
 
 if __name__ == "__main__":
     text = "# A finer pyramid level (x1.5625 added): tables\n\nAP@0.5, 100 real seeds, 3 training seeds; Δ paired.\n"
     for split in ("val", "test"):
-        for fam, (a, b, name, where) in RUNS.items():
+        for fam, (a, b, name) in RUNS.items():
             pa, pb = (HERE / a.format(split=split) / name), (HERE / b.format(split=split) / name)
             if not (pa.is_file() and pb.is_file()):
                 continue
             rows = {}
             for label, p in ((f"{fam}, default pyramid (6 levels, 1.25 … 0.41)", pa),
-                             (f"{fam}, + level 1.5625 ({where})", pb)):
+                             (f"{fam}, + level 1.5625 (scoring only)", pb)):
                 r = ProtocolResult.load(p)
                 r.condition = label
                 rows[label] = r

@@ -9,4 +9,4 @@ COMMON="--class drone --detectors adaboost --seed-counts 100 --training-seeds $*
 extra="--no-scale-check --no-patches --eval-split val"
 [ $split = test ] && extra="--no-scale-check"
 python -m synthaug.evaluate.runner learning-curve $COMMON $extra --out $out/adaboost_${split}_default_s$tag
-python -m synthaug.evaluate.runner learning-curve $COMMON $extra --detect-scales $FINE --out $out/adaboost_${split}_fine_s$tag
+python -m synthaug.evaluate.runner learning-curve $COMMON $extra --detect-scales $FINE --out $out/adaboost_${split}_detectfine_s$tag
