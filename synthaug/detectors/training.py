@@ -240,13 +240,10 @@ class TrainOptions:
             raise ValueError(f"val_target_recall and val_iou must be in (0, 1], got {self.val_target_recall}, {self.val_iou}")
         if self.mining_select is not None and self.mining_select not in MINING_SELECT:
             raise ValueError(f"mining_select must be one of {list(MINING_SELECT)} or None, got {self.mining_select!r}")
-        if self.mining_patience is not None and (isinstance(self.mining_patience, bool)
-                                                 or int(self.mining_patience) != self.mining_patience
-                                                 or self.mining_patience < 0):
-            raise ValueError(f"mining_patience must be an integer >= 0 or None, got {self.mining_patience!r}")
-        if self.ada_rounds is not None and (isinstance(self.ada_rounds, bool) or int(self.ada_rounds) != self.ada_rounds
-                                            or self.ada_rounds < 1):
-            raise ValueError(f"ada_rounds must be an integer >= 1 or None, got {self.ada_rounds!r}")
+        for name, low in (("mining_patience", 0), ("ada_rounds", 1)):  # None: the family's default
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or int(v) != v or v < low):
+                raise ValueError(f"{name} must be an integer >= {low} or None, got {v!r}")
         if self.box_model not in BOX_MODELS:
             raise ValueError(f"box_model must be one of {list(BOX_MODELS)}, got {self.box_model!r}")
         if self.scales is not None:

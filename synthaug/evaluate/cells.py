@@ -112,7 +112,6 @@ class CellCache:
         hit = self.get(identity)
         if hit is not None or self.read_only:
             return hit
-        self.root.mkdir(parents=True, exist_ok=True)
         with exclusive_lock(self.root / f".{cell_key(identity)}.lock"):
             hit = self.get(identity)  # computed by another process while we waited
             if hit is not None:
