@@ -148,7 +148,7 @@ def test_cells_that_only_score_differently_read_the_trained_detector_back(ws, cu
     assert load_detector(ckpt).kind == "hog"
 
 
-def test_detect_scales_score_another_pyramid_with_the_stored_detector(ws, curve, monkeypatch):
+def test_detect_scales_score_another_pyramid_with_the_stored_detector(ws, curve, monkeypatch, capsys):
     """``detect_scales``: the scored detections use another pyramid than the training's; the cell is new, the
     trained detector is the stored one (no training), and the detections are those of the detector run directly
     with that pyramid."""
@@ -182,6 +182,10 @@ def test_detect_scales_score_another_pyramid_with_the_stored_detector(ws, curve,
     assert [v.scores.tolist() for v in ref] != [v.scores.tolist() for v in train_pyramid]
     args = R.build_parser().parse_args(["learning-curve", "--detect-scales", "1.5", "1", "--out", "x"])
     assert args.detect_scales == [1.5, 1.0] and args.scales is None
+    for bad in ("0", "-1", "nan"):
+        with pytest.raises(SystemExit) as e:
+            R.build_parser().parse_args(["learning-curve", "--detect-scales", "1", bad, "--out", "x"])
+        assert e.value.code == 2 and "--detect-scales" in capsys.readouterr().err
 
 
 def test_eval_split_val_scores_the_validation_videos_in_their_own_cells(ws, curve):
