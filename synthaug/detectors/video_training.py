@@ -92,6 +92,9 @@ class AddedPositives:
             a user's baseline).
         perturb_copies: perturbed copies of every real positive (the paper's Table 1 baseline,
             :func:`~synthaug.effects.perturb.perturb_patches`).
+        downscaled_copies: copies of every real seed shown as a smaller, farther object, cut the way the pyramid's
+            largest magnification sees it (:func:`~synthaug.detectors.training_sets.downscaled_positives`; seed sets
+            only).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; None: every positive weighs the same, so the added ones hold
             ``added / (real + added)``. HOG: the SVM's per-sample cost; CNN: the BCE loss's per-sample weight (kept
@@ -105,6 +108,7 @@ class AddedPositives:
     copy_paste_ratio: float = 0.0
     perturb_copies: int = 0
     synthetic_share: float | None = None
+    downscaled_copies: int = 0
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
@@ -328,6 +332,7 @@ def train_from_videos(
         ts = _all_frames_training_set(vs, sp, frame_step=frame_step, seed=seed)
     n_real = int(ts.positives.shape[0])
     perturb_info = _add_perturbed(ts, added.perturb_copies, seed=seed, say=say)
+    downscaled_info = _add_downscaled(ts, added.downscaled_copies, options, seed=seed, say=say)
     synthetic_info = _add_from_fit(ts, added, seed=seed, say=say)
     t_data = time.perf_counter() - t0
     say(f"training set: {ts.positives.shape[0]} positives, {ts.negatives.shape[0]} negatives ({t_data:.0f}s)")
@@ -342,7 +347,8 @@ def train_from_videos(
     res = _mine_and_train(kind, ts, vs, sp, options, seed=seed, regressor=regressor, say=say, positive_weights=weights)
     t_train = time.perf_counter() - t0
     meta = _metadata(kind, class_name, seed, videos_dir, labels_dir, sp, ts, res, options=options,
-                     synthetic_info=synthetic_info, perturb_info=perturb_info, box_info=box_info,
+                     synthetic_info=synthetic_info, perturb_info=perturb_info, downscaled_info=downscaled_info,
+                     box_info=box_info,
                      seconds={"data": round(t_data, 1), "training": round(t_train, 1),
                               "total": round(time.perf_counter() - t_start, 1)},
                      command=command, out=out)
@@ -362,9 +368,9 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
         if kind not in ("hog", "cnn"):
             raise TrainingInputError("--synthetic-share", f"weights the HOG detector's SVM and the CNN's loss; not "
                                      f"implemented for {kind}")
-        if synthetic_ratio <= 0 and copy_paste_ratio <= 0 and perturb_copies <= 0:
+        if synthetic_ratio <= 0 and copy_paste_ratio <= 0 and perturb_copies <= 0 and added.downscaled_copies <= 0:
             raise TrainingInputError("--synthetic-share", "there are no added positives to weigh: give "
-                                     "--synthetic-ratio, --copy-paste-ratio or --perturb-copies")
+                                     "--synthetic-ratio, --copy-paste-ratio, --perturb-copies or --downscaled-copies")
     if kind not in DETECTORS:
         raise TrainingInputError("--detector", f"unknown detector {kind!r}; choose from {list(DETECTORS)}")
     if frame_step < 1:
@@ -377,6 +383,11 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
         raise TrainingInputError("--seed-counts", f"must be >= 1, got {seed_count}")
     if perturb_copies < 0:
         raise TrainingInputError("--perturb-copies", f"must be >= 0, got {perturb_copies}")
+    if added.downscaled_copies < 0:
+        raise TrainingInputError("--downscaled-copies", f"must be >= 0, got {added.downscaled_copies}")
+    if added.downscaled_copies and all_frames and seedset is None:
+        raise TrainingInputError("--downscaled-copies", "shrinks the seeds' frames: give --seed-counts or --seed-set, "
+                                                        "not --all-frames")
     if copy_paste_ratio < 0:
         raise TrainingInputError("--copy-paste-ratio", f"must be >= 0, got {copy_paste_ratio}")
     if copy_paste_ratio > 0 and params is None:
@@ -478,6 +489,23 @@ def _add_perturbed(ts: _TrainingSet, copies: int, *, seed: int, say: Callable[[s
     ts.positives = with_perturbed_copies(ts.positives, copies, seed=seed + 3)
     info = {"copies": copies, "count": int(ts.positives.shape[0] - n_real)}
     say(f"perturbed: {info['count']} copies of the {n_real} real positives")
+    return info
+
+
+def _add_downscaled(ts: _TrainingSet, copies: int, options: TrainOptions, *, seed: int,
+                    say: Callable[[str], None]) -> dict[str, Any] | None:
+    """``copies`` smaller copies of every real seed (:func:`~synthaug.detectors.training_sets.downscaled_positives`),
+    cut down to the largest magnification of the pyramid the detector is mined and scored with."""
+    if not copies:
+        return None
+    from synthaug.detectors.sliding import DEFAULT_SCALES
+    from synthaug.detectors.training_sets import downscaled_positives
+
+    max_scale = max(options.scales or DEFAULT_SCALES)
+    patches, info = downscaled_positives(ts.seedset, copies, max_scale=max_scale, seed=seed + 5)
+    ts.positives = torch.cat([ts.positives, patches])
+    say(f"downscaled: {info['count']} copies of {info['seeds_used']} seeds, longest side {info['sides'][0]:g}-"
+        f"{info['sides'][1]:g} px (median {info['side_median']}), windows down to x{max_scale:g}")
     return info
 
 
@@ -669,7 +697,7 @@ def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, 
 def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, labels_dir: str | Path,
               sp: Mapping[str, Any], ts: _TrainingSet, res: Any, *, options: TrainOptions,
               synthetic_info: dict[str, Any] | None, perturb_info: dict[str, Any] | None,
-              box_info: dict[str, Any] | None, seconds: dict[str, float], command: Any,
+              downscaled_info: dict[str, Any] | None, box_info: dict[str, Any] | None, seconds: dict[str, float], command: Any,
               out: str | Path | None) -> dict[str, Any]:
     """The metadata :func:`train_from_videos` returns and writes beside the checkpoint."""
     import synthaug
@@ -679,6 +707,7 @@ def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, lab
         "detector": kind, "class": class_name, "seed": seed,
         "videos_dir": str(Path(videos_dir).resolve()), "labels_dir": str(Path(labels_dir).resolve()),
         "split": sp, "positives": ts.info, "synthetic": synthetic_info, "perturbed": perturb_info,
+        "downscaled": downscaled_info,
         "negatives": {"initial": int(ts.negatives.shape[0]), "final": int(res.negatives.shape[0]),
                       "initial_source": ("seed set negatives + object-free crops of the seed frames"
                                          if ts.seedset is not None

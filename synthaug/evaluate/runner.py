@@ -82,6 +82,8 @@ class Condition:
         fit_options: other :class:`~synthaug.fit.fitting.FitConfig` fields of that fit, as
             ``(name, value)`` pairs (default: ``synthaug fit``'s).
         perturb_copies: perturbed copies of every real positive (the paper's baseline).
+        downscaled_copies: copies of every real seed shown smaller (farther), cut the way the pyramid sees them
+            (:func:`~synthaug.detectors.training_sets.downscaled_positives`).
         pose_sampling: poses of the synthetic positives (``"uniform"``: the paper; ``"fitted"``: around
             each seed's fitted pose).
         copy_paste_ratio: copy-paste patches per real seed (the real objects cut out with the fit's
@@ -104,6 +106,7 @@ class Condition:
     pose_sampling: str = "uniform"
     copy_paste_ratio: float = 0.0
     synthetic_share: float | None = None
+    downscaled_copies: int = 0
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -113,7 +116,7 @@ class Condition:
         else:
             d["frame_step"] = None
         for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling", "copy_paste_ratio",  # added later:
-                  "synthetic_share"):
+                  "synthetic_share", "downscaled_copies"):
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         return d
@@ -302,7 +305,8 @@ class ProtocolRunner:
             added=AddedPositives(params=self.params_for(condition, seed), mesh=condition.mesh,
                                  synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies,
                                  pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio,
-                                 synthetic_share=condition.synthetic_share),
+                                 synthetic_share=condition.synthetic_share,
+                                 downscaled_copies=condition.downscaled_copies),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -487,7 +491,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
                          fit_options: Mapping[str, Any] | None = None, pose_sampling: Sequence[str] = ("uniform",),
                          copy_paste_ratios: Sequence[float] = (), seeds: Sequence[int] | None = None,
-                         synthetic_share: float | None = None,
+                         synthetic_share: float | None = None, downscaled_copies: Sequence[int] = (),
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -499,7 +503,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``fit_options`` (other :class:`~synthaug.fit.fitting.FitConfig` fields); each ratio once per
     ``pose_sampling`` (``"uniform"``: the paper's poses; ``"fitted"``: around each seed's fitted pose).
     ``copy_paste_ratios``: the copy-paste baseline (the seeds' objects cut out with the same fit's
-    silhouettes, pasted on other seeds' backgrounds), one condition per ratio. ``synthetic_share``: the added
+    silhouettes, pasted on other seeds' backgrounds), one condition per ratio. ``downscaled_copies``: the real seeds
+    shown smaller (:func:`~synthaug.detectors.training_sets.downscaled_positives`), one condition per count.
+    ``synthetic_share``: the added
     positives' share of the positive class's weight in every synthetic, perturbed and copy-paste condition.
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
@@ -524,6 +530,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             seed_count=seed_count, params=params, mesh=mesh, fit_distance=dist, fit_options=fit_opts,
                             copy_paste_ratio=float(r), synthetic_share=synthetic_share)
                   for r in copy_paste_ratios]
+        conds += [Condition(f"{base} + {c}x downscaled{share}", kind, seed_count=seed_count, downscaled_copies=int(c),
+                            synthetic_share=synthetic_share)
+                  for c in downscaled_copies]
         for c in conds:
             _run_into(results, runner, c, seeds)
     if out is not None:
@@ -624,6 +633,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--copy-paste-ratios", type=float, nargs="*", default=[],
                     help="copy-paste baseline: patches per real seed, the seeds' objects cut out with the fit's "
                          "silhouettes and pasted on other seeds' backgrounds")
+    sy.add_argument("--downscaled-copies", type=int_at_least(1), nargs="*", default=[],
+                    help="copies of every real seed shown as a smaller, farther object (longest side 16-24 px), cut "
+                         "the way the pyramid sees it; one condition per count")
     sy.add_argument("--synthetic-share", type=float, default=None,
                     help="the added positives' share of the positive class's training weight (HOG and CNN; "
                          "default: by count)")
@@ -660,7 +672,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              synthetic_ratios=args.synthetic_ratios, fit_distance=dist, params=args.params,
                              perturb_copies=args.perturb_copies, mesh=args.mesh, pose_sampling=args.pose_sampling,
                              copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds,
-                             synthetic_share=args.synthetic_share, out=args.out)
+                             synthetic_share=args.synthetic_share, downscaled_copies=args.downscaled_copies,
+                             out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
