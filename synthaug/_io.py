@@ -141,19 +141,11 @@ def sha256_file(path: str | os.PathLike, *, chunk: int = 1 << 20) -> str:
     return h.hexdigest()
 
 
-def quick_file_fingerprint(path: str | os.PathLike, *, edge: int = 1 << 20) -> dict[str, object]:
-    """A cheap fingerprint of a large file (a video): size, mtime and the SHA-256 of its first and last ``edge``
-    bytes. Any edit that changes the size, the time stamp, the header or the tail shows."""
-    import hashlib
-
-    st = os.stat(path)
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        h.update(f.read(edge))
-        if st.st_size > edge:
-            f.seek(max(edge, st.st_size - edge))
-            h.update(f.read(edge))
-    return {"size": int(st.st_size), "mtime_ns": int(st.st_mtime_ns), "head_tail_sha256": h.hexdigest()}
+def file_fingerprint(path: str | os.PathLike) -> dict[str, object]:
+    """What a file holds, not when it was written: its size and the SHA-256 of all its bytes. A copied data folder
+    (new time stamps, same bytes) keeps every cache keyed by it; any edit of the bytes shows. Hashing reads the file
+    once, far less than decoding a video: 0.1 s for the 69 MB of ``../shared/data`` here."""
+    return {"size": int(os.stat(path).st_size), "sha256": sha256_file(path)}
 
 
 def digest(obj: object, *, length: int = 20) -> str:

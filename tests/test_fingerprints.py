@@ -240,7 +240,12 @@ def test_a_replaced_video_or_another_split_reingests_it(videos, tmp_path):
     root = tmp_path / "a"
     shutil.copytree(videos / "a", root)
     out = tmp_path / "out"
-    _ingest(root, out, seed_counts=())
+    first = _ingest(root, out, seed_counts=())
+    # new time stamps on the same bytes (a copied data folder): every shard is current
+    for f in (*root.glob("videos/*"), *root.glob("labels/*")):
+        os.utime(f, ns=(f.stat().st_atime_ns, f.stat().st_mtime_ns + 10**12))
+    touched = _ingest(root, out, seed_counts=())
+    assert list(touched["videos"]) == [] and touched["skipped_current"] == len(first["videos"]) > 0, touched
     shutil.copy2(videos / "b/videos/V_DRONE_003.mp4", root / "videos/V_DRONE_003.mp4")
     again = _ingest(root, out, seed_counts=())
     assert list(again["videos"]) == ["V_DRONE_003"] and again["redone"] == {"V_DRONE_003": "the video file"}

@@ -209,11 +209,12 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     fit_opts = {"budget": 40, "step_deg": 30.0, "sprite_size": 32, "init": "uniform"}
     res = R.synthetic_comparison(make_runner(ws), detectors=["hog"], seed_count=6,
                                  synthetic_ratios=[2], fit_distance="eucl", fit_options=fit_opts,
-                                 perturb_copies=[2], copy_paste_ratios=[2], seeds=[0, 1], out=out)
+                                 perturb_copies=[2], copy_paste_ratios=[2], downscaled_copies=[1], seeds=[0, 1],
+                                 out=out)
     group = res["hog"]
     syn, per = "hog / 6 seeds + 2x synthetic (eucl)", "hog / 6 seeds + 2x perturbed"
-    cp = "hog / 6 seeds + 2x copy-paste (eucl silhouettes)"
-    assert list(group) == ["hog / 6 seeds", syn, per, cp]
+    cp, down = "hog / 6 seeds + 2x copy-paste (eucl silhouettes)", "hog / 6 seeds + 1x downscaled"
+    assert list(group) == ["hog / 6 seeds", syn, per, cp, down]
     # the real-only cells are the learning curve's (same key): identical results, nothing retrained
     assert group["hog / 6 seeds"].to_json() == curve["results"]["hog"]["hog / 6 seeds"].to_json()
     fits = Path(ws["paths"].work_dir) / "fits"
@@ -252,6 +253,12 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     k0 = runner.identity(given, 0)["condition"]["params_sha256"]
     assert k0 and k0 != runner.identity(given, 1)["condition"]["params_sha256"]
     assert "perturb_copies" not in R.Condition("r", "hog", seed_count=6).identity()
+    # downscaled copies: their own cell, keyed by the count; they reach the training (its metadata)
+    cond_down = R.Condition(down, "hog", seed_count=6, downscaled_copies=1)
+    assert "downscaled_copies" not in R.Condition("r", "hog", seed_count=6).identity()
+    assert cond_down.identity()["downscaled_copies"] == 1
+    cell = cache.get_or_compute(runner.identity(cond_down, 0), lambda: pytest.fail("downscaled cell not cached"))
+    assert cell["train"]["downscaled"]["copies"] == 1 and cell["train"]["downscaled"]["count"] >= 1
 
 
 def test_runner_scales_option_parses_and_refuses_a_non_positive_factor(capsys):
@@ -264,6 +271,15 @@ def test_runner_scales_option_parses_and_refuses_a_non_positive_factor(capsys):
             R.build_parser().parse_args(["synthetic", "--scales", "1", bad, "--out", "x"])
         assert e.value.code == 2
         assert "--scales" in capsys.readouterr().err
+
+
+def test_runner_downscaled_copies_option_parses_and_refuses_zero(capsys):
+    args = R.build_parser().parse_args(["synthetic", "--downscaled-copies", "1", "3", "--out", "x"])
+    assert args.downscaled_copies == [1, 3]
+    assert R.build_parser().parse_args(["synthetic", "--out", "x"]).downscaled_copies == []
+    with pytest.raises(SystemExit) as e:
+        R.build_parser().parse_args(["synthetic", "--downscaled-copies", "0", "--out", "x"])
+    assert e.value.code == 2 and "--downscaled-copies" in capsys.readouterr().err
 
 
 def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(capsys):

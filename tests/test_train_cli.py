@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 from typing import Any
 
@@ -110,6 +111,11 @@ def test_box_regressor_is_cached_in_the_work_folder_by_its_inputs(ws: dict[str, 
                box_regressor_key(vs, stems, TrainOptions(box_stride=3), 1.0, 0),
                box_regressor_key(vs, stems, TrainOptions(), 1.2, 0)}
     assert base not in changed and len(changed) == 5
+    video = next(ws["videos"].glob(f"{stems[0]}.*"))  # a new time stamp on the same bytes (a copied folder): same key
+    st = video.stat()
+    os.utime(video, ns=(st.st_atime_ns, st.st_mtime_ns + 10**12))
+    assert box_regressor_key(vs, stems, TrainOptions(), 1.0, 0) == base
+    os.utime(video, ns=(st.st_atime_ns, st.st_mtime_ns))
     copy = tmp_path / "labels_copy"
     shutil.copytree(ws["labels"], copy)
     doc = json.loads((copy / f"{stems[0]}.json").read_text())
@@ -236,9 +242,13 @@ def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], traine
     assert meta["mining"]["rounds"][1]["added"] > 0
     out = ws["root"] / "runs" / "cnn.pt"
     seedset = trained["meta"]["positives"]["seedset"]
-    assert _train(ws, out, "--detector", "cnn", "--seedset", seedset, "--cnn-epochs", "2", "--mining-rounds", "0") == 0
+    assert _train(ws, out, "--detector", "cnn", "--seedset", seedset, "--cnn-epochs", "2", "--mining-rounds", "0",
+                  "--downscaled-copies", "2") == 0
     meta = json.loads(out.with_suffix(".json").read_text())
     assert meta["positives"]["mode"] == "seedset" and [r["round"] for r in meta["mining"]["rounds"]] == [0]
+    # --downscaled-copies: 2 copies of each seed of at least 16 px, windows down to the pyramid's largest scale (1.0)
+    down = meta["downscaled"]
+    assert down["copies"] == 2 and down["max_scale"] == 1.0 and down["count"] == 2 * down["seeds_used"] > 0
     from synthaug.detectors.base import load_detector
 
     assert load_detector(out).kind == "cnn"
@@ -337,6 +347,8 @@ def test_cnn_synthetic_share_reaches_the_loss_weights(ws: dict[str, Path], train
         ("share_without_added", "--synthetic-share"),
         ("share_for_adaboost", "--synthetic-share"),
         ("negative_patience", "--mining-patience"),
+        ("negative_downscaled", "--downscaled-copies"),
+        ("downscaled_with_all_frames", "--downscaled-copies"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -378,6 +390,10 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--perturb-copies", "1", "--synthetic-share", "0.5"]
     elif case == "negative_patience":
         extra += ["--mining-patience", "-1"]
+    elif case == "negative_downscaled":
+        extra += ["--downscaled-copies", "-1"]
+    elif case == "downscaled_with_all_frames":
+        extra = ["--all-frames", "--downscaled-copies", "1"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
     capsys.readouterr()
@@ -391,7 +407,7 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         assert "1000" in err and "24 labelled frames" in err
     if case == "no_class":
         assert "'cat'" in err and "drone" in err
-    if case in ("negative_perturb_copies", "negative_copy_paste"):
+    if case in ("negative_perturb_copies", "negative_copy_paste", "negative_downscaled"):
         assert "must be >= 0, got -1" in err
     if case == "copy_paste_without_params":
         assert "--params" in err

@@ -31,7 +31,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from synthaug._io import atomic_write_bytes, check_header, digest, exclusive_lock, sha256_file
+from synthaug._io import atomic_write_bytes, check_header, digest, exclusive_lock, file_fingerprint, sha256_file
 from synthaug.data.video import find_video
 from synthaug.detectors.frames import VideoFrames
 from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mining
@@ -561,16 +561,15 @@ def _box_cache_dir(work_dir: str | Path | None, out: str | Path | None) -> Path 
 
 
 def box_regressor_key(vs: VideoSet, videos: Sequence[str], options: TrainOptions, aspect: float, seed: int) -> str:
-    """The cache key of a box regressor: everything its fit reads — the training videos (name, size and
-    modification time of each video file, the bytes of its label file), the box model, the frame stride, the
+    """The cache key of a box regressor: everything its fit reads — the training videos (name, size and SHA-256 of
+    each video file, not its time stamp, so a copied data folder keeps the cache; the bytes of its label file), the box model, the frame stride, the
     window's aspect, the seed (its jitter and initialisation) and :data:`BOX_CACHE_VERSION`. The detector, its
     positives and the mining do not enter: the box map is fitted on the labelled boxes alone, before them."""
     files = []
     for stem in sorted(videos):
         video = find_video(vs.videos_dir, stem)
-        st = video.stat() if video is not None else None
         label = Path(vs.labels_dir) / f"{stem}.json"
-        files.append([stem, None if st is None else [video.name, st.st_size, st.st_mtime_ns],
+        files.append([stem, None if video is None else [video.name, file_fingerprint(video)],
                       sha256_file(label) if label.is_file() else None])
     ident = {"what": "box_regressor", "version": BOX_CACHE_VERSION, "model": options.box_model,
              "stride": int(options.box_stride), "aspect": round(float(aspect), 9), "seed": int(seed), "videos": files}

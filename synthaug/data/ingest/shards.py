@@ -18,7 +18,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from synthaug._io import digest, quick_file_fingerprint, sha256_file
+from synthaug._io import digest, file_fingerprint, sha256_file
 
 
 # What a shard holds: 1 gray patches and frames; 2 + RGB patches (colour.npz) and each seed's aligned neighbour frame.
@@ -111,12 +111,12 @@ def _or_none(fn: Callable[[Any], Any], path: Any) -> Any:
 
 
 def video_inputs(job: VideoJob, cfg: IngestConfig) -> dict[str, Any]:
-    """What a video's shard depends on: the options, the video file (size, mtime, SHA-256 of its first and last
-    MiB), the label file's SHA-256, the split and the synthaug version."""
+    """What a video's shard depends on: the options, the video file's size and SHA-256 (not its time stamp: a
+    copied folder keeps its shards), the label file's SHA-256, the split and the synthaug version."""
     from synthaug import __version__
 
     return {"options": cfg.fingerprint(), "synthaug_version": __version__, "split": job.split,
-            "video": _or_none(quick_file_fingerprint, job.video_path),
+            "video": _or_none(file_fingerprint, job.video_path),
             "labels_sha256": _or_none(sha256_file, job.label_path)}
 
 
@@ -127,7 +127,7 @@ def images_inputs(images: Sequence[Any], split_of: dict[str, str], cfg: IngestCo
 
     rows = [[str(im.path), int(im.image_id), np.asarray(im.boxes, np.float64).round(6).tolist(), list(im.classes),
              split_of.get(im.path.name, split_of.get(im.path.stem, "train")),
-             _or_none(quick_file_fingerprint, im.path)] for im in images]
+             _or_none(file_fingerprint, im.path)] for im in images]
     return {"options": cfg.fingerprint(), "synthaug_version": __version__, "images": digest(rows, length=64)}
 
 
