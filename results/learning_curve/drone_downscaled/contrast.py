@@ -1,6 +1,6 @@
 """How dark a drone is against its surroundings: training vs test split vs the downscaled copies (trains nothing).
 
-    PYTHONPATH=. python results/learning_curve/drone_downscaled/contrast.py     # ~40 s; reads ../shared, data/runs
+    PYTHONPATH=. python results/learning_curve/drone_downscaled/contrast.py     # ~60 s; reads ../shared, data/runs
 
 Every 5th labelled frame of the drone videos of each split. Depth = median of a ring around the box (half the longest
 side wide) minus the darkest decile inside the box, in gray levels; contrast = depth / (ring std + 1). The copies:
@@ -20,7 +20,7 @@ def contrast(frame, box):
     ring=reg[~mask]; inside=reg[mask]
     return (np.median(ring)-np.percentile(inside,10))/ (ring.std()+1.0), abs(np.median(ring)-np.percentile(inside,10))
 rows={}
-for split in ('train','test'):
+for split in ('train','val','test'):
     out=[]
     for s in [v for v in sp[split] if sp['classes'].get(v)=='drone']:
         frames,labels,_=read_video_with_labels(find_video(V,s), L/f'{s}.json')
