@@ -144,7 +144,8 @@ def sha256_file(path: str | os.PathLike, *, chunk: int = 1 << 20) -> str:
 def file_fingerprint(path: str | os.PathLike) -> dict[str, object]:
     """What a file holds, not when it was written: its size and the SHA-256 of all its bytes. A copied data folder
     (new time stamps, same bytes) keeps every cache keyed by it; any edit of the bytes shows. Hashing reads the file
-    once, far less than decoding a video: 0.1 s for the 69 MB of ``../shared/data`` here."""
+    once, far less than decoding a video: the 190 videos (67 MB) of ``../shared/data`` take 0.36 s
+    cold, 0.09 s cached, on this 2-core box."""
     return {"size": int(os.stat(path).st_size), "sha256": sha256_file(path)}
 
 
