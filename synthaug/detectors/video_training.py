@@ -498,10 +498,9 @@ def _add_downscaled(ts: _TrainingSet, copies: int, options: TrainOptions, *, see
     cut down to the largest magnification of the pyramid the detector is mined and scored with."""
     if not copies:
         return None
-    from synthaug.detectors.sliding import DEFAULT_SCALES
     from synthaug.detectors.training_sets import downscaled_positives
 
-    max_scale = max(options.scales or DEFAULT_SCALES)
+    max_scale = max(options.pyramid())
     patches, info = downscaled_positives(ts.seedset, copies, max_scale=max_scale, seed=seed + 5)
     ts.positives = torch.cat([ts.positives, patches])
     say(f"downscaled: {info['count']} copies of {info['seeds_used']} seeds, longest side {info['sides'][0]:g}-"
@@ -562,8 +561,8 @@ def _box_cache_dir(work_dir: str | Path | None, out: str | Path | None) -> Path 
 
 def box_regressor_key(vs: VideoSet, videos: Sequence[str], options: TrainOptions, aspect: float, seed: int) -> str:
     """The cache key of a box regressor: everything its fit reads — the training videos (name, size and SHA-256 of
-    each video file, not its time stamp, so a copied data folder keeps the cache; the bytes of its label file), the box model, the frame stride, the
-    window's aspect, the seed (its jitter and initialisation) and :data:`BOX_CACHE_VERSION`. The detector, its
+    each video file, not its time stamp, so a copied data folder keeps the cache; the bytes of its label file), the
+    box model, the frame stride, the window's aspect, the seed (its jitter and initialisation) and :data:`BOX_CACHE_VERSION`. The detector, its
     positives and the mining do not enter: the box map is fitted on the labelled boxes alone, before them."""
     files = []
     for stem in sorted(videos):
@@ -696,8 +695,8 @@ def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, 
 def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, labels_dir: str | Path,
               sp: Mapping[str, Any], ts: _TrainingSet, res: Any, *, options: TrainOptions,
               synthetic_info: dict[str, Any] | None, perturb_info: dict[str, Any] | None,
-              downscaled_info: dict[str, Any] | None, box_info: dict[str, Any] | None, seconds: dict[str, float], command: Any,
-              out: str | Path | None) -> dict[str, Any]:
+              downscaled_info: dict[str, Any] | None, box_info: dict[str, Any] | None, seconds: dict[str, float],
+              command: Any, out: str | Path | None) -> dict[str, Any]:
     """The metadata :func:`train_from_videos` returns and writes beside the checkpoint."""
     import synthaug
 

@@ -505,8 +505,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``copy_paste_ratios``: the copy-paste baseline (the seeds' objects cut out with the same fit's
     silhouettes, pasted on other seeds' backgrounds), one condition per ratio. ``downscaled_copies``: the real seeds
     shown smaller (:func:`~synthaug.detectors.training_sets.downscaled_positives`), one condition per count.
-    ``synthetic_share``: the added
-    positives' share of the positive class's weight in every synthetic, perturbed and copy-paste condition.
+    ``synthetic_share``: the added positives' share of the positive class's weight in every synthetic, perturbed,
+    copy-paste and downscaled condition.
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
