@@ -89,12 +89,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--downscaled-copies", type=int, default=0,
                         help="copies of every real seed shown as a smaller, farther object (its frame shrunk so the "
                              "object's longest side is 16-24 px), cut the way the detector's pyramid sees it")
+    parser.add_argument("--faded-copies", type=int, default=0,
+                        help="copies of every real seed with the object fainter against its own background (its "
+                             "difference from the seed's background patch scaled by x0.3-0.9 inside the box)")
     parser.add_argument("--copy-paste-ratio", type=float, default=0.0,
                         help="copy-paste patches per real seed with --params: the seeds' objects cut out with their fitted "
                              "silhouettes, pasted on other seeds' backgrounds (a user's baseline)")
     parser.add_argument("--synthetic-share", type=float, default=None,
                         help="the share of the positive class's training weight held by the added positives (synthetic, "
-                             "copy-paste, perturbed, downscaled), the rest by the real ones (HOG: the SVM's sample cost; "
+                             "copy-paste, perturbed, downscaled, faded), the rest by the real ones (HOG: the SVM's sample cost; "
                              "CNN: the loss's sample weight; not AdaBoost; default: every positive weighs the same)")
     parser.add_argument("--seed", type=int, default=0, help="training seed: initialisation, negative sampling, the automatic split")
     parser.add_argument("--ingest-seed", type=int, default=0, help="`synthaug ingest --seed` of the seed draw (shards are reused per value)")
@@ -176,7 +179,7 @@ def main(args: argparse.Namespace) -> int:
             added=AddedPositives(params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
                                  perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
                                  copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
-                                 downscaled_copies=args.downscaled_copies),
+                                 downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

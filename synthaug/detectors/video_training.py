@@ -95,6 +95,8 @@ class AddedPositives:
         downscaled_copies: copies of every real seed shown as a smaller, farther object, cut the way the pyramid's
             largest magnification sees it (:func:`~synthaug.detectors.training_sets.downscaled_positives`; seed sets
             only).
+        faded_copies: copies of every real seed with the object's contrast against its own background lowered
+            (:func:`~synthaug.detectors.training_sets.faded_positives`; seed sets only).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; None: every positive weighs the same, so the added ones hold
             ``added / (real + added)``. HOG: the SVM's per-sample cost; CNN: the BCE loss's per-sample weight (kept
@@ -109,6 +111,7 @@ class AddedPositives:
     perturb_copies: int = 0
     synthetic_share: float | None = None
     downscaled_copies: int = 0
+    faded_copies: int = 0
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
@@ -333,6 +336,7 @@ def train_from_videos(
     n_real = int(ts.positives.shape[0])
     perturb_info = _add_perturbed(ts, added.perturb_copies, seed=seed, say=say)
     downscaled_info = _add_downscaled(ts, added.downscaled_copies, options, seed=seed, say=say)
+    faded_info = _add_faded(ts, added.faded_copies, seed=seed, say=say)
     synthetic_info = _add_from_fit(ts, added, seed=seed, say=say)
     t_data = time.perf_counter() - t0
     say(f"training set: {ts.positives.shape[0]} positives, {ts.negatives.shape[0]} negatives ({t_data:.0f}s)")
@@ -348,7 +352,7 @@ def train_from_videos(
     t_train = time.perf_counter() - t0
     meta = _metadata(kind, class_name, seed, videos_dir, labels_dir, sp, ts, res, options=options,
                      synthetic_info=synthetic_info, perturb_info=perturb_info, downscaled_info=downscaled_info,
-                     box_info=box_info,
+                     faded_info=faded_info, box_info=box_info,
                      seconds={"data": round(t_data, 1), "training": round(t_train, 1),
                               "total": round(time.perf_counter() - t_start, 1)},
                      command=command, out=out)
@@ -368,9 +372,10 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
         if kind not in ("hog", "cnn"):
             raise TrainingInputError("--synthetic-share", f"weights the HOG detector's SVM and the CNN's loss; not "
                                      f"implemented for {kind}")
-        if synthetic_ratio <= 0 and copy_paste_ratio <= 0 and perturb_copies <= 0 and added.downscaled_copies <= 0:
-            raise TrainingInputError("--synthetic-share", "there are no added positives to weigh: give "
-                                     "--synthetic-ratio, --copy-paste-ratio, --perturb-copies or --downscaled-copies")
+        if (synthetic_ratio <= 0 and copy_paste_ratio <= 0 and perturb_copies <= 0 and added.downscaled_copies <= 0
+                and added.faded_copies <= 0):
+            raise TrainingInputError("--synthetic-share", "there are no added positives to weigh: give --synthetic-ratio, "
+                                     "--copy-paste-ratio, --perturb-copies, --downscaled-copies or --faded-copies")
     if kind not in DETECTORS:
         raise TrainingInputError("--detector", f"unknown detector {kind!r}; choose from {list(DETECTORS)}")
     if frame_step < 1:
@@ -388,6 +393,11 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
     if added.downscaled_copies and all_frames and seedset is None:
         raise TrainingInputError("--downscaled-copies", "shrinks the seeds' frames: give --seed-counts or --seed-set, "
                                                         "not --all-frames")
+    if added.faded_copies < 0:
+        raise TrainingInputError("--faded-copies", f"must be >= 0, got {added.faded_copies}")
+    if added.faded_copies and all_frames and seedset is None:
+        raise TrainingInputError("--faded-copies", "fades the seeds toward their backgrounds: give --seed-counts or "
+                                                   "--seed-set, not --all-frames")
     if copy_paste_ratio < 0:
         raise TrainingInputError("--copy-paste-ratio", f"must be >= 0, got {copy_paste_ratio}")
     if copy_paste_ratio > 0 and params is None:
@@ -505,6 +515,19 @@ def _add_downscaled(ts: _TrainingSet, copies: int, options: TrainOptions, *, see
     ts.positives = torch.cat([ts.positives, patches])
     say(f"downscaled: {info['count']} copies of {info['seeds_used']} seeds, longest side {info['sides'][0]:g}-"
         f"{info['sides'][1]:g} px (median {info['side_median']}), windows down to x{max_scale:g}")
+    return info
+
+
+def _add_faded(ts: _TrainingSet, copies: int, *, seed: int, say: Callable[[str], None]) -> dict[str, Any] | None:
+    """``copies`` fainter copies of every real seed (:func:`~synthaug.detectors.training_sets.faded_positives`)."""
+    if not copies:
+        return None
+    from synthaug.detectors.training_sets import faded_positives
+
+    patches, info = faded_positives(ts.seedset, copies, seed=seed + 6)
+    ts.positives = torch.cat([ts.positives, patches])
+    say(f"faded: {info['count']} copies, contrast x{info['contrast'][0]:g}-{info['contrast'][1]:g} "
+        f"(median {info['contrast_median']})")
     return info
 
 
@@ -695,7 +718,7 @@ def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, 
 def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, labels_dir: str | Path,
               sp: Mapping[str, Any], ts: _TrainingSet, res: Any, *, options: TrainOptions,
               synthetic_info: dict[str, Any] | None, perturb_info: dict[str, Any] | None,
-              downscaled_info: dict[str, Any] | None, box_info: dict[str, Any] | None, seconds: dict[str, float],
+              downscaled_info: dict[str, Any] | None, faded_info: dict[str, Any] | None = None, box_info: dict[str, Any] | None, seconds: dict[str, float],
               command: Any, out: str | Path | None) -> dict[str, Any]:
     """The metadata :func:`train_from_videos` returns and writes beside the checkpoint."""
     import synthaug
@@ -705,7 +728,7 @@ def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, lab
         "detector": kind, "class": class_name, "seed": seed,
         "videos_dir": str(Path(videos_dir).resolve()), "labels_dir": str(Path(labels_dir).resolve()),
         "split": sp, "positives": ts.info, "synthetic": synthetic_info, "perturbed": perturb_info,
-        "downscaled": downscaled_info,
+        "downscaled": downscaled_info, "faded": faded_info,
         "negatives": {"initial": int(ts.negatives.shape[0]), "final": int(res.negatives.shape[0]),
                       "initial_source": ("seed set negatives + object-free crops of the seed frames"
                                          if ts.seedset is not None

@@ -84,6 +84,8 @@ class Condition:
         perturb_copies: perturbed copies of every real positive (the paper's baseline).
         downscaled_copies: copies of every real seed shown smaller (farther), cut the way the pyramid sees them
             (:func:`~synthaug.detectors.training_sets.downscaled_positives`).
+        faded_copies: copies of every real seed with the object fainter against its own background
+            (:func:`~synthaug.detectors.training_sets.faded_positives`).
         pose_sampling: poses of the synthetic positives (``"uniform"``: the paper; ``"fitted"``: around
             each seed's fitted pose).
         copy_paste_ratio: copy-paste patches per real seed (the real objects cut out with the fit's
@@ -107,6 +109,7 @@ class Condition:
     copy_paste_ratio: float = 0.0
     synthetic_share: float | None = None
     downscaled_copies: int = 0
+    faded_copies: int = 0
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -116,7 +119,7 @@ class Condition:
         else:
             d["frame_step"] = None
         for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling", "copy_paste_ratio",  # added later:
-                  "synthetic_share", "downscaled_copies"):
+                  "synthetic_share", "downscaled_copies", "faded_copies"):
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         return d
@@ -306,7 +309,8 @@ class ProtocolRunner:
                                  synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies,
                                  pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio,
                                  synthetic_share=condition.synthetic_share,
-                                 downscaled_copies=condition.downscaled_copies),
+                                 downscaled_copies=condition.downscaled_copies,
+                                 faded_copies=condition.faded_copies),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -492,7 +496,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          fit_options: Mapping[str, Any] | None = None, pose_sampling: Sequence[str] = ("uniform",),
                          copy_paste_ratios: Sequence[float] = (), seeds: Sequence[int] | None = None,
                          synthetic_share: float | None = None, downscaled_copies: Sequence[int] = (),
-                         out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
+                         faded_copies: Sequence[int] = (), out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
     Every condition uses the same training seeds, so each one's paired difference against
@@ -504,8 +508,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``pose_sampling`` (``"uniform"``: the paper's poses; ``"fitted"``: around each seed's fitted pose).
     ``copy_paste_ratios``: the copy-paste baseline (the seeds' objects cut out with the same fit's
     silhouettes, pasted on other seeds' backgrounds), one condition per ratio. ``downscaled_copies``: the real seeds
-    shown smaller (:func:`~synthaug.detectors.training_sets.downscaled_positives`), one condition per count.
-    ``synthetic_share``: the added positives' share of the positive class's weight in every synthetic, perturbed,
+    shown smaller (:func:`~synthaug.detectors.training_sets.downscaled_positives`), one condition per count; ``faded_copies`` likewise, with the objects made fainter against their own backgrounds
+    (:func:`~synthaug.detectors.training_sets.faded_positives`). ``synthetic_share``: the added positives' share of the positive class's weight in every synthetic, perturbed,
     copy-paste and downscaled condition.
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
@@ -533,6 +537,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         conds += [Condition(f"{base} + {c}x downscaled{share}", kind, seed_count=seed_count, downscaled_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in downscaled_copies]
+        conds += [Condition(f"{base} + {c}x faded{share}", kind, seed_count=seed_count, faded_copies=int(c),
+                            synthetic_share=synthetic_share)
+                  for c in faded_copies]
         for c in conds:
             _run_into(results, runner, c, seeds)
     if out is not None:
@@ -636,6 +643,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--downscaled-copies", type=int_at_least(1), nargs="*", default=[],
                     help="copies of every real seed shown as a smaller, farther object (longest side 16-24 px), cut "
                          "the way the pyramid sees it; one condition per count")
+    sy.add_argument("--faded-copies", type=int_at_least(1), nargs="*", default=[],
+                    help="copies of every real seed with the object fainter against its own background (contrast "
+                         "x0.3-0.9); one condition per count")
     sy.add_argument("--synthetic-share", type=float, default=None,
                     help="the added positives' share of the positive class's training weight (HOG and CNN; "
                          "default: by count)")
@@ -673,7 +683,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              perturb_copies=args.perturb_copies, mesh=args.mesh, pose_sampling=args.pose_sampling,
                              copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds,
                              synthetic_share=args.synthetic_share, downscaled_copies=args.downscaled_copies,
-                             out=args.out)
+                             faded_copies=args.faded_copies, out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
