@@ -209,12 +209,13 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     fit_opts = {"budget": 40, "step_deg": 30.0, "sprite_size": 32, "init": "uniform"}
     res = R.synthetic_comparison(make_runner(ws), detectors=["hog"], seed_count=6,
                                  synthetic_ratios=[2], fit_distance="eucl", fit_options=fit_opts,
-                                 perturb_copies=[2], copy_paste_ratios=[2], downscaled_copies=[1], seeds=[0, 1],
-                                 out=out)
+                                 perturb_copies=[2], copy_paste_ratios=[2], downscaled_copies=[1], faded_copies=[1],
+                                 seeds=[0, 1], out=out)
     group = res["hog"]
     syn, per = "hog / 6 seeds + 2x synthetic (eucl)", "hog / 6 seeds + 2x perturbed"
     cp, down = "hog / 6 seeds + 2x copy-paste (eucl silhouettes)", "hog / 6 seeds + 1x downscaled"
-    assert list(group) == ["hog / 6 seeds", syn, per, cp, down]
+    faded = "hog / 6 seeds + 1x faded"
+    assert list(group) == ["hog / 6 seeds", syn, per, cp, down, faded]
     # the real-only cells are the learning curve's (same key): identical results, nothing retrained
     assert group["hog / 6 seeds"].to_json() == curve["results"]["hog"]["hog / 6 seeds"].to_json()
     fits = Path(ws["paths"].work_dir) / "fits"
@@ -259,6 +260,12 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     assert cond_down.identity()["downscaled_copies"] == 1
     cell = cache.get_or_compute(runner.identity(cond_down, 0), lambda: pytest.fail("downscaled cell not cached"))
     assert cell["train"]["downscaled"]["copies"] == 1 and cell["train"]["downscaled"]["count"] >= 1
+    # faded copies likewise: keyed by the count, absent from older keys, one copy of each of the 6 seeds
+    cond_faded = R.Condition(faded, "hog", seed_count=6, faded_copies=1)
+    assert "faded_copies" not in R.Condition("r", "hog", seed_count=6).identity()
+    assert cond_faded.identity()["faded_copies"] == 1
+    cell = cache.get_or_compute(runner.identity(cond_faded, 1), lambda: pytest.fail("faded cell not cached"))
+    assert cell["train"]["faded"]["copies"] == 1 and cell["train"]["faded"]["count"] == 6
 
 
 def test_runner_scales_option_parses_and_refuses_a_non_positive_factor(capsys):
@@ -280,6 +287,10 @@ def test_runner_downscaled_copies_option_parses_and_refuses_zero(capsys):
     with pytest.raises(SystemExit) as e:
         R.build_parser().parse_args(["synthetic", "--downscaled-copies", "0", "--out", "x"])
     assert e.value.code == 2 and "--downscaled-copies" in capsys.readouterr().err
+    assert R.build_parser().parse_args(["synthetic", "--faded-copies", "2", "--out", "x"]).faded_copies == [2]
+    with pytest.raises(SystemExit) as e:
+        R.build_parser().parse_args(["synthetic", "--faded-copies", "0", "--out", "x"])
+    assert e.value.code == 2 and "--faded-copies" in capsys.readouterr().err
 
 
 def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(capsys):

@@ -243,12 +243,16 @@ def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], traine
     out = ws["root"] / "runs" / "cnn.pt"
     seedset = trained["meta"]["positives"]["seedset"]
     assert _train(ws, out, "--detector", "cnn", "--seedset", seedset, "--cnn-epochs", "2", "--mining-rounds", "0",
-                  "--downscaled-copies", "2") == 0
+                  "--downscaled-copies", "2", "--faded-copies", "1") == 0
     meta = json.loads(out.with_suffix(".json").read_text())
     assert meta["positives"]["mode"] == "seedset" and [r["round"] for r in meta["mining"]["rounds"]] == [0]
     # --downscaled-copies: 2 copies of each seed of at least 16 px, windows down to the pyramid's largest scale (1.0)
     down = meta["downscaled"]
     assert down["copies"] == 2 and down["max_scale"] == 1.0 and down["count"] == 2 * down["seeds_used"] > 0
+    # --faded-copies: one fainter copy of every seed, contrast drawn in the default range
+    faded = meta["faded"]
+    assert faded["copies"] == 1 and faded["count"] == meta["positives"]["count"] and faded["contrast"] == [0.3, 0.9]
+    assert 0.3 <= faded["contrast_median"] <= 0.9
     from synthaug.detectors.base import load_detector
 
     assert load_detector(out).kind == "cnn"
@@ -349,6 +353,8 @@ def test_cnn_synthetic_share_reaches_the_loss_weights(ws: dict[str, Path], train
         ("negative_patience", "--mining-patience"),
         ("negative_downscaled", "--downscaled-copies"),
         ("downscaled_with_all_frames", "--downscaled-copies"),
+        ("negative_faded", "--faded-copies"),
+        ("faded_with_all_frames", "--faded-copies"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -394,6 +400,10 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--downscaled-copies", "-1"]
     elif case == "downscaled_with_all_frames":
         extra = ["--all-frames", "--downscaled-copies", "1"]
+    elif case == "negative_faded":
+        extra += ["--faded-copies", "-1"]
+    elif case == "faded_with_all_frames":
+        extra = ["--all-frames", "--faded-copies", "1"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
     capsys.readouterr()
@@ -407,7 +417,7 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         assert "1000" in err and "24 labelled frames" in err
     if case == "no_class":
         assert "'cat'" in err and "drone" in err
-    if case in ("negative_perturb_copies", "negative_copy_paste", "negative_downscaled"):
+    if case in ("negative_perturb_copies", "negative_copy_paste", "negative_downscaled", "negative_faded"):
         assert "must be >= 0, got -1" in err
     if case == "copy_paste_without_params":
         assert "--params" in err

@@ -508,9 +508,10 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``pose_sampling`` (``"uniform"``: the paper's poses; ``"fitted"``: around each seed's fitted pose).
     ``copy_paste_ratios``: the copy-paste baseline (the seeds' objects cut out with the same fit's
     silhouettes, pasted on other seeds' backgrounds), one condition per ratio. ``downscaled_copies``: the real seeds
-    shown smaller (:func:`~synthaug.detectors.training_sets.downscaled_positives`), one condition per count; ``faded_copies`` likewise, with the objects made fainter against their own backgrounds
-    (:func:`~synthaug.detectors.training_sets.faded_positives`). ``synthetic_share``: the added positives' share of the positive class's weight in every synthetic, perturbed,
-    copy-paste and downscaled condition.
+    shown smaller (:func:`~synthaug.detectors.training_sets.downscaled_positives`), one condition per count;
+    ``faded_copies`` likewise, the objects made fainter against their own backgrounds
+    (:func:`~synthaug.detectors.training_sets.faded_positives`). ``synthetic_share``: the added positives' share of
+    the positive class's weight in every synthetic, perturbed, copy-paste, downscaled and faded condition.
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
