@@ -1,10 +1,11 @@
-"""How dark a drone is against its surroundings: training vs test split vs the downscaled copies (trains nothing).
+"""How dark a drone is against its surroundings: training vs test split vs the downscaled and faded copies (trains nothing).
 
     PYTHONPATH=. python results/learning_curve/drone_downscaled/contrast.py     # ~60 s; reads ../shared, data/runs
 
 Every 5th labelled frame of the drone videos of each split. Depth = median of a ring around the box (half the longest
 side wide) minus the darkest decile inside the box, in gray levels; contrast = depth / (ring std + 1). The copies:
-seed set 0 (data/runs/ingest_drone_seed0), shrunk as downscaled_positives shrinks them.
+seed set 0 (data/runs/ingest_drone_seed0), shrunk as downscaled_positives shrinks them, and faded as faded_positives
+fades them (contrast c ~ log-U[0.3, 0.9] inside the feathered box; here applied to the whole frame).
 """
 import json, numpy as np, cv2
 from pathlib import Path
@@ -40,6 +41,17 @@ for i in range(len(ss)):
     c=contrast(sm,b*k)
     if c: d.append((s,)+c)
 rows['downscaled seeds (seed set 0)']=np.array(d)
+# the faded copies (faded_positives' rule on the whole frame: inside the feathered box, frame - (1-c)(frame - background))
+from scipy.ndimage import gaussian_filter
+rng=np.random.default_rng(6); d=[]
+for i in range(len(ss)):
+    f=ss.frame(i).astype(float); bgf=ss.background_frame(i).astype(float); b=np.asarray(ss.boxes[i],float).reshape(-1,4)[0]
+    m=np.zeros_like(f); m[int(round(b[1])):int(round(b[1]+b[3])), int(round(b[0])):int(round(b[0]+b[2]))]=1
+    Lr=max(b[2],b[3]); m=gaussian_filter(m, Lr/28.0)  # 1 patch px of feathering (the box spans 0.7 x 40 = 28 patch px)
+    c=float(np.exp(rng.uniform(np.log(0.3),np.log(0.9))))
+    r=contrast(np.clip(f-(1-c)*m*(f-bgf),0,255),b)
+    if r: d.append((Lr,)+r)
+rows['faded seeds (seed set 0)']=np.array(d)
 for k,a in rows.items():
     for lo,hi in ((0,24),(24,48)):
         sel=a[(a[:,0]>=lo)&(a[:,0]<hi)]
