@@ -297,3 +297,26 @@ def test_a_shard_of_an_older_synthaug_is_kept_until_its_files_change(videos, tmp
     again = _ingest(root, out, seed_counts=())
     assert list(again["videos"]) == ["V_DRONE_001"] and "V_DRONE_001.json newer" in again["redone"]["V_DRONE_001"]
     assert again["skipped_current"] == 2
+
+
+def test_a_shard_keyed_by_an_older_form_of_fingerprint_says_so(videos, tmp_path, caplog):
+    # shards recorded when a video's fingerprint was size + time stamp + head/tail hash: remade once, and the warning
+    # says the fingerprint's form changed, not that the (byte-identical) video did
+    root = tmp_path / "a"
+    shutil.copytree(videos / "a", root)
+    out = tmp_path / "out"
+    _ingest(root, out, seed_counts=())
+    head = out / "pool/V_DRONE_001/seedset.json"
+    doc = json.loads(head.read_text())
+    doc["ingest_inputs"]["video"] = {"size": doc["ingest_inputs"]["video"]["size"], "mtime_ns": 1, "head_sha256": "0"}
+    doc["ingest_fingerprint"] = "old"
+    head.write_text(json.dumps(doc))
+    caplog.set_level(logging.WARNING, logger="synthaug.ingest")
+    again = _ingest(root, out, seed_counts=())
+    assert list(again["videos"]) == ["V_DRONE_001"] and again["skipped_current"] == 2
+    why = again["redone"]["V_DRONE_001"]
+    assert why == "the form of the video file's fingerprint (recorded by an older synthaug: head_sha256, mtime_ns, size)"
+    assert any(f"V_DRONE_001: {why} changed since" in m for m in _ingest_warnings(caplog))
+    # a video whose bytes changed is still named as such (same form, other values)
+    shutil.copy2(videos / "b/videos/V_DRONE_003.mp4", root / "videos/V_DRONE_003.mp4")
+    assert _ingest(root, out, seed_counts=())["redone"] == {"V_DRONE_003": "the video file"}

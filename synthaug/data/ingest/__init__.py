@@ -10,8 +10,8 @@ Two stages, both restartable:
    hard-negative classes (birds), its hard negatives. A shard is written to a
    temporary folder and renamed into place, so an interrupted run leaves no
    half-written shard. Each shard records the fingerprint of its inputs (the
-   options, the video file's size, mtime and the SHA-256 of its first and last
-   MiB, the label file's SHA-256, the split, the synthaug version); a rerun
+   options, the video file's size and SHA-256 (not its time stamp: a copied
+   folder keeps its shards), the label file's SHA-256, the split, the synthaug version); a rerun
    skips shards whose fingerprint is current and redoes the rest, with a
    warning naming what changed (so editing one label file re-ingests exactly
    that video). A video that fails writes ``OUT/pool/<stem>.error.json``

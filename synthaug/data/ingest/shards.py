@@ -136,10 +136,20 @@ _INPUT_NAMES = {"options": "the ingest options", "synthaug_version": "the syntha
 
 
 def _what_changed(old: dict[str, Any], new: dict[str, Any]) -> str:
+    """The inputs that differ, named for a user; a file recorded in another form of fingerprint (an older synthaug's,
+    e.g. size + time stamp + partial hash before the full SHA-256) is said to be that, not to have changed."""
     out = []
     for k in sorted(set(old) | set(new)):
-        if old.get(k) != new.get(k):
-            out.append(f"the split {old.get(k)} -> {new.get(k)}" if k == "split" else _INPUT_NAMES.get(k, k))
+        a, b = old.get(k), new.get(k)
+        if a == b:
+            continue
+        name = _INPUT_NAMES.get(k, k)
+        if k == "split":
+            out.append(f"the split {a} -> {b}")
+        elif isinstance(a, dict) and isinstance(b, dict) and set(a) != set(b):
+            out.append(f"the form of {name}'s fingerprint (recorded by an older synthaug: {', '.join(sorted(a))})")
+        else:
+            out.append(name)
     return ", ".join(out) or "another fingerprint"
 
 
