@@ -161,11 +161,12 @@ def box_mask(box: Sequence[float], crop: Sequence[float], patch_size: int, *, fe
     s = patch_size / side
     edges = np.arange(patch_size + 1, dtype=np.float64)
 
-    fx = np.clip(np.minimum(edges[1:], s * (x + w - cx) + patch_size / 2)
-                 - np.maximum(edges[:-1], s * (x - cx) + patch_size / 2), 0.0, 1.0)
-    fy = np.clip(np.minimum(edges[1:], s * (y + h - cy) + patch_size / 2)
-                 - np.maximum(edges[:-1], s * (y - cy) + patch_size / 2), 0.0, 1.0)
-    m = fy[:, None] * fx[None, :]
+    def cover(start: float, length: float, centre: float) -> np.ndarray:
+        """The share of each patch column (row) inside ``[start, start + length)`` of the frame."""
+        lo, hi = s * (start - centre) + patch_size / 2, s * (start + length - centre) + patch_size / 2
+        return np.clip(np.minimum(edges[1:], hi) - np.maximum(edges[:-1], lo), 0.0, 1.0)
+
+    m = cover(y, h, cy)[:, None] * cover(x, w, cx)[None, :]
     if feather > 0:
         from scipy.ndimage import gaussian_filter
 

@@ -388,16 +388,12 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
         raise TrainingInputError("--seed-counts", f"must be >= 1, got {seed_count}")
     if perturb_copies < 0:
         raise TrainingInputError("--perturb-copies", f"must be >= 0, got {perturb_copies}")
-    if added.downscaled_copies < 0:
-        raise TrainingInputError("--downscaled-copies", f"must be >= 0, got {added.downscaled_copies}")
-    if added.downscaled_copies and all_frames and seedset is None:
-        raise TrainingInputError("--downscaled-copies", "shrinks the seeds' frames: give --seed-counts or --seed-set, "
-                                                        "not --all-frames")
-    if added.faded_copies < 0:
-        raise TrainingInputError("--faded-copies", f"must be >= 0, got {added.faded_copies}")
-    if added.faded_copies and all_frames and seedset is None:
-        raise TrainingInputError("--faded-copies", "fades the seeds toward their backgrounds: give --seed-counts or "
-                                                   "--seed-set, not --all-frames")
+    for option, copies, what in (("--downscaled-copies", added.downscaled_copies, "shrinks the seeds' frames"),
+                                 ("--faded-copies", added.faded_copies, "fades the seeds toward their backgrounds")):
+        if copies < 0:
+            raise TrainingInputError(option, f"must be >= 0, got {copies}")
+        if copies and all_frames and seedset is None:
+            raise TrainingInputError(option, f"{what}: give --seed-counts or --seed-set, not --all-frames")
     if copy_paste_ratio < 0:
         raise TrainingInputError("--copy-paste-ratio", f"must be >= 0, got {copy_paste_ratio}")
     if copy_paste_ratio > 0 and params is None:
@@ -718,7 +714,7 @@ def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, 
 def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, labels_dir: str | Path,
               sp: Mapping[str, Any], ts: _TrainingSet, res: Any, *, options: TrainOptions,
               synthetic_info: dict[str, Any] | None, perturb_info: dict[str, Any] | None,
-              downscaled_info: dict[str, Any] | None, faded_info: dict[str, Any] | None = None, box_info: dict[str, Any] | None, seconds: dict[str, float],
+              downscaled_info: dict[str, Any] | None, faded_info: dict[str, Any] | None, box_info: dict[str, Any] | None, seconds: dict[str, float],
               command: Any, out: str | Path | None) -> dict[str, Any]:
     """The metadata :func:`train_from_videos` returns and writes beside the checkpoint."""
     import synthaug

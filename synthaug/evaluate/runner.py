@@ -535,12 +535,10 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             seed_count=seed_count, params=params, mesh=mesh, fit_distance=dist, fit_options=fit_opts,
                             copy_paste_ratio=float(r), synthetic_share=synthetic_share)
                   for r in copy_paste_ratios]
-        conds += [Condition(f"{base} + {c}x downscaled{share}", kind, seed_count=seed_count, downscaled_copies=int(c),
-                            synthetic_share=synthetic_share)
-                  for c in downscaled_copies]
-        conds += [Condition(f"{base} + {c}x faded{share}", kind, seed_count=seed_count, faded_copies=int(c),
-                            synthetic_share=synthetic_share)
-                  for c in faded_copies]
+        for label, counts in (("downscaled", downscaled_copies), ("faded", faded_copies)):
+            conds += [Condition(f"{base} + {c}x {label}{share}", kind, seed_count=seed_count,
+                                synthetic_share=synthetic_share, **{f"{label}_copies": int(c)})
+                      for c in counts]
         for c in conds:
             _run_into(results, runner, c, seeds)
     if out is not None:
