@@ -213,6 +213,7 @@ def main() -> int:
         found = [f"{f['effect']} ({f['channel']})" if f["effect"] != "unexplained"
                  else "unexplained: " + ", ".join(f["structure"]) for f in rep["findings"]]
         cases.append({"case": k, "findings": found, "diagnosis_seconds": diag_s[-1],
+                      "settings": [f.get("setting") for f in rep["findings"] if f["effect"] != "unexplained"],
                       "nuisances": info["key"]["nuisances"]})
         print(f"case {k}: {found or 'nothing'} ({diag_s[-1]:.0f} s diagnosis, {prep:.0f} s data+fit)",
               file=sys.stderr, flush=True)
@@ -225,6 +226,8 @@ def main() -> int:
         wrong = sum(f is not None and f != a.hidden for f in first)
         power = {"hidden": a.hidden, "named_first": named, "misnamed_first": wrong, "missed": first.count(None),
                  "named_first_rate": named / len(cases), "wilson95": list(wilson(named, len(cases))),
+                 "settings_named_first": [c["settings"][0] for c, f in zip(cases, first)
+                                          if f == a.hidden and c["settings"]],
                  **({"rule": f"an effect outside the candidates counts as named when an 'unexplained' finding "
                              f"lists its structure ({OUTSIDE_STRUCTURE[a.hidden]})"}
                     if a.hidden in OUTSIDE_STRUCTURE else {})}

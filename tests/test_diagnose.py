@@ -209,6 +209,14 @@ def test_a_hidden_effect_is_named_first_and_significant(tmp_path, effect):
     # frames' fall-off
     assert max(g["heldout_feature"], g["heldout_pixel"], g["absorbed_parameter_r2"] or -1,
                g["noise_loglik_per_px"] or -1, g["heldout_colour"] or -1, g["frame_statistic"] or -1) > 0
+    if effect == "shot_noise":
+        # its strength read from the frames' affine noise level function: the truth, plus the few per cent that
+        # the background's own noise (0.35 of the frame's std, unknown to the diagnosis) adds
+        from synthaug.diagnose.reference_camera import REALISTIC_STRENGTHS
+
+        assert first["channel"] == "noise_level"
+        assert first["setting"]["shot_sigma"] == pytest.approx(REALISTIC_STRENGTHS["shot_noise"]["shot_sigma"],
+                                                               rel=0.15)
     # the files: report.json (same content) and the human report with its plots
     assert json.loads((tmp_path / "out" / "report.json").read_text())["findings"][0]["effect"] == effect
     md = (tmp_path / "out" / "report.md").read_text()

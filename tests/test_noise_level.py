@@ -12,6 +12,7 @@ from synthaug.diagnose.noise import (
     frame_noise_levels,
     nlf_slope,
     noise_channel,
+    shot_noise_sigma,
 )
 
 
@@ -161,3 +162,57 @@ def test_a_rising_noise_level_goes_to_gamma_or_shot_noise_by_the_signals_tone():
     assert noise_level_channel("gamma", falling, 30, 0.01, None)["significant"]
     assert not noise_level_channel("shot_noise", falling, 30, 0.01, None)["significant"]
     assert "tone" not in noise_level_channel("gamma", falling, 30, 0.01, None)
+
+
+def _shot_frames(rng: np.random.Generator, sigma: float, *, n: int = 8, background_sd: float = 0.0,
+                 hw: tuple[int, int] = (120, 160)) -> list[dict[str, np.ndarray]]:
+    """NLFs of ``n`` frames with read noise changing from frame to frame (the gain) and shot noise ``sigma``;
+    the background a second look whose noise has ``background_sd`` times the frame's std."""
+    out = []
+    for i in range(n):
+        b = _scene(rng, *hw) * rng.uniform(0.7, 1.1)
+        sd = np.sqrt(rng.uniform(0.003, 0.008) ** 2 + sigma ** 2 * b)
+        out.append(frame_noise_levels(b + sd * rng.normal(size=b.shape), b + background_sd * sd * rng.normal(size=b.shape)))
+    return out
+
+
+@pytest.mark.parametrize("sigma", [0.02, 0.04, 0.08])
+def test_shot_noise_sigma_recovers_the_cameras_shot_noise(sigma):
+    rng = np.random.default_rng(int(sigma * 1000))
+    assert shot_noise_sigma(_shot_frames(rng, sigma)) == pytest.approx(sigma, rel=0.08)
+
+
+def test_shot_noise_sigma_counts_the_looks_and_reads_read_noise_as_none():
+    rng = np.random.default_rng(11)
+    # a frame minus its neighbour: two equal looks, said so by the NLFs' "looks"
+    two = [{**n, "looks": 2.0} for n in _shot_frames(rng, 0.04, background_sd=1.0)]
+    assert shot_noise_sigma(two) == pytest.approx(0.04, rel=0.08)
+    # a background with noise of its own, not said: sigma reads sqrt(1 + kappa²) high (the reference camera's 0.35)
+    kappa = 0.35
+    assert shot_noise_sigma(_shot_frames(rng, 0.04, background_sd=kappa)) == pytest.approx(
+        0.04 * math.sqrt(1 + kappa ** 2), rel=0.08)
+    # read noise only (a different level per frame): no shot noise
+    assert shot_noise_sigma(_shot_frames(rng, 0.0)) < 0.006
+    # too few frames, or no spread of brightness: no reading
+    assert shot_noise_sigma(_shot_frames(rng, 0.04, n=2)) is None
+    flat = {"signal": np.array([0.5, 0.5]), "var": np.array([1e-4, 1.1e-4]), "count": np.array([500, 500])}
+    assert shot_noise_sigma([flat] * 4) is None
+
+
+def test_shot_noise_sigma_is_the_weighted_fit_by_hand():
+    # exact variances on the affine model with one constant per frame: the fit returns the slope exactly
+    sig = np.array([0.2, 0.4, 0.6, 0.8])
+    nlfs = [{"signal": sig, "var": (a + 0.03 ** 2 * sig) * 24 / 25, "count": np.array([400, 300, 200, 100])}
+            for a in (1e-5, 4e-5, 9e-5)]
+    assert shot_noise_sigma(nlfs) == pytest.approx(0.03, rel=1e-9)
+
+
+def test_the_nlf_sets_shot_noise_and_gamma_and_nothing_else():
+    from synthaug.diagnose.screening import noise_setting
+
+    nc = {"fitted_slope": 0.5, "shot_sigma": 0.041}
+    assert noise_setting("shot_noise", nc) == {"shot_sigma": 0.041}
+    assert noise_setting("shot_noise", {**nc, "shot_sigma": 0.5}) == {"shot_sigma": 0.2}  # the parameter's range
+    assert noise_setting("shot_noise", {**nc, "shot_sigma": None}) is None
+    assert noise_setting("gamma", nc) == {"gamma_g": pytest.approx(2 / 1.5)}
+    assert noise_setting("defocus", nc) is None

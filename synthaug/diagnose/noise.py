@@ -27,6 +27,14 @@ slopes are t-tested over seeds. The extended model's gain is a held-out
 log-likelihood: the NLF model of the candidate, fitted on training seeds,
 against a flat NLF, on the pixels of held-out seeds (nats per pixel).
 
+The shot noise's strength comes from the same measurements
+(:func:`shot_noise_sigma`): the affine NLF ``var = a_i + σ_shot² · I``
+(Foi et al., "Practical Poissonian-Gaussian noise modeling and fitting for
+single-image raw-data", TIP 2008), each seed with its own constant part
+(read noise, 8-bit rounding), one σ_shot for the camera, the measured
+variances first divided by what the high-pass and the second look add
+(:data:`HIGH_PASS_VAR`, ``looks``).
+
 Example:
     >>> rng = np.random.default_rng(0)
     >>> b = np.tile(np.linspace(0.3, 0.9, 128), (96, 1))
@@ -46,7 +54,7 @@ import numpy as np
 from synthaug.diagnose.stats import t_test
 
 __all__ = ["frame_noise_levels", "nlf_slope", "seed_noise_levels", "aligned_neighbour", "noise_channel",
-           "NOISE_CANDIDATES"]
+           "shot_noise_sigma", "NOISE_CANDIDATES", "HIGH_PASS_VAR"]
 
 # Candidates the noise level function can testify for, with the sign of the log-log slope they produce (gamma:
 # its compressive case, g < 1; an expansive curve, g > 1, rises like shot noise, and the patches' tone tells the
@@ -59,6 +67,9 @@ SLOPE_FLOOR = 2 * math.log2(1.1)
 MIN_NOISE_SD = 0.3 / 255
 # Variance of a standard normal truncated to ±4: the rejection's bias, undone.
 _CLIPPED_VAR_4SD = 1.0 - 8.0 * math.exp(-8.0) / math.sqrt(2.0 * math.pi) / math.erf(4.0 / math.sqrt(2.0))
+# What the 5x5 local mean removed from ``frame - background`` leaves of white noise's variance: r - mean25(r) weighs
+# the centre (1 - 1/25) and 24 neighbours -1/25, so var = ((24/25)² + 24/25²) var(r) = (24/25) var(r).
+HIGH_PASS_VAR = 1.0 - 1.0 / 25.0
 
 
 def _box_mean(x: np.ndarray, k: int) -> np.ndarray:
@@ -197,7 +208,7 @@ def seed_noise_levels(seeds: Any, *, margin: float = 0.5, frames: Sequence[np.nd
     None without frames or when no seed has a second look (see :func:`frame_noise_levels`). ``frames``: the
     seeds' frames when already read."""
     out = []
-    for i in range(len(seeds)):
+    for i in range(len(seeds)):  # each NLF says how many looks of the camera's noise its differences hold
         try:
             f = seeds.frame(i) if frames is None else frames[i]
             b = seeds.background_frame(i)
@@ -207,11 +218,11 @@ def seed_noise_levels(seeds: Any, *, margin: float = 0.5, frames: Sequence[np.nd
         if f is None or b is None:
             return None
         ex = _box_mask(np.asarray(f).shape[:2], seeds.boxes[i], margin)
-        levels = frame_noise_levels(f, b, exclude=ex, **kwargs)
+        levels = {**frame_noise_levels(f, b, exclude=ex, **kwargs), "looks": 1.0}  # B: a less noisy, averaged look
         if not len(levels["signal"]) and nb is not None:
             info = seeds.records[i].get("neighbour", {})
             warped, out_nb = aligned_neighbour(f, nb, info["homography"], info.get("box"), margin)
-            levels = frame_noise_levels(f, warped, exclude=ex | out_nb, **kwargs)
+            levels = {**frame_noise_levels(f, warped, exclude=ex | out_nb, **kwargs), "looks": 2.0}  # two equal looks
         out.append(levels)
     return out if any(len(n["signal"]) for n in out) else None
 
@@ -268,4 +279,56 @@ def noise_channel(nlfs: Sequence[dict[str, np.ndarray]], folds: Sequence[np.ndar
             gains[j] = _heldout_loglik(nlfs[j], s) - _heldout_loglik(nlfs[j], 0.0)
     return {"slope": m, "t": t, "p": p, "n_seeds": int(np.isfinite(slopes).sum()),
             "per_seed_slope": slopes.tolist(), "gain": float(np.nanmean(gains)) if np.isfinite(gains).any() else 0.0,
-            "per_seed_gain": gains.tolist(), "fitted_slope": float(_fit_model(nlfs, "power")[0])}
+            "per_seed_gain": gains.tolist(), "fitted_slope": float(_fit_model(nlfs, "power")[0]),
+            "shot_sigma": shot_noise_sigma(nlfs)}
+
+
+def shot_noise_sigma(nlfs: Sequence[dict[str, np.ndarray]], *, iterations: int = 3) -> float | None:
+    """The camera's shot-noise strength σ_shot (frame noise variance ``a + σ_shot² · I``, the reference camera's and
+    :func:`synthaug.effects.camera_functional.shot_noise`'s model) from the seeds' NLFs.
+
+    Weighted least squares of the binned variances on ``[one constant per seed, I]``: each frame keeps its own
+    constant part (read noise and rounding change with the frame's gain), the slope is the camera's. Each bin's
+    variance estimate has relative standard error ``sqrt(2 / count)``, so the weights are ``count / model²``,
+    iterated (``iterations`` re-weightings from the measured variances). A measured variance holds
+    :data:`HIGH_PASS_VAR` (the 5x5 local mean removed) times ``looks`` (an NLF's key, default 1: the frame's own
+    noise over a background averaged from many looks; 2: two equal looks, a frame minus its neighbour) of the
+    camera's; a background with some noise of its own (relative variance κ²) makes σ_shot read ``sqrt(1 + κ²)``
+    high (≈ 6 % for the reference camera's κ = 0.35).
+
+    Returns:
+        σ_shot ≥ 0 (0 when the fitted slope is negative: no rise with brightness), or None with fewer than 3
+        seeds' NLFs of ≥ 2 bins or no spread of brightness.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> b = np.tile(np.linspace(0.2, 0.9, 160), (120, 1))
+        >>> nlfs = [frame_noise_levels(b + rng.normal(size=b.shape) * np.sqrt(r ** 2 + 0.03 ** 2 * b), b)
+        ...         for r in (0.004, 0.006, 0.008)]
+        >>> round(shot_noise_sigma(nlfs), 2)
+        0.03
+    """
+    sig, var, cnt, seed = [], [], [], []
+    for i, n in enumerate(nlfs):
+        ok = (n["var"] > 0) & (n["count"] > 0)
+        if ok.sum() < 2:
+            continue
+        sig.append(n["signal"][ok])
+        var.append(n["var"][ok] / (HIGH_PASS_VAR * float(n.get("looks", 1.0))))
+        cnt.append(n["count"][ok].astype(np.float64))
+        seed.append(np.full(int(ok.sum()), len(sig) - 1))
+    if len(sig) < 3:
+        return None
+    s, v, c, g = (np.concatenate(x) for x in (sig, var, cnt, seed))
+    if np.ptp(s) <= 0:
+        return None
+    x = np.zeros((s.size, len(sig) + 1))
+    x[np.arange(s.size), g] = 1.0
+    x[:, -1] = s
+    model = v
+    beta = np.zeros(x.shape[1])
+    for _ in range(max(1, iterations)):
+        sw = np.sqrt(c) / np.maximum(model, 1e-12)
+        beta = np.linalg.lstsq(x * sw[:, None], v * sw, rcond=None)[0]
+        model = np.maximum(x @ beta, 1e-12)
+    return float(math.sqrt(max(float(beta[-1]), 0.0)))

@@ -55,6 +55,8 @@ BLOCK_GRID_TOLERANCE = 0.0125
 """Cycles per frame px a periodic structure's peak may sit from a multiple of 1/8 and still be the block grid's
 (one step of the ``periodic_*`` measures' frequency grid)."""
 _FITTED_PARAMS = ("sigma_s", "sigma_u", "sigma_n")
+NLF_KEYS = ("slope", "t", "p", "n_seeds", "fitted_slope", "gain", "shot_sigma")
+"""What the report keeps of the noise level function (:func:`synthaug.diagnose.noise.noise_channel`)."""
 
 
 def structure_hints(name: str, measure: dict[str, Any]) -> tuple[str, ...]:
@@ -334,7 +336,7 @@ def _noise_level_function(data: Any, folds: Any) -> dict[str, Any] | None:
     from synthaug.diagnose.noise import noise_channel
 
     nc = noise_channel(data.noise_levels, folds)
-    nlf = {k_: nc[k_] for k_ in ("slope", "t", "p", "n_seeds", "fitted_slope", "gain")}
+    nlf = {k_: nc[k_] for k_ in NLF_KEYS}
     nlf["note"] = ("log-log slope of the frames' noise variance vs brightness, off the object (0: read noise "
                    "only, as the model's sigma_n assumes; > 0: shot noise, or an expansive tone curve (g > 1), "
                    "told apart by the patches' tone; < 0: a compressive tone curve after the sensor); gain: "
@@ -367,7 +369,7 @@ def _effect_findings(data: Any, picked: list[tuple[dict, dict]], folds: Any, acc
                       "realism_accuracy_before": acc_base, "realism_accuracy_after": acc},
             "evidence": {"channels": row["channels"], "absorption": row["absorption"],
                          "noise_level_function": None if row.get("noise") is None else {
-                             k_: row["noise"][k_] for k_ in ("slope", "t", "p", "n_seeds", "fitted_slope", "gain")},
+                             k_: row["noise"][k_] for k_ in NLF_KEYS},
                          "hinted_by_residuals": row["effect"] in hinted,
                          "residual_structure": [m["description"] for n_, m in structure.items()
                                                 if m["significant"] and row["effect"] in structure_hints(n_, m)]},
@@ -571,6 +573,9 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                 + (f"; noise level function log-log slope {f['evidence']['noise_level_function']['slope']:+.2f} "
                    f"(flat = read noise only), held-out likelihood gain {g['noise_loglik_per_px']:.4f} nats/px"
                    if f["channel"] == "noise_level" else "")
+                + (f"; σ_shot {f['setting']['shot_sigma']:.3f} from the frames' affine noise level function "
+                   "(var = a + σ_shot² I, a per frame)"
+                   if f["channel"] == "noise_level" and "shot_sigma" in f["setting"] else "")
                 + (_frame_text(f) if f["channel"] == "frame" else "")
                 + _tone_text(f)
                 + (f"; real-vs-synthetic accuracy {100 * g['realism_accuracy_before']:.0f} % → {100 * acc:.0f} %"

@@ -80,6 +80,7 @@ from synthaug.diagnose.calibration import HAND_MIN_GAIN, gain_floor
 from synthaug.diagnose.noise import NOISE_CANDIDATES, SLOPE_FLOOR, noise_channel
 from synthaug.diagnose.diagnosis_data import DiagnosisData, pairwise_distance, pixel_distance, render_with, solve_albedo
 from synthaug.diagnose.residuals import seed_metadata
+from synthaug.params import EFFECT_PARAM_SPECS
 
 __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "screen_candidates", "screen_one", "absorption_gain",
            "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
@@ -530,9 +531,14 @@ def frame_setting(effect: str, fc: dict[str, Any] | None) -> Setting | None:
 
 def noise_setting(effect: str, nc: dict[str, Any]) -> Setting | None:
     """The camera setting the NLF implies: a tone curve x^g with slope 2(g - 1)/g when read noise
-    dominates, so g = 2 / (2 - slope); None for effects it does not set."""
+    dominates, so g = 2 / (2 - slope); shot noise's σ_shot from the affine NLF
+    (:func:`~synthaug.diagnose.noise.shot_noise_sigma`, within the parameter's range); None for effects it does
+    not set (or without a measurable σ_shot)."""
     if effect == "gamma":
         return {"gamma_g": float(np.clip(2.0 / (2.0 - min(nc["fitted_slope"], 1.5)), 0.4, 2.5))}
+    if effect == "shot_noise" and nc.get("shot_sigma") is not None:
+        spec = EFFECT_PARAM_SPECS["shot_noise"][0]
+        return {"shot_sigma": float(np.clip(nc["shot_sigma"], spec.low, spec.high))}
     return None
 
 
