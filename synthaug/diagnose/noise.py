@@ -294,7 +294,9 @@ def shot_noise_sigma(nlfs: Sequence[dict[str, np.ndarray]], *, iterations: int =
     :data:`HIGH_PASS_VAR` (the 5x5 local mean removed) times ``looks`` (an NLF's key, default 1: the frame's own
     noise over a background averaged from many looks; 2: two equal looks, a frame minus its neighbour) of the
     camera's; a background with some noise of its own (relative variance κ²) makes σ_shot read ``sqrt(1 + κ²)``
-    high (≈ 6 % for the reference camera's κ = 0.35).
+    high (≈ 6 % for the reference camera's κ = 0.35), and a neighbour warped by a sub-pixel shift has had its noise
+    smoothed by the bilinear interpolation (its variance down to a quarter at half a pixel in x and y), so there
+    σ_shot reads up to ``sqrt(1.25 / 2)`` ≈ 0.79 of the truth.
 
     Returns:
         σ_shot ≥ 0 (0 when the fitted slope is negative: no rise with brightness), or None with fewer than 3
