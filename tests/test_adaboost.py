@@ -48,10 +48,14 @@ def test_best_stumps_match_brute_force() -> None:
         assert float((w / w.sum() * (pred != y)).sum()) == pytest.approx(ref_err, abs=1e-6)
 
 
-def _np_adaboost(f: np.ndarray, y: np.ndarray, rounds: int) -> tuple[list[int], list[float]]:
-    """Textbook discrete AdaBoost (class-balanced start), returns chosen columns and α."""
+def _np_adaboost(f: np.ndarray, y: np.ndarray, rounds: int,
+                 positive_weights: np.ndarray | None = None) -> tuple[list[int], list[float]]:
+    """Textbook discrete AdaBoost (class-balanced start; the positives' half split by ``positive_weights`` when
+    given), returns chosen columns and α."""
     n_pos, n_neg = y.sum(), (1 - y).sum()
     w = np.where(y == 1, 0.5 / n_pos, 0.5 / n_neg)
+    if positive_weights is not None:
+        w[y == 1] = 0.5 * positive_weights / positive_weights.sum()
     chosen, alphas = [], []
     for _ in range(rounds):
         errs = [_np_best_stump(f[:, j], y, w) for j in range(f.shape[1])]
@@ -79,6 +83,32 @@ def test_train_adaboost_matches_numpy_reference() -> None:
     assert det.learners.rects.tolist() == rects[chosen].tolist()
     assert det.learners.orientations.tolist() == orients[chosen].tolist()
     np.testing.assert_allclose(det.alphas.numpy(), alphas, rtol=1e-4)
+
+
+def test_positive_weights_start_the_boosting_as_the_numpy_reference_and_as_repeated_samples() -> None:
+    pos, neg = toy_patches(20, 30, seed=3)
+    pw = torch.from_numpy(np.random.default_rng(0).uniform(0.2, 3.0, 20))
+    det = train_adaboost(pos, neg, n_rounds=5, candidates=40, step=8, seed=1, positive_weights=pw)
+    rects, orients = exhaustive_candidates(40, 4, step=8, min_size=4)
+    pick = torch.randperm(len(rects), generator=torch.Generator().manual_seed(1))[:40].sort().values
+    f = edge_orientation_energy(torch.cat([pos, neg]).double(), rects[pick], orients[pick]).numpy()
+    chosen, alphas = _np_adaboost(f, np.r_[np.ones(20), np.zeros(30)], 5, pw.numpy())
+    assert det.learners.rects.tolist() == rects[pick][chosen].tolist()
+    np.testing.assert_allclose(det.alphas.numpy(), alphas, rtol=1e-4)
+    # a weight of 2 boosts as the patch twice would; all-equal weights as no weights
+    w2 = torch.ones(20, dtype=torch.float64)
+    w2[:5] = 2.0
+    a = train_adaboost(pos, neg, n_rounds=8, candidates=60, seed=2, positive_weights=w2)
+    b = train_adaboost(torch.cat([pos, pos[:5]]), neg, n_rounds=8, candidates=60, seed=2)
+    assert a.learners.rects.tolist() == b.learners.rects.tolist()
+    torch.testing.assert_close(a.alphas, b.alphas)
+    c = train_adaboost(pos, neg, n_rounds=8, candidates=60, seed=2, positive_weights=torch.full((20,), 3.0))
+    d = train_adaboost(pos, neg, n_rounds=8, candidates=60, seed=2)
+    assert c.learners.rects.tolist() == d.learners.rects.tolist()
+    torch.testing.assert_close(c.alphas, d.alphas)
+    for bad in (torch.ones(19), -torch.ones(20), torch.zeros(20), torch.full((20,), float("nan"))):
+        with pytest.raises(ValueError, match="positive_weights"):
+            train_adaboost(pos, neg, n_rounds=2, candidates=10, positive_weights=bad)
 
 
 @pytest.fixture(scope="module")

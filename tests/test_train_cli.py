@@ -307,25 +307,31 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     assert json.loads(out3.with_suffix(".json").read_text())["positives"]["synthetic_share"] == 0.25
 
 
-def test_cnn_synthetic_share_reaches_the_loss_weights(ws: dict[str, Path], trained: dict[str, Any],
-                                                     monkeypatch: pytest.MonkeyPatch) -> None:
-    """--synthetic-share for the CNN: the 8 real seeds hold 1 - share of the positive class's weight in its loss."""
+@pytest.mark.parametrize("kind", ["cnn", "adaboost"])
+def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dict[str, Path], trained: dict[str, Any],
+                                                                        monkeypatch: pytest.MonkeyPatch,
+                                                                        kind: str) -> None:
+    """--synthetic-share for the CNN (its loss's sample weights) and AdaBoost (its positives' starting weights): the 8
+    real seeds hold 1 - share of the positive class's weight."""
+    import synthaug.detectors.adaboost as ada
     import synthaug.detectors.lightning_module as lm
     from synthaug.detectors.video_training import AddedPositives, _check_options
 
-    _check_options("cnn", AddedPositives(perturb_copies=1, synthetic_share=0.5), frame_step=1, all_frames=False,
+    _check_options(kind, AddedPositives(perturb_copies=1, synthetic_share=0.5), frame_step=1, all_frames=False,
                    seedset=None, seed_count=8)  # accepted
     seen = []
-    real_fit = lm.fit_patch_detector
+    module, name, short = ((lm, "fit_patch_detector", {"epochs": 1}) if kind == "cnn" else
+                           (ada, "train_adaboost", {"n_rounds": 3, "candidates": 50}))
+    real_fit = getattr(module, name)
 
     def spy(positives, negatives, **kw):
         seen.append((positives.shape[0], kw.get("positive_weights")))
-        return real_fit(positives, negatives, **{**kw, "epochs": 1})
+        return real_fit(positives, negatives, **{**kw, **short})
 
-    monkeypatch.setattr(lm, "fit_patch_detector", spy)
-    out = ws["root"] / "runs" / "cnn_share.pt"
+    monkeypatch.setattr(module, name, spy)
+    out = ws["root"] / "runs" / f"{kind}_share.pt"
     seedset = trained["meta"]["positives"]["seedset"]
-    assert _train(ws, out, "--detector", "cnn", "--seedset", seedset, "--perturb-copies", "3", "--synthetic-share", "0.25",
+    assert _train(ws, out, "--detector", kind, "--seedset", seedset, "--perturb-copies", "3", "--synthetic-share", "0.25",
                   "--mining-rounds", "0") == 0
     (n, w), = seen
     assert n == 32 and w.shape == (32,)
@@ -349,7 +355,6 @@ def test_cnn_synthetic_share_reaches_the_loss_weights(ws: dict[str, Path], train
         ("copy_paste_without_params", "--copy-paste-ratio"),
         ("share_out_of_range", "--synthetic-share"),
         ("share_without_added", "--synthetic-share"),
-        ("share_for_adaboost", "--synthetic-share"),
         ("negative_patience", "--mining-patience"),
         ("negative_downscaled", "--downscaled-copies"),
         ("downscaled_with_all_frames", "--downscaled-copies"),
@@ -391,9 +396,6 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--perturb-copies", "1", "--synthetic-share", "1.0"]
     elif case == "share_without_added":
         extra += ["--synthetic-share", "0.5"]
-    elif case == "share_for_adaboost":
-        base["--detector"] = "adaboost"
-        extra += ["--perturb-copies", "1", "--synthetic-share", "0.5"]
     elif case == "negative_patience":
         extra += ["--mining-patience", "-1"]
     elif case == "negative_downscaled":
@@ -421,5 +423,3 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         assert "must be >= 0, got -1" in err
     if case == "copy_paste_without_params":
         assert "--params" in err
-    if case == "share_for_adaboost":
-        assert "not implemented for adaboost" in err and "CNN" in err

@@ -342,7 +342,7 @@ def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> 
 
 def test_cnn_positive_weights_reach_every_mining_round(monkeypatch: pytest.MonkeyPatch) -> None:
     """--synthetic-share for the CNN: every round's training (the mined negatives added, weight 1) gets the same
-    per-positive weights; AdaBoost refuses them."""
+    per-positive weights, and so does AdaBoost's (its starting weights)."""
     import synthaug.detectors.lightning_module as lm
     from synthaug.detectors.video_training import share_weights
 
@@ -374,8 +374,18 @@ def test_cnn_positive_weights_reach_every_mining_round(monkeypatch: pytest.Monke
     seen.clear()
     train_with_mining("cnn", pos, grey, 0, options=opts, mining_source=mining)
     assert [x for _, _, x in seen] == [None, None, None]  # the default: no weights
-    with pytest.raises(ValueError, match="not for 'adaboost'"):
-        train_with_mining("adaboost", pos, grey, 0, options=opts, positive_weights=w)
+    # AdaBoost's starting weights, the same vector in every round
+    import synthaug.detectors.adaboost as ada
+
+    ada_seen: list[Any] = []
+
+    def ada_spy(positives: torch.Tensor, negatives: torch.Tensor, **kw: Any) -> Darkness:
+        ada_seen.append(kw.get("positive_weights"))
+        return Darkness.fit(pos, negatives)
+
+    monkeypatch.setattr(ada, "train_adaboost", ada_spy)
+    train_with_mining("adaboost", pos, grey, 0, options=opts, mining_source=mining, positive_weights=w)
+    assert len(ada_seen) == 3 and all(x is w for x in ada_seen)
 
 
 # ----------------------------------------------------------------- the three families on generated videos

@@ -184,6 +184,7 @@ def train_adaboost(
     stage_size: int = 10,
     cascade_quantile: float = 0.0,
     cascade_margin: float = 0.3,
+    positive_weights: Tensor | None = None,
 ) -> "AdaBoostDetector":
     """Train discrete AdaBoost on Levi–Weiss stumps.
 
@@ -206,6 +207,11 @@ def train_adaboost(
             positive is ever rejected).
         cascade_margin: slack of the rejection thresholds, see
             :meth:`AdaBoostDetector.calibrate_cascade`.
+        positive_weights: ``(P,)`` each positive's share of the positive class's starting weight (non-negative, not
+            all 0): the positives start at ``0.5 · w_i / Σ w`` instead of ``0.5 / P`` (the negatives keep their half),
+            so a weight of 2 boosts as the sample twice would; boosting reweights from there.
+            :func:`~synthaug.detectors.video_training.share_weights` gives the real and added positives their
+            shares. None: every positive the same (unchanged).
 
     Returns:
         A trained :class:`AdaBoostDetector`.
@@ -241,6 +247,12 @@ def train_adaboost(
     search = _StumpSearch(features.float(), labels)
     n_pos, n_neg = len(positives), len(negatives)
     w = torch.where(labels == 1, 0.5 / n_pos, 0.5 / n_neg).double()
+    if positive_weights is not None:
+        pw = torch.as_tensor(positive_weights, dtype=torch.float64).reshape(-1)
+        if pw.shape != (n_pos,) or not bool(torch.isfinite(pw).all()) or bool((pw < 0).any()) or not float(pw.sum()) > 0:
+            raise ValueError(f"positive_weights must be ({n_pos},) finite, >= 0 and not all 0, got "
+                             f"{tuple(pw.shape)}")
+        w[:n_pos] = 0.5 * pw / pw.sum()
 
     chosen: list[int] = []
     taus: list[float] = []

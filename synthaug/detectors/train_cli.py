@@ -98,7 +98,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--synthetic-share", type=float, default=None,
                         help="the share of the positive class's training weight held by the added positives (synthetic, "
                              "copy-paste, perturbed, downscaled, faded), the rest by the real ones (HOG: the SVM's sample cost; "
-                             "CNN: the loss's sample weight; not AdaBoost; default: every positive weighs the same)")
+                             "CNN: the loss's sample weight; AdaBoost: the positives' starting weights; default: every positive weighs the same)")
     parser.add_argument("--seed", type=int, default=0, help="training seed: initialisation, negative sampling, the automatic split")
     parser.add_argument("--ingest-seed", type=int, default=0, help="`synthaug ingest --seed` of the seed draw (shards are reused per value)")
     parser.add_argument("--val-fraction", type=float, default=0.2, help="share of the class's videos kept for validation without --split")

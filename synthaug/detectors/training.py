@@ -285,8 +285,6 @@ def _fit_once(
     window = int(positives.shape[-1])
     positives = check_patches(positives, window)
     negatives = check_patches(negatives, window)
-    if positive_weights is not None and kind == "adaboost":
-        raise ValueError("positive weights are implemented for the HOG detector's SVM and the CNN's loss, not for 'adaboost'")
     if kind == "hog":
         from synthaug.detectors.hog_dpm import HOGDetector
 
@@ -306,7 +304,8 @@ def _fit_once(
     elif kind == "adaboost":
         from synthaug.detectors.adaboost import train_adaboost
 
-        det = train_adaboost(positives, negatives, n_rounds=options.ada_rounds, candidates=options.ada_candidates, seed=seed)
+        det = train_adaboost(positives, negatives, n_rounds=options.ada_rounds, candidates=options.ada_candidates, seed=seed,
+                             positive_weights=positive_weights)
     else:
         # the one CNN training loop: PatchDetectorModule + PatchDataModule.from_tensors under a CPU lightning.Trainer
         from synthaug.detectors.lightning_module import fit_patch_detector
@@ -437,7 +436,8 @@ def train_with_mining(
         positive_weights: ``(P,)`` each positive's weight in the positive class, the same in every
             round (mined negatives weigh 1): HOG's per-sample SVM cost
             (:meth:`~synthaug.detectors.hog_dpm.HOGDetector.fit`) or the CNN's per-sample BCE weight
-            (:func:`~synthaug.detectors.lightning_module.fit_patch_detector`); not AdaBoost. None: all equal.
+            (:func:`~synthaug.detectors.lightning_module.fit_patch_detector`) or AdaBoost's starting weights
+            (:func:`~synthaug.detectors.adaboost.train_adaboost`). None: all equal.
 
     Returns:
         A :class:`TrainResult`.

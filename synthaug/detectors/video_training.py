@@ -100,7 +100,8 @@ class AddedPositives:
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; None: every positive weighs the same, so the added ones hold
             ``added / (real + added)``. HOG: the SVM's per-sample cost; CNN: the BCE loss's per-sample weight (kept
-            through the flip doubling, the split and the mining rounds); not AdaBoost.
+            through the flip doubling, the split and the mining rounds); AdaBoost: the positives' starting weights
+            (every mining round).
     """
 
     params: str | Path | Callable[[Path], str | Path] | None = None
@@ -369,9 +370,6 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
     if synthetic_share is not None:
         if not 0.0 <= synthetic_share < 1.0:
             raise TrainingInputError("--synthetic-share", f"must be in [0, 1), got {synthetic_share}")
-        if kind not in ("hog", "cnn"):
-            raise TrainingInputError("--synthetic-share", f"weights the HOG detector's SVM and the CNN's loss; not "
-                                     f"implemented for {kind}")
         if (synthetic_ratio <= 0 and copy_paste_ratio <= 0 and perturb_copies <= 0 and added.downscaled_copies <= 0
                 and added.faded_copies <= 0):
             raise TrainingInputError("--synthetic-share", "there are no added positives to weigh: give --synthetic-ratio, "

@@ -646,8 +646,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="copies of every real seed with the object fainter against its own background (contrast "
                          "x0.3-0.9); one condition per count")
     sy.add_argument("--synthetic-share", type=float, default=None,
-                    help="the added positives' share of the positive class's training weight (HOG and CNN; "
-                         "default: by count)")
+                    help="the added positives' share of the positive class's training weight (default: by count)")
     return p
 
 
