@@ -311,7 +311,7 @@ def shot_noise_sigma(nlfs: Sequence[dict[str, np.ndarray]], *, iterations: int =
         0.03
     """
     sig, var, cnt, seed = [], [], [], []
-    for i, n in enumerate(nlfs):
+    for n in nlfs:
         ok = (n["var"] > 0) & (n["count"] > 0)
         if ok.sum() < 2:
             continue
