@@ -583,3 +583,36 @@ def test_a_column_pattern_off_the_block_grid_is_neither_a_compression_hint_nor_e
     left = left_unexplained({"column_pattern": on, "tone_curve": tone, "block_8x8": {"p": 1e-7}}, ["compression"])
     assert sorted(left) == ["tone_curve"]
     assert sorted(left_unexplained({"column_pattern": off, "tone_curve": tone}, ["gamma"])) == ["column_pattern"]
+
+
+@pytest.mark.parametrize("explained", [True, False])
+def test_a_distance_gain_that_frame_evidence_explains_is_not_accepted_first(monkeypatch, explained):
+    """Forward selection: haze's held-out HOG gain comes first by rank; when shot noise (evidenced by the frames' noise
+    level function, at the setting the frames read) explains it — haze re-screened on top of it is no longer
+    significant — shot noise is accepted first and haze drops out; when it does not, the order stays."""
+    import synthaug.diagnose.screening as scr
+    from synthaug.diagnose.report import _forward_selection
+
+    def row(effect, channel, significant=True):
+        return {"effect": effect, "channel": channel, "significant": significant, "score": 3.0, "gain": 0.02,
+                "p_adjusted": 1e-3, "noise_setting": {"shot_sigma": 0.04} if channel == "noise_level" else None,
+                "frame_setting": None, "screen": {"feature": {"setting": {"haze_extinction_px": 15.0}},
+                                                  "pixel": {"setting": {}}}}
+
+    calls = []
+
+    def fake_screen(data, names, *, given=None, **kw):
+        calls.append((list(names), dict(given or {})))
+        given = given or {}
+        return [row(n, "distance:feature", significant=not (explained and "shot_noise" in given)) if n == "haze"
+                else row(n, "noise_level") for n in names]
+
+    monkeypatch.setattr(scr, "screen_candidates", fake_screen)
+    first, picked = _forward_selection(None, ["haze", "shot_noise"], k=5, seed=0, alpha=0.01, max_effects=3,
+                                       say=lambda s: None)
+    order = [(r["effect"], list(given)) for r, given in picked]
+    if explained:
+        assert order == [("shot_noise", [])]
+        assert (["haze"], {"shot_noise": {"shot_sigma": 0.04}}) in calls  # screened on top of the frames' setting
+    else:
+        assert order == [("haze", []), ("shot_noise", ["haze"])]

@@ -55,6 +55,9 @@ BLOCK_GRID_TOLERANCE = 0.0125
 """Cycles per frame px a periodic structure's peak may sit from a multiple of 1/8 and still be the block grid's
 (one step of the ``periodic_*`` measures' frequency grid)."""
 _FITTED_PARAMS = ("sigma_s", "sigma_u", "sigma_n")
+FRAME_EVIDENCE_CHANNELS = ("noise_level", "frame")
+"""Screening channels read from the whole frames, not from the fitted patches: their evidence does not change with the
+extensions the model already holds (:func:`_forward_selection`)."""
 NLF_KEYS = ("slope", "t", "p", "n_seeds", "fitted_slope", "gain", "shot_sigma")
 """What the report keeps of the noise level function (:func:`synthaug.diagnose.noise.noise_channel`)."""
 
@@ -142,6 +145,12 @@ def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha:
     """Screen every candidate, accept the best significant one, re-screen the other significant ones on top
     of it (their conditional gain), and so on: an effect whose gain another one already explains drops out.
 
+    The best significant one is the first by :func:`~synthaug.diagnose.screening._rank` (distance gains first),
+    unless its distance gain is explained by a significant effect whose evidence comes from the whole frames
+    (:data:`FRAME_EVIDENCE_CHANNELS`: the noise level function, the frame channel; the same whatever the model
+    holds): re-screened on top of that effect at the setting the frames read, the top one is no longer
+    significant. Then that effect is accepted first (and the other is re-screened on top of it, as any other).
+
     Returns:
         (rows of the first round, [(accepted row, the extensions it was screened on top of)]).
     """
@@ -162,9 +171,18 @@ def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha:
         if not sig:
             break
         top = sig[0]
+        for r in sig[1:]:  # a distance gain that an effect evidenced by the whole frames already explains
+            if not top["channel"].startswith("distance:") or r["channel"] not in FRAME_EVIDENCE_CHANNELS:
+                continue
+            again = screen_candidates(data, [top["effect"]], k=k, seed=seed, alpha=alpha, n_tests=n_tests, tone=tone,
+                                      given={**accepted, r["effect"]: _setting(r)})
+            if not again[0]["significant"]:
+                say(f"{top['effect']}'s gain is explained by {r['effect']} ({r['channel']}): {r['effect']} first")
+                top = r
+                break
         picked.append((top, dict(accepted)))
         accepted[top["effect"]] = _setting(top)
-        rest = [r["effect"] for r in sig[1:]]
+        rest = [r["effect"] for r in sig if r is not top]
         if not rest:
             break
         say(f"re-screening {rest} on top of {list(accepted)}")
