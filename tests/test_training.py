@@ -325,7 +325,8 @@ def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> 
     import synthaug.detectors.adaboost as ab
 
     seen = []
-    monkeypatch.setattr(ab, "train_adaboost", lambda pos, neg, n_rounds, candidates, seed: seen.append(n_rounds) or 1 / 0)
+    monkeypatch.setattr(ab, "train_adaboost",
+                        lambda pos, neg, n_rounds, candidates, seed, positive_weights=None: seen.append(n_rounds) or 1 / 0)
     from synthaug.detectors.toy import toy_patches
 
     pos, neg = toy_patches(8, 8, seed=0)
