@@ -328,9 +328,8 @@ def shot_noise_sigma(nlfs: Sequence[dict[str, np.ndarray]], *, iterations: int =
     x[np.arange(s.size), g] = 1.0
     x[:, -1] = s
     model = v
-    beta = np.zeros(x.shape[1])
     for _ in range(max(1, iterations)):
         sw = np.sqrt(c) / np.maximum(model, 1e-12)
-        beta = np.linalg.lstsq(x * sw[:, None], v * sw, rcond=None)[0]
-        model = np.maximum(x @ beta, 1e-12)
-    return float(math.sqrt(max(float(beta[-1]), 0.0)))
+        coef = np.linalg.lstsq(x * sw[:, None], v * sw, rcond=None)[0]
+        model = np.maximum(x @ coef, 1e-12)
+    return float(math.sqrt(max(float(coef[-1]), 0.0)))
