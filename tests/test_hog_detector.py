@@ -260,7 +260,7 @@ def test_positive_weights_zero_drops_those_positives() -> None:
     a = HOGDetector.fit(torch.cat([pos, extra]), neg, components=1, mining_rounds=0, positive_weights=w)
     b = HOGDetector.fit(pos, neg, components=1, mining_rounds=0)
     torch.testing.assert_close(a.weights, b.weights, atol=1e-4, rtol=1e-3)
-    with pytest.raises(ValueError, match="one weight per positive"):
+    with pytest.raises(ValueError, match="one per positive"):
         HOGDetector.fit(pos, neg, components=1, mining_rounds=0, positive_weights=torch.ones(3))
 
 

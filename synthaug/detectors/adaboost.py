@@ -45,7 +45,8 @@ from typing import Any
 import torch
 from torch import Tensor
 
-from synthaug.detectors.base import PatchDetector, check_image, check_patches, register_detector, score_map_shape
+from synthaug.detectors.base import (PatchDetector, check_image, check_patches, check_weights, register_detector,
+                                     score_map_shape)
 from synthaug.detectors.weak_learners import (
     DEFAULT_EPS,
     WeakLearners,
@@ -248,10 +249,7 @@ def train_adaboost(
     n_pos, n_neg = len(positives), len(negatives)
     w = torch.where(labels == 1, 0.5 / n_pos, 0.5 / n_neg).double()
     if positive_weights is not None:
-        pw = torch.as_tensor(positive_weights, dtype=torch.float64).reshape(-1)
-        if pw.shape != (n_pos,) or not bool(torch.isfinite(pw).all()) or bool((pw < 0).any()) or not float(pw.sum()) > 0:
-            raise ValueError(f"positive_weights must be ({n_pos},) finite, >= 0 and not all 0, got "
-                             f"{tuple(pw.shape)}")
+        pw = check_weights(positive_weights, n_pos, flatten=True)
         w[:n_pos] = 0.5 * pw / pw.sum()
 
     chosen: list[int] = []

@@ -177,6 +177,30 @@ def check_patches(patches: Tensor, window: int) -> Tensor:
     return patches.float()
 
 
+def check_weights(weights: Any, n: int, name: str = "positive_weights", per: str = "positive", *,
+                  flatten: bool = False, not_all_zero: bool = True) -> Tensor:
+    """``weights`` as a float64 tensor of ``n`` training weights, one per ``per``: finite, >= 0 and (with
+    ``not_all_zero``) not all zero; ``flatten`` accepts any shape holding ``n`` values. ValueError naming
+    ``name`` otherwise. The one check of every family's per-positive weights (HOG's SVM, AdaBoost's starting
+    weights, the CNN's loss).
+
+    Example:
+        >>> check_weights([1, 0, 2], 3).tolist()
+        [1.0, 0.0, 2.0]
+        >>> check_weights([0, 0], 2)
+        Traceback (most recent call last):
+        ...
+        ValueError: positive_weights must be finite, >= 0, not all 0 and one per positive (2), got (2,)
+    """
+    given = torch.as_tensor(weights).detach()
+    w = (given.flatten() if flatten else given).to(torch.float64)
+    zero = not_all_zero and w.shape == (n,) and n > 0 and not float(w.abs().sum()) > 0
+    if w.shape != (n,) or not bool(torch.isfinite(w).all()) or bool((w < 0).any()) or zero:
+        rule = ", not all 0" if not_all_zero else ""
+        raise ValueError(f"{name} must be finite, >= 0{rule} and one per {per} ({n}), got {tuple(given.shape)}")
+    return w
+
+
 def to_float_patches(patches: Tensor, window: int) -> Tensor:
     """Accept uint8 (0..255) or float (0..1) patches, ``(N, w, w)`` or ``(N, 1, w, w)``.
 

@@ -45,7 +45,8 @@ from typing import Any, Sequence
 import torch
 from torch import Tensor
 
-from synthaug.detectors.base import PatchDetector, check_image, register_detector, score_map_shape, to_float_patches
+from synthaug.detectors.base import (PatchDetector, check_image, check_weights, register_detector, score_map_shape,
+                                     to_float_patches)
 from synthaug.detectors.hog import DEFAULT_HOG, HOGConfig, dense_block_map, descriptor_to_filter, hog
 
 
@@ -336,9 +337,7 @@ class HOGDetector(PatchDetector):
             raise ValueError(f"ignore_boxes must have one entry per background image ({len(background_images)}), got {len(ignore_boxes)}")
         pw = None
         if positive_weights is not None:
-            pw = torch.as_tensor(positive_weights, dtype=torch.float64).reshape(-1)
-            if pw.shape[0] != pos.shape[0]:
-                raise ValueError(f"positive_weights must have one weight per positive ({pos.shape[0]}), got {pw.shape[0]}")
+            pw = check_weights(positive_weights, pos.shape[0], flatten=True)
         if mirror:
             pos = torch.cat([pos, pos.flip(-1)])
             pw = None if pw is None else torch.cat([pw, pw])

@@ -45,7 +45,7 @@ import torch
 from torch import Tensor, nn
 from torch.utils.data import ConcatDataset, DataLoader, Dataset
 
-from synthaug.detectors.base import save_detector
+from synthaug.detectors.base import check_weights, save_detector
 from synthaug.detectors.cnn import CNNDetector, PatchCNN, load_patch_cnn
 
 __all__ = ["PatchDetectorModule", "PatchDataModule", "PatchDataset", "fit_patch_detector", "export_detector",
@@ -170,16 +170,6 @@ def shift_patches(x: Tensor, which: Tensor, shift: int, *, generator: torch.Gene
     return out
 
 
-def _checked_weights(weights: Any, n: int, name: str, per: str, *, flatten: bool = False) -> Tensor:
-    """``weights`` as a tensor of ``n`` loss weights (``flatten``: of any shape holding ``n``), finite and >= 0;
-    ValueError naming ``name`` otherwise."""
-    given = torch.as_tensor(weights).detach()
-    w = given.flatten() if flatten else given
-    if w.shape != (n,) or not bool(torch.isfinite(w).all()) or bool((w < 0).any()):
-        raise ValueError(f"{name} must be finite, >= 0 and one per {per} ({n}), got {tuple(given.shape)}")
-    return w
-
-
 class PatchDataset(Dataset):
     """Labelled patches with a deterministic horizontal-flip doubling.
 
@@ -197,7 +187,7 @@ class PatchDataset(Dataset):
         if patches.dim() != 4 or patches.shape[1] != 1 or labels.shape != (patches.shape[0],):
             raise ValueError(f"patches must be (N, 1, S, S) with labels (N,), got {tuple(patches.shape)} and {tuple(labels.shape)}")
         if weights is not None:
-            weights = _checked_weights(weights, labels.shape[0], "weights", "patch").float()
+            weights = check_weights(weights, labels.shape[0], "weights", "patch", not_all_zero=False).float()
         self.patches = patches.float()
         self.labels = labels.float()
         self.flip = flip
@@ -327,8 +317,7 @@ class PatchDataModule(L.LightningDataModule):
         dm = cls.__new__(cls)
         dm._tensors = (pos, neg)  # before __init__: its no-data check counts them
         if positive_weights is not None:
-            dm._positive_weights = _checked_weights(positive_weights, len(pos), "positive_weights", "positive",
-                                                    flatten=True).to(torch.float64)
+            dm._positive_weights = check_weights(positive_weights, len(pos), flatten=True)
         dm.__init__(**kwargs)
         return dm
 
