@@ -112,6 +112,74 @@ def test_within_video_spearman_removes_a_per_video_nuisance():
     assert np.mean(np.array(ps) < 0.05) < 0.15
 
 
+def test_permutation_pearson_matches_scipy_and_is_calibrated_within_videos():
+    from scipy import stats
+
+    from synthaug.diagnose.residuals import within_groups
+    from synthaug.diagnose.stats import permutation_correlation
+
+    rng = np.random.default_rng(5)
+    g = np.repeat(np.arange(5), 8)
+    x = rng.normal(size=40) + np.repeat(rng.normal(size=5) * 3, 8)
+    y = 0.4 * x + rng.normal(size=40) + np.repeat(rng.normal(size=5) * 3, 8)
+    r, p = permutation_correlation(x, y, rng, 19_999, g, method="pearson")
+    xc, yc = within_groups(x, g), within_groups(y, g)
+    assert r == pytest.approx(stats.pearsonr(xc, yc).statistic)
+    # the p-value of within-video shuffles, by a plain loop (not scipy's: it shuffles across videos, p 0.047 here,
+    # where restricting the shuffles to each video gives 0.09)
+    ref_rng, hits, n_ref = np.random.default_rng(2), 0, 4000
+    for _ in range(n_ref):
+        yp = yc.copy()
+        for k in range(5):
+            idx = np.nonzero(g == k)[0]
+            yp[idx] = yc[ref_rng.permutation(idx)]
+        hits += abs(np.corrcoef(xc, yp)[0, 1]) >= abs(r) - 1e-12
+    assert abs(p - (hits + 1) / (n_ref + 1)) < 0.015
+    ps = [permutation_correlation(rng.normal(size=30) + np.repeat(np.arange(5.0), 6),
+                                  rng.lognormal(size=30) - np.repeat(np.arange(5.0), 6), rng, 499,
+                                  np.repeat(np.arange(5), 6), method="pearson")[1] for _ in range(60)]
+    assert np.mean(np.array(ps) < 0.05) < 0.15
+    with pytest.raises(ValueError, match="method"):
+        permutation_correlation(x, y, rng, method="kendall")
+
+
+def test_exposure_absorption_is_tested_linearly_and_has_the_power_ranks_lack(monkeypatch):
+    """Auto-exposure makes w_d follow the metered brightness B within a video: the Pearson correlation within videos
+    (the dependence whose held-out R2 is the gain) finds it where the rank correlation is weaker (one video's
+    brightness spans far more than the others', as in the power table's case whose rank test missed it)."""
+    from types import SimpleNamespace
+
+    from scipy import stats
+
+    import synthaug.diagnose.residuals as residuals_mod
+    import synthaug.diagnose.screening as screening_mod
+    from synthaug.diagnose.stats import within_groups
+
+    g = np.repeat(np.arange(5), 12)
+    data = SimpleNamespace(records=[{"video": f"v{int(k)}"} for k in g])
+    monkeypatch.setattr(residuals_mod, "seed_groups", lambda d: g)
+    folds = screening_mod.kfold(60, 5, np.random.default_rng(0))
+    ratios = []
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        spread = np.repeat([0.05, 0.08, 0.06, 0.05, 0.4], 12)  # within-video sd of log brightness
+        b = np.exp(np.repeat(rng.normal(-0.7, 0.05, 5), 12) + spread * rng.normal(size=60))
+        albedo = np.repeat(rng.uniform(0.3, 0.45, 5), 12)
+        w = albedo * (0.5 / b) ** 0.5 + 0.05 * rng.normal(size=60)  # the gain (target / B)^a, a = 0.5
+        monkeypatch.setattr(screening_mod, "seed_metadata", lambda d, b=b: {"frame_brightness": b})
+        ab = screening_mod.absorption_gain(data, "exposure", w, folds, np.random.default_rng(1))
+        assert ab["statistic"] == "pearson" and ab["sign_ok"] and ab["within"] == "video"
+        assert ab["rho"] == pytest.approx(stats.pearsonr(within_groups(b, g), within_groups(w, g)).statistic)
+        rho_s, p_s = permutation_spearman(b, w, np.random.default_rng(1), 99_999, groups=g)
+        ratios.append(p_s / ab["p"])
+        # the held-out gain is the linear R2 of the values within videos
+        assert ab["gain"] == pytest.approx(screening_mod._cv_r2(within_groups(b, g), within_groups(w, g), folds))
+    assert min(ratios) >= 0.5 and np.median(ratios) >= 5.0  # never much weaker, mostly far stronger
+    # the other absorbed effects keep the rank test
+    monkeypatch.setattr(screening_mod, "seed_metadata", lambda d: {"radial_r2": np.linspace(0.0, 0.3, 60)})
+    assert screening_mod.absorption_gain(data, "vignetting", w, folds, np.random.default_rng(1))["statistic"] == "spearman"
+
+
 def test_feature_residual_map_matches_the_flat_hog_descriptor():
     """The per-block HOG residual equals the norm over each block's slice of the flat descriptor (its documented
     order: block row, block col, cells, orientations)."""

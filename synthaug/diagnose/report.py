@@ -454,6 +454,17 @@ def _unexplained_finding(remaining: dict[str, dict[str, Any]], picked: list[tupl
     }
 
 
+def _absorbed_text(f: dict[str, Any]) -> str:
+    """The absorbed channel's evidence, for a finding's line of report.md."""
+    ab = f["evidence"].get("absorption") or {}
+    text = f"; absorbed-parameter R² {f['gains']['absorbed_parameter_r2']:.2f}"
+    if ab.get("parameter") is None:
+        return text
+    stat = {"pearson": "Pearson r", "spearman": "Spearman ρ"}.get(ab.get("statistic"), "Spearman ρ")
+    within = " within videos" if ab.get("within") else ""
+    return text + f" ({ab['parameter']} vs {ab['metadata']}{within}: {stat} {ab['rho']:+.2f}, p = {ab['p']:.2g})"
+
+
 def _frame_text(f: dict[str, Any]) -> str:
     """The frame channel's evidence, for a finding's line of report.md."""
     ch = next((c for c in f["evidence"]["channels"] if c["channel"] == "frame"), None)
@@ -583,7 +594,7 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                 f"{i}. **{f['effect']}** ({f['channel']}, z = {f['score']:.1f}, p_adj = {f['p_adjusted']:.2g}); "
                 f"setting {f['setting']}; held-out gain {100 * (g['heldout_feature'] or 0):.1f} % "
                 f"({inp['distance']}), {100 * (g['heldout_pixel'] or 0):.1f} % (pixels)"
-                + (f"; absorbed-parameter R² {g['absorbed_parameter_r2']:.2f}" if f["channel"] == "absorbed" else "")
+                + (_absorbed_text(f) if f["channel"] == "absorbed" else "")
                 + (f"; held-out chroma (R-G, B-G) gain {100 * g['heldout_colour']:.1f} %"
                    if g.get("heldout_colour") is not None else "")
                 + ("; the colour channel assumes a neutral (grey) object: a coloured paint reads as white balance"
