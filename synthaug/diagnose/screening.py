@@ -125,7 +125,7 @@ ABSORPTION: dict[str, tuple[str, str, int]] = {
 # is the channel's gain; the others by Spearman's rank correlation. Auto-exposure's gain is a smooth function of the
 # metered brightness, (target / B)^a, and over one video's brightness range the absorbed w_d is close to linear
 # in B; ranks throw away that one video's brightness spans 5-10x another's. Measured on the power table's 10 cached
-# exposure cases (results/diagnose/README.md, stop 39): Pearson p_adj <= 0.0024 in all 10, Spearman 0.0004-0.017
+# exposure cases (results/diagnose/README.md, stop 39): Pearson p_adj <= 0.003 in all 10, Spearman 0.0004-0.017
 # (2 of 10 above alpha), Pearson of the logs up to 0.087 (one seed's low w_d dominates its log); on 10 fresh cases
 # the same findings as Spearman (the floor on the held-out R2, not p, is what misses there).
 LINEAR_ABSORPTION: tuple[str, ...] = ("exposure",)
