@@ -194,7 +194,7 @@ def check_weights(weights: Any, n: int, name: str = "positive_weights", per: str
     """
     given = torch.as_tensor(weights).detach()
     w = (given.flatten() if flatten else given).to(torch.float64)
-    zero = not_all_zero and w.shape == (n,) and n > 0 and not float(w.abs().sum()) > 0
+    zero = not_all_zero and n > 0 and w.shape == (n,) and not bool((w != 0).any())
     if w.shape != (n,) or not bool(torch.isfinite(w).all()) or bool((w < 0).any()) or zero:
         rule = ", not all 0" if not_all_zero else ""
         raise ValueError(f"{name} must be finite, >= 0{rule} and one per {per} ({n}), got {tuple(given.shape)}")

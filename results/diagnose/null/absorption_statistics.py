@@ -2,7 +2,8 @@
 (Pearson of the logs, Spearman, Pearson of the values), on cached power-table cases (stop 39 of the README).
 
 usage: PYTHONPATH=. python results/diagnose/null/absorption_statistics.py outputs/bench_diagnose_power5_exposure/case_00{0,1,2,3,4}
-Prints each case's r and Bonferroni-adjusted p (x37, the full candidate list's count) for each statistic.
+Prints each case's r and Bonferroni-adjusted p (x39, the diagnosis's count for the full candidate list) for each
+statistic.
 """
 import sys
 
@@ -15,7 +16,7 @@ from synthaug.diagnose.screening import CANDIDATE_GRIDS, base_render, n_screenin
 from synthaug.diagnose.stats import permutation_correlation
 
 torch.set_num_threads(1)
-n_tests = n_screening_tests(list(CANDIDATE_GRIDS))  # the full candidate list (37)
+n_tests = n_screening_tests(list(CANDIDATE_GRIDS))  # the full candidate list: 39, as in the diagnosis
 for d in sys.argv[1:]:
     data = load_diagnosis_data(f"{d}/seeds", f"{d}/fit.json", "quadcopter")
     _, w0 = base_render(data)
