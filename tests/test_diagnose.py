@@ -384,6 +384,28 @@ def test_compression_on_a_nuisance_varied_camera_is_named_from_the_frames_at_its
 
 
 @pytest.mark.slow
+def test_sharpening_on_a_nuisance_varied_camera_is_named_from_the_frames_edges(tmp_path):
+    # an unsharp mask at its realistic strength (amount 1, sigma 1 frame px) after the sensor, on a nuisance-varied
+    # camera: on a 20-30 px object a 1-px halo that the fit's blur, noise and shading mismatch drown (its distance
+    # gain stays under the clean floor), but every edge of the whole frames is steeper than clean frames' (read on
+    # the frame at edges found on the independent background frame): named first, from the frames
+    from synthaug.diagnose.nuisances import Nuisances
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+    from synthaug.diagnose.report import diagnose
+
+    seeds = make_measured_seedset(tmp_path / "seeds", hidden=["sharpening"], seed=14,
+                                  nuisances=Nuisances.draw(np.random.default_rng([8000, 14])), **MEASURED)
+    fit = converged_fit(seeds, tmp_path / "fit.json")
+    report = diagnose(seeds, "quadcopter", fit, out_dir=tmp_path / "out")
+    first = report["findings"][0]
+    assert (first["effect"], first["channel"]) == ("sharpening", "frame"), report["findings"]
+    row = next(r for r in report["screened"] if r["effect"] == "sharpening")
+    ch = next(c for c in row["channels"] if c["channel"] == "frame")
+    assert ch["gain"] > ch["floor"] > ch["centre"] and ch["p_adjusted"] < 0.01
+    assert "edges are steeper than clean frames'" in (tmp_path / "out" / "report.md").read_text()
+
+
+@pytest.mark.slow
 def test_a_fixed_column_pattern_is_unexplained_with_its_structure(tmp_path):
     # a sensor's fixed column pattern at its realistic strength (each frame column's gain 1 + 0.02 N(0, 1)), on a
     # nuisance-varied camera: not a candidate, so "unexplained", described as gains fixed in the frame's columns

@@ -45,6 +45,8 @@ def test_derive_floors_by_hand():
     assert hi == pytest.approx(max(0.0 + z2 * sd, tone.max()))
     assert lo < -0.2 and 0 < hi < 0.2
     assert f["SCREEN"]["gamma:distance:pixel"] == pytest.approx(max(0.0 + z1 * gain.std(ddof=1), gain.max()))
+    # the clean mean of each candidate statistic: the "no effect" value of one without a physical zero
+    assert f["CENTRE"] == {"gamma:distance:pixel": pytest.approx(gain.mean())}
 
 
 def test_floors_hold_the_family_false_alarm_rate_on_fresh_null_cases():
@@ -88,7 +90,7 @@ def test_structure_rule_uses_the_null_range_and_falls_back_to_hand_floors(monkey
     assert "20 clean" in text and "test" in text and "hand-set" in text
 
 
-def test_write_floors_module_round_trip(tmp_path):
+def test_write_floors_module_round_trip(tmp_path, monkeypatch):
     rng = np.random.default_rng(2)
     rows = [{"residual:high_frequency": {"value": float(v)}, "screen:gamma:noise_level": {"slope": float(s)}}
             for v, s in zip(rng.normal(-0.3, 0.1, 12), rng.normal(0.0, 0.05, 12))]
@@ -107,3 +109,11 @@ def test_write_floors_module_round_trip(tmp_path):
     z1 = stats.norm.isf(0.05 / 2)
     assert mod.SCREEN["gamma:noise_level"] == pytest.approx(max(max(slopes.mean(), 0) + z1 * slopes.std(ddof=1),
                                                                 slopes.max()), abs=1e-6)
+    assert mod.CENTRE["gamma:noise_level"] == pytest.approx(slopes.mean(), abs=1e-6)
+    # read back by gain_centre; a calibration written before centres were kept has none
+    with monkeypatch.context() as m:
+        m.setattr(calibration, "_floors", lambda: mod)
+        assert calibration.gain_centre("gamma", "noise_level") == pytest.approx(slopes.mean(), abs=1e-6)
+        assert calibration.gain_centre("sharpening", "frame") is None
+        del mod.CENTRE
+        assert calibration.gain_centre("gamma", "noise_level") is None

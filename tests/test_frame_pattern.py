@@ -253,3 +253,125 @@ def test_compression_frame_setting_is_the_read_quality_within_the_grid():
     assert frame_setting("compression", {"jpeg_quality": None, "gain": 0.3}) is None  # the distance setting stands
     assert frame_setting("vignetting", {"gain": 0.25}) == {"vignette_k": 0.25}
     assert frame_setting("vignetting", None) is None
+
+
+# ------------------------------------------------------------------ in-camera sharpening: the frames' edge ratio
+def _step_frame(sigma: float, *, h: int = 96, w: int = 160, lo: float = 0.3, c: float = 0.4) -> np.ndarray:
+    """Vertical step edges centred on pixel columns 40 and 120 (rising, then falling), each a Gaussian-blurred
+    step ``lo + c Φ((x - x0) / σ)``: a scene whose edge profile is known in closed form."""
+    x = np.arange(w, dtype=np.float64)
+    row = lo + c * (stats.norm.cdf((x - 40) / sigma) - stats.norm.cdf((x - 120) / sigma))
+    return np.tile(row, (h, 1))
+
+
+@pytest.mark.parametrize("sigma", [0.8, 1.2, 2.0])
+def test_edge_ratio_of_blurred_steps_against_the_normal_cdf(sigma):
+    # D(o) = I(x0 + o) - I(x0 - o) = c (2 Φ(o / σ) - 1) at both edges (the falling one oriented by its gradient),
+    # read at whole pixels: A(2) / A(4) = (2 Φ(2 / σ) - 1) / (2 Φ(4 / σ) - 1); the background frame (where the
+    # edges are found) is another look, 1/1000 brighter (no pixel equal), so the edges' normals are exactly ±x
+    from synthaug.diagnose.frame_pattern import edge_ratio
+
+    f = _step_frame(sigma)
+    b = f + 1e-3
+    want = (2 * stats.norm.cdf(2 / sigma) - 1) / (2 * stats.norm.cdf(4 / sigma) - 1)
+    assert edge_ratio(f, b) == pytest.approx(want, abs=1e-9)
+    # colour frames: the mean of the channels; uint8: /255 (both leave the ratio as it is, up to rounding)
+    assert edge_ratio(np.dstack([f] * 3), b) == pytest.approx(want, abs=1e-9)
+    assert edge_ratio(np.round(f * 255).astype(np.uint8), b) == pytest.approx(want, abs=0.025)  # 1 level of 102
+
+
+def test_edge_ratio_is_not_applicable_without_an_independent_look_or_edges():
+    from synthaug.diagnose.frame_pattern import edge_ratio
+
+    f = _step_frame(1.0)
+    assert np.isnan(edge_ratio(f, f))  # the background frame is the frame itself: no second look
+    assert np.isnan(edge_ratio(f, f[:, :-1]))  # another size
+    flat = np.full((96, 160), 0.5) + 0.01 * np.random.default_rng(1).standard_normal((96, 160))
+    assert np.isnan(edge_ratio(flat, np.full((96, 160), 0.5)))  # no edge reaches the contrast
+    # the object's crop is left out with the profile's reach: edges only inside it are not the scene's
+    out = np.ones(f.shape, bool)
+    out[:, 20:140] = False
+    assert np.isnan(edge_ratio(f, f + 1e-3, outside=out))
+
+
+def test_edge_ratio_rises_with_sharpening_falls_with_blur_and_ignores_the_noise_of_the_frame():
+    # a random blocky scene (edges of every orientation, steps up to 0.2), the camera's optics a 1.5-px blur; an unsharp mask
+    # (scipy: I + a (I - G_s * I)) of amount a raises the ratio step by step, a defocus lowers it; the frame's own
+    # noise (sd 0.03, ~8 grey levels, as the reference camera's shot noise) leaves it where it is, because the
+    # edges are chosen on the independent background look, while choosing them on the noisy frame itself
+    # inflates it (noise read as sharpness)
+    from scipy import ndimage
+
+    from synthaug.diagnose.frame_pattern import edge_ratio
+
+    rng = np.random.default_rng(2)
+    scenes = [ndimage.gaussian_filter(ndimage.zoom(0.4 + 0.2 * rng.random((12, 20)), 8, order=0), 1.5)
+              for _ in range(6)]
+
+    def ratio(op, noise=0.0, same_look=False):
+        v = []
+        for s in scenes:
+            img = op(s)
+            f = img + noise * rng.standard_normal(img.shape)
+            b = f + 1e-3 if same_look else img + 0.005 * rng.standard_normal(img.shape)
+            v.append(edge_ratio(f, b))
+        return float(np.mean(v))
+
+    usm = lambda a: (lambda s: s + a * (s - ndimage.gaussian_filter(s, 1.0)))  # noqa: E731
+    r = [ratio(usm(a)) for a in (0.0, 0.5, 1.0, 1.5)]
+    assert all(b > a + 0.02 for a, b in zip(r, r[1:])), r
+    assert ratio(lambda s: ndimage.gaussian_filter(s, 1.0)) < r[0] - 0.05
+    assert ratio(usm(0.0), noise=0.03) == pytest.approx(r[0], abs=0.02)
+    assert ratio(usm(0.0), noise=0.03, same_look=True) > r[0] + 0.05
+
+
+def test_sharp_edges_tests_scenes_against_the_clean_centre():
+    from synthaug.diagnose.frame_pattern import sharp_edges
+
+    # 8 scenes of 6 frames, each scene its own edge level around the clean mean 0.63: p uniform over scenes
+    rng = np.random.default_rng(4)
+    ps = []
+    for _ in range(300):
+        frames, groups = [], []
+        for v in range(8):
+            tex, level = rng.standard_normal((12, 16)), 0.63 + 0.02 * rng.standard_normal()
+            for _ in range(6):
+                frames.append({"edge_ratio": level + 0.01 * rng.standard_normal(), "repeat": 0.9, "shape": (48, 64),
+                               "texture": tex + 0.1 * rng.standard_normal(tex.shape)})
+                groups.append(f"v{v}")
+        out = sharp_edges(frames, groups, centre=0.63)
+        assert out["scenes"] == 8 and out["frames"] == 48 and out["centre"] == 0.63
+        ps.append(out["p"])
+    assert stats.kstest(ps, "uniform").pvalue > 0.01
+    # scipy's one-sample t-test of the scenes' means against the centre, on the last draw
+    lab = scene_clusters(frames, groups)
+    means = [np.mean([f["edge_ratio"] for f, l in zip(frames, lab) if l == c]) for c in range(lab.max() + 1)]
+    assert out["p"] == pytest.approx(stats.ttest_1samp(means, 0.63, alternative="greater").pvalue)
+    assert out["ratio"] == pytest.approx(np.mean(means))
+    # sharper frames are found; without a calibrated centre there is nothing to test against
+    sharp = [{**f, "edge_ratio": f["edge_ratio"] + 0.08} for f in frames]
+    assert sharp_edges(sharp, groups, centre=0.63)["p"] < 1e-4
+    assert sharp_edges(sharp, groups, centre=None)["p"] == 1.0
+    # NaN ratios (no independent look) are left out; under 3 scenes: None
+    assert sharp_edges([{**f, "edge_ratio": float("nan")} for f in frames], groups, centre=0.63) is None
+    assert sharp_edges(frames[:12], groups[:12], centre=0.63) is None
+
+
+def test_sharpening_frame_channel_needs_the_test_against_the_centre_and_the_clean_floor(monkeypatch):
+    # the screening's frame channel of sharpening: the edge ratio is its statistic, significant when the test over
+    # scenes (against the clean mean) rejects at alpha after Bonferroni AND the ratio exceeds the calibrated floor;
+    # it sets no camera setting of its own (the distance screen's setting stands)
+    from synthaug.diagnose import screening
+
+    monkeypatch.setattr(screening, "gain_floor", lambda effect, channel: 0.66 if (effect, channel) == (
+        "sharpening", "frame") else None)
+    ev = {"sharpening": {"ratio": 0.70, "t": 9.0, "p": 1e-5, "centre": 0.63, "scenes": 40, "frames": 60}}
+    ch = screening.frame_channel("sharpening", ev, 40, 0.01)
+    assert ch["significant"] and ch["gain"] == 0.70 and ch["floor"] == 0.66 and ch["centre"] == 0.63
+    assert ch["p_adjusted"] == pytest.approx(4e-4)
+    assert not screening.frame_channel("sharpening", ev, 2000, 0.01)["significant"]  # p_adj 0.02
+    low = {"sharpening": {**ev["sharpening"], "ratio": 0.65}}  # significant test, inside the clean range
+    assert not screening.frame_channel("sharpening", low, 40, 0.01)["significant"]
+    assert screening.frame_channel("sharpening", {"sharpening": None}, 40, 0.01) is None
+    assert screening.frame_setting("sharpening", ch) is None
+    assert "sharpening" in screening.FRAME_CANDIDATES

@@ -49,6 +49,19 @@ frame of the camera, shows in one;
 :func:`block_grid` tests it over scenes as the fall-off is. A JPEG's quality is read from the same grid
 (:func:`jpeg_quality`): the decoded blocks' DCT coefficients sit on multiples of the quantisation steps, the
 steps of libjpeg's table at that quality.
+**In-camera sharpening** (an unsharp mask after the sensor) is in the whole frames too: it steepens every edge and
+puts a halo beside it. Each frame's ``edge_ratio`` (:func:`edge_ratio`) is read off its strong edges (gradient
+maxima of the top :data:`EDGE_QUANTILE` of the gradient, contrast ≥ :data:`EDGE_MIN_CONTRAST`): the mean
+antisymmetric profile ``D(o) = I(x + o·n) - I(x - o·n)`` across them at 2 and 4 px, ``A(2) / A(4)``, the share of an
+edge's full step already made 2 px from its centre — larger for sharper edges (a blur lowers it, a sharpening
+halo raises it). The edges are found, oriented and kept on the seed's **background frame** (an independent look at
+the same scene) and the profile is read on the frame: the frame's noise then does not choose the edges it is
+measured on, so noise adds no sharpness (selected and read on one noisy look, the reference camera's shot noise
+read as sharper edges than a sharpening of amount 1). Without an independent look (an ingested video whose
+background frame is the frame itself off the object) the ratio is not measured. A scene's own edges (poles,
+clouds) set its level, so it is tested over scenes as the fall-off is (:func:`sharp_edges`), against the mean
+that clean frames give it (the calibrated centre): unlike a fall-off or a block grid, edge sharpness has no
+physical zero.
 """
 
 from __future__ import annotations
@@ -59,7 +72,8 @@ from typing import Any, Sequence
 import numpy as np
 
 __all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_summary", "scene_clusters", "radial_falloff",
-           "block_grid", "jpeg_quality", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK"]
+           "block_grid", "jpeg_quality", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK",
+           "edge_ratio", "sharp_edges", "EDGE_OFFSETS", "EDGE_QUANTILE", "EDGE_MIN_CONTRAST"]
 
 HIGH_PASS = 7  # frame px: the window of the local quadratic removed from a profile (the scene's slow changes)
 FALLOFF_BLOCK = 4  # frame px: the side of the blocks a frame's fall-off is fitted on
@@ -68,6 +82,11 @@ DCT_POSITIONS = ((0, 0), (0, 1), (1, 0), (1, 1), (0, 2), (2, 0))  # the 8x8 DCT 
 SCENE_BAND = (3, 15)  # blocks: a scene's texture is its block image's running mean over 3 minus over 15 blocks
 SAME_SCENE = 0.6  # textures correlating at least this much show the same scene (measured: a frame and its own
 # background frame 0.88-0.94 median, two independent sky scenes at most 0.57, on the reference camera's cases)
+EDGE_OFFSETS = (2, 4)  # frame px: edge_ratio is the mean step across an edge at the first over that at the second
+EDGE_QUANTILE = 0.97  # the edges: gradient maxima among the frame's strongest 3 % gradients ...
+EDGE_MIN_CONTRAST = 8.0 / 255.0  # ... whose step between 4 px either side reaches this on the background frame
+MIN_EDGES = 20  # fewer edges in a frame: no ratio
+SAME_LOOK = 0.9  # share of equal pixels above which a background frame is the frame itself (no second look)
 
 
 def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
@@ -302,6 +321,74 @@ def _corr(a: np.ndarray, b: np.ndarray) -> float:
     return float((a * b).sum() / den) if den > 0 else 0.0
 
 
+def _gray(frame: np.ndarray) -> np.ndarray:
+    """A frame as float (H, W) in [0, 1] (colour: the mean of the channels)."""
+    a = np.asarray(frame)
+    f = a.astype(np.float64)
+    if f.ndim == 3:
+        f = f.mean(-1)
+    if f.ndim != 2:
+        raise ValueError(f"frame must be (H, W) or (H, W, C), got shape {np.shape(frame)}")
+    return f / 255.0 if a.dtype == np.uint8 else f
+
+
+def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray | None = None,
+               offsets: tuple[int, int] = EDGE_OFFSETS) -> float:
+    """The sharpness of a frame's edges: ``A(o1) / A(o2)`` of the mean antisymmetric edge profile (module docstring).
+
+    Args:
+        frame: (H, W) or (H, W, C) uint8 or float in [0, 1]: the profile is read here.
+        background: the same scene without the object, an independent look (same shape): the edges are found,
+            oriented and kept here.
+        outside: (H, W) bool, where edges may lie (the object's crop left out); None: everywhere.
+        offsets: (o1, o2) px from the edge's centre.
+
+    Returns:
+        The ratio, or NaN with fewer than :data:`MIN_EDGES` edges, frames of different shapes, or a background
+        that is the frame itself (≥ :data:`SAME_LOOK` of the pixels equal: no independent look).
+
+    Example:
+        >>> from scipy import ndimage
+        >>> rng = np.random.default_rng(0)
+        >>> scene = ndimage.gaussian_filter((rng.random((24, 32)) > 0.5).repeat(8, 0).repeat(8, 1) * 0.5 + 0.25, 1.0)
+        >>> look = lambda img: img + 0.01 * rng.standard_normal(img.shape)
+        >>> sharp = scene + 1.0 * (scene - ndimage.gaussian_filter(scene, 1.0))  # unsharp mask, amount 1
+        >>> edge_ratio(look(sharp), look(sharp)) > edge_ratio(look(scene), look(scene)) + 0.1
+        True
+    """
+    from scipy import ndimage
+
+    f, b = _gray(frame), _gray(background)
+    if f.shape != b.shape:
+        return float("nan")
+    h, w = f.shape
+    ok = np.ones((h, w), bool) if outside is None else np.asarray(outside, bool)
+    if np.mean(f[ok] == b[ok]) >= SAME_LOOK:
+        return float("nan")
+    gs = ndimage.gaussian_filter(b, 1.0)
+    gx, gy = ndimage.sobel(gs, 1), ndimage.sobel(gs, 0)
+    g = np.hypot(gx, gy)
+    o1, o2 = offsets
+    m = 2 * o2  # the profile must stay inside the frame
+    inner = np.zeros((h, w), bool)
+    inner[m:h - m, m:w - m] = True
+    if outside is not None:  # away from the excluded crop by the profile's reach (the object's edges are not the scene's)
+        inner &= ~ndimage.binary_dilation(~ok, np.ones((2 * o2 + 1, 2 * o2 + 1), bool))
+    if inner.sum() < MIN_EDGES:
+        return float("nan")
+    ys, xs = np.nonzero(inner & (g >= np.quantile(g[inner], EDGE_QUANTILE)) & (g > 0))
+    nx, ny = gx[ys, xs] / g[ys, xs], gy[ys, xs] / g[ys, xs]
+    at = lambda img, o: ndimage.map_coordinates(img, [ys + o * ny, xs + o * nx], order=1)  # noqa: E731
+    keep = (g[ys, xs] >= at(g, 1.0)) & (g[ys, xs] >= at(g, -1.0))  # the edge's centre: a maximum across it
+    keep &= at(b, float(o2)) - at(b, -float(o2)) >= EDGE_MIN_CONTRAST
+    ys, xs, nx, ny = ys[keep], xs[keep], nx[keep], ny[keep]
+    if len(ys) < MIN_EDGES:
+        return float("nan")
+    a1 = float(np.sum(at(f, float(o1)) - at(f, -float(o1))))
+    a2 = float(np.sum(at(f, float(o2)) - at(f, -float(o2))))
+    return a1 / a2 if a2 > 0 else float("nan")
+
+
 def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
                   background: np.ndarray | None = None, step: int = FALLOFF_BLOCK) -> dict[str, Any]:
     """One frame's radial log fall-off, its codec blockiness and its scene's texture.
@@ -317,7 +404,8 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         ``log_slope`` (``s`` of ``log I = a + b dx + c dy - s r²``, least squares over the blocks; ``s > 0``:
         darker toward the corners; NaN with fewer than 16 usable blocks), ``texture`` (float32 (H/step, W/step):
         the band-passed block log image), ``repeat`` (its correlation with the background's texture; NaN without
-        one) and ``shape`` (H, W).
+        one), ``edge_ratio`` (:func:`edge_ratio` against the background frame; NaN without an independent one)
+        and ``shape`` (H, W).
 
     Example:
         >>> h, w = 96, 128
@@ -340,13 +428,14 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
     blockiness = _blockiness(lin, outside, CODEC_BLOCK)
     dct = _block_dct(lin * 255.0, outside & unclipped)
     tex = _texture(log, step)
-    repeat = float("nan")
+    repeat, edges = float("nan"), float("nan")
     if background is not None:
         blog, _ = _gray_log(background)
         if blog.shape == log.shape:
             repeat = _corr(tex, _texture(blog, step))
+            edges = edge_ratio(frame, background, outside=outside)
     return {"log_slope": slope, "blockiness": blockiness, "dct": dct, "texture": tex, "repeat": repeat,
-            "shape": (int(h), int(w))}
+            "edge_ratio": edges, "shape": (int(h), int(w))}
 
 
 def scene_clusters(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
@@ -431,9 +520,9 @@ def falloff_k(log_slope: float, shape: tuple[int, int], *, step: int = FALLOFF_B
     return float(brentq(g, lo, hi, xtol=1e-6))
 
 
-def _over_scenes(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], key: str, same: float
-                 ) -> dict[str, Any] | None:
-    """The one-sided t-test (> 0) of ``key`` over scenes: each scene's mean over its frames (None under 3)."""
+def _over_scenes(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], key: str, same: float,
+                 centre: float = 0.0) -> dict[str, Any] | None:
+    """The one-sided t-test (> ``centre``) of ``key`` over scenes: each scene's mean over its frames (None under 3)."""
     from scipy import stats
 
     keep = [i for i, f in enumerate(summaries) if math.isfinite(f.get(key, float("nan")))]
@@ -444,7 +533,7 @@ def _over_scenes(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], key
     means = np.array([v[lab == c].mean() for c in range(int(lab.max()) + 1)])
     if len(means) < 3:
         return None
-    t = stats.ttest_1samp(means, 0.0, alternative="greater")
+    t = stats.ttest_1samp(means, centre, alternative="greater")
     shapes = [tuple(summaries[i]["shape"]) for i in keep]
     return {"mean": float(means.mean()), "t": float(t.statistic), "p": float(t.pvalue), "scenes": int(len(means)),
             "frames": len(keep), "shape": max(set(shapes), key=shapes.count)}
@@ -500,6 +589,31 @@ def block_grid(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
     if r is None:
         return None
     return {"log_ratio": r["mean"], "t": r["t"], "p": r["p"], "scenes": r["scenes"], "frames": r["frames"]}
+
+
+def sharp_edges(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *, centre: float | None,
+                same: float = SAME_SCENE) -> dict[str, Any] | None:
+    """In-camera sharpening over the frames (their ``edge_ratio``), tested over scenes as :func:`radial_falloff`,
+    against ``centre``: the mean ratio clean frames give (the calibration's; None: not calibrated, p = 1).
+
+    Returns:
+        None with fewer than 3 scenes that have a ratio; else ``ratio`` (the mean over scenes), ``t``, ``p``
+        (one-sided: sharper than ``centre``), ``centre``, ``scenes``, ``frames``.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> f = [{"edge_ratio": 0.75 + 0.03 * rng.standard_normal(), "texture": rng.standard_normal((24, 32)),
+        ...       "repeat": 0.9, "shape": (96, 128)} for _ in range(10)]
+        >>> out = sharp_edges(f, [None] * 10, centre=0.63)
+        >>> out["scenes"], out["p"] < 1e-6, sharp_edges(f, [None] * 10, centre=None)["p"]
+        (10, True, 1.0)
+    """
+    r = _over_scenes(summaries, groups, "edge_ratio", same, 0.0 if centre is None else centre)
+    if r is None:
+        return None
+    return {"ratio": r["mean"], "t": r["t"] if centre is not None else float("nan"),
+            "p": r["p"] if centre is not None else 1.0, "centre": centre, "scenes": r["scenes"],
+            "frames": r["frames"]}
 
 
 def _step_of(coef: np.ndarray, max_step: int = 64, min_values: int = 30) -> tuple[int, float]:

@@ -475,6 +475,10 @@ def _frame_text(f: dict[str, Any]) -> str:
     if f["effect"] == "vignetting":
         return (f"; the whole frames fall off toward the corners: log fall-off {ch['log_slope']:+.3f} {where}, a "
                 f"gain 1 - {ch['gain']:.2f} r²; on the object the fitted w_d absorbs it")
+    if f["effect"] == "sharpening":
+        return (f"; the whole frames' edges are steeper than clean frames': the step across an edge between ±2 px "
+                f"is {ch['gain']:.1%} of that between ±4 px (clean mean {ch['centre']:.1%}) {where}; read on the "
+                "frames at edges found on their independent background frames")
     q = ch.get("jpeg_quality")
     return (f"; the whole frames carry an 8x8 block grid: steps across its lines {math.exp(ch['gain']):.2f}x those "
             f"inside the blocks beside them (median over the lines) {where}"

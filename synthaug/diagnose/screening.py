@@ -76,7 +76,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import torch
 
-from synthaug.diagnose.calibration import HAND_MIN_GAIN, gain_floor
+from synthaug.diagnose.calibration import HAND_MIN_GAIN, gain_centre, gain_floor
 from synthaug.diagnose.noise import NOISE_CANDIDATES, SLOPE_FLOOR, noise_channel
 from synthaug.diagnose.diagnosis_data import DiagnosisData, pairwise_distance, pixel_distance, render_with, solve_albedo
 from synthaug.diagnose.residuals import seed_metadata
@@ -139,8 +139,10 @@ COLOUR_CANDIDATES: tuple[str, ...] = ("chromatic_aberration", "white_balance", "
 
 # Candidates with evidence on the whole frames (synthaug.diagnose.frame_pattern), fixed in the frame and carried by
 # the background around the object as well: vignetting's radial fall-off (on the object a gain that w_d absorbs),
-# a codec's 8x8 block grid (on a 20-30 px object a few block edges).
-FRAME_CANDIDATES: tuple[str, ...] = ("vignetting", "compression")
+# a codec's 8x8 block grid (on a 20-30 px object a few block edges), in-camera sharpening's steeper edges (on the
+# object a 1-px halo that the fitted blur, noise and shading mismatch drown: its distance gain stayed under the floor
+# in 5 of 5 power cases at amount 1, results/diagnose/README.md, stop 40).
+FRAME_CANDIDATES: tuple[str, ...] = ("vignetting", "compression", "sharpening")
 # Candidates that exist only in colour: a single channel has no lateral colour shift and no colour cast (in gray
 # chromatic aberration is a ~1 px radial blur, white balance a gain that w_d absorbs), so on single-channel data
 # they are not offered (:func:`offered_candidates`); haze stays: its extinction and airlight act on gray too.
@@ -488,9 +490,10 @@ def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | No
     """The whole frames' evidence of each frame candidate, tested over scenes: ``{"vignetting":``
     :func:`~synthaug.diagnose.frame_pattern.radial_falloff`, ``"compression":``
     :func:`~synthaug.diagnose.frame_pattern.block_grid` with ``"quality"``, the JPEG quality its DCT steps read
-    (:func:`~synthaug.diagnose.frame_pattern.jpeg_quality`; None for frames not JPEG-coded) ``}`` (a value None
-    with fewer than 3 scenes); None without frames."""
-    from synthaug.diagnose.frame_pattern import block_grid, jpeg_quality, radial_falloff
+    (:func:`~synthaug.diagnose.frame_pattern.jpeg_quality`; None for frames not JPEG-coded), ``"sharpening":``
+    :func:`~synthaug.diagnose.frame_pattern.sharp_edges` against the calibrated clean mean ``}`` (a value None
+    with fewer than 3 scenes; sharpening's also without independent background frames); None without frames."""
+    from synthaug.diagnose.frame_pattern import block_grid, jpeg_quality, radial_falloff, sharp_edges
 
     if data.frame_summaries is None:
         return None
@@ -499,7 +502,8 @@ def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | No
     if grid is not None:
         jq = jpeg_quality(data.frame_summaries)
         grid = {**grid, "quality": None if jq is None else jq["quality"]}
-    return {"vignetting": radial_falloff(data.frame_summaries, groups), "compression": grid}
+    return {"vignetting": radial_falloff(data.frame_summaries, groups), "compression": grid,
+            "sharpening": sharp_edges(data.frame_summaries, groups, centre=gain_centre("sharpening", "frame"))}
 
 
 def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_tests: int, alpha: float
@@ -507,13 +511,14 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
     """The frame channel of ``effect`` (:data:`FRAME_CANDIDATES`, evidence from :func:`frame_evidence`). Its
     statistic (``gain``): for vignetting the fall-off ``k`` the frames imply (the fraction of light lost at the
     corners), for compression the log ratio of the frames' steps across the 8x8 grid's lines to those inside the
-    blocks beside them (median over the lines).
+    blocks beside them (median over the lines), for sharpening the edges' ``A(2) / A(4)`` (the share of an edge's
+    step made 2 px from its centre; its test is against the clean mean, not 0).
     Significant when the one-sided test over scenes rejects at α (Bonferroni) and the statistic exceeds its
     calibrated clean floor."""
     e = None if ev is None or effect not in FRAME_CANDIDATES else ev.get(effect)
     if e is None:
         return None
-    value = e["k"] if effect == "vignetting" else e["log_ratio"]
+    value = {"vignetting": e.get("k"), "compression": e.get("log_ratio"), "sharpening": e.get("ratio")}[effect]
     p_adj = min(1.0, e["p"] * n_tests)
     floor = gain_floor(effect, "frame")
     out = {"channel": "frame", "p_adjusted": p_adj, "z": _z(e["p"]), "gain": value, "floor": floor,
@@ -521,8 +526,10 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
            "significant": bool(p_adj < alpha and value > max(floor or 0.0, 0.0))}
     if effect == "vignetting":
         out["log_slope"] = e["log_slope"]
-    else:
+    elif effect == "compression":
         out["jpeg_quality"] = e.get("quality")
+    else:
+        out["centre"] = e["centre"]
     return out
 
 
