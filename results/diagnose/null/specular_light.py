@@ -7,7 +7,7 @@ the model's), and a hidden highlight sits where n.h peaks for *that* light; the 
 the model's light and with each seed's true light (read from the seed records' truth), and prints the
 screening's pixel- and feature-space held-out gains of both (same folds, same penalty as the diagnosis).
 
-    PYTHONPATH=. python results/diagnose/null/specular_light.py outputs/power5_specular_default/case_00?
+    PYTHONPATH=. python results/diagnose/null/specular_light.py outputs/bench_diagnose_power5_specular{,_alt}/case_00?
 """
 from __future__ import annotations
 
