@@ -403,7 +403,7 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
     m = 2 * o2  # the profile must stay inside the frame
     inner = np.zeros((h, w), bool)
     inner[m:h - m, m:w - m] = True
-    if outside is not None:  # away from the excluded crop by the profile's reach (the object's edges are not the scene's)
+    if outside is not None:  # away from the crop by the profile's reach (the object's edges are not the scene's)
         inner &= ~ndimage.binary_dilation(~ok, np.ones((2 * o2 + 1, 2 * o2 + 1), bool))
     if inner.sum() < MIN_EDGES:
         return float("nan")
