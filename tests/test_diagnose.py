@@ -391,10 +391,21 @@ def test_sharpening_on_a_nuisance_varied_camera_is_named_from_the_frames_edges(t
     # an unsharp mask at its realistic strength (amount 1, sigma 1 frame px) after the sensor, on a nuisance-varied
     # camera: on a 20-30 px object a 1-px halo that the fit's blur, noise and shading mismatch drown (its distance
     # gain stays under the clean floor), but every edge of the whole frames is steeper than clean frames' (read on
-    # the frame at edges found on the independent background frame): named first, from the frames
+    # the frame at edges found on the independent background frame): named first, from the frames, at its setting
+    from synthaug.diagnose.reference_camera import REALISTIC_STRENGTHS
+
     _, report = _diagnosed_nuisance_case(tmp_path, ["sharpening"], 14)
     first = report["findings"][0]
     assert (first["effect"], first["channel"]) == ("sharpening", "frame"), report["findings"]
+    # its setting read off the frames: the unsharp mask whose inverse brings their edges back to clean frames'; one
+    # statistic for two parameters, so amount and sigma trade off: within one step of the screening grid in each
+    # (the power table's 10 cases: 8 exact, 2 one step off in both)
+    from synthaug.diagnose.screening import CANDIDATE_GRIDS
+
+    truth = REALISTIC_STRENGTHS["sharpening"]
+    for name in ("sharpen_amount", "sharpen_sigma"):
+        steps = sorted({g[name] for g in CANDIDATE_GRIDS["sharpening"]})
+        assert abs(steps.index(first["setting"][name]) - steps.index(truth[name])) <= 1, first["setting"]
     row = next(r for r in report["screened"] if r["effect"] == "sharpening")
     ch = next(c for c in row["channels"] if c["channel"] == "frame")
     assert ch["gain"] > ch["floor"] > ch["centre"] and ch["p_adjusted"] < 0.01

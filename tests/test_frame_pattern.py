@@ -385,3 +385,63 @@ def test_sharpening_frame_channel_needs_the_test_against_the_centre_and_the_clea
     assert screening.frame_channel("sharpening", {"sharpening": None}, 40, 0.01) is None
     assert screening.frame_setting("sharpening", ch) is None
     assert "sharpening" in screening.FRAME_CANDIDATES
+
+
+def test_unsharp_inverse_undoes_the_models_unsharp_mask():
+    # the model's own unsharp mask (synthaug.effects.camera_functional, reflect border) undone by the division by
+    # its transfer function, in the interior (the two borders differ within a few sigma of the edge)
+    import torch
+
+    from synthaug.diagnose.frame_pattern import unsharp_inverse
+    from synthaug.effects import camera_functional as Cx
+
+    img = np.random.default_rng(6).random((48, 64))
+    for a, s in ((0.6, 0.7), (1.0, 1.0), (1.5, 1.5)):
+        sharp = Cx.unsharp_mask(torch.from_numpy(img)[None, None], a, s, pad=8, border="reflect")[0, 0].numpy()
+        back = unsharp_inverse(sharp, a, s)
+        assert np.abs(back - img)[10:-10, 10:-10].max() < 5e-3, (a, s)
+        assert np.abs(sharp - img)[10:-10, 10:-10].max() > 0.3  # it did sharpen
+
+
+def test_sharpening_setting_reads_the_unsharp_mask_off_the_frames():
+    # frames of blocky scenes (optics a 1.5-px blur), two independent looks each; the clean mean of their edge
+    # ratio is the centre; sharpened by the camera at (1, 1) and at (1.5, 1.5) frame px, the grid setting whose
+    # inverse brings them back to the centre is the camera's
+    from scipy import ndimage
+
+    from synthaug.diagnose.frame_pattern import edge_ratio, frame_summary, sharpening_setting
+    from synthaug.diagnose.screening import CANDIDATE_GRIDS
+
+    rng = np.random.default_rng(7)
+    scenes = [ndimage.gaussian_filter(ndimage.zoom(0.3 + 0.4 * rng.random((12, 16)), 8, order=0), 1.5)
+              for _ in range(8)]
+    look = lambda img: np.clip(img + 0.005 * rng.standard_normal(img.shape), 0, 1)  # noqa: E731
+    centre = float(np.mean([edge_ratio(look(s), look(s)) for s in scenes]))
+    grid = CANDIDATE_GRIDS["sharpening"]
+    for a, sg in ((1.0, 1.0), (1.5, 1.5)):
+        usm = lambda s: s + a * (s - ndimage.gaussian_filter(s, sg, mode="reflect"))  # noqa: E731
+        summ = [frame_summary(look(usm(s)), background=look(usm(s)), keep_looks=True) for s in scenes]
+        assert all(f["looks"] is not None for f in summ)
+        out = sharpening_setting(summ, grid, centre)
+        assert out["setting"] == {"sharpen_amount": a, "sharpen_sigma": sg}, out
+        assert len(out["ratios"]) == len(grid)
+    # no frame kept its looks: nothing to read
+    assert sharpening_setting([{**f, "looks": None} for f in summ], grid, centre) is None
+    assert frame_summary(scenes[0], background=scenes[0] + 1e-3)["looks"] is None  # not asked for
+
+
+def test_a_significant_frame_channel_gives_the_setting_whatever_channel_ranks_first():
+    # report._setting: a row named from its distance channel takes the frames' read of the camera when its frame
+    # channel is significant too; not when the frame channel is not (then the distance screen's grid point)
+    from synthaug.diagnose.report import _setting
+
+    frames = {"sharpen_amount": 1.5, "sharpen_sigma": 1.5}
+    grid = {"sharpen_amount": 0.6, "sharpen_sigma": 1.5}
+    row = {"effect": "sharpening", "channel": "distance:feature", "frame_setting": frames,
+           "screen": {"feature": {"setting": grid}, "pixel": {"setting": grid}},
+           "channels": [{"channel": "distance:feature", "significant": True},
+                        {"channel": "frame", "significant": True}]}
+    assert _setting(row) == frames
+    row["channels"][1]["significant"] = False
+    assert _setting(row) == grid
+    assert _setting({**row, "channel": "frame"}) == frames

@@ -9,6 +9,8 @@ residual statistics on top of them are :mod:`synthaug.diagnose.residuals`'.
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -182,16 +184,18 @@ def _frame_summaries(seeds: Any, frames: list[np.ndarray], geo: dict[str, torch.
     """Each frame's radial fall-off, blockiness and scene texture
     (:func:`~synthaug.diagnose.frame_pattern.frame_summary`), its seed's crop left out, with its background frame
     (where the seed set has one) to tell whether its texture repeats."""
-    from synthaug.diagnose.frame_pattern import frame_summary
+    from synthaug.diagnose.frame_pattern import SETTING_FRAMES, frame_summary
 
     out = []
+    every = max(1, math.ceil(len(frames) / SETTING_FRAMES))  # the frames that keep their looks (a setting's read)
     for i, f in enumerate(frames):
         try:
             bg = np.asarray(seeds.background_frame(i))
         except (FileNotFoundError, OSError, KeyError, IndexError, ValueError, AttributeError):
             bg = None
         out.append(frame_summary(f, background=bg, exclude=(float(geo["origin"][i, 0]), float(geo["origin"][i, 1]),
-                                                            p * float(geo["frame_scale"][i]))))
+                                                            p * float(geo["frame_scale"][i])),
+                                 keep_looks=i % every == 0))
     return out
 
 

@@ -63,7 +63,9 @@ adds to every step across it on the frame, and the reference camera's 2 % column
 frames read 0.62-0.64. So the line gains are divided out of both looks first (:func:`destripe`: each column's
 gain the median over the rows of the log background's high-pass across the columns, each row's likewise, repeated
 :data:`DESTRIPE_PASSES` times), which leaves clean frames within 0.002 and brings those cases to 0.63-0.65
-(``results/diagnose/null/edge_ratio_cases.py``). Without an independent look (an ingested video whose
+(``results/diagnose/null/edge_ratio_cases.py``). The setting is read the same way (:func:`sharpening_setting`):
+the unsharp mask whose exact inverse (:func:`unsharp_inverse`) brings the frames' edge ratio back to the clean mean.
+Without an independent look (an ingested video whose
 background frame is the frame itself off the object) the ratio is not measured. A scene's own edges (poles,
 clouds) set its level, so it is tested over scenes as the fall-off is (:func:`sharp_edges`), against the mean
 that clean frames give it (the calibrated centre): unlike a fall-off or a block grid, edge sharpness has no
@@ -79,7 +81,8 @@ import numpy as np
 
 __all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_summary", "scene_clusters", "radial_falloff",
            "block_grid", "jpeg_quality", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK",
-           "edge_ratio", "sharp_edges", "destripe", "EDGE_OFFSETS", "EDGE_QUANTILE", "EDGE_MIN_CONTRAST"]
+           "edge_ratio", "sharp_edges", "destripe", "unsharp_inverse", "sharpening_setting", "EDGE_OFFSETS",
+           "EDGE_QUANTILE", "EDGE_MIN_CONTRAST", "SETTING_FRAMES"]
 
 HIGH_PASS = 7  # frame px: the window of the local quadratic removed from a profile (the scene's slow changes)
 FALLOFF_BLOCK = 4  # frame px: the side of the blocks a frame's fall-off is fitted on
@@ -94,6 +97,8 @@ EDGE_MIN_CONTRAST = 8.0 / 255.0  # ... whose step between 4 px either side reach
 MIN_EDGES = 20  # fewer edges in a frame: no ratio
 SAME_LOOK = 0.9  # share of equal pixels above which a background frame is the frame itself (no second look)
 DESTRIPE_PASSES = 6  # the 7-px high-pass keeps 6/7 of a line's gain per pass: 6 passes leave (1/7)^6 of it
+SETTING_FRAMES = 100  # at most this many frames keep their two looks, to read a sharpening's setting (sharpening_setting;
+# its 1-parameter read of a 2-parameter mask needs them: 12 frames picked a neighbouring grid point in 3 of 5 cases)
 
 
 def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
@@ -362,6 +367,49 @@ def destripe(frame: np.ndarray, background: np.ndarray, *, passes: int = DESTRIP
     return f, b
 
 
+def unsharp_inverse(image: np.ndarray, amount: float, sigma: float) -> np.ndarray:
+    """The exact inverse of the unsharp mask ``I + a (I - G_σ * I)`` on a float (H, W) image: division by its
+    transfer function ``1 + a (1 - exp(-2π² σ² |f|²))`` (≥ 1, so stable), the image reflect-padded by 4σ.
+
+    Example:
+        >>> from scipy import ndimage
+        >>> img = np.random.default_rng(0).random((40, 48))
+        >>> sharp = img + 1.0 * (img - ndimage.gaussian_filter(img, 1.0, mode="reflect", truncate=8.0))
+        >>> bool(np.abs(unsharp_inverse(sharp, 1.0, 1.0) - img)[8:-8, 8:-8].max() < 1e-3)
+        True
+    """
+    pad = int(math.ceil(4.0 * sigma)) + 1
+    x = np.pad(np.asarray(image, np.float64), pad, mode="reflect")
+    fy = np.fft.fftfreq(x.shape[0])[:, None]
+    fx = np.fft.rfftfreq(x.shape[1])[None, :]
+    h = 1.0 + amount * (1.0 - np.exp(-2.0 * math.pi ** 2 * sigma ** 2 * (fx ** 2 + fy ** 2)))
+    return np.fft.irfft2(np.fft.rfft2(x) / h, s=x.shape)[pad:-pad, pad:-pad]
+
+
+def sharpening_setting(summaries: Sequence[dict[str, Any]], grid: Sequence[dict[str, float]], centre: float
+                       ) -> dict[str, Any] | None:
+    """The camera's sharpening read off the frames: of ``grid``'s unsharp masks (``sharpen_amount``,
+    ``sharpen_sigma`` in frame px), the one whose inverse (:func:`unsharp_inverse`, on both looks) brings the mean
+    edge ratio of the frames that kept their looks (``"looks"`` of :func:`frame_summary`) closest to ``centre``,
+    the clean frames' mean.
+
+    Returns:
+        None without such frames; else ``setting`` and ``ratios`` (each grid setting's mean ratio once undone).
+    """
+    looks = [f["looks"] for f in summaries if f.get("looks") is not None]
+    if not looks:
+        return None
+    ratios = []
+    for g in grid:
+        a, sg = float(g["sharpen_amount"]), float(g["sharpen_sigma"])
+        r = [edge_ratio(unsharp_inverse(fr, a, sg), unsharp_inverse(bg, a, sg), outside=out) for fr, bg, out in looks]
+        ratios.append(float(np.nanmean(r)) if np.isfinite(r).any() else float("nan"))
+    err = np.abs(np.asarray(ratios) - centre)
+    if not np.isfinite(err).any():
+        return None
+    return {"setting": dict(grid[int(np.nanargmin(err))]), "ratios": ratios}
+
+
 def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray | None = None,
                offsets: tuple[int, int] = EDGE_OFFSETS) -> float:
     """The sharpness of a frame's edges: ``A(o1) / A(o2)`` of the mean antisymmetric edge profile (module docstring).
@@ -421,7 +469,8 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
 
 
 def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
-                  background: np.ndarray | None = None, step: int = FALLOFF_BLOCK) -> dict[str, Any]:
+                  background: np.ndarray | None = None, step: int = FALLOFF_BLOCK,
+                  keep_looks: bool = False) -> dict[str, Any]:
     """One frame's radial log fall-off, its codec blockiness and its scene's texture.
 
     Args:
@@ -430,13 +479,15 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         background: the seed's background frame (the same scene without the object), or None: whether the
             frame's texture repeats there (``repeat``) says if the texture can tell its scene.
         step: block side (px).
+        keep_looks: keep the two looks (float32 gray frame and background, where edges may lie) when the edge
+            ratio is measured, for :func:`sharpening_setting`.
 
     Returns:
         ``log_slope`` (``s`` of ``log I = a + b dx + c dy - s r²``, least squares over the blocks; ``s > 0``:
         darker toward the corners; NaN with fewer than 16 usable blocks), ``texture`` (float32 (H/step, W/step):
         the band-passed block log image), ``repeat`` (its correlation with the background's texture; NaN without
-        one), ``edge_ratio`` (:func:`edge_ratio` against the background frame; NaN without an independent one)
-        and ``shape`` (H, W).
+        one), ``edge_ratio`` (:func:`edge_ratio` against the background frame; NaN without an independent one),
+        ``looks`` (with ``keep_looks``, else None) and ``shape`` (H, W).
 
     Example:
         >>> h, w = 96, 128
@@ -459,14 +510,16 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
     blockiness = _blockiness(lin, outside, CODEC_BLOCK)
     dct = _block_dct(lin * 255.0, outside & unclipped)
     tex = _texture(log, step)
-    repeat, edges = float("nan"), float("nan")
+    repeat, edges, looks = float("nan"), float("nan"), None
     if background is not None:
         blog, _ = _gray_log(background)
         if blog.shape == log.shape:
             repeat = _corr(tex, _texture(blog, step))
             edges = edge_ratio(frame, background, outside=outside)
+            if keep_looks and math.isfinite(edges):
+                looks = (_gray(frame).astype(np.float32), _gray(background).astype(np.float32), outside)
     return {"log_slope": slope, "blockiness": blockiness, "dct": dct, "texture": tex, "repeat": repeat,
-            "edge_ratio": edges, "shape": (int(h), int(w))}
+            "edge_ratio": edges, "looks": looks, "shape": (int(h), int(w))}
 
 
 def scene_clusters(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,

@@ -118,9 +118,12 @@ def _jsonable(x: Any) -> Any:
 
 
 def _setting(row: dict[str, Any]) -> dict[str, float]:
+    """The setting of a screened row: its channel's; a setting read off the whole frames wins whenever the frame
+    channel is significant too (the frames' own read of the camera, not a grid point chosen by held-out patches)."""
     if row["channel"] == "noise_level" and row.get("noise_setting"):
         return row["noise_setting"]
-    if row["channel"] == "frame" and row.get("frame_setting"):
+    frame_significant = any(c["channel"] == "frame" and c["significant"] for c in row.get("channels") or [])
+    if (row["channel"] == "frame" or frame_significant) and row.get("frame_setting"):
         return row["frame_setting"]
     if row["channel"] == "distance:colour":
         return row["screen"]["colour"]["setting"]

@@ -45,7 +45,7 @@ from the distance screening). In-camera sharpening steepens every edge of the
 frames, where on the object it is a 1-px halo: sharpening's frame channel, the
 edges' step at 2 px over that at 4 px, read on the frame at edges found on its
 independent background frame, tested over scenes against the clean frames'
-mean (its setting comes from the distance screening). The camera's noise level
+mean (its setting: the unsharp mask whose inverse brings them back to it). The camera's noise level
 function, measured on the seed frames off the object
 (:mod:`synthaug.diagnose.noise`), testifies for ``shot_noise`` (rising with
 brightness) and ``gamma`` (falling: a compressive tone curve after the sensor);
@@ -497,7 +497,8 @@ def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | No
     (:func:`~synthaug.diagnose.frame_pattern.jpeg_quality`; None for frames not JPEG-coded), ``"sharpening":``
     :func:`~synthaug.diagnose.frame_pattern.sharp_edges` against the calibrated clean mean ``}`` (a value None
     with fewer than 3 scenes; sharpening's also without independent background frames); None without frames."""
-    from synthaug.diagnose.frame_pattern import block_grid, jpeg_quality, radial_falloff, sharp_edges
+    from synthaug.diagnose.frame_pattern import (block_grid, jpeg_quality, radial_falloff, sharp_edges,
+                                                 sharpening_setting)
 
     if data.frame_summaries is None:
         return None
@@ -506,8 +507,13 @@ def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | No
     if grid is not None:
         jq = jpeg_quality(data.frame_summaries)
         grid = {**grid, "quality": None if jq is None else jq["quality"]}
-    return {"vignetting": radial_falloff(data.frame_summaries, groups), "compression": grid,
-            "sharpening": sharp_edges(data.frame_summaries, groups, centre=gain_centre("sharpening", "frame"))}
+    centre, floor = gain_centre("sharpening", "frame"), gain_floor("sharpening", "frame")
+    sharp = sharp_edges(data.frame_summaries, groups, centre=centre)
+    if sharp is not None and centre is not None and floor is not None and sharp["ratio"] > floor:
+        # sharper than clean frames: the setting whose inverse brings them back (read only then: 12 x N ratios)
+        read = sharpening_setting(data.frame_summaries, CANDIDATE_GRIDS["sharpening"], centre)
+        sharp = {**sharp, "setting": None if read is None else read["setting"]}
+    return {"vignetting": radial_falloff(data.frame_summaries, groups), "compression": grid, "sharpening": sharp}
 
 
 def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_tests: int, alpha: float
@@ -534,17 +540,22 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
         out["jpeg_quality"] = e.get("quality")
     else:
         out["centre"] = e["centre"]
+        out["setting"] = e.get("setting")
     return out
 
 
 def frame_setting(effect: str, fc: dict[str, Any] | None) -> Setting | None:
     """The camera setting a frame channel implies: vignetting's fall-off ``k``; compression's JPEG quality
     read from the frames' DCT steps, within the screening grid's range (None when the frames show no JPEG
-    table, e.g. a video codec's other transforms: the distance screen's setting then stands)."""
+    table, e.g. a video codec's other transforms: the distance screen's setting then stands); sharpening's
+    unsharp mask whose inverse brings the frames' edges back to clean frames' (read when the edges are sharper
+    than the clean floor; :func:`~synthaug.diagnose.frame_pattern.sharpening_setting`)."""
     if fc is None:
         return None
     if effect == "vignetting":
         return {"vignette_k": fc["gain"]}
+    if effect == "sharpening":
+        return fc.get("setting")
     q = fc.get("jpeg_quality")
     if effect == "compression" and q is not None:
         grid = [g["jpeg_quality"] for g in CANDIDATE_GRIDS["compression"]]
