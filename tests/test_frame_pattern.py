@@ -307,9 +307,9 @@ def test_edge_ratio_is_not_applicable_without_an_independent_look_or_edges():
 def test_edge_ratio_rises_with_sharpening_falls_with_blur_and_ignores_the_noise_of_the_frame():
     # a random blocky scene (edges of every orientation, steps up to 0.2), the camera's optics a 1.5-px blur; an
     # unsharp mask (scipy: I + a (I - G_s * I)) of amount a raises the ratio step by step, a defocus lowers it; the
-    # frame's own noise (sd 0.03, ~8 grey levels, as the reference camera's shot noise) leaves it where it is, because the
-    # edges are chosen on the independent background look, while choosing them on the noisy frame itself
-    # inflates it (noise read as sharpness)
+    # frame's own noise (sd 0.03, ~8 grey levels, as the reference camera's shot noise) leaves it where it is,
+    # because the edges are chosen on the independent background look, while choosing them on the noisy frame
+    # itself inflates it (noise read as sharpness)
     from scipy import ndimage
 
     from synthaug.diagnose.frame_pattern import edge_ratio

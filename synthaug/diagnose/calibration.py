@@ -59,8 +59,8 @@ import math
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
-__all__ = ["HAND_FLOORS", "HAND_MIN_GAIN", "structure_significant", "gain_floor", "gain_centre", "rule_text", "describe",
-           "derive_floors", "write_floors_module", "FAMILY_RATE", "hand_set"]
+__all__ = ["HAND_FLOORS", "HAND_MIN_GAIN", "structure_significant", "gain_floor", "gain_centre", "rule_text",
+           "describe", "derive_floors", "write_floors_module", "FAMILY_RATE", "hand_set"]
 
 # The floors set by hand before the calibration (and the fallback for statistics without a null).
 HAND_FLOORS: dict[str, float] = {

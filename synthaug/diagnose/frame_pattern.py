@@ -97,8 +97,9 @@ EDGE_MIN_CONTRAST = 8.0 / 255.0  # ... whose step between 4 px either side reach
 MIN_EDGES = 20  # fewer edges in a frame: no ratio
 SAME_LOOK = 0.9  # share of equal pixels above which a background frame is the frame itself (no second look)
 DESTRIPE_PASSES = 6  # the 7-px high-pass keeps 6/7 of a line's gain per pass: 6 passes leave (1/7)^6 of it
-SETTING_FRAMES = 100  # at most this many frames keep their two looks, to read a sharpening's setting (sharpening_setting;
-# its 1-parameter read of a 2-parameter mask needs them: 12 frames picked a neighbouring grid point in 3 of 5 cases)
+# at most this many frames keep their two looks, to read a sharpening's setting (sharpening_setting; its 1-parameter
+# read of a 2-parameter mask needs them: 12 frames picked a neighbouring grid point in 3 of 5 cases)
+SETTING_FRAMES = 100
 
 
 def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
@@ -515,9 +516,10 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         blog, _ = _gray_log(background)
         if blog.shape == log.shape:
             repeat = _corr(tex, _texture(blog, step))
-            edges = edge_ratio(frame, background, outside=outside)
+            fg, bg = _gray(frame), _gray(background)  # once: the ratio and the kept looks read the same gray frames
+            edges = edge_ratio(fg, bg, outside=outside)
             if keep_looks and math.isfinite(edges):
-                looks = (_gray(frame).astype(np.float32), _gray(background).astype(np.float32), outside)
+                looks = (fg.astype(np.float32), bg.astype(np.float32), outside)
     return {"log_slope": slope, "blockiness": blockiness, "dct": dct, "texture": tex, "repeat": repeat,
             "edge_ratio": edges, "looks": looks, "shape": (int(h), int(w))}
 
