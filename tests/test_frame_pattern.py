@@ -445,3 +445,128 @@ def test_a_significant_frame_channel_gives_the_setting_whatever_channel_ranks_fi
     row["channels"][1]["significant"] = False
     assert _setting(row) == grid
     assert _setting({**row, "channel": "frame"}) == frames
+
+
+def _lens_look(scene: np.ndarray, k1: float) -> np.ndarray:
+    """A scene through the library's whole-frame lens (division model, the reference camera's call)."""
+    import torch
+
+    from synthaug.effects.camera_functional import lens_distortion
+
+    return lens_distortion(torch.from_numpy(scene)[None, None], k1, recentre=False, border="border")[0, 0].numpy()
+
+
+def _textured_scene(rng: np.random.Generator, shape=(144, 192)) -> np.ndarray:
+    from scipy import ndimage
+
+    return 0.2 + 0.6 * ndimage.gaussian_filter(rng.random(shape), 2.0) / 0.15 * 0.1
+
+
+@pytest.mark.parametrize("k1", [-0.2, -0.15, -0.05, 0.0, 0.1])
+def test_radial_flow_reads_the_lens_k_off_a_moved_scene(k1):
+    # a scene moved by a known shift between two looks (scipy's cubic-spline shift), both through the library's
+    # whole-frame division-model lens: the fit of the frame as the background seen through the map reads k1 and
+    # the shift; without distortion the motion is one shift and k reads 0
+    from scipy import ndimage
+
+    from synthaug.diagnose.frame_pattern import radial_flow
+
+    rng = np.random.default_rng(11)
+    scene = _textured_scene(rng)
+    shift = (0.6, -0.8)  # (rows, columns): the scene moves 0.8 px left, 0.6 px down
+    moved = ndimage.shift(scene, shift, order=3, mode="reflect")
+    out = radial_flow(_lens_look(moved, k1), _lens_look(scene, k1))
+    assert out["drift"] == pytest.approx(1.0, abs=0.03)
+    assert out["k"] == pytest.approx(k1, abs=0.006)
+    assert out["pixels"] > 20000
+
+
+def test_radial_flow_is_unbiased_under_frame_noise_and_ignores_the_objects_crop():
+    # each look its own noise (an independent look); an object pasted into the frame's crop only, the crop left out
+    # (outside): over draws the reading's mean is the lens's k (0 and -0.15) within 3 standard errors
+    from scipy import ndimage
+
+    from synthaug.diagnose.frame_pattern import radial_flow
+
+    rng = np.random.default_rng(12)
+    outside = np.ones((144, 192), bool)
+    outside[58:92, 78:112] = False
+    for k1 in (0.0, -0.15):
+        ks = []
+        while len(ks) < 10:
+            scene = _textured_scene(rng)
+            t = rng.uniform(-1.0, 1.0, 2)
+            if np.hypot(*t) < 0.4:
+                continue
+            moved = ndimage.shift(scene, t, order=3, mode="reflect")
+            f = np.clip(_lens_look(moved, k1) + 0.01 * rng.standard_normal(scene.shape), 0, 1)
+            b = np.clip(_lens_look(scene, k1) + 0.01 * rng.standard_normal(scene.shape), 0, 1)
+            f[60:90, 80:110] = 0.95  # the object, in the frame only
+            ks.append(radial_flow(f, b, outside=outside)["k"])
+        ks = np.asarray(ks)
+        assert np.isfinite(ks).all()
+        assert abs(ks.mean() - k1) < 3 * ks.std(ddof=1) / np.sqrt(len(ks)) + 0.003, (k1, ks)
+
+
+def test_radial_flow_has_no_reading_without_a_second_look_or_a_motion():
+    from scipy import ndimage
+
+    from synthaug.diagnose.frame_pattern import MIN_DRIFT_PX, radial_flow
+
+    rng = np.random.default_rng(13)
+    scene = _textured_scene(rng)
+    f = _lens_look(ndimage.shift(scene, (0.5, 0.5), order=3, mode="reflect"), -0.15)
+    assert np.isnan(radial_flow(f, f)["k"])  # the background is the frame itself: no independent look
+    assert np.isnan(radial_flow(f, f[:, :-1])["k"])  # other shapes
+    still = _lens_look(ndimage.shift(scene, (0.1, 0.0), order=3, mode="reflect"), -0.15)
+    out = radial_flow(still, _lens_look(scene, -0.15))  # a shift under MIN_DRIFT_PX cannot tell k
+    assert out["drift"] < MIN_DRIFT_PX and np.isnan(out["k"])
+    flat = np.full_like(scene, 0.5)  # no texture: nothing to follow
+    assert np.isnan(radial_flow(flat + 0.001 * rng.standard_normal(flat.shape), flat)["k"])
+
+
+def test_lens_flow_tests_scenes_two_sided():
+    from synthaug.diagnose.frame_pattern import lens_flow
+
+    rng = np.random.default_rng(14)
+    ps = []
+    for _ in range(300):
+        frames, groups = [], []
+        for v in range(8):
+            tex, level = rng.standard_normal((12, 16)), 0.005 * rng.standard_normal()
+            for _ in range(6):
+                frames.append({"flow_k": level + 0.02 * rng.standard_normal(), "repeat": 0.9, "shape": (48, 64),
+                               "texture": tex + 0.1 * rng.standard_normal(tex.shape)})
+                groups.append(f"v{v}")
+        out = lens_flow(frames, groups)
+        ps.append(out["p"])
+    assert stats.kstest(ps, "uniform").pvalue > 0.01
+    lab = scene_clusters(frames, groups)
+    means = [np.mean([f["flow_k"] for f, l in zip(frames, lab) if l == c]) for c in range(lab.max() + 1)]
+    assert out["p"] == pytest.approx(stats.ttest_1samp(means, 0.0).pvalue)
+    assert out["k"] == pytest.approx(np.mean(means)) and out["scenes"] == 8 and out["frames"] == 48
+    for k1 in (-0.15, 0.1):  # barrel and pincushion alike
+        moved = lens_flow([{**f, "flow_k": f["flow_k"] + k1} for f in frames], groups)
+        assert moved["p"] < 1e-4 and moved["k"] == pytest.approx(k1, abs=0.02)
+    # frames without a reading (no motion, no second look) are left out; under 3 scenes: None
+    assert lens_flow([{**f, "flow_k": float("nan")} for f in frames], groups) is None
+    assert lens_flow(frames[:12], groups[:12]) is None
+
+
+def test_lens_frame_channel_uses_the_size_of_k_and_sets_the_signed_k(monkeypatch):
+    from synthaug.diagnose import screening
+
+    monkeypatch.setattr(screening, "gain_floor", lambda effect, channel: 0.03 if (effect, channel) == (
+        "lens_distortion", "frame") else None)
+    ev = {"lens_distortion": {"k": -0.14, "t": -20.0, "p": 1e-8, "scenes": 30, "frames": 50}}
+    ch = screening.frame_channel("lens_distortion", ev, 40, 0.01)
+    assert ch["significant"] and ch["gain"] == pytest.approx(0.14) and ch["k1"] == -0.14 and ch["floor"] == 0.03
+    assert screening.frame_setting("lens_distortion", ch) == {"distortion_k1": -0.14}
+    small = {"lens_distortion": {**ev["lens_distortion"], "k": 0.02}}  # significant test, inside the clean range
+    assert not screening.frame_channel("lens_distortion", small, 40, 0.01)["significant"]
+    weak = {"lens_distortion": {**ev["lens_distortion"], "p": 1e-3}}  # p_adj 0.04
+    assert not screening.frame_channel("lens_distortion", weak, 40, 0.01)["significant"]
+    far = {"lens_distortion": {**ev["lens_distortion"], "k": -0.6}}  # the setting stays in the parameter's range
+    assert screening.frame_setting("lens_distortion", screening.frame_channel("lens_distortion", far, 40, 0.01)) == {
+        "distortion_k1": -0.3}
+    assert "lens_distortion" in screening.FRAME_CANDIDATES

@@ -70,6 +70,17 @@ background frame is the frame itself off the object) the ratio is not measured. 
 clouds) set its level, so it is tested over scenes as the fall-off is (:func:`sharp_edges`), against the mean
 that clean frames give it (the calibrated centre): unlike a fall-off or a block grid, edge sharpness has no
 physical zero.
+
+**A lens's radial distortion** is fixed in the frame as well, but it moves nothing a single frame shows: it bends the
+scene's motion. Between a frame and its background frame the scene moves a little (the camera drifts, the scene
+sways); through an undistorted lens that motion is one shift over the whole frame, through a lens of division-model
+``k`` a shift ``t`` shows at frame point ``p`` as about ``t + k (|p|² t + 2 p (p·t))`` — more at the corners
+(pincushion) or less (barrel). Fitting the frame as its background seen through that map
+(:func:`radial_flow`, Gauss-Newton on the two looks, the crop left out) reads ``k`` — the two-view estimate of radial
+distortion (Fitzgibbon 2001). On the object (20-30 px, within r² < 0.4 of the centre) the same lens is a
+stretch of a few percent that the fitted pose absorbs. The reading needs a shift of at least :data:`MIN_DRIFT_PX`
+and an independent look (an ingested video's background frame is the frame itself); :func:`lens_flow` tests it
+over scenes, two-sided.
 """
 
 from __future__ import annotations
@@ -82,7 +93,8 @@ import numpy as np
 __all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_summary", "scene_clusters", "radial_falloff",
            "block_grid", "jpeg_quality", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK",
            "edge_ratio", "sharp_edges", "destripe", "unsharp_inverse", "sharpening_setting", "EDGE_OFFSETS",
-           "EDGE_QUANTILE", "EDGE_MIN_CONTRAST", "SETTING_FRAMES"]
+           "EDGE_QUANTILE", "EDGE_MIN_CONTRAST", "SETTING_FRAMES",
+           "radial_flow", "lens_flow", "MIN_DRIFT_PX"]
 
 HIGH_PASS = 7  # frame px: the window of the local quadratic removed from a profile (the scene's slow changes)
 FALLOFF_BLOCK = 4  # frame px: the side of the blocks a frame's fall-off is fitted on
@@ -100,6 +112,12 @@ DESTRIPE_PASSES = 6  # the 7-px high-pass keeps 6/7 of a line's gain per pass: 6
 # at most this many frames keep their two looks, to read a sharpening's setting (sharpening_setting; its 1-parameter
 # read of a 2-parameter mask needs them: 12 frames picked a neighbouring grid point in 3 of 5 cases)
 SETTING_FRAMES = 100
+FLOW_SIGMA = 1.0  # frame px: both looks are smoothed by this before the scene's motion between them is fitted
+FLOW_ITERS = 10  # damped Gauss-Newton steps of the motion fit (the reference camera's: k settles within 1e-4 in 5-6)
+FLOW_MARGIN = 6  # frame px left out at the frame's edges (a shifted look's border has no partner)
+FLOW_MAX_K = 0.3  # |k| beyond the parameter's range: the motion fit has diverged (no reading)
+FLOW_MAX_DRIFT_PX = 8.0  # a larger motion between the looks is not a drift the fit can follow (no reading)
+MIN_DRIFT_PX = 0.3  # a shift smaller than this (frame px) cannot tell a lens's k (radial_flow)
 
 
 def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
@@ -469,6 +487,138 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
     return a1 / a2 if a2 > 0 else float("nan")
 
 
+def _division_sample(px: np.ndarray, py: np.ndarray, tx: float, ty: float, k: float,
+                     iters: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """Where the background frame shows what frame point ``p`` (normalised by the half diagonal) shows, for a
+    scene moved by ``(tx, ty)`` (same units) between the two looks under the division model's ``k``:
+    ``D(U(p) - t)`` with ``U(p) = p / (1 + k|p|²)`` and ``D`` its inverse (fixed point ``q = u (1 + k|q|²)``,
+    a contraction for ``|k| < 0.3`` within the frame)."""
+    r2 = px * px + py * py
+    ux, uy = px / (1.0 + k * r2) - tx, py / (1.0 + k * r2) - ty
+    qx, qy = ux.copy(), uy.copy()
+    with np.errstate(over="ignore", invalid="ignore"):  # a diverging iterate (|k| too large) ends NaN, checked
+        for _ in range(iters):
+            f = 1.0 + k * (qx * qx + qy * qy)
+            qx, qy = ux * f, uy * f
+    return qx, qy
+
+
+def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray | None = None,
+                sigma: float = FLOW_SIGMA, iters: int = FLOW_ITERS) -> dict[str, float]:
+    """The lens's radial distortion read off the scene's motion between two looks at it.
+
+    Between the frame and its background frame the scene moves (the camera drifts, the scene sways); through
+    a lens without distortion that motion is the same shift everywhere in the frame, through a distorted lens
+    it is not: under the division model (``p_u = p_d / (1 + k |p_d|²)``, ``p`` normalised by the half diagonal,
+    as :func:`~synthaug.effects.camera_functional.lens_distortion`) a scene shift ``t`` shows at frame point
+    ``p`` as about ``t + k (|p|² t + 2 p (p·t))``, stretched toward the corners (pincushion, ``k > 0``) or
+    shrunk (barrel) — the two-view estimate of radial distortion (Fitzgibbon 2001). The frame is fitted as the
+    background seen through that map, ``F(p) ≈ (1 + g) B(D(U(p) - t)) + o`` (``g``, ``o``: a brightness
+    change), by Gauss-Newton on both looks smoothed by ``sigma`` px, started from the phase correlation's shift,
+    where the pixels lie ``outside`` the object's crop and inside a 6-px margin.
+
+    Args:
+        frame, background: (H, W) or (H, W, C) uint8 or float in [0, 1]: two looks at the same scene.
+        outside: (H, W) bool, where the scene may be compared (the object's crop left out); None: everywhere.
+
+    Returns:
+        ``k``, its least-squares standard error ``k_se`` (pixels treated as independent: a lower bound), the
+        shift ``drift`` (frame px) and ``pixels`` used. ``k`` is NaN when the looks cannot tell it: a background
+        that is the frame itself (no second look), other shapes, fewer than 1,000 usable pixels, a fit that
+        diverges or moves more than :data:`FLOW_MAX_DRIFT_PX`, or a shift under
+        :data:`MIN_DRIFT_PX` (the distortion's share of the motion is ``k`` times the shift: measured on the
+        reference camera, clean frames that moved 0.12-0.15 px read k -0.04 … -0.08).
+
+    Example:
+        >>> from scipy import ndimage
+        >>> from synthaug.effects.camera_functional import lens_distortion
+        >>> import torch
+        >>> rng = np.random.default_rng(0)
+        >>> scene = ndimage.gaussian_filter(rng.random((120, 160)), 2.0)
+        >>> moved = ndimage.shift(scene, (0.6, -0.8), order=3, mode="reflect")
+        >>> look = lambda s: lens_distortion(torch.tensor(s)[None, None], -0.15, recentre=False,
+        ...                                  border="border")[0, 0].numpy()
+        >>> out = radial_flow(look(moved), look(scene))
+        >>> round(out["drift"], 1), abs(out["k"] + 0.15) < 0.02
+        (1.0, True)
+    """
+    import cv2
+    from scipy import ndimage
+
+    nan = {"k": float("nan"), "k_se": float("nan"), "drift": float("nan"), "pixels": 0}
+    f, b = _gray(frame), _gray(background)
+    if f.shape != b.shape:
+        return nan
+    h, w = f.shape
+    ok = np.ones((h, w), bool) if outside is None else np.asarray(outside, bool)
+    if np.mean(f[ok] == b[ok]) >= SAME_LOOK:
+        return nan
+    m = np.zeros((h, w), bool)
+    m[FLOW_MARGIN:h - FLOW_MARGIN, FLOW_MARGIN:w - FLOW_MARGIN] = True
+    m &= ok & (f > 2.5 / 255.0) & (f < 252.5 / 255.0)
+    if outside is not None:
+        m &= ~ndimage.binary_dilation(~ok, iterations=3)
+    if m.sum() < 1000:
+        return nan
+    fs, bs = ndimage.gaussian_filter(f, sigma), ndimage.gaussian_filter(b, sigma)
+    gy_img, gx_img = np.gradient(bs)
+    radius = 0.5 * math.hypot(h, w)
+    yy, xx = np.nonzero(m)
+    cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
+    px, py = (xx - cx) / radius, (yy - cy) / radius
+    (sx, sy), _ = cv2.phaseCorrelate(bs.astype(np.float64), fs.astype(np.float64))
+    if math.hypot(sx, sy) > FLOW_MAX_DRIFT_PX:  # a spurious peak (a bare sky): start from no motion
+        sx, sy = 0.0, 0.0
+    th = np.array([float(sx), float(sy), 0.0, 0.0, 0.0])  # t_x, t_y (frame px), k, gain, offset
+    target = fs[yy, xx]
+    eps = (1e-3, 1e-3, 1e-4)
+    for _ in range(iters):
+        t_x, t_y, k, g, o = th
+        qx, qy = _division_sample(px, py, t_x / radius, t_y / radius, k)
+        if not (np.isfinite(qx).all() and np.isfinite(qy).all()):
+            return nan
+        at = lambda img, x, y: ndimage.map_coordinates(img, [y * radius + cy, x * radius + cx], order=1,  # noqa: E731
+                                                       mode="nearest")
+        bq = ndimage.map_coordinates(bs, [qy * radius + cy, qx * radius + cx], order=3, mode="nearest")
+        gxq, gyq = at(gx_img, qx, qy), at(gy_img, qx, qy)
+        cols = []
+        for j, e in enumerate(eps):  # the map's derivative in t_x, t_y, k (central differences)
+            hi, lo = th[:3].copy(), th[:3].copy()
+            hi[j] += e
+            lo[j] -= e
+            ax, ay = _division_sample(px, py, hi[0] / radius, hi[1] / radius, hi[2])
+            bx, by = _division_sample(px, py, lo[0] / radius, lo[1] / radius, lo[2])
+            cols.append((1.0 + g) * radius * (gxq * (ax - bx) + gyq * (ay - by)) / (2 * e))
+        # only points whose scene lies inside the frame: a look rendered from a frame-sized scene repeats its
+        # border beyond it (a barrel lens's corners), a real lens would show more scene there; neither moves as t
+        r2 = px * px + py * py
+        inside = (np.abs(px / (1.0 + k * r2)) * radius <= cx - FLOW_MARGIN) & \
+                 (np.abs(py / (1.0 + k * r2)) * radius <= cy - FLOW_MARGIN)
+        if inside.sum() < 1000:
+            return nan
+        jac = np.stack(cols + [bq, np.ones_like(bq)], 1)[inside]
+        resid = (target - ((1.0 + g) * bq + o))[inside]
+        if not np.isfinite(jac).all():
+            return nan
+        jtj = jac.T @ jac
+        try:
+            step = np.linalg.solve(jtj, jac.T @ resid)
+        except np.linalg.LinAlgError:
+            return nan
+        step[:2] = np.clip(step[:2], -1.0, 1.0)  # damped: at most 1 px and 0.05 in k a step (a far start, clutter)
+        step[2] = float(np.clip(step[2], -0.05, 0.05))
+        th = th + step
+        if abs(th[2]) >= FLOW_MAX_K or not np.isfinite(th).all():
+            return nan
+    dof = max(len(resid) - 5, 1)
+    cov = np.linalg.pinv(jtj) * float(np.sum((resid - jac @ step) ** 2)) / dof
+    drift = float(math.hypot(th[0], th[1]))
+    if drift > FLOW_MAX_DRIFT_PX:
+        return nan
+    k = float(th[2]) if drift >= MIN_DRIFT_PX else float("nan")
+    return {"k": k, "k_se": float(math.sqrt(max(cov[2, 2], 0.0))), "drift": drift, "pixels": int(m.sum())}
+
+
 def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
                   background: np.ndarray | None = None, step: int = FALLOFF_BLOCK,
                   keep_looks: bool = False) -> dict[str, Any]:
@@ -488,7 +638,9 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         darker toward the corners; NaN with fewer than 16 usable blocks), ``texture`` (float32 (H/step, W/step):
         the band-passed block log image), ``repeat`` (its correlation with the background's texture; NaN without
         one), ``edge_ratio`` (:func:`edge_ratio` against the background frame; NaN without an independent one),
-        ``looks`` (with ``keep_looks``, else None) and ``shape`` (H, W).
+        ``looks`` (with ``keep_looks``, else None), ``flow_k`` and ``flow_drift`` (:func:`radial_flow` against the
+        background frame: the lens's k and the scene's shift between the looks; NaN without an independent one or
+        too small a shift) and ``shape`` (H, W).
 
     Example:
         >>> h, w = 96, 128
@@ -512,6 +664,7 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
     dct = _block_dct(lin * 255.0, outside & unclipped)
     tex = _texture(log, step)
     repeat, edges, looks = float("nan"), float("nan"), None
+    flow = {"k": float("nan"), "drift": float("nan")}
     if background is not None:
         blog, _ = _gray_log(background)
         if blog.shape == log.shape:
@@ -520,8 +673,10 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
             edges = edge_ratio(fg, bg, outside=outside)
             if keep_looks and math.isfinite(edges):
                 looks = (fg.astype(np.float32), bg.astype(np.float32), outside)
+            flow = radial_flow(fg, bg, outside=outside)
     return {"log_slope": slope, "blockiness": blockiness, "dct": dct, "texture": tex, "repeat": repeat,
-            "edge_ratio": edges, "looks": looks, "shape": (int(h), int(w))}
+            "edge_ratio": edges, "looks": looks, "flow_k": flow["k"], "flow_drift": flow["drift"],
+            "shape": (int(h), int(w))}
 
 
 def scene_clusters(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
@@ -607,8 +762,9 @@ def falloff_k(log_slope: float, shape: tuple[int, int], *, step: int = FALLOFF_B
 
 
 def _over_scenes(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], key: str, same: float,
-                 centre: float = 0.0) -> dict[str, Any] | None:
-    """The one-sided t-test (> ``centre``) of ``key`` over scenes: each scene's mean over its frames (None under 3)."""
+                 centre: float = 0.0, *, two_sided: bool = False) -> dict[str, Any] | None:
+    """The one-sided t-test (> ``centre``; ``two_sided``: ≠) of ``key`` over scenes: each scene's mean over its
+    frames (None under 3)."""
     from scipy import stats
 
     keep = [i for i, f in enumerate(summaries) if math.isfinite(f.get(key, float("nan")))]
@@ -619,7 +775,7 @@ def _over_scenes(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], key
     means = np.array([v[lab == c].mean() for c in range(int(lab.max()) + 1)])
     if len(means) < 3:
         return None
-    t = stats.ttest_1samp(means, centre, alternative="greater")
+    t = stats.ttest_1samp(means, centre, alternative="two-sided" if two_sided else "greater")
     shapes = [tuple(summaries[i]["shape"]) for i in keep]
     return {"mean": float(means.mean()), "t": float(t.statistic), "p": float(t.pvalue), "scenes": int(len(means)),
             "frames": len(keep), "shape": max(set(shapes), key=shapes.count)}
@@ -700,6 +856,30 @@ def sharp_edges(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *, c
     return {"ratio": r["mean"], "t": r["t"] if centre is not None else float("nan"),
             "p": r["p"] if centre is not None else 1.0, "centre": centre, "scenes": r["scenes"],
             "frames": r["frames"]}
+
+
+def lens_flow(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
+              same: float = SAME_SCENE) -> dict[str, Any] | None:
+    """A lens's radial distortion over the frames (their ``flow_k``, :func:`radial_flow`), tested over scenes as
+    :func:`radial_falloff`, two-sided (barrel or pincushion).
+
+    Returns:
+        None with fewer than 3 scenes that have a reading (the scene did not move between the looks, or there is
+        no independent background frame); else ``k`` (the mean over scenes), ``t``, ``p`` (two-sided), ``scenes``,
+        ``frames``.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> f = [{"flow_k": -0.15 + 0.03 * rng.standard_normal(), "texture": rng.standard_normal((24, 32)),
+        ...       "repeat": 0.9, "shape": (96, 128)} for _ in range(10)]
+        >>> out = lens_flow(f, [None] * 10)
+        >>> out["scenes"], out["p"] < 1e-6, abs(out["k"] + 0.15) < 0.03
+        (10, True, True)
+    """
+    r = _over_scenes(summaries, groups, "flow_k", same, two_sided=True)
+    if r is None:
+        return None
+    return {"k": r["mean"], "t": r["t"], "p": r["p"], "scenes": r["scenes"], "frames": r["frames"]}
 
 
 def _step_of(coef: np.ndarray, max_step: int = 64, min_values: int = 30) -> tuple[int, float]:

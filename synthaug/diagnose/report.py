@@ -482,6 +482,10 @@ def _frame_text(f: dict[str, Any]) -> str:
         return (f"; the whole frames' edges are steeper than clean frames': the step across an edge between ±2 px "
                 f"is {ch['gain']:.1%} of that between ±4 px (clean mean {ch['centre']:.1%}) {where}; read on the "
                 "frames at edges found on their independent background frames")
+    if f["effect"] == "lens_distortion":
+        kind = "barrel" if ch["k1"] < 0 else "pincushion"
+        return (f"; the scene's motion between the frames and their independent background frames is not one shift: "
+                f"it reads a radial distortion k₁ {ch['k1']:+.3f} ({kind}, division model; |k₁| tested) {where}")
     q = ch.get("jpeg_quality")
     return (f"; the whole frames carry an 8x8 block grid: steps across its lines {math.exp(ch['gain']):.2f}x those "
             f"inside the blocks beside them (median over the lines) {where}"

@@ -45,7 +45,10 @@ from the distance screening). In-camera sharpening steepens every edge of the
 frames, where on the object it is a 1-px halo: sharpening's frame channel, the
 edges' step at 2 px over that at 4 px, read on the frame at edges found on its
 independent background frame, tested over scenes against the clean frames'
-mean (its setting: the unsharp mask whose inverse brings them back to it). The camera's noise level
+mean (its setting: the unsharp mask whose inverse brings them back to it). A lens's radial distortion bends
+the scene's motion between the frame and its background frame (a shift ``t`` reads ``t + k (|p|² t + 2 p (p·t))``
+at frame point ``p``): lens distortion's frame channel, the division model's ``k`` fitted to that motion, tested
+over scenes (two-sided; its setting is ``k``). The camera's noise level
 function, measured on the seed frames off the object
 (:mod:`synthaug.diagnose.noise`), testifies for ``shot_noise`` (rising with
 brightness) and ``gamma`` (falling: a compressive tone curve after the sensor);
@@ -145,8 +148,10 @@ COLOUR_CANDIDATES: tuple[str, ...] = ("chromatic_aberration", "white_balance", "
 # the background around the object as well: vignetting's radial fall-off (on the object a gain that w_d absorbs),
 # a codec's 8x8 block grid (on a 20-30 px object a few block edges), in-camera sharpening's steeper edges (on the
 # object a 1-px halo that the fitted blur, noise and shading mismatch drown: its distance gain stayed under the floor
-# in 5 of 5 power cases at amount 1, results/diagnose/README.md, stop 40).
-FRAME_CANDIDATES: tuple[str, ...] = ("vignetting", "compression", "sharpening")
+# in 5 of 5 power cases at amount 1, results/diagnose/README.md, stop 40), a lens's radial distortion (on an object
+# within r² < 0.4 of the centre an anisotropic stretch of a few percent the fitted pose absorbs; the scene's motion
+# between the frame and its background frame shows it over the whole frame, stop 41).
+FRAME_CANDIDATES: tuple[str, ...] = ("vignetting", "compression", "sharpening", "lens_distortion")
 # Candidates that exist only in colour: a single channel has no lateral colour shift and no colour cast (in gray
 # chromatic aberration is a ~1 px radial blur, white balance a gain that w_d absorbs), so on single-channel data
 # they are not offered (:func:`offered_candidates`); haze stays: its extinction and airlight act on gray too.
@@ -495,9 +500,11 @@ def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | No
     :func:`~synthaug.diagnose.frame_pattern.radial_falloff`, ``"compression":``
     :func:`~synthaug.diagnose.frame_pattern.block_grid` with ``"quality"``, the JPEG quality its DCT steps read
     (:func:`~synthaug.diagnose.frame_pattern.jpeg_quality`; None for frames not JPEG-coded), ``"sharpening":``
-    :func:`~synthaug.diagnose.frame_pattern.sharp_edges` against the calibrated clean mean ``}`` (a value None
-    with fewer than 3 scenes; sharpening's also without independent background frames); None without frames."""
-    from synthaug.diagnose.frame_pattern import (block_grid, jpeg_quality, radial_falloff, sharp_edges,
+    :func:`~synthaug.diagnose.frame_pattern.sharp_edges` against the calibrated clean mean, ``"lens_distortion":``
+    :func:`~synthaug.diagnose.frame_pattern.lens_flow` ``}`` (a value None with fewer than 3 scenes; sharpening's
+    and the lens's also without independent background frames, the lens's without a scene that moved between the
+    two looks); None without frames."""
+    from synthaug.diagnose.frame_pattern import (block_grid, jpeg_quality, lens_flow, radial_falloff, sharp_edges,
                                                  sharpening_setting)
 
     if data.frame_summaries is None:
@@ -513,7 +520,8 @@ def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | No
         # sharper than clean frames: the setting whose inverse brings them back (read only then: 12 x N ratios)
         read = sharpening_setting(data.frame_summaries, CANDIDATE_GRIDS["sharpening"], centre)
         sharp = {**sharp, "setting": None if read is None else read["setting"]}
-    return {"vignetting": radial_falloff(data.frame_summaries, groups), "compression": grid, "sharpening": sharp}
+    return {"vignetting": radial_falloff(data.frame_summaries, groups), "compression": grid, "sharpening": sharp,
+            "lens_distortion": lens_flow(data.frame_summaries, groups)}
 
 
 def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_tests: int, alpha: float
@@ -522,13 +530,15 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
     statistic (``gain``): for vignetting the fall-off ``k`` the frames imply (the fraction of light lost at the
     corners), for compression the log ratio of the frames' steps across the 8x8 grid's lines to those inside the
     blocks beside them (median over the lines), for sharpening the edges' ``A(2) / A(4)`` (the share of an edge's
-    step made 2 px from its centre; its test is against the clean mean, not 0).
-    Significant when the one-sided test over scenes rejects at α (Bonferroni) and the statistic exceeds its
+    step made 2 px from its centre; its test is against the clean mean, not 0), for lens distortion ``|k|`` of the
+    division model that the scene's motion between the frame and its background frame reads (its test two-sided).
+    Significant when the test over scenes rejects at α (Bonferroni) and the statistic exceeds its
     calibrated clean floor."""
     e = None if ev is None or effect not in FRAME_CANDIDATES else ev.get(effect)
     if e is None:
         return None
-    value = {"vignetting": e.get("k"), "compression": e.get("log_ratio"), "sharpening": e.get("ratio")}[effect]
+    value = {"vignetting": e.get("k"), "compression": e.get("log_ratio"), "sharpening": e.get("ratio"),
+             "lens_distortion": None if e.get("k") is None else abs(e["k"])}[effect]
     p_adj = min(1.0, e["p"] * n_tests)
     floor = gain_floor(effect, "frame")
     out = {"channel": "frame", "p_adjusted": p_adj, "z": _z(e["p"]), "gain": value, "floor": floor,
@@ -538,6 +548,8 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
         out["log_slope"] = e["log_slope"]
     elif effect == "compression":
         out["jpeg_quality"] = e.get("quality")
+    elif effect == "lens_distortion":
+        out["k1"] = e["k"]
     else:
         out["centre"] = e["centre"]
         out["setting"] = e.get("setting")
@@ -549,13 +561,17 @@ def frame_setting(effect: str, fc: dict[str, Any] | None) -> Setting | None:
     read from the frames' DCT steps, within the screening grid's range (None when the frames show no JPEG
     table, e.g. a video codec's other transforms: the distance screen's setting then stands); sharpening's
     unsharp mask whose inverse brings the frames' edges back to clean frames' (read when the edges are sharper
-    than the clean floor; :func:`~synthaug.diagnose.frame_pattern.sharpening_setting`)."""
+    than the clean floor; :func:`~synthaug.diagnose.frame_pattern.sharpening_setting`); lens distortion's
+    ``k``, the division model's k₁ read off the scene's motion (within the parameter's range)."""
     if fc is None:
         return None
     if effect == "vignetting":
         return {"vignette_k": fc["gain"]}
     if effect == "sharpening":
         return fc.get("setting")
+    if effect == "lens_distortion":
+        spec = EFFECT_PARAM_SPECS["lens_distortion"][0]
+        return {"distortion_k1": float(np.clip(fc["k1"], spec.low, spec.high))}
     q = fc.get("jpeg_quality")
     if effect == "compression" and q is not None:
         grid = [g["jpeg_quality"] for g in CANDIDATE_GRIDS["compression"]]

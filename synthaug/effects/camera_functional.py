@@ -495,6 +495,27 @@ def lens_distortion(
         image (B, C, H, W), k1 (B,) or (B, C) -> (B, C, H, W)
     """
     _check_image(image)
+    src_x, src_y = lens_distortion_source(image, k1, origin=origin, frame_size=frame_size,
+                                          frame_scale=frame_scale, recentre=recentre)
+    return _sample(image, src_x, src_y, _padding(border))
+
+
+def lens_distortion_source(
+    image: torch.Tensor,
+    k1: torch.Tensor | float,
+    *,
+    origin: torch.Tensor | None = None,
+    frame_size: torch.Tensor | None = None,
+    frame_scale: torch.Tensor | None = None,
+    recentre: bool = True,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """The pixel coordinates (src_x, src_y) each output pixel of :func:`lens_distortion` samples ``image`` at
+    (the map alone, for a sampler of one's own: a whole frame's resampling with a higher-order kernel).
+
+    Shape:
+        image (B, C, H, W), k1 (B,) or (B, C) -> two (B, C, H, W)
+    """
+    _check_image(image)
     b, c, h, w = image.shape
     k = _pc(k1, image, "distortion_k1")
     if (k.abs() >= 1).any():
@@ -516,7 +537,7 @@ def lens_distortion(
         ux, uy = _undistort(qx, qy, k)
         src_x = (g["centre"][:, 0:1] + ux * radius - g["origin"][:, 0:1] + 0.5) / scale - 0.5
         src_y = (g["centre"][:, 1:2] + uy * radius - g["origin"][:, 1:2] + 0.5) / scale - 0.5
-    return _sample(image, src_x, src_y, _padding(border))
+    return src_x, src_y
 
 
 # ------------------------------------------------------------------ noise

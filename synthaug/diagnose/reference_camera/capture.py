@@ -57,13 +57,29 @@ def _column_pattern(img: torch.Tensor, p: dict[str, float], tint: np.ndarray | N
     return img * torch.as_tensor(g, dtype=img.dtype)
 
 
+def _lens_frame(img: torch.Tensor, k1: float) -> torch.Tensor:
+    """A whole frame through a lens of division-model ``k1`` (the map of
+    :func:`~synthaug.effects.camera_functional.lens_distortion`, the frame's border repeated beyond it), resampled
+    by a quintic spline (scipy's ``map_coordinates``).
+
+    A lens maps the scene onto the sensor before it is sampled and blurs nothing; resampling a sampled frame does:
+    bilinearly, the frame's finest detail halves (measured, stop 41: the frames' high-frequency power 0.30-0.35x
+    the undistorted frames', and the diagnosis named the blur defocus), Keys' bicubic (a = -0.75) boosts the
+    middle frequencies (the edge ratio then read sharpening). The quintic spline keeps the band nearly flat."""
+    from scipy import ndimage
+
+    sx, sy = Cx.lens_distortion_source(img, _one(k1, img), recentre=False)
+    out = np.stack([ndimage.map_coordinates(img[0, c].numpy(), [sy[0, c].numpy(), sx[0, c].numpy()], order=5,
+                                            mode="nearest") for c in range(img.shape[1])])
+    return torch.from_numpy(out)[None].to(img.dtype)
+
+
 # each whole-frame effect on a (1, C, H, W) image, given its settings (shot noise and JPEG: see capture / to_u8)
 _FRAME_STEPS: dict[str, Callable[[torch.Tensor, dict[str, float], np.ndarray | None], torch.Tensor]] = {
     "haze": _haze,
     "defocus": _defocus,
     "chromatic_aberration": lambda img, p, t: Cx.chromatic_aberration(img, _one(p["ca_shift"], img), border="border"),
-    "lens_distortion": lambda img, p, t: Cx.lens_distortion(img, _one(p["distortion_k1"], img), recentre=False,
-                                                            border="border"),
+    "lens_distortion": lambda img, p, t: _lens_frame(img, p["distortion_k1"]),
     "vignetting": lambda img, p, t: Cx.vignetting(img, _one(p["vignette_k"], img)),
     "exposure": lambda img, p, t: Cx.exposure(img, _one(p["exposure_gain"], img), _one(p["exposure_offset"], img)),
     "white_balance": lambda img, p, t: Cx.white_balance(img, wb_gains(p["wb_gain"], img.shape[1], img.dtype)),
