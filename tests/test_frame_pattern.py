@@ -570,3 +570,21 @@ def test_lens_frame_channel_uses_the_size_of_k_and_sets_the_signed_k(monkeypatch
     assert screening.frame_setting("lens_distortion", screening.frame_channel("lens_distortion", far, 40, 0.01)) == {
         "distortion_k1": -0.3}
     assert "lens_distortion" in screening.FRAME_CANDIDATES
+
+
+def test_radial_flow_is_not_fooled_by_a_vignetting_in_both_looks():
+    # a radial gain fixed in the frame (1 - 0.4 r², in both looks) is no motion: the static gain terms of the fit
+    # take it (without them the reference camera's vignetting of 0.3 read k 0.10-0.17); a lens under it still reads
+    from scipy import ndimage
+
+    from synthaug.diagnose.frame_pattern import radial_flow
+
+    rng = np.random.default_rng(15)
+    scene = _textured_scene(rng)
+    h, w = scene.shape
+    yy, xx = np.mgrid[:h, :w]
+    vig = 1.0 - 0.4 * ((xx - (w - 1) / 2) ** 2 + (yy - (h - 1) / 2) ** 2) / (0.25 * (h * h + w * w))
+    moved = ndimage.shift(scene, (0.7, 0.9), order=3, mode="reflect")
+    for k1 in (0.0, -0.15):
+        out = radial_flow(vig * _lens_look(moved, k1), vig * _lens_look(scene, k1))
+        assert out["k"] == pytest.approx(k1, abs=0.006), k1

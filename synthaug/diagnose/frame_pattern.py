@@ -513,8 +513,10 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
     as :func:`~synthaug.effects.camera_functional.lens_distortion`) a scene shift ``t`` shows at frame point
     ``p`` as about ``t + k (|p|² t + 2 p (p·t))``, stretched toward the corners (pincushion, ``k > 0``) or
     shrunk (barrel) — the two-view estimate of radial distortion (Fitzgibbon 2001). The frame is fitted as the
-    background seen through that map, ``F(p) ≈ (1 + g) B(D(U(p) - t)) + o`` (``g``, ``o``: a brightness
-    change), by Gauss-Newton on both looks smoothed by ``sigma`` px, started from the phase correlation's shift,
+    background seen through that map, ``F(p) ≈ (1 + g + (c + c₃ |p|²) p·t) B(D(U(p) - t)) + o`` (``g``, ``o``: a
+    brightness change; ``c``, ``c₃``: a radial gain fixed in the frame, a vignetting, is in both looks and so
+    differs by ``∇log V · t`` between a point and the one it moved from, ``(p·t)(c + c₃|p|²)`` to the third order;
+    without them the reference camera's vignetting of 0.3 read k 0.10-0.17), by Gauss-Newton on both looks smoothed by ``sigma`` px, started from the phase correlation's shift,
     where the pixels lie ``outside`` the object's crop and inside a 6-px margin.
 
     Args:
@@ -569,11 +571,11 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
     (sx, sy), _ = cv2.phaseCorrelate(bs.astype(np.float64), fs.astype(np.float64))
     if math.hypot(sx, sy) > FLOW_MAX_DRIFT_PX:  # a spurious peak (a bare sky): start from no motion
         sx, sy = 0.0, 0.0
-    th = np.array([float(sx), float(sy), 0.0, 0.0, 0.0])  # t_x, t_y (frame px), k, gain, offset
+    th = np.array([float(sx), float(sy), 0.0, 0.0, 0.0, 0.0, 0.0])  # t_x, t_y (px), k, gain, offset, static gain
     target = fs[yy, xx]
     eps = (1e-3, 1e-3, 1e-4)
     for _ in range(iters):
-        t_x, t_y, k, g, o = th
+        t_x, t_y, k, g, o, c, c3 = th
         qx, qy = _division_sample(px, py, t_x / radius, t_y / radius, k)
         if not (np.isfinite(qx).all() and np.isfinite(qy).all()):
             return nan
@@ -581,6 +583,11 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
                                                        mode="nearest")
         bq = ndimage.map_coordinates(bs, [qy * radius + cy, qx * radius + cx], order=3, mode="nearest")
         gxq, gyq = at(gx_img, qx, qy), at(gy_img, qx, qy)
+        # a radial gain fixed in the frame (vignetting) differs by ∇log V · t between p and where it moved from:
+        # (p·t) (c + c3 |p|²) for V = 1 - k r² up to the third order
+        pt = px * t_x + py * t_y
+        r2p = px * px + py * py
+        gain = 1.0 + g + (c + c3 * r2p) * pt
         cols = []
         for j, e in enumerate(eps):  # the map's derivative in t_x, t_y, k (central differences)
             hi, lo = th[:3].copy(), th[:3].copy()
@@ -588,7 +595,7 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
             lo[j] -= e
             ax, ay = _division_sample(px, py, hi[0] / radius, hi[1] / radius, hi[2])
             bx, by = _division_sample(px, py, lo[0] / radius, lo[1] / radius, lo[2])
-            cols.append((1.0 + g) * radius * (gxq * (ax - bx) + gyq * (ay - by)) / (2 * e))
+            cols.append(gain * radius * (gxq * (ax - bx) + gyq * (ay - by)) / (2 * e))
         # only points whose scene lies inside the frame: a look rendered from a frame-sized scene repeats its
         # border beyond it (a barrel lens's corners), a real lens would show more scene there; neither moves as t
         r2 = px * px + py * py
@@ -596,8 +603,8 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
                  (np.abs(py / (1.0 + k * r2)) * radius <= cy - FLOW_MARGIN)
         if inside.sum() < 1000:
             return nan
-        jac = np.stack(cols + [bq, np.ones_like(bq)], 1)[inside]
-        resid = (target - ((1.0 + g) * bq + o))[inside]
+        jac = np.stack(cols + [bq, np.ones_like(bq), bq * pt, bq * pt * r2p], 1)[inside]
+        resid = (target - (gain * bq + o))[inside]
         if not np.isfinite(jac).all():
             return nan
         jtj = jac.T @ jac
@@ -610,7 +617,7 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
         th = th + step
         if abs(th[2]) >= FLOW_MAX_K or not np.isfinite(th).all():
             return nan
-    dof = max(len(resid) - 5, 1)
+    dof = max(len(resid) - len(th), 1)
     cov = np.linalg.pinv(jtj) * float(np.sum((resid - jac @ step) ** 2)) / dof
     drift = float(math.hypot(th[0], th[1]))
     if drift > FLOW_MAX_DRIFT_PX:
