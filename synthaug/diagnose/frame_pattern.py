@@ -113,7 +113,7 @@ DESTRIPE_PASSES = 6  # the 7-px high-pass keeps 6/7 of a line's gain per pass: 6
 # read of a 2-parameter mask needs them: 12 frames picked a neighbouring grid point in 3 of 5 cases)
 SETTING_FRAMES = 100
 FLOW_SIGMA = 1.0  # frame px: both looks are smoothed by this before the scene's motion between them is fitted
-FLOW_ITERS = 10  # damped Gauss-Newton steps of the motion fit (the reference camera's: k settles within 1e-4 in 5-6)
+FLOW_ITERS = 10  # at most this many damped Gauss-Newton steps (stopped once k moves < 1e-5 and t < 1e-3 px)
 FLOW_MARGIN = 6  # frame px left out at the frame's edges (a shifted look's border has no partner)
 FLOW_MAX_K = 0.3  # |k| beyond the parameter's range: the motion fit has diverged (no reading)
 FLOW_MAX_DRIFT_PX = 8.0  # a larger motion between the looks is not a drift the fit can follow (no reading)
@@ -617,6 +617,8 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
         th = th + step
         if abs(th[2]) >= FLOW_MAX_K or not np.isfinite(th).all():
             return nan
+        if abs(step[2]) < 1e-5 and np.abs(step[:2]).max() < 1e-3:  # converged
+            break
     dof = max(len(resid) - len(th), 1)
     cov = np.linalg.pinv(jtj) * float(np.sum((resid - jac @ step) ** 2)) / dof
     drift = float(math.hypot(th[0], th[1]))
