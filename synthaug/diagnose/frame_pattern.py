@@ -243,11 +243,29 @@ def _gray(frame: np.ndarray) -> np.ndarray:
     return f / 255.0 if a.dtype == np.uint8 else f
 
 
+def _unclipped(f: np.ndarray) -> np.ndarray:
+    """The pixels of a float [0, 1] frame off its 8-bit ends (a clipped pixel says nothing of gain or motion)."""
+    return (f > 2.5 / 255.0) & (f < 252.5 / 255.0)
+
+
 def _gray_log(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A frame's log intensity (colour: the mean of the channels) and its unsaturated pixels."""
     f = _gray(frame)
-    ok = (f > 2.5 / 255.0) & (f < 252.5 / 255.0)  # a clipped pixel's log says nothing of its gain
-    return np.log(np.clip(f, 1.0 / 255.0, None)), ok
+    return np.log(np.clip(f, 1.0 / 255.0, None)), _unclipped(f)
+
+
+def _two_looks(frame: np.ndarray, background: np.ndarray, outside: np.ndarray | None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Both looks as float gray and where they may be compared (``outside``, else everywhere), or None when they
+    are not two looks at one scene: other shapes, or a background that is the frame itself (≥ :data:`SAME_LOOK`
+    of those pixels equal)."""
+    f, b = _gray(frame), _gray(background)
+    if f.shape != b.shape:
+        return None
+    ok = np.ones(f.shape, bool) if outside is None else np.asarray(outside, bool)
+    if np.mean(f[ok] == b[ok]) >= SAME_LOOK:
+        return None
+    return f, b, ok
 
 
 def _blocks(log: np.ndarray, ok: np.ndarray, step: int) -> tuple[np.ndarray, np.ndarray]:
@@ -455,13 +473,11 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
     """
     from scipy import ndimage
 
-    f, b = _gray(frame), _gray(background)
-    if f.shape != b.shape:
+    looks = _two_looks(frame, background, outside)
+    if looks is None:
         return float("nan")
+    f, b, ok = looks
     h, w = f.shape
-    ok = np.ones((h, w), bool) if outside is None else np.asarray(outside, bool)
-    if np.mean(f[ok] == b[ok]) >= SAME_LOOK:
-        return float("nan")
     f, b = destripe(f, b)  # a fixed line pattern is in both looks: it would choose the edges it is read on
     gs = ndimage.gaussian_filter(b, 1.0)
     gx, gy = ndimage.sobel(gs, 1), ndimage.sobel(gs, 0)
@@ -548,16 +564,14 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
     from scipy import ndimage
 
     nan = {"k": float("nan"), "k_se": float("nan"), "drift": float("nan"), "pixels": 0}
-    f, b = _gray(frame), _gray(background)
-    if f.shape != b.shape:
+    looks = _two_looks(frame, background, outside)
+    if looks is None:
         return nan
+    f, b, ok = looks
     h, w = f.shape
-    ok = np.ones((h, w), bool) if outside is None else np.asarray(outside, bool)
-    if np.mean(f[ok] == b[ok]) >= SAME_LOOK:
-        return nan
     m = np.zeros((h, w), bool)
     m[FLOW_MARGIN:h - FLOW_MARGIN, FLOW_MARGIN:w - FLOW_MARGIN] = True
-    m &= ok & (f > 2.5 / 255.0) & (f < 252.5 / 255.0)
+    m &= ok & _unclipped(f)
     if outside is not None:
         m &= ~ndimage.binary_dilation(~ok, iterations=3)
     if m.sum() < 1000:
@@ -568,6 +582,9 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
     yy, xx = np.nonzero(m)
     cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
     px, py = (xx - cx) / radius, (yy - cy) / radius
+    r2 = px * px + py * py
+    at = lambda img, x, y, order=1: ndimage.map_coordinates(img, [y * radius + cy, x * radius + cx],  # noqa: E731
+                                                            order=order, mode="nearest")
     (sx, sy), _ = cv2.phaseCorrelate(bs.astype(np.float64), fs.astype(np.float64))
     if math.hypot(sx, sy) > FLOW_MAX_DRIFT_PX:  # a spurious peak (a bare sky): start from no motion
         sx, sy = 0.0, 0.0
@@ -579,15 +596,12 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
         qx, qy = _division_sample(px, py, t_x / radius, t_y / radius, k)
         if not (np.isfinite(qx).all() and np.isfinite(qy).all()):
             return nan
-        at = lambda img, x, y: ndimage.map_coordinates(img, [y * radius + cy, x * radius + cx], order=1,  # noqa: E731
-                                                       mode="nearest")
-        bq = ndimage.map_coordinates(bs, [qy * radius + cy, qx * radius + cx], order=3, mode="nearest")
+        bq = at(bs, qx, qy, 3)
         gxq, gyq = at(gx_img, qx, qy), at(gy_img, qx, qy)
         # a radial gain fixed in the frame (vignetting) differs by ∇log V · t between p and where it moved from:
         # (p·t) (c + c3 |p|²) for V = 1 - k r² up to the third order
         pt = px * t_x + py * t_y
-        r2p = px * px + py * py
-        gain = 1.0 + g + (c + c3 * r2p) * pt
+        gain = 1.0 + g + (c + c3 * r2) * pt
         cols = []
         for j, e in enumerate(eps):  # the map's derivative in t_x, t_y, k (central differences)
             hi, lo = th[:3].copy(), th[:3].copy()
@@ -598,12 +612,11 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
             cols.append(gain * radius * (gxq * (ax - bx) + gyq * (ay - by)) / (2 * e))
         # only points whose scene lies inside the frame: a look rendered from a frame-sized scene repeats its
         # border beyond it (a barrel lens's corners), a real lens would show more scene there; neither moves as t
-        r2 = px * px + py * py
         inside = (np.abs(px / (1.0 + k * r2)) * radius <= cx - FLOW_MARGIN) & \
                  (np.abs(py / (1.0 + k * r2)) * radius <= cy - FLOW_MARGIN)
         if inside.sum() < 1000:
             return nan
-        jac = np.stack(cols + [bq, np.ones_like(bq), bq * pt, bq * pt * r2p], 1)[inside]
+        jac = np.stack(cols + [bq, np.ones_like(bq), bq * pt, bq * pt * r2], 1)[inside]
         resid = (target - (gain * bq + o))[inside]
         if not np.isfinite(jac).all():
             return nan

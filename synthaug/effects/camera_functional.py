@@ -494,8 +494,7 @@ def lens_distortion(
     Shape:
         image (B, C, H, W), k1 (B,) or (B, C) -> (B, C, H, W)
     """
-    _check_image(image)
-    src_x, src_y = lens_distortion_source(image, k1, origin=origin, frame_size=frame_size,
+    src_x, src_y = lens_distortion_source(image, k1, origin=origin, frame_size=frame_size,  # checks the image
                                           frame_scale=frame_scale, recentre=recentre)
     return _sample(image, src_x, src_y, _padding(border))
 
