@@ -39,13 +39,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     # numbers are checked as they are parsed (a bad one exits 2 at once, naming the option)
     parser.add_argument("--out", default="outputs/demo", help="output folder")
-    parser.add_argument("--videos", type=int_at_least(2), default=8,
-                        help="generated videos (about 60%% train, 40%% test; >= 2)")
+    parser.add_argument("--videos", type=int_at_least(2), default=20,
+                        help="generated videos (40%% test; of the rest, 15%% of all validation when >= 6, the "
+                             "others train; >= 2)")
     parser.add_argument("--frames", type=int_at_least(10), default=90, help="frames per video (>= 10)")
     add_option(parser, "--seed-counts", aliases=["--seeds"], type=positive_int, default=25,
                help="seed images drawn from the train videos")
     parser.add_argument("--budget", type=int_at_least(10), default=800, help="fit evaluations per seed (>= 10)")
     parser.add_argument("--ratio", type=positive_float, default=20, help="synthetic patches per real seed (> 0)")
+    parser.add_argument("--object-box", choices=["seed", "none"], default="seed",
+                        help="synthetic objects framed as ingest frames a labelled seed (seed) or at the mesh's scale "
+                             "(none, the paper's)")
     parser.add_argument("--detector", default="hog", choices=["hog", "adaboost", "cnn"],
                         help="detector trained on real seeds only and on real + synthetic")
     add_option(parser, "--frame-stride", aliases=["--stride"], type=positive_int, default=3,
@@ -109,7 +113,9 @@ def make_measured_videos(out: Path, *, n_videos: int, n_frames: int, seed: int, 
                            texture="textured" if k % 2 else "flat")
         stems.append(name)
     n_test = max(1, int(round(0.4 * n_videos)))
-    split = {"train": stems[:-n_test], "val": [], "test": stems[-n_test:]}
+    n_val = int(round(0.15 * n_videos)) if n_videos >= 6 else 0  # mining stops on them (none for tiny runs)
+    train = stems[:-n_test]
+    split = {"train": train[:len(train) - n_val], "val": train[len(train) - n_val:], "test": stems[-n_test:]}
     save_split(VideoSplit(videos=split, classes={s: "drone" for s in stems}, info={"dataset": "synthaug demo"}),
                out / "split.json")
     return split
@@ -151,7 +157,6 @@ def main(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from synthaug.data.ingest import ingest_videos
     from synthaug.data.seedset import SeedSet
-    from synthaug.detectors.training_sets import real_positives
     from synthaug.evaluate.videos import load_eval_set
     from synthaug.fit.fitting import FitConfig, fit_seedset
     from synthaug.fit.plots import plot_fitted_pairs, plot_joint_histograms
@@ -168,7 +173,7 @@ def _run(args: argparse.Namespace) -> int:
 
     t = time.perf_counter()
     ingest_videos(data / "videos", data / "labels", out / "ingest", split=data / "split.json",
-                  seed_counts=(args.seed_counts,), progress=False, workers=2)
+                  seed_counts=(args.seed_counts, 2 * args.seed_counts), progress=False, workers=2)
     seed_dir = out / "ingest" / "seedsets" / f"drone_{args.seed_counts}"
     seeds = SeedSet.load(seed_dir)
     timings["ingest"] = time.perf_counter() - t
@@ -181,13 +186,9 @@ def _run(args: argparse.Namespace) -> int:
 
     t = time.perf_counter()
     eval_set = load_eval_set(split["test"], data / "videos", data / "labels", stride_k=args.frame_stride)
-    real = real_positives(seeds)
-    from synthaug.detectors.base import box_in_window_from_boxes
-
-    biw = box_in_window_from_boxes(torch.as_tensor(seeds.boxes), window=seeds.patch_size,
-                                   object_fraction=float(seeds.object_fraction))
-    names = ("real seeds only", f"real + {args.ratio:g}x synthetic (ours)")
-    results, first = _train_and_score(args, seeds, fit_path, real, biw, eval_set, names)
+    names = ("real seeds only", f"real + {args.ratio:g}x synthetic (ours)", "2x real seeds (reference)")
+    seed_dir2 = out / "ingest" / "seedsets" / f"drone_{2 * args.seed_counts}"
+    results, first = _train_and_score(args, data, (seed_dir, seed_dir, seed_dir2), fit_path, eval_set, names)
     for (name, slug) in zip(names, ("real", "ours")):
         _plot_pr(first[name], out / f"pr_{slug}.png", title=f"{args.detector}: {name} (training seed 0)")
     timings["train + evaluate"] = time.perf_counter() - t
@@ -208,11 +209,14 @@ def _run(args: argparse.Namespace) -> int:
                                      budget=args.budget, seed=args.seed))
         timings["diagnosis"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t0
-    counts = {names[0]: len(real), names[1]: len(real) + int(args.ratio * len(seeds))}
+    counts = {names[0]: len(seeds), names[1]: len(seeds) + int(round(args.ratio * len(seeds))),
+              names[2]: len(SeedSet.load(seed_dir2))}
     table, verdict, summaries = _comparison(results, names)
     _write_report(out, args, counts, table, verdict, timings, len(seeds), split, diagnosis)
     summary = {"out": str(out), **{n: round(summaries[n].ap[0.5].estimate, 4) for n in names},
                "difference": summaries[names[1]].paired.difference.to_json() if summaries[names[1]].paired else None,
+               "reference_difference": (summaries[names[2]].paired.difference.to_json()
+                                        if summaries[names[2]].paired else None),
                "verdict": verdict}
     if diagnosis is not None:
         summary["diagnosis"] = {"hidden": args.hidden, "findings": [f["effect"] for f in diagnosis[0]["findings"]],
@@ -255,12 +259,14 @@ def demo_protocol(frame_stride: int, training_seeds: int) -> Any:
         scale_check=[]))
 
 
-def _train_and_score(args: argparse.Namespace, seeds: Any, fit_path: Path, real: torch.Tensor, biw: Any,
-                     eval_set: Any, names: tuple[str, str]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Both conditions trained with each training seed (its own negatives, synthetic draw and initialisation)
+def _train_and_score(args: argparse.Namespace, data: Path, seed_dirs: tuple[Path, ...], fit_path: Path, eval_set: Any,
+                     names: tuple[str, ...]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Each condition (real seeds, + synthetic, twice the real seeds: ``seed_dirs``) trained with each training seed by ``synthaug train``'s function
+    (:func:`~synthaug.detectors.video_training.train_from_videos`: the seed set's negatives, box regression from
+    the training videos' labels, hard-negative mining over the training videos stopped on the validation videos)
     and matched on the test videos: ``{name: ProtocolResult}`` and training seed 0's pooled PR curve per name."""
-    from synthaug.detectors.training import train_detector
-    from synthaug.detectors.training_sets import negative_pool, synthetic_positives
+    from synthaug.detectors.training import TrainOptions
+    from synthaug.detectors.video_training import AddedPositives, train_from_videos
     from synthaug.evaluate.ap import evaluate_detections
     from synthaug.evaluate.matching import match_videos
     from synthaug.evaluate.results import ProtocolResult
@@ -269,12 +275,16 @@ def _train_and_score(args: argparse.Namespace, seeds: Any, fit_path: Path, real:
     proto = demo_protocol(args.frame_stride, args.training_seeds)
     results = {n: ProtocolResult(n, proto) for n in names}
     first: dict[str, Any] = {}
+    options = TrainOptions(box_model="ridge")  # the ridge map: the ensemble's CNN map costs minutes
+    object_box = None if args.object_box == "none" else args.object_box
+    conditions = (AddedPositives(), AddedPositives(params=fit_path, synthetic_ratio=args.ratio, object_box=object_box),
+                  AddedPositives())
     for seed in range(args.training_seeds):
         s = args.seed + seed
-        negatives = negative_pool(seeds, extra=1000, seed=s)
-        synthetic = synthetic_positives(seeds, "quadcopter", fit_path, int(args.ratio * len(seeds)), seed=s)
-        for name, pos in zip(names, (real, torch.cat([real, synthetic]))):
-            det = train_detector(args.detector, pos, negatives, seed=s, box_in_window=biw)
+        for name, seed_dir, added in zip(names, seed_dirs, conditions):
+            det, _ = train_from_videos(args.detector, "drone", data / "videos", data / "labels",
+                                       split=data / "split.json", seed=s, seedset=seed_dir, added=added,
+                                       options=options, negative_classes=(), extra_negatives=1000)
             dets = detect_on_eval_set(det, eval_set, nms_iou=proto.detection.nms_iou,
                                       max_detections=proto.detection.max_detections)
             results[name].add_seed(seed, videos=match_videos(eval_set.stems, dets, eval_set.boxes, proto))
@@ -284,8 +294,10 @@ def _train_and_score(args: argparse.Namespace, seeds: Any, fit_path: Path, real:
     return results, first
 
 
-def _comparison(results: dict[str, Any], names: tuple[str, str]) -> tuple[str, str, dict[str, Any]]:
-    """The protocol's table (AP with video-bootstrap CIs, the paired difference) and one plain sentence on it."""
+def _comparison(results: dict[str, Any], names: tuple[str, ...]) -> tuple[str, str, dict[str, Any]]:
+    """The protocol's table (AP with video-bootstrap CIs, the paired differences) and plain sentences on it: what
+    synthetic data did, and, beside it, what twice the real seeds did (whether this detector gains from more
+    positives on these videos at all)."""
     from synthaug.evaluate.summary import report_table, summarize_conditions
 
     summaries = summarize_conditions(results, baseline=names[0])
@@ -293,19 +305,27 @@ def _comparison(results: dict[str, Any], names: tuple[str, str]) -> tuple[str, s
     paired = summaries[names[1]].paired
     n = len(summaries[names[1]].seeds)
     if paired is None:
-        verdict = f"No paired comparison ({summaries[names[1]].paired_note})."
+        return table, f"No paired comparison ({summaries[names[1]].paired_note}).", summaries
+    d = paired.difference
+    ci = f"{d.estimate:+.3f} [{d.low:+.3f}, {d.high:+.3f}]"
+    unit = f"paired over {n} training seeds, 95 % interval from resampling the {summaries[names[0]].n_videos} test videos"
+    if d.low > 0:
+        verdict = f"Synthetic data raised AP@0.5 by {ci} ({unit}): the gain the method exists for."
+    elif d.high < 0:
+        verdict = (f"Synthetic data LOWERED AP@0.5 by {ci} ({unit}): this run does not show the gain the "
+                   "method exists for.")
     else:
-        d = paired.difference
-        ci = f"{d.estimate:+.3f} [{d.low:+.3f}, {d.high:+.3f}]"
-        unit = f"paired over {n} training seeds, 95 % interval from resampling the {summaries[names[0]].n_videos} test videos"
-        if d.low > 0:
-            verdict = f"Synthetic data raised AP@0.5 by {ci} ({unit}): the gain the method exists for."
-        elif d.high < 0:
-            verdict = (f"Synthetic data LOWERED AP@0.5 by {ci} ({unit}): this run does not show the gain the "
-                       "method exists for.")
+        verdict = (f"No significant change in AP@0.5: {ci} ({unit}); the interval includes 0, so this run does "
+                   "not show a gain from synthetic data.")
+    ref = summaries[names[2]].paired if len(names) > 2 else None
+    if ref is not None:
+        r = ref.difference
+        rci = f"{r.estimate:+.3f} [{r.low:+.3f}, {r.high:+.3f}]"
+        if r.low > 0:
+            verdict += f" Twice the real seeds raised it by {rci}: this detector does gain from more positives here."
         else:
-            verdict = (f"No significant change in AP@0.5: {ci} ({unit}); the interval includes 0, so this run does "
-                       "not show a gain from synthetic data.")
+            verdict += (f" Twice the real seeds changed it by {rci}: on these videos this detector does not gain from "
+                        "more real positives either, so added positives of any kind have little to give.")
     return table, verdict, summaries
 
 
@@ -335,10 +355,14 @@ def _write_report(out: Path, args: argparse.Namespace, counts: dict[str, int], t
         "# synthaug demo",
         "",
         f"Generated measured data: {args.videos} panning videos x {args.frames} frames (320x256), quadcopter "
-        f"rendered with per-video capture parameters; train videos {split['train']}, test videos {split['test']}.",
+        f"rendered with per-video capture parameters; train videos {split['train']}, validation videos "
+        f"{split['val']}, test videos {split['test']}.",
         f"Seeds: {n_seeds} from the train videos; Θ fitted per seed in HOG space ({args.budget} evaluations).",
-        f"Detector: {args.detector}, trained with {args.training_seeds} training seeds per condition; AP on one test "
-        f"frame in {args.frame_stride}.",
+        f"Detector: {args.detector}, trained by `synthaug train`'s function (box regression from the training "
+        f"videos' labels, hard-negative mining over them, stopped on the validation videos when there are any) with "
+        f"{args.training_seeds} training seeds per condition; synthetic objects framed "
+        + ("as ingest frames a labelled seed (`object_box='seed'`)" if args.object_box == "seed" else
+           "at the mesh's scale (the paper's)") + f"; AP on one test frame in {args.frame_stride}.",
         "",
         "| training positives | count |",
         "|---|---|",

@@ -310,3 +310,54 @@ def test_former_constructor_arguments_still_work_for_one_release(small_cache, tm
         make(render="gl")
     with pytest.raises(ValueError, match="render must be .* got int"):
         make(render=3)
+
+
+def _object_boxes(ds, n):
+    """Longest side and centre of each item's object, read off the image: with the material alone, a black object
+    (w_d = 0) over a constant 0.8 background, the coverage is exactly ``1 - image / 0.8``; its box at 0.5 in numpy."""
+    sides, centres = [], []
+    for i in range(n):
+        cov = 1.0 - ds[i][0][0].numpy() / 0.8
+        ys, xs = np.nonzero(cov >= 0.5)
+        sides.append(max(ys.max() - ys.min() + 1, xs.max() - xs.min() + 1))
+        centres.append(((xs.max() + xs.min() + 1) / 2, (ys.max() + ys.min() + 1) / 2))
+    return np.array(sides), np.array(centres)
+
+
+def test_object_box_frames_every_object_as_ingest_frames_a_labelled_seed(small_cache):
+    """object_box: whatever the drawn pose and translation, the object's box is centred in the patch and its longest
+    side is the fraction of the patch (as ``crop_patch`` frames a labelled real object); the paper's framing varies."""
+    n = 3
+    fit = CaptureParams.default(n)
+    fit = fit.replace(w_d=torch.zeros(fit.w_d.shape))
+    bgs = [np.full((64, 72), 0.8, np.float32) for _ in range(n)]
+
+    def make(box):
+        return SyntheticObjectDataset("quadcopter", bgs, fit, render=small_cache, length=40, negative_fraction=0.0,
+                                      effects=["material"], object_box=box, seed=1)
+
+    sides, centres = _object_boxes(make(0.6), 40)
+    assert np.all(np.abs(sides - 24) <= 1), sides  # 0.6 x 40 px, to the pixel the first look measures
+    assert np.all(np.abs(centres - 20.0) <= 1.0), centres
+    paper_sides, paper_centres = _object_boxes(make(None), 40)
+    assert paper_sides.max() - paper_sides.min() >= 8 and np.abs(paper_centres - 20.0).max() > 2  # not framed
+    # the item is still a pure function of (seed, epoch, index), and its theta records the framing translation
+    ds = make(0.6)
+    a, b = ds[5], ds[5]
+    assert torch.equal(a[0], b[0]) and torch.equal(a[1]["theta"], b[1]["theta"])
+    assert ds.make_params(5).pose["t_x"] != pytest.approx(float(a[1]["theta"][3]))
+
+
+def test_bad_object_box_is_refused_with_a_clear_message(small_cache):
+    bgs = sky_backgrounds(2, (64, 72), seed=1)
+
+    def make(**kw):
+        return SyntheticObjectDataset("quadcopter", bgs, render=small_cache, length=4, **kw)
+
+    for bad in (0.0, 1.5, -0.2, math.nan, True, "tight"):
+        with pytest.raises(ValueError, match="object_box must be a fraction in"):
+            make(object_box=bad)
+    with pytest.raises(ValueError, match="give a seed set as backgrounds"):
+        make(object_box="seed")  # plain images carry no object_fraction
+    with pytest.raises(ValueError, match="object_box frames patch-mode objects"):
+        make(object_box=0.7, mode="frame")

@@ -266,8 +266,8 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     calls = []
 
     def fake(seedset: Any, mesh: Any, fit_file: Any, count: int, *, seed: int = 0, pose_sampling: str = "uniform",
-             **_: Any) -> torch.Tensor:
-        calls.append((len(seedset), str(mesh), count, seed, pose_sampling))
+             object_box: Any = None, **_: Any) -> torch.Tensor:
+        calls.append((len(seedset), str(mesh), count, seed, pose_sampling) + ((object_box,) if object_box else ()))
         return torch.rand(count, 1, 40, 40, generator=torch.Generator().manual_seed(seed))
 
     monkeypatch.setattr(video_training, "synthetic_positives", fake)
@@ -289,6 +289,18 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     assert calls[-1] == (8, "quadcopter", 24, 2, "fitted") and meta2["synthetic"]["pose_sampling"] == "fitted"
     assert meta2["perturbed"] == {"copies": 2, "count": 16}
     assert meta2["synthetic"]["copy_paste"] == {"ratio": 1.5, "count": 12}  # the copy-paste baseline, cut with the fit
+    # --object-box seed reaches the synthetic positives and the metadata (absent at its default, above)
+    out_box = ws["root"] / "runs" / "hog_syn_box.pt"
+    assert _train(ws, out_box, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
+                  "--object-box", "seed", "--mining-rounds", "0") == 0
+    assert calls[-1] == (8, "quadcopter", 24, 2, "uniform", "seed")
+    assert json.loads(out_box.with_suffix(".json").read_text())["synthetic"]["object_box"] == "seed"
+    from synthaug.data.seedset import SeedSet
+    from synthaug.detectors.training_sets import synthetic_positives  # the real generator: "seed" reads the seed set
+
+    ss = SeedSet.load(seedset)
+    x = synthetic_positives(ss, "quadcopter", fit, 4, object_box="seed")
+    assert x.shape == (4, 1, ss.patch_size, ss.patch_size) and ss.object_fraction > 0
     # --synthetic-share reaches the SVM as per-positive weights: the 8 real seeds hold 1 - share of the positive half
     seen = []
     real_fit = HOGDetector.fit

@@ -52,6 +52,7 @@ Example:
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -109,6 +110,15 @@ class SyntheticObjectDataset(Dataset):
             patch side. None: the per-seed scales of a fit file written with
             ``fit_scale`` (``synthaug fit``'s default), else 0.7 (the seed
             sets' default ``object_fraction``).
+        object_box: patch mode: frame every synthetic object the way ``synthaug ingest`` frames a labelled
+            real seed (:func:`synthaug.data.seedset.crop_patch`): the box of its coverage (≥ 0.5, before the
+            capture effects) centred in the patch and its longest side ``object_box × patch_size`` pixels,
+            whatever the drawn pose — a float in (0, 1], or ``"seed"`` for the seed set's own
+            ``object_fraction`` (``backgrounds`` must then be a seed set). The drawn t_x, t_y and the
+            object scale then only set the first look the box is measured on. None (default, the paper):
+            the mesh's unit length at ``object_scale`` and the drawn translation, so an edge-on view is a
+            smaller object than a view from above. Measured on ``synthaug demo``'s generated videos
+            (``results/synthetic/demo_box/README.md``).
         negative_fraction: patch mode: fraction of synthetic items that are
             background-only patches (label 0); frame mode: fraction of frames
             without an object.
@@ -172,6 +182,7 @@ class SyntheticObjectDataset(Dataset):
         mode: Mode = "patch",
         patch_size: int = 40,
         object_scale: float | None = None,
+        object_box: float | Literal["seed"] | None = None,
         negative_fraction: float | None = None,
         object_size: tuple[float, float] = (20.0, 60.0),
         effects: Sequence[str] | None = None,
@@ -198,6 +209,7 @@ class SyntheticObjectDataset(Dataset):
         self.patch_size = int(patch_size)
         self.object_scale = 0.7 if object_scale is None else float(object_scale)
         self.seed_scales: torch.Tensor | None = None
+        self.object_box = _check_object_box(object_box, backgrounds, mode)
         self.negative_fraction = neg
         self.object_size = (float(object_size[0]), float(object_size[1]))
         self.seed = int(seed)
@@ -497,6 +509,13 @@ class SyntheticObjectDataset(Dataset):
         seeds = torch.tensor([p.seed_index for p in batch])
         theta_rows = self.capture_sampler.rows(seeds, [p.capture for p in batch])
         pose = {n: torch.tensor([p.pose[n] for p in batch]) for n in POSE_NAMES}
+        if self.mode == "patch":
+            scale = (self.seed_scales[seeds].float() if self.seed_scales is not None
+                     else torch.full((len(batch),), self.object_scale))
+            if self.object_box is not None:
+                pose, scale = self._box_framed(pose, crop, scale)
+        else:
+            scale = torch.tensor([p.object_px / crop for p in batch])
         theta = theta_rows.replace(**pose) if self._pose_in_range(pose) else CaptureParams(
             {**theta_rows.as_dict(), **pose}, channels=self.channels, effects=self.params.effects, validate=False)
         bgs = torch.stack([
@@ -504,11 +523,6 @@ class SyntheticObjectDataset(Dataset):
                                               p.crop_xy[0]:p.crop_xy[0] + crop]
             for p in batch
         ])
-        if self.mode == "patch":
-            scale = (self.seed_scales[seeds].float() if self.seed_scales is not None
-                     else torch.full((len(batch),), self.object_scale))
-        else:
-            scale = torch.tensor([p.object_px / crop for p in batch])
         fields = {k: torch.cat([p.fields[k] for p in batch]) for k in batch[0].fields}
         frame_size = origin = None
         extras: dict[str, torch.Tensor] = {}
@@ -572,6 +586,36 @@ class SyntheticObjectDataset(Dataset):
                 out.append((tv_tensors.Image(frame), target))
         return out
 
+    def _box_framed(self, pose: dict[str, torch.Tensor], size: int, scale: torch.Tensor,
+                    ) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
+        """The pose and scale that frame each object as ingest frames a labelled seed (``object_box``).
+
+        A first look at the pose, untranslated, on a square twice the patch's side at the same pixel size (so
+        that nothing is cut), gives the coverage's box (≥ 0.5, else > 0); the scale is multiplied by
+        ``object_box × size / longest side`` and the translation moves the box's centre onto the patch's.
+        An object with no coverage at all keeps its pose and scale.
+        """
+        big = 2 * size
+        zero = {**pose, "t_x": torch.zeros_like(pose["t_x"]), "t_y": torch.zeros_like(pose["t_y"])}
+        step = max(1, _CHUNK_PIXELS // (big * big))
+        boxes, seen = [], []
+        for i in range(0, len(scale), step):
+            sl = slice(i, i + step)
+            cov, _ = self._layers({k: v[sl] for k, v in zero.items()}, big, scale[sl] * (size / big))
+            b, n = _boxes_from_coverage(cov[:, 0], torch.zeros(cov.shape[0]), torch.zeros(cov.shape[0]))
+            boxes.append(b)
+            seen += n
+        box = torch.cat(boxes).double()
+        ok = torch.tensor(seen, dtype=torch.bool)
+        longest = torch.maximum(box[:, 2] - box[:, 0], box[:, 3] - box[:, 1]).clamp_min(1.0)
+        k = torch.where(ok, self.object_box * size / longest, torch.ones_like(longest))
+        cx = (box[:, 0] + box[:, 2]) / 2 - big / 2  # the box centre's offset from the square's centre, px
+        cy = (box[:, 1] + box[:, 3]) / 2 - big / 2
+        framed = dict(pose)
+        framed["t_x"] = torch.where(ok, -cx * k / size, pose["t_x"].double()).to(pose["t_x"].dtype)
+        framed["t_y"] = torch.where(ok, -cy * k / size, pose["t_y"].double()).to(pose["t_y"].dtype)
+        return framed, (scale.double() * k).to(scale.dtype)
+
     def _frame_batch(self, batch: list[ItemParams]) -> list[torch.Tensor]:
         """The batch's full frames (copies of their backgrounds), views of one storage.
 
@@ -602,6 +646,25 @@ class SyntheticObjectDataset(Dataset):
 
 
 _CHUNK_PIXELS = 64 * 64 * 64  # pixels rendered together (see SyntheticObjectDataset._synthetic_items)
+
+
+def _check_object_box(object_box: Any, backgrounds: Any, mode: str) -> float | None:
+    """``object_box`` as a fraction of the patch side (None: the paper's framing)."""
+    if object_box is None:
+        return None
+    if mode != "patch":
+        raise ValueError("object_box frames patch-mode objects; frame mode draws object sizes with object_size")
+    if isinstance(object_box, str):
+        if object_box != "seed":
+            raise ValueError(f"object_box must be a fraction in (0, 1], 'seed' or None, got {object_box!r}")
+        fraction = getattr(backgrounds, "object_fraction", None)
+        if fraction is None:
+            raise ValueError("object_box='seed' reads the seed set's object_fraction: give a seed set as backgrounds, "
+                             "or the fraction itself")
+        object_box = fraction
+    if isinstance(object_box, bool) or not isinstance(object_box, numbers.Real) or not 0 < float(object_box) <= 1:
+        raise ValueError(f"object_box must be a fraction in (0, 1], 'seed' or None, got {object_box!r}")
+    return float(object_box)
 
 
 def _boxes_from_coverage(cov: torch.Tensor, x0: torch.Tensor, y0: torch.Tensor, threshold: float = 0.5,

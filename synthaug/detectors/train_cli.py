@@ -84,6 +84,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="synthetic patches per real seed with --params (default 10 when --params is given, else 0)")
     parser.add_argument("--pose-sampling", choices=["uniform", "fitted"], default="uniform",
                         help="poses of the synthetic positives: uniform (the paper) or around each seed's fitted pose")
+    parser.add_argument("--object-box", choices=["seed"], default=None,
+                        help="frame each synthetic object as ingest frames a labelled seed (its box centred, its longest "
+                             "side the seed set's object_fraction of the patch); default: the paper's mesh-scale framing")
     parser.add_argument("--perturb-copies", type=int, default=0,
                         help="perturbed copies (rotation, shift, mirror, blur, noise) of every real positive: the paper's baseline")
     parser.add_argument("--downscaled-copies", type=int, default=0,
@@ -178,7 +181,7 @@ def main(args: argparse.Namespace) -> int:
             frame_step=args.frame_step, seedset=args.seed_set,
             added=AddedPositives(params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
                                  perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
-                                 copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
+                                 object_box=args.object_box, copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,

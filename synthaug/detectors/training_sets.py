@@ -238,6 +238,7 @@ def synthetic_positives(
     batch: int = 2048,
     seed_geometry: Mapping[str, Any] | str | None = "auto",
     pose_sampling: str = "uniform",
+    object_box: float | str | None = None,
 ) -> Tensor:
     """``count`` synthetic object patches generated from a capture-parameter fit.
 
@@ -258,6 +259,9 @@ def synthetic_positives(
             set's); None: the patch is the frame.
         pose_sampling: ``"uniform"`` (the paper) or ``"fitted"`` (around each seed's fitted pose; see
             :class:`~synthaug.data.synthetic.SyntheticObjectDataset`).
+        object_box: None (the paper) or each object framed as ingest frames a labelled seed: its coverage box
+            centred, its longest side this fraction of the patch (``"seed"``: the seed set's ``object_fraction``;
+            see :class:`~synthaug.data.synthetic.SyntheticObjectDataset`).
 
     Returns:
         Float patches ``(count, 1, P, P)`` in [0, 1].
@@ -272,7 +276,7 @@ def synthetic_positives(
     ds = SyntheticObjectDataset(
         mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
         effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
-        seed_geometry=seed_geometry, pose_sampling=pose_sampling,  # type: ignore[arg-type]
+        seed_geometry=seed_geometry, pose_sampling=pose_sampling, object_box=object_box,  # type: ignore[arg-type]
     )
     out = []
     for start in range(0, count, batch):

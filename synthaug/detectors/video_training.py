@@ -87,6 +87,8 @@ class AddedPositives:
             :func:`~synthaug.detectors.training_sets.synthetic_positives`).
         pose_sampling: poses of the synthetic positives: ``"uniform"`` (the paper) or ``"fitted"`` (around each
             seed's fitted pose).
+        object_box: None (the paper) or ``"seed"`` / a fraction: each synthetic object framed as ingest frames a
+            labelled seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
         copy_paste_ratio: copy-paste patches per real seed: the seeds' objects cut out with their fitted
             silhouettes and pasted on other seeds' backgrounds (:func:`~synthaug.data.copypaste.copy_paste_positives`;
             a user's baseline).
@@ -108,6 +110,7 @@ class AddedPositives:
     mesh: str | None = None
     synthetic_ratio: float = 0.0
     pose_sampling: str = "uniform"
+    object_box: float | str | None = None
     copy_paste_ratio: float = 0.0
     perturb_copies: int = 0
     synthetic_share: float | None = None
@@ -548,11 +551,13 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, *, seed: int,
     n_syn = int(round(synthetic_ratio * len(ss)))
     if n_syn:
         t0 = time.perf_counter()
-        syn = synthetic_positives(ss, mesh, params, n_syn, seed=seed + 2, pose_sampling=pose_sampling)
+        syn = synthetic_positives(ss, mesh, params, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
+                                  object_box=added.object_box)
         ts.positives = torch.cat([ts.positives, syn])
         say(f"synthetic: {n_syn} patches from {params} ({time.perf_counter() - t0:.0f}s)")
     info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
-                            "pose_sampling": pose_sampling}
+                            "pose_sampling": pose_sampling,
+                            **({"object_box": added.object_box} if added.object_box is not None else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives
