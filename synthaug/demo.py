@@ -275,7 +275,10 @@ def _train_and_score(args: argparse.Namespace, data: Path, seed_dirs: tuple[Path
     proto = demo_protocol(args.frame_stride, args.training_seeds)
     results = {n: ProtocolResult(n, proto) for n in names}
     first: dict[str, Any] = {}
-    options = TrainOptions(box_model="ridge")  # the ridge map: the ensemble's CNN map costs minutes
+    has_val = bool(json.loads((data / "split.json").read_text()).get("val"))
+    # the ridge map (the ensemble's CNN map costs minutes); without validation videos the mining's stopping rule has
+    # nothing to count, so one mining round instead of up to three
+    options = TrainOptions(box_model="ridge", mining_rounds=3 if has_val else 1)
     object_box = None if args.object_box == "none" else args.object_box
     conditions = (AddedPositives(), AddedPositives(params=fit_path, synthetic_ratio=args.ratio, object_box=object_box),
                   AddedPositives())
@@ -359,7 +362,7 @@ def _write_report(out: Path, args: argparse.Namespace, counts: dict[str, int], t
         f"{split['val']}, test videos {split['test']}.",
         f"Seeds: {n_seeds} from the train videos; Θ fitted per seed in HOG space ({args.budget} evaluations).",
         f"Detector: {args.detector}, trained by `synthaug train`'s function (box regression from the training "
-        f"videos' labels, hard-negative mining over them, stopped on the validation videos when there are any) with "
+        f"videos' labels, hard-negative mining over them, stopped on the validation videos; one round when there are none) with "
         f"{args.training_seeds} training seeds per condition; synthetic objects framed "
         + ("as ingest frames a labelled seed (`object_box='seed'`)" if args.object_box == "seed" else
            "at the mesh's scale (the paper's)") + f"; AP on one test frame in {args.frame_stride}.",

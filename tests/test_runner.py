@@ -209,10 +209,7 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     fit_opts = {"budget": 40, "step_deg": 30.0, "sprite_size": 32, "init": "uniform"}
     res = R.synthetic_comparison(make_runner(ws), detectors=["hog"], seed_count=6,
                                  synthetic_ratios=[2], fit_distance="eucl", fit_options=fit_opts,
-                                 perturb_copies=[2], copy_paste_ratios=[2], downscaled_copies=[1], faded_copies=[1],
-                                 seeds=[0, 1], out=out)
-    group = res["hog"]
-    syn, per = "hog / 6 seeds + 2x synthetic (eucl)", "hog / 6 seeds + 2x perturbed"
+XX
     cp, down = "hog / 6 seeds + 2x copy-paste (eucl silhouettes)", "hog / 6 seeds + 1x downscaled"
     faded = "hog / 6 seeds + 1x faded"
     assert list(group) == ["hog / 6 seeds", syn, per, cp, down, faded]
@@ -235,6 +232,12 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
                            fit_options=tuple(sorted(fit_opts.items())))
     cell = cache.get_or_compute(runner.identity(cond_syn, 1), lambda: pytest.fail("synthetic cell not cached"))
     assert cell["train"]["synthetic"]["count"] == 12 and cell["train"]["synthetic"]["params"].endswith("drone_6_seed1_eucl.json")
+    assert "object_box" not in cell["train"]["synthetic"] and "object_box" not in cond_syn.identity()
+    # the framed condition: its own key (the framing), the same fit, the framing reaching the generator
+    cond_framed = dataclasses.replace(cond_syn, name=framed, object_box="seed")
+    assert cond_framed.identity()["object_box"] == "seed"
+    cell = cache.get_or_compute(runner.identity(cond_framed, 1), lambda: pytest.fail("framed cell not cached"))
+    assert cell["train"]["synthetic"]["object_box"] == "seed" and cell["train"]["synthetic"]["count"] == 12
     cond_per = R.Condition(per, "hog", seed_count=6, perturb_copies=2)
     cell = cache.get_or_compute(runner.identity(cond_per, 0), lambda: pytest.fail("perturbed cell not cached"))
     assert cell["train"]["perturbed"] == {"copies": 2, "count": 12}
@@ -288,6 +291,9 @@ def test_runner_downscaled_copies_option_parses_and_refuses_zero(capsys):
         R.build_parser().parse_args(["synthetic", "--downscaled-copies", "0", "--out", "x"])
     assert e.value.code == 2 and "--downscaled-copies" in capsys.readouterr().err
     assert R.build_parser().parse_args(["synthetic", "--faded-copies", "2", "--out", "x"]).faded_copies == [2]
+    assert R.build_parser().parse_args(["synthetic", "--out", "x"]).object_box == ["none"]
+    assert R.build_parser().parse_args(["synthetic", "--object-box", "none", "seed", "--out", "x"]).object_box == [
+        "none", "seed"]
     with pytest.raises(SystemExit) as e:
         R.build_parser().parse_args(["synthetic", "--faded-copies", "0", "--out", "x"])
     assert e.value.code == 2 and "--faded-copies" in capsys.readouterr().err

@@ -92,6 +92,8 @@ class Condition:
             silhouettes, pasted on other seeds' backgrounds; a user's baseline).
         synthetic_share: the added positives' share of the positive class's training weight (None: by
             count; :func:`~synthaug.detectors.video_training.train_from_videos`).
+        object_box: None (the paper's framing) or ``"seed"``: synthetic objects framed as ingest frames a labelled
+            seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
     """
 
     name: str
@@ -110,6 +112,7 @@ class Condition:
     synthetic_share: float | None = None
     downscaled_copies: int = 0
     faded_copies: int = 0
+    object_box: str | None = None
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -119,7 +122,7 @@ class Condition:
         else:
             d["frame_step"] = None
         for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling", "copy_paste_ratio",  # added later:
-                  "synthetic_share", "downscaled_copies", "faded_copies"):
+                  "synthetic_share", "downscaled_copies", "faded_copies", "object_box"):
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         return d
@@ -310,7 +313,7 @@ class ProtocolRunner:
                                  pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio,
                                  synthetic_share=condition.synthetic_share,
                                  downscaled_copies=condition.downscaled_copies,
-                                 faded_copies=condition.faded_copies),
+                                 faded_copies=condition.faded_copies, object_box=condition.object_box),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -496,7 +499,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          fit_options: Mapping[str, Any] | None = None, pose_sampling: Sequence[str] = ("uniform",),
                          copy_paste_ratios: Sequence[float] = (), seeds: Sequence[int] | None = None,
                          synthetic_share: float | None = None, downscaled_copies: Sequence[int] = (),
-                         faded_copies: Sequence[int] = (), out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
+                         faded_copies: Sequence[int] = (), object_box: Sequence[str | None] = (None,),
+                         out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
     Every condition uses the same training seeds, so each one's paired difference against
@@ -512,6 +516,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``faded_copies`` likewise, the objects made fainter against their own backgrounds
     (:func:`~synthaug.detectors.training_sets.faded_positives`). ``synthetic_share``: the added positives' share of
     the positive class's weight in every synthetic, perturbed, copy-paste, downscaled and faded condition.
+    ``object_box``: each synthetic ratio once per framing (None: the paper's; ``"seed"``: as ingest frames a seed).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -524,10 +529,11 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         share = "" if synthetic_share is None else f", share {synthetic_share:g}"
         conds = [Condition(base, kind, seed_count=seed_count)]
         conds += [Condition(f"{base} + {r:g}x synthetic ({dist or Path(str(params)).stem}"
-                            f"{'' if ps == 'uniform' else f', {ps} poses'}{share})", kind, seed_count=seed_count,
+                            f"{'' if ps == 'uniform' else f', {ps} poses'}{share}"
+                            f"{'' if ob is None else f', framed as the seeds ({ob})'})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
-                            fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share)
-                  for r in synthetic_ratios for ps in pose_sampling]
+                            fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob)
+                  for r in synthetic_ratios for ps in pose_sampling for ob in object_box]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -647,6 +653,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "x0.3-0.9); one condition per count")
     sy.add_argument("--synthetic-share", type=float, default=None,
                     help="the added positives' share of the positive class's training weight (default: by count)")
+    sy.add_argument("--object-box", nargs="+", choices=["none", "seed"], default=["none"],
+                    help="framing of the synthetic objects, one condition per value: none (the paper's mesh scale) or "
+                         "seed (as ingest frames a labelled seed)")
     return p
 
 
@@ -681,7 +690,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              perturb_copies=args.perturb_copies, mesh=args.mesh, pose_sampling=args.pose_sampling,
                              copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds,
                              synthetic_share=args.synthetic_share, downscaled_copies=args.downscaled_copies,
-                             faded_copies=args.faded_copies, out=args.out)
+                             faded_copies=args.faded_copies,
+                             object_box=tuple(None if b == "none" else b for b in args.object_box), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 

@@ -1,3 +1,6 @@
+"""compare.py --oracle S: a fit file whose capture parameters are the truth of `synthaug demo --seed S`'s videos
+(each seed's video: w_d, motion blur σ_u, σ_v and angle as `RenderedQuadcopter` drew them, blurs scaled from frame to
+patch pixels by the seed's crop; σ_n 0, σ_s 0.5 frame px); the fitted pose and scale are kept."""
 import json, torch
 from synthaug.params import CaptureParams
 def write_oracle(fit_path, seedset_dir, demo_seed, out_path, patch=40, keep=()):

@@ -1,3 +1,8 @@
+"""compare.py --pixel-wd: each seed's w_d re-solved by pixel least squares at its fitted Θ (the render is affine in
+w_d, so two renders give it exactly), written to a new fit file. HOG cannot see the object's contrast sign; pixels can.
+
+    PYTHONPATH=. python results/synthetic/demo_box/resolve.py SEEDSET FIT OUT
+"""
 import sys, torch, json
 from synthaug.params import CaptureParams
 def resolve_wd(seeds, fit_path, out_path, mesh="quadcopter"):
