@@ -209,10 +209,14 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     fit_opts = {"budget": 40, "step_deg": 30.0, "sprite_size": 32, "init": "uniform"}
     res = R.synthetic_comparison(make_runner(ws), detectors=["hog"], seed_count=6,
                                  synthetic_ratios=[2], fit_distance="eucl", fit_options=fit_opts,
-XX
+                                 perturb_copies=[2], copy_paste_ratios=[2], downscaled_copies=[1], faded_copies=[1],
+                                 object_box=(None, "seed"), seeds=[0, 1], out=out)
+    group = res["hog"]
+    syn, per = "hog / 6 seeds + 2x synthetic (eucl)", "hog / 6 seeds + 2x perturbed"
+    framed = "hog / 6 seeds + 2x synthetic (eucl, framed as the seeds (seed))"
     cp, down = "hog / 6 seeds + 2x copy-paste (eucl silhouettes)", "hog / 6 seeds + 1x downscaled"
     faded = "hog / 6 seeds + 1x faded"
-    assert list(group) == ["hog / 6 seeds", syn, per, cp, down, faded]
+    assert list(group) == ["hog / 6 seeds", syn, framed, per, cp, down, faded]
     # the real-only cells are the learning curve's (same key): identical results, nothing retrained
     assert group["hog / 6 seeds"].to_json() == curve["results"]["hog"]["hog / 6 seeds"].to_json()
     fits = Path(ws["paths"].work_dir) / "fits"
