@@ -361,3 +361,31 @@ def test_bad_object_box_is_refused_with_a_clear_message(small_cache):
         make(object_box="seed")  # plain images carry no object_fraction
     with pytest.raises(ValueError, match="object_box frames patch-mode objects"):
         make(object_box=0.7, mode="frame")
+
+
+def test_object_box_fit_frames_objects_at_the_size_of_the_fitted_renders(small_cache, tmp_path):
+    """object_box="fit": the median over seeds of the fitted render's box (coverage >= 0.5 at the fitted pose and
+    scale, measured here in numpy on the cache's own layers) as a fraction of the patch, and every item framed at it."""
+    n = 3
+    fit = CaptureParams.default(n)
+    fit = fit.replace(w_d=torch.zeros(fit.w_d.shape), alpha=torch.tensor([0.3, 1.2, 2.5]),
+                      beta=torch.tensor([0.6, 0.9, 1.3]), t_x=torch.tensor([0.05, -0.05, 0.0]))
+    path = tmp_path / "fit.json"
+    scales = [0.45, 0.55, 0.65]
+    fit.save(path, extra=[{"object_scale": s} for s in scales])
+    cov, _ = small_cache.layers(fit.alpha, fit.beta, fit.gamma, fit.t_x, fit.t_y, size=40,
+                                object_scale=torch.tensor(scales))
+    sides = []
+    for c in cov[:, 0].numpy():
+        ys, xs = np.nonzero(c >= 0.5)
+        sides.append(max(ys.max() - ys.min() + 1, xs.max() - xs.min() + 1))
+    bgs = [np.full((64, 72), 0.8, np.float32) for _ in range(n)]
+    ds = SyntheticObjectDataset("quadcopter", bgs, str(path), render=small_cache, length=30, negative_fraction=0.0,
+                                effects=["material"], object_box="fit", seed=2)
+    assert ds.object_box == pytest.approx(np.median(sides) / 40)
+    got, centres = _object_boxes(ds, 30)
+    # to the pixel mostly; a thin part crossing the 0.5 level once rescaled moves a box by up to 3 px (48-px sprites)
+    assert np.median(np.abs(got - np.median(sides))) <= 1 and np.abs(got - np.median(sides)).max() <= 3
+    assert np.all(np.abs(centres - 20.0) <= 1.5)
+    with pytest.raises(ValueError, match="give params from a fit with per-seed scales"):
+        SyntheticObjectDataset("quadcopter", bgs, fit, render=small_cache, length=4, object_box="fit")

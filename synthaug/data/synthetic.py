@@ -113,8 +113,10 @@ class SyntheticObjectDataset(Dataset):
         object_box: patch mode: frame every synthetic object the way ``synthaug ingest`` frames a labelled
             real seed (:func:`synthaug.data.seedset.crop_patch`): the box of its coverage (≥ 0.5, before the
             capture effects) centred in the patch and its longest side ``object_box × patch_size`` pixels,
-            whatever the drawn pose — a float in (0, 1], or ``"seed"`` for the seed set's own
-            ``object_fraction`` (``backgrounds`` must then be a seed set). The drawn t_x, t_y and the
+            whatever the drawn pose — a float in (0, 1], ``"seed"`` for the seed set's own
+            ``object_fraction`` (``backgrounds`` must then be a seed set), or ``"fit"`` for the median size of the
+            fitted renders' own boxes in their patches (the labelled box less the annotators' margin, as the fit
+            measures it; ``params`` must be a fit with per-seed scales). The drawn t_x, t_y and the
             object scale then only set the first look the box is measured on. None (default, the paper):
             the mesh's unit length at ``object_scale`` and the drawn translation, so an edge-on view is a
             smaller object than a view from above. Measured on ``synthaug demo``'s generated videos
@@ -228,6 +230,11 @@ class SyntheticObjectDataset(Dataset):
             real, mode=self.mode, channels=self.channels, patch_size=self.patch_size, label=self.label,
             theta_size=theta_size)
         self._set_up_renderer(mesh, render)
+        if self.object_box == "fit":
+            if params is None or self.seed_scales is None:
+                raise ValueError("object_box='fit' reads each seed's fitted pose and object scale: give params from a "
+                                 "fit with per-seed scales (synthaug fit's default)")
+            self.object_box = self._fitted_box_fraction()
 
     # ----------------------------------------------------------- set-up
     def _set_up_capture(self, backgrounds: Any, params: CaptureParams | str | os.PathLike | None, *,
@@ -586,6 +593,19 @@ class SyntheticObjectDataset(Dataset):
                 out.append((tv_tensors.Image(frame), target))
         return out
 
+    def _fitted_box_fraction(self) -> float:
+        """``object_box="fit"``: the median over seeds of the fitted render's coverage box (its longest side, at the
+        fitted pose and scale) as a fraction of the patch: the size at which the fit says the seeds' objects
+        themselves sit in their patches, inside the labelled box's ``object_fraction`` and the annotators' margin."""
+        size = self._crop()
+        pose = {n: getattr(self.params, n).flatten().float() for n in POSE_NAMES}
+        cov, _ = self._layers(pose, size, self.seed_scales.float())
+        box, seen = _boxes_from_coverage(cov[:, 0], torch.zeros(cov.shape[0]), torch.zeros(cov.shape[0]))
+        longest = torch.maximum(box[:, 2] - box[:, 0], box[:, 3] - box[:, 1])[torch.tensor(seen, dtype=torch.bool)]
+        if len(longest) == 0:
+            raise ValueError("object_box='fit': no seed's fitted render covers a pixel")
+        return float(min(1.0, longest.median().item() / size))
+
     def _box_framed(self, pose: dict[str, torch.Tensor], size: int, scale: torch.Tensor,
                     ) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
         """The pose and scale that frame each object as ingest frames a labelled seed (``object_box``).
@@ -648,22 +668,25 @@ class SyntheticObjectDataset(Dataset):
 _CHUNK_PIXELS = 64 * 64 * 64  # pixels rendered together (see SyntheticObjectDataset._synthetic_items)
 
 
-def _check_object_box(object_box: Any, backgrounds: Any, mode: str) -> float | None:
-    """``object_box`` as a fraction of the patch side (None: the paper's framing)."""
+def _check_object_box(object_box: Any, backgrounds: Any, mode: str) -> float | str | None:
+    """``object_box`` as a fraction of the patch side (None: the paper's framing; ``"fit"``: resolved once the
+    renderer exists, :meth:`SyntheticObjectDataset._fitted_box_fraction`)."""
     if object_box is None:
         return None
     if mode != "patch":
         raise ValueError("object_box frames patch-mode objects; frame mode draws object sizes with object_size")
     if isinstance(object_box, str):
+        if object_box == "fit":
+            return "fit"
         if object_box != "seed":
-            raise ValueError(f"object_box must be a fraction in (0, 1], 'seed' or None, got {object_box!r}")
+            raise ValueError(f"object_box must be a fraction in (0, 1], 'seed', 'fit' or None, got {object_box!r}")
         fraction = getattr(backgrounds, "object_fraction", None)
         if fraction is None:
             raise ValueError("object_box='seed' reads the seed set's object_fraction: give a seed set as backgrounds, "
                              "or the fraction itself")
         object_box = fraction
     if isinstance(object_box, bool) or not isinstance(object_box, numbers.Real) or not 0 < float(object_box) <= 1:
-        raise ValueError(f"object_box must be a fraction in (0, 1], 'seed' or None, got {object_box!r}")
+        raise ValueError(f"object_box must be a fraction in (0, 1], 'seed', 'fit' or None, got {object_box!r}")
     return float(object_box)
 
 

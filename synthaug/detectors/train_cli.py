@@ -84,9 +84,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="synthetic patches per real seed with --params (default 10 when --params is given, else 0)")
     parser.add_argument("--pose-sampling", choices=["uniform", "fitted"], default="uniform",
                         help="poses of the synthetic positives: uniform (the paper) or around each seed's fitted pose")
-    parser.add_argument("--object-box", choices=["seed"], default=None,
-                        help="frame each synthetic object as ingest frames a labelled seed (its box centred, its longest "
-                             "side the seed set's object_fraction of the patch); default: the paper's mesh-scale framing")
+    parser.add_argument("--object-box", choices=["seed", "fit"], default=None,
+                        help="frame each synthetic object as ingest frames a labelled seed, its box centred and its "
+                             "longest side the seed set's object_fraction of the patch (seed) or the median size of the "
+                             "fitted renders' boxes (fit); default: the paper's mesh-scale framing")
     parser.add_argument("--perturb-copies", type=int, default=0,
                         help="perturbed copies (rotation, shift, mirror, blur, noise) of every real positive: the paper's baseline")
     parser.add_argument("--downscaled-copies", type=int, default=0,

@@ -653,9 +653,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "x0.3-0.9); one condition per count")
     sy.add_argument("--synthetic-share", type=float, default=None,
                     help="the added positives' share of the positive class's training weight (default: by count)")
-    sy.add_argument("--object-box", nargs="+", choices=["none", "seed"], default=["none"],
-                    help="framing of the synthetic objects, one condition per value: none (the paper's mesh scale) or "
-                         "seed (as ingest frames a labelled seed)")
+    sy.add_argument("--object-box", nargs="+", choices=["none", "seed", "fit"], default=["none"],
+                    help="framing of the synthetic objects, one condition per value: none (the paper's mesh scale), "
+                         "seed (as ingest frames a labelled seed) or fit (at the fitted renders' median box size)")
     return p
 
 
