@@ -261,9 +261,10 @@ def demo_protocol(frame_stride: int, training_seeds: int) -> Any:
 
 def _train_and_score(args: argparse.Namespace, data: Path, seed_dirs: tuple[Path, ...], fit_path: Path, eval_set: Any,
                      names: tuple[str, ...]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Each condition (real seeds, + synthetic, twice the real seeds: ``seed_dirs``) trained with each training seed by ``synthaug train``'s function
-    (:func:`~synthaug.detectors.video_training.train_from_videos`: the seed set's negatives, box regression from
-    the training videos' labels, hard-negative mining over the training videos stopped on the validation videos)
+    """Each condition (real seeds, + synthetic, twice the real seeds: ``seed_dirs``) trained with each training seed
+    by ``synthaug train``'s function (:func:`~synthaug.detectors.video_training.train_from_videos`: the seed set's
+    negatives, box regression from the training videos' labels, hard-negative mining over the training videos
+    stopped on the validation videos)
     and matched on the test videos: ``{name: ProtocolResult}`` and training seed 0's pooled PR curve per name."""
     from synthaug.detectors.training import TrainOptions
     from synthaug.detectors.video_training import AddedPositives, train_from_videos

@@ -45,6 +45,11 @@ def test_demo_runs_end_to_end(demo):
     assert summary["verdict"] in report and "Δ AP@0.5 vs real seeds only" in report
     word = "raised" if d["low"] > 0 else "LOWERED" if d["high"] < 0 else "No significant change"
     assert word in summary["verdict"]
+    # beside it, twice the real seeds (does this detector gain from more positives here at all?), paired the same way
+    r = summary["reference_difference"]
+    assert r["low"] <= r["estimate"] <= r["high"] and "Twice the real seeds" in summary["verdict"]
+    assert r["estimate"] == pytest.approx(summary["2x real seeds (reference)"] - aps[0], abs=2e-4)
+    assert "| 2x real seeds (reference) |" in report
     # the closing diagnosis (issue 6): a report on measured data with an effect hidden
     assert summary["diagnosis"]["hidden"] == "rotor_blur"
     assert "## Diagnosis" in report and (out / "diagnosis" / "report.md").exists()
