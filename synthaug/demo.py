@@ -188,7 +188,7 @@ def _run(args: argparse.Namespace) -> int:
     eval_set = load_eval_set(split["test"], data / "videos", data / "labels", stride_k=args.frame_stride)
     names = ("real seeds only", f"real + {args.ratio:g}x synthetic (ours)", "2x real seeds (reference)")
     seed_dir2 = out / "ingest" / "seedsets" / f"drone_{2 * args.seed_counts}"
-    results, first = _train_and_score(args, data, (seed_dir, seed_dir, seed_dir2), fit_path, eval_set, names)
+    results, first = _train_and_score(args, data, split, (seed_dir, seed_dir, seed_dir2), fit_path, eval_set, names)
     for (name, slug) in zip(names, ("real", "ours")):
         _plot_pr(first[name], out / f"pr_{slug}.png", title=f"{args.detector}: {name} (training seed 0)")
     timings["train + evaluate"] = time.perf_counter() - t
@@ -259,8 +259,8 @@ def demo_protocol(frame_stride: int, training_seeds: int) -> Any:
         scale_check=[]))
 
 
-def _train_and_score(args: argparse.Namespace, data: Path, seed_dirs: tuple[Path, ...], fit_path: Path, eval_set: Any,
-                     names: tuple[str, ...]) -> tuple[dict[str, Any], dict[str, Any]]:
+def _train_and_score(args: argparse.Namespace, data: Path, split: dict[str, list[str]], seed_dirs: tuple[Path, ...],
+                     fit_path: Path, eval_set: Any, names: tuple[str, ...]) -> tuple[dict[str, Any], dict[str, Any]]:
     """Each condition (real seeds, + synthetic, twice the real seeds: ``seed_dirs``) trained with each training seed
     by ``synthaug train``'s function (:func:`~synthaug.detectors.video_training.train_from_videos`: the seed set's
     negatives, box regression from the training videos' labels, hard-negative mining over the training videos
@@ -276,10 +276,9 @@ def _train_and_score(args: argparse.Namespace, data: Path, seed_dirs: tuple[Path
     proto = demo_protocol(args.frame_stride, args.training_seeds)
     results = {n: ProtocolResult(n, proto) for n in names}
     first: dict[str, Any] = {}
-    has_val = bool(json.loads((data / "split.json").read_text()).get("val"))
     # the ridge map (the ensemble's CNN map costs minutes); without validation videos the mining's stopping rule has
     # nothing to count, so one mining round instead of up to three
-    options = TrainOptions(box_model="ridge", mining_rounds=3 if has_val else 1)
+    options = TrainOptions(box_model="ridge", mining_rounds=3 if split["val"] else 1)
     object_box = None if args.object_box == "none" else args.object_box
     conditions = (AddedPositives(), AddedPositives(params=fit_path, synthetic_ratio=args.ratio, object_box=object_box),
                   AddedPositives())

@@ -595,18 +595,31 @@ class SyntheticObjectDataset(Dataset):
                 out.append((tv_tensors.Image(frame), target))
         return out
 
+    def _coverage_boxes(self, pose: dict[str, torch.Tensor], size: int, scale: torch.Tensor,
+                        ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Each pose's coverage box on a ``size`` square (≥ 0.5, else > 0; rendered in chunks as the items are):
+        ``(B, 4)`` XYXY boxes (float64, px), their longest sides, and whether any pixel was covered."""
+        step = max(1, _CHUNK_PIXELS // (size * size))
+        boxes, seen = [], []
+        for i in range(0, len(scale), step):
+            sl = slice(i, i + step)
+            cov, _ = self._layers({k: v[sl] for k, v in pose.items()}, size, scale[sl])
+            b, n = _boxes_from_coverage(cov[:, 0], torch.zeros(cov.shape[0]), torch.zeros(cov.shape[0]))
+            boxes.append(b)
+            seen += n
+        box = torch.cat(boxes).double()
+        return box, torch.maximum(box[:, 2] - box[:, 0], box[:, 3] - box[:, 1]), torch.tensor(seen, dtype=torch.bool)
+
     def _fitted_box_fraction(self) -> float:
         """``object_box="fit"``: the median over seeds of the fitted render's coverage box (its longest side, at the
         fitted pose and scale) as a fraction of the patch: the size at which the fit says the seeds' objects
         themselves sit in their patches, inside the labelled box's ``object_fraction`` and the annotators' margin."""
         size = self._crop()
         pose = {n: getattr(self.params, n).flatten().float() for n in POSE_NAMES}
-        cov, _ = self._layers(pose, size, self.seed_scales.float())
-        box, seen = _boxes_from_coverage(cov[:, 0], torch.zeros(cov.shape[0]), torch.zeros(cov.shape[0]))
-        longest = torch.maximum(box[:, 2] - box[:, 0], box[:, 3] - box[:, 1])[torch.tensor(seen, dtype=torch.bool)]
-        if len(longest) == 0:
+        _, longest, seen = self._coverage_boxes(pose, size, self.seed_scales.float())
+        if not seen.any():
             raise ValueError("object_box='fit': no seed's fitted render covers a pixel")
-        return float(min(1.0, longest.median().item() / size))
+        return float(min(1.0, longest[seen].median().item() / size))
 
     def _box_framed(self, pose: dict[str, torch.Tensor], size: int, scale: torch.Tensor,
                     ) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
@@ -619,18 +632,8 @@ class SyntheticObjectDataset(Dataset):
         """
         big = 2 * size
         zero = {**pose, "t_x": torch.zeros_like(pose["t_x"]), "t_y": torch.zeros_like(pose["t_y"])}
-        step = max(1, _CHUNK_PIXELS // (big * big))
-        boxes, seen = [], []
-        for i in range(0, len(scale), step):
-            sl = slice(i, i + step)
-            cov, _ = self._layers({k: v[sl] for k, v in zero.items()}, big, scale[sl] * (size / big))
-            b, n = _boxes_from_coverage(cov[:, 0], torch.zeros(cov.shape[0]), torch.zeros(cov.shape[0]))
-            boxes.append(b)
-            seen += n
-        box = torch.cat(boxes).double()
-        ok = torch.tensor(seen, dtype=torch.bool)
-        longest = torch.maximum(box[:, 2] - box[:, 0], box[:, 3] - box[:, 1]).clamp_min(1.0)
-        k = torch.where(ok, self.object_box * size / longest, torch.ones_like(longest))
+        box, longest, ok = self._coverage_boxes(zero, big, scale * (size / big))
+        k = torch.where(ok, self.object_box * size / longest.clamp_min(1.0), torch.ones_like(longest))
         cx = (box[:, 0] + box[:, 2]) / 2 - big / 2  # the box centre's offset from the square's centre, px
         cy = (box[:, 1] + box[:, 3]) / 2 - big / 2
         framed = dict(pose)

@@ -532,8 +532,9 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
     background seen through that map, ``F(p) ≈ (1 + g + (c + c₃ |p|²) p·t) B(D(U(p) - t)) + o`` (``g``, ``o``: a
     brightness change; ``c``, ``c₃``: a radial gain fixed in the frame, a vignetting, is in both looks and so
     differs by ``∇log V · t`` between a point and the one it moved from, ``(p·t)(c + c₃|p|²)`` to the third order;
-    without them the reference camera's vignetting of 0.3 read k 0.10-0.17), by Gauss-Newton on both looks smoothed by ``sigma`` px, started from the phase correlation's shift,
-    where the pixels lie ``outside`` the object's crop and inside a 6-px margin.
+    without them the reference camera's vignetting of 0.3 read k 0.10-0.17), by Gauss-Newton on both looks
+    smoothed by ``sigma`` px, started from the phase correlation's shift, where the pixels lie ``outside`` the
+    object's crop and inside a 6-px margin.
 
     Args:
         frame, background: (H, W) or (H, W, C) uint8 or float in [0, 1]: two looks at the same scene.
