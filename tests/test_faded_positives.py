@@ -96,3 +96,43 @@ def test_defaults_bad_inputs_and_none() -> None:
     # contrast 1: the copy is the real patch
     same, _ = faded_positives(seeds, 1, contrast=(1.0, 1.0))
     np.testing.assert_allclose(same[0, 0].numpy(), seeds.patches[0] / 255.0, atol=1e-6)
+
+
+def test_a_negative_range_inverts_the_object_against_its_background() -> None:
+    """``contrast=INVERTED_CONTRAST``: the dark box becomes brighter than the sky, by |c| of its depth, c log-uniform."""
+    from synthaug.detectors.training_sets import INVERTED_CONTRAST
+
+    seeds = _Seeds(np.array([[60.0, 40.0, 28.0, 14.0], [50.0, 50.0, 20.0, 30.0]]))
+    sky, ink = 120, 80  # a shallow object, so that the inverted one stays inside [0, 255]
+    seeds.patches = np.stack([crop_patch(_frame(b, bg=sky, fg=ink), crop=c)[0] for b, c in zip(seeds.boxes, seeds.crops)])
+    seeds.backgrounds = np.full_like(seeds.patches, sky)
+    assert INVERTED_CONTRAST == (-1.0, -0.5)
+    out, info = faded_positives(seeds, 2, contrast=INVERTED_CONTRAST, seed=3)
+    assert info["contrast"] == [-1.0, -0.5] and -1.0 <= info["contrast_median"] <= -0.5
+    rng = np.random.default_rng(3)
+    cs = -np.exp(rng.uniform(np.log(0.5), np.log(1.0), 4))  # |c| log-uniform in [0.5, 1], sign negative
+    for k in range(4):
+        i = k // 2
+        real = seeds.patches[i].astype(np.float64) / 255
+        bg = sky / 255
+        m = box_mask(seeds.boxes[i], seeds.crops[i], 40)
+        got = out[k, 0].double().numpy()
+        # numpy reference of I' = I - (1 - c) m (I - B), clipped to [0, 1]
+        np.testing.assert_allclose(got, np.clip(real - (1 - cs[k]) * m * (real - bg), 0, 1), atol=1e-6)
+        inner = m > 0.999
+        # the object now stands *above* the sky, at |c| of the depth it had below it (120 + 40 |c| <= 160: no clipping)
+        assert (got[inner] > bg).all()
+        np.testing.assert_allclose((got[inner] - bg) / (bg - real[inner]), -cs[k], rtol=1e-3)
+        far = m == 0
+        assert np.array_equal(got[far], real[far].astype(np.float32))
+    # a range across zero or beyond -1 is refused
+    for bad in ((-1.0, 0.5), (-1.5, -0.5), (-0.5, -1.0), (-0.5, 0.0)):
+        with pytest.raises(ValueError, match="contrast"):
+            faded_positives(seeds, 1, contrast=bad)
+    # a positive range draws exactly as before the sign was allowed
+    before, _ = faded_positives(seeds, 2, contrast=(0.3, 0.9), seed=3)
+    rng = np.random.default_rng(3)
+    c0 = np.exp(rng.uniform(np.log(0.3), np.log(0.9)))
+    real0 = seeds.patches[0].astype(np.float64) / 255
+    m0 = box_mask(seeds.boxes[0], seeds.crops[0], 40)
+    np.testing.assert_allclose(before[0, 0].double().numpy(), real0 - (1 - c0) * m0 * (real0 - sky / 255), atol=1e-6)

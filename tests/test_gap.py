@@ -417,8 +417,8 @@ def test_diagnose_cli_checks_the_gap_options_first(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("pose_sampling", ["uniform", "fitted"])
-def test_training_samples_are_the_detectors_synthetic_positives(tmp_path, pose_sampling):
+@pytest.mark.parametrize("pose_sampling, object_box", [("uniform", None), ("fitted", None), ("uniform", "seed")])
+def test_training_samples_are_the_detectors_synthetic_positives(tmp_path, pose_sampling, object_box):
     """The gap is measured on the very patches training uses (same fit, seed and pose sampling)."""
     from synthaug.data.procedural import sky_backgrounds
     from synthaug.data.seedset import SeedSet, write_seedset
@@ -435,10 +435,10 @@ def test_training_samples_are_the_detectors_synthetic_positives(tmp_path, pose_s
     seeds = SeedSet.load(tmp_path / "s")
     fit = tmp_path / "fit.json"
     CaptureParams.sample(n, generator=torch.Generator().manual_seed(0)).save(fit)
-    x, idx = training_samples(seeds, "quadcopter", fit, 6, seed=3, pose_sampling=pose_sampling)
-    ref = synthetic_positives(seeds, "quadcopter", fit, 6, seed=3, pose_sampling=pose_sampling)
+    x, idx = training_samples(seeds, "quadcopter", fit, 6, seed=3, pose_sampling=pose_sampling, object_box=object_box)
+    ref = synthetic_positives(seeds, "quadcopter", fit, 6, seed=3, pose_sampling=pose_sampling, object_box=object_box)
     torch.testing.assert_close(x, ref)
     assert idx.shape == (6,) and set(idx.tolist()) <= set(range(n))
-    if pose_sampling == "fitted":  # not the uniform draw
+    if pose_sampling == "fitted" or object_box is not None:  # not the paper's uniform draw at the mesh's scale
         other, _ = training_samples(seeds, "quadcopter", fit, 6, seed=3)
         assert not torch.equal(x, other)

@@ -584,3 +584,61 @@ def test_score_and_patch_metrics(tiny_videos: Path) -> None:
     assert no_ci.ap.estimate == pytest.approx(m.ap.estimate) and np.isnan(no_ci.ap.low)
     with pytest.raises(ValueError, match="window"):
         score_patch_set(type("W", (), {"window": 32, "score_patches": None})(), ps)
+
+
+# =========================================================================== unlabelled frames (protocol v2)
+def test_committed_v2_differs_from_v1_only_in_skipping_unlabelled_frames() -> None:
+    v1 = load_protocol(REPO / "configs" / "protocol" / "halmstad_v1.json")
+    v2 = load_protocol(REPO / "configs" / "protocol" / "halmstad_v2.json")
+    assert (v1.test.unlabelled_frames, v1.val.unlabelled_frames) == ("score", "score")
+    assert (v2.name, v2.version, v2.test.unlabelled_frames, v2.val.unlabelled_frames) == ("halmstad_v2", 2, "skip", "skip")
+    assert v2.fingerprint() != v1.fingerprint()
+    d1, d2 = v1.to_dict(), v2.to_dict()
+    for d in (d1, d2):
+        d.pop("description"), d.pop("name"), d.pop("version")
+        d["test"].pop("unlabelled_frames", None), d["val"].pop("unlabelled_frames", None)
+    assert d1 == d2
+    # the field is absent from a v1 protocol's canonical form: v1's fingerprint did not move when it was added
+    assert "unlabelled_frames" not in v1.to_dict()["test"]
+    assert proto(test={"split": "test", "frame_stride": 5, "unlabelled_frames": "score"}).fingerprint() == proto().fingerprint()
+    assert Protocol.from_dict(v2.to_dict()) == v2
+    with pytest.raises(ProtocolError, match="test.unlabelled_frames"):
+        proto(test={"split": "test", "frame_stride": 5, "unlabelled_frames": "ignore"})
+
+
+def test_load_eval_set_skips_frames_without_a_labelled_box(tiny_videos: Path) -> None:
+    from synthaug.data.video import read_video_with_labels
+    from synthaug.evaluate.matching import match_videos
+    from synthaug.evaluate.videos import load_eval_set
+
+    stems = ["V_DRONE_010", "V_DRONE_003"]
+    every = load_eval_set(stems, tiny_videos / "videos", tiny_videos / "labels", stride_k=2)
+    kept = load_eval_set(stems, tiny_videos / "videos", tiny_videos / "labels", stride_k=2, skip_unlabelled=True)
+    # V_DRONE_010: frames 0, 2, 4, 6 at stride 2, 2 and 4 null -> 0 and 6 kept; V_DRONE_003: all labelled
+    assert every.frame_indices[0] == [0, 2, 4, 6] and kept.frame_indices[0] == [0, 6]
+    assert kept.frame_indices[1] == every.frame_indices[1]
+    frames, labels, _ = read_video_with_labels(tiny_videos / "videos" / "V_DRONE_010.mp4",
+                                               tiny_videos / "labels" / "V_DRONE_010.json")
+    for j, f in enumerate(kept.frame_indices[0]):  # the frames and boxes kept are those of the kept indices
+        assert np.array_equal(kept.frames[0][j], frames[f])
+        np.testing.assert_allclose(np.asarray(kept.boxes[0][j]).reshape(-1, 4), np.asarray(labels.boxes[f]).reshape(-1, 4))
+    assert kept.n_objects == every.n_objects and kept.n_frames == every.n_frames - 2
+    # a confident detection on a skipped frame is no false positive any more: one box per frame, scored
+    p = proto(test={"split": "test", "frame_stride": 2})
+
+    def dets(es):
+        return [[np.array([[0.0, 0.0, 8.0, 8.0, 1.0]]) for _ in fr] for fr in es.frames]
+
+    fp_every = sum(int((~m.tp[0]).sum()) for m in match_videos(every.stems, dets(every), every.boxes, p))
+    fp_kept = sum(int((~m.tp[0]).sum()) for m in match_videos(kept.stems, dets(kept), kept.boxes, p))
+    assert fp_every - fp_kept == 2
+    # a video whose scored frames hold no box at all is left out, with a warning naming it
+    lab = tiny_videos / "labels" / "V_DRONE_003.json"
+    doc = json.loads(lab.read_text())
+    empty = tiny_videos / "labels_empty"
+    empty.mkdir(exist_ok=True)
+    (empty / "V_DRONE_003.json").write_text(json.dumps(dict(doc, boxes=[None] * len(doc["boxes"]))))
+    (empty / "V_DRONE_010.json").write_text((tiny_videos / "labels" / "V_DRONE_010.json").read_text())
+    with pytest.warns(UserWarning, match="V_DRONE_003"):
+        es = load_eval_set(stems, tiny_videos / "videos", empty, stride_k=2, skip_unlabelled=True)
+    assert es.stems == ["V_DRONE_010"]

@@ -301,6 +301,14 @@ def test_runner_downscaled_copies_option_parses_and_refuses_zero(capsys):
     with pytest.raises(SystemExit) as e:
         R.build_parser().parse_args(["synthetic", "--faded-copies", "0", "--out", "x"])
     assert e.value.code == 2 and "--faded-copies" in capsys.readouterr().err
+    # --faded-contrast: a range (negative: inverted copies), part of the condition's key only when given
+    args = R.build_parser().parse_args(["synthetic", "--faded-copies", "1", "--faded-contrast", "-1", "-0.5", "--out", "x"])
+    assert args.faded_contrast == [-1.0, -0.5]
+    assert R.build_parser().parse_args(["synthetic", "--out", "x"]).faded_contrast is None
+    assert "faded_contrast" not in R.Condition("f", "hog", seed_count=6, faded_copies=1).identity()
+    inv = R.Condition("i", "hog", seed_count=6, faded_copies=1, faded_contrast=(-1.0, -0.5))
+    assert inv.identity()["faded_contrast"] == (-1.0, -0.5)
+    assert inv.identity() != R.Condition("f", "hog", seed_count=6, faded_copies=1).identity()
 
 
 def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(capsys):
@@ -349,10 +357,11 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
     default = R.train_options(R.build_parser().parse_args(["learning-curve", "--out", "x"]))
     assert default == TrainOptions()
     args = R.build_parser().parse_args(["synthetic", "--ada-rounds", "300", "--ada-candidates", "4000",
-                                        "--cnn-epochs", "5", "--mining-rounds", "2", "--out", "x"])
+                                        "--cnn-epochs", "5", "--mining-rounds", "2", "--mining-stride", "10", "--out", "x"])
     opts = R.train_options(args)
-    assert (opts.ada_rounds, opts.ada_candidates, opts.cnn_epochs, opts.mining_rounds) == (300, 4000, 5, 2)
-    assert dataclasses.replace(opts, ada_rounds=None, ada_candidates=2000, cnn_epochs=12, mining_rounds=3) == default
+    assert (opts.ada_rounds, opts.ada_candidates, opts.cnn_epochs, opts.mining_rounds, opts.mining_stride) == (300, 4000, 5, 2, 10)
+    assert dataclasses.replace(opts, ada_rounds=None, ada_candidates=2000, cnn_epochs=12, mining_rounds=3,
+                               mining_stride=30) == default
     proto = Protocol.from_dict(example_protocol_dict(name="tiny", split_file="split.json"))
     paths = R.DataPaths("videos", "labels", "split.json", "work")
     c = R.Condition("adaboost / 12 seeds", "adaboost", seed_count=12)
@@ -371,7 +380,8 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
                                                                                    mining_patience=0),
                                      log=lambda m: None).identity(hog, 0)
     assert key(dataclasses.replace(default, ada_candidates=4000)) != key(default)
-    for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"]):
+    assert key(dataclasses.replace(default, mining_stride=10)) != key(default)
+    for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"], ["--mining-stride", "0"]):
         with pytest.raises(SystemExit) as e:
             R.build_parser().parse_args(["learning-curve", *bad, "--out", "x"])
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err

@@ -256,6 +256,14 @@ def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], traine
     from synthaug.detectors.base import load_detector
 
     assert load_detector(out).kind == "cnn"
+    # --faded-contrast -1 -0.5: the copies are inverted (the object brighter than its background where it was darker)
+    out = ws["root"] / "runs" / "hog_inverted.pt"
+    assert _train(ws, out, "--detector", "hog", "--seedset", seedset, "--mining-rounds", "0", "--faded-copies", "1",
+                  "--faded-contrast", "-1", "-0.5") == 0
+    meta = json.loads(out.with_suffix(".json").read_text())
+    inv = meta["faded"]
+    assert inv["contrast"] == [-1.0, -0.5] and -1.0 <= inv["contrast_median"] <= -0.5
+    assert inv["count"] == meta["positives"]["count"]
 
 
 def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> None:
@@ -372,6 +380,8 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
         ("downscaled_with_all_frames", "--downscaled-copies"),
         ("negative_faded", "--faded-copies"),
         ("faded_with_all_frames", "--faded-copies"),
+        ("contrast_without_faded", "--faded-contrast"),
+        ("contrast_across_zero", "--faded-contrast"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -418,6 +428,10 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--faded-copies", "-1"]
     elif case == "faded_with_all_frames":
         extra = ["--all-frames", "--faded-copies", "1"]
+    elif case == "contrast_without_faded":
+        extra += ["--faded-contrast", "-1", "-0.5"]
+    elif case == "contrast_across_zero":
+        extra += ["--faded-copies", "1", "--faded-contrast", "-0.5", "0.5"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
     capsys.readouterr()

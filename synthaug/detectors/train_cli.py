@@ -96,6 +96,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--faded-copies", type=int, default=0,
                         help="copies of every real seed with the object fainter against its own background (its "
                              "difference from the seed's background patch scaled by x0.3-0.9 inside the box)")
+    parser.add_argument("--faded-contrast", type=float, nargs=2, metavar=("LOW", "HIGH"), default=None,
+                        help="the faded copies' contrast range (default 0.3 0.9); a negative range, e.g. -1 -0.5, "
+                             "inverts the object's contrast (a dark object shown brighter than its background)")
     parser.add_argument("--copy-paste-ratio", type=float, default=0.0,
                         help="copy-paste patches per real seed with --params: the seeds' objects cut out with their fitted "
                              "silhouettes, pasted on other seeds' backgrounds (a user's baseline)")
@@ -183,7 +186,8 @@ def main(args: argparse.Namespace) -> int:
             added=AddedPositives(params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
                                  perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
                                  object_box=args.object_box, copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
-                                 downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies),
+                                 downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,
+                                 faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast)),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

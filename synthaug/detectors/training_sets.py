@@ -145,6 +145,21 @@ split's (median darkest-decile depth 2.0 vs 5.0 and 1.0 vs 3.0 gray levels,
 results/learning_curve/drone_downscaled/contrast.py)."""
 
 
+INVERTED_CONTRAST: tuple[float, float] = (-1.0, -0.5)
+"""A negative :func:`faded_positives` range: copies with the object's contrast against its background *inverted* (a
+dark drone shown bright against the same sky). On the halmstad drones 17-19 % of the training seeds' objects are
+brighter than their background, 67 % of the test split's (results/learning_curve/label_convention/README.md)."""
+
+
+def _check_contrast(contrast: Sequence[float]) -> tuple[float, float]:
+    """``(low, high)`` of one sign: ``0 < low <= high <= 1`` (fainter) or ``-1 <= low <= high < 0`` (inverted)."""
+    lo, hi = (float(v) for v in contrast)
+    if not (0 < lo <= hi <= 1 or -1 <= lo <= hi < 0):
+        raise ValueError(f"contrast must satisfy 0 < low <= high <= 1 (fainter) or -1 <= low <= high < 0 (inverted), "
+                         f"got {tuple(contrast)}")
+    return lo, hi
+
+
 def box_mask(box: Sequence[float], crop: Sequence[float], patch_size: int, *, feather: float = 1.0) -> np.ndarray:
     """The object box's footprint in a seed patch: float ``(P, P)`` in [0, 1].
 
@@ -181,18 +196,19 @@ def faded_positives(
     contrast: tuple[float, float] = FADED_CONTRAST,
     seed: int = 0,
 ) -> tuple[Tensor, dict[str, Any]]:
-    """``copies`` copies of every real seed with the object fainter against its own background.
+    """``copies`` copies of every real seed with the object fainter against its own background (or inverted).
 
     Inside the object's box (:func:`box_mask`, feathered by 1 px) each copy moves the patch toward the seed's
     background patch (the same crop of the object-free background frame): ``I' = I - (1 - c) m (I - B)``, so the
     object's difference from its background is scaled by ``c``, drawn log-uniform in ``contrast``; outside the box
     the patch is left as it was. The real-data counterpart of a lowered diffuse weight: the same object seen against
-    a brighter sky, through haze, or by a camera with less contrast.
+    a brighter sky, through haze, or by a camera with less contrast. A negative range (``|c|`` log-uniform, e.g.
+    :data:`INVERTED_CONTRAST`) inverts the object's contrast: a dark object shown brighter than its background.
 
     Args:
         seedset: a :class:`~synthaug.data.seedset.SeedSet` (its patches, backgrounds, boxes and crops).
         copies: copies per seed (0: none).
-        contrast: ``(low, high)`` contrast factors, ``0 < low <= high <= 1``.
+        contrast: ``(low, high)`` contrast factors of one sign, ``0 < low <= high <= 1`` or ``-1 <= low <= high < 0``.
         seed: seeds the draws (:class:`numpy.random.Generator`).
 
     Returns:
@@ -203,9 +219,9 @@ def faded_positives(
         >>> from synthaug.data.seedset import SeedSet  # doctest: +SKIP
         >>> patches, info = faded_positives(SeedSet("seeds/"), 1)  # doctest: +SKIP
     """
-    lo, hi = (float(v) for v in contrast)
-    if not 0 < lo <= hi <= 1:
-        raise ValueError(f"contrast must satisfy 0 < low <= high <= 1, got {tuple(contrast)}")
+    lo, hi = _check_contrast(contrast)
+    sign = 1.0 if lo > 0 else -1.0
+    a, b = sorted((abs(lo), abs(hi)))
     if copies < 0:
         raise ValueError(f"copies must be >= 0, got {copies}")
     p = int(seedset.patches.shape[-1])
@@ -216,7 +232,7 @@ def faded_positives(
         bg = np.asarray(seedset.backgrounds[i], np.float64) / 255.0
         m = box_mask(seedset.boxes[i], seedset.crops[i], p)
         for _ in range(copies):
-            c = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+            c = sign * float(np.exp(rng.uniform(np.log(a), np.log(b))))
             out.append(img - (1.0 - c) * m * (img - bg))
             drawn.append(c)
     info = {"copies": int(copies), "count": len(out), "contrast": [lo, hi],

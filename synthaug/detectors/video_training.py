@@ -99,6 +99,9 @@ class AddedPositives:
             only).
         faded_copies: copies of every real seed with the object's contrast against its own background lowered
             (:func:`~synthaug.detectors.training_sets.faded_positives`; seed sets only).
+        faded_contrast: the range the faded copies' contrast factor is drawn from (None:
+            :data:`~synthaug.detectors.training_sets.FADED_CONTRAST`); a negative range (e.g.
+            :data:`~synthaug.detectors.training_sets.INVERTED_CONTRAST`) inverts the object's contrast.
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; None: every positive weighs the same, so the added ones hold
             ``added / (real + added)``. HOG: the SVM's per-sample cost; CNN: the BCE loss's per-sample weight (kept
@@ -116,6 +119,7 @@ class AddedPositives:
     synthetic_share: float | None = None
     downscaled_copies: int = 0
     faded_copies: int = 0
+    faded_contrast: tuple[float, float] | None = None
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
@@ -340,7 +344,7 @@ def train_from_videos(
     n_real = int(ts.positives.shape[0])
     perturb_info = _add_perturbed(ts, added.perturb_copies, seed=seed, say=say)
     downscaled_info = _add_downscaled(ts, added.downscaled_copies, options, seed=seed, say=say)
-    faded_info = _add_faded(ts, added.faded_copies, seed=seed, say=say)
+    faded_info = _add_faded(ts, added.faded_copies, seed=seed, say=say, contrast=added.faded_contrast)
     synthetic_info = _add_from_fit(ts, added, seed=seed, say=say)
     t_data = time.perf_counter() - t0
     say(f"training set: {ts.positives.shape[0]} positives, {ts.negatives.shape[0]} negatives ({t_data:.0f}s)")
@@ -395,6 +399,15 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
             raise TrainingInputError(option, f"must be >= 0, got {copies}")
         if copies and all_frames and seedset is None:
             raise TrainingInputError(option, f"{what}: give --seed-counts or --seed-set, not --all-frames")
+    if added.faded_contrast is not None:
+        from synthaug.detectors.training_sets import _check_contrast
+
+        if added.faded_copies <= 0:
+            raise TrainingInputError("--faded-contrast", "there are no faded copies to draw it for: give --faded-copies")
+        try:
+            _check_contrast(added.faded_contrast)
+        except (ValueError, TypeError) as e:
+            raise TrainingInputError("--faded-contrast", str(e)) from None
     if copy_paste_ratio < 0:
         raise TrainingInputError("--copy-paste-ratio", f"must be >= 0, got {copy_paste_ratio}")
     if copy_paste_ratio > 0 and params is None:
@@ -515,15 +528,18 @@ def _add_downscaled(ts: _TrainingSet, copies: int, options: TrainOptions, *, see
     return info
 
 
-def _add_faded(ts: _TrainingSet, copies: int, *, seed: int, say: Callable[[str], None]) -> dict[str, Any] | None:
-    """``copies`` fainter copies of every real seed (:func:`~synthaug.detectors.training_sets.faded_positives`)."""
+def _add_faded(ts: _TrainingSet, copies: int, *, seed: int, say: Callable[[str], None],
+               contrast: tuple[float, float] | None = None) -> dict[str, Any] | None:
+    """``copies`` fainter (or, with a negative ``contrast`` range, inverted) copies of every real seed
+    (:func:`~synthaug.detectors.training_sets.faded_positives`)."""
     if not copies:
         return None
-    from synthaug.detectors.training_sets import faded_positives
+    from synthaug.detectors.training_sets import FADED_CONTRAST, faded_positives
 
-    patches, info = faded_positives(ts.seedset, copies, seed=seed + 6)
+    patches, info = faded_positives(ts.seedset, copies, seed=seed + 6,
+                                    contrast=FADED_CONTRAST if contrast is None else tuple(contrast))
     ts.positives = torch.cat([ts.positives, patches])
-    say(f"faded: {info['count']} copies, contrast x{info['contrast'][0]:g}-{info['contrast'][1]:g} "
+    say(f"faded: {info['count']} copies, contrast x{info['contrast'][0]:g} to x{info['contrast'][1]:g} "
         f"(median {info['contrast_median']})")
     return info
 

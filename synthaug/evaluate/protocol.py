@@ -10,6 +10,8 @@ Protocol file (``configs/protocol/halmstad_v1.json``)::
     {"name": "halmstad_v1", "version": 1, "description": "...",
      "split_file": "configs/splits/halmstad.json",          # optional (null: the caller names the videos)
      "test": {"split": "test", "frame_stride": 5},         # every 5th frame of every test video of the class
+                                                           # (+ "unlabelled_frames": "skip": frames without a
+                                                           #  labelled box are not scored; v2)
      "val":  {"split": "val",  "frame_stride": 5},
      "min_training_seeds": 3,                              # seeds (data sampling + initialisation) per cell
      "iou_thresholds": [0.5, 0.3],                         # the first is the main one
@@ -98,6 +100,10 @@ DEFAULT_PROTOCOL = Path(__file__).resolve().parents[2] / "configs" / "protocol" 
 """The protocol every experiment of the repository uses (a checkout's ``configs/``)."""
 
 
+UNLABELLED_FRAMES = ("score", "skip")
+"""What a scored frame without any labelled box can be (:attr:`SplitSpec.unlabelled_frames`)."""
+
+
 class ProtocolError(ValueError):
     """A protocol file or dict that cannot be used; the message names the field."""
 
@@ -110,10 +116,23 @@ class SplitSpec:
         split: the split of the video-split file (``"test"``, ``"val"``, ``"train"``).
         frame_stride: frames ``0, k, 2k, ...`` of every video of the split (frame index = position
             in the label file's ``boxes`` list).
+        unlabelled_frames: what a frame without any labelled box is: ``"score"`` (a frame with no object: every
+            detection on it is a false positive; protocol v1) or ``"skip"`` (not annotated: not scored). The
+            shared format reads a null entry as "target not visible", but on the halmstad drones two test videos
+            are null throughout and a third in 217 of 305 frames while the drone is in view (protocol v2's
+            description; results/learning_curve/unlabelled_drones/README.md).
     """
 
     split: str
     frame_stride: int
+    unlabelled_frames: str = "score"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The spec as JSON; ``unlabelled_frames`` only when not ``"score"`` (v1 protocols keep their fingerprint)."""
+        d = asdict(self)
+        if d["unlabelled_frames"] == "score":
+            d.pop("unlabelled_frames")
+        return d
 
 
 @dataclass(frozen=True)
@@ -217,8 +236,8 @@ class Protocol:
             "version": self.version,
             "description": self.description,
             "split_file": self.split_file,
-            "test": asdict(self.test),
-            "val": asdict(self.val),
+            "test": self.test.to_dict(),
+            "val": self.val.to_dict(),
             "min_training_seeds": self.min_training_seeds,
             "iou_thresholds": list(self.iou_thresholds),
             "size_buckets_px": [b.to_list() for b in self.size_buckets],
@@ -299,10 +318,13 @@ def _parse_protocol(doc: Mapping[str, Any], source: str) -> Protocol:
         raise _err(source, "split_file", "must be a path string or null", split_file)
 
     def split_spec(key: str) -> SplitSpec:
-        d = _obj(top[key], source, key, ["split", "frame_stride"])
+        d = _obj(top[key], source, key, ["split", "frame_stride"], ["unlabelled_frames"])
         if d["split"] not in SPLITS:
             raise _err(source, f"{key}.split", f"must be one of {list(SPLITS)}", d["split"])
-        return SplitSpec(str(d["split"]), _int(d["frame_stride"], source, f"{key}.frame_stride", 1))
+        unl = d.get("unlabelled_frames", "score")
+        if unl not in UNLABELLED_FRAMES:
+            raise _err(source, f"{key}.unlabelled_frames", f"must be one of {list(UNLABELLED_FRAMES)}", unl)
+        return SplitSpec(str(d["split"]), _int(d["frame_stride"], source, f"{key}.frame_stride", 1), str(unl))
 
     test, val = split_spec("test"), split_spec("val")
     min_seeds = _int(top["min_training_seeds"], source, "min_training_seeds", 1)

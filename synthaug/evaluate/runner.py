@@ -86,6 +86,7 @@ class Condition:
             (:func:`~synthaug.detectors.training_sets.downscaled_positives`).
         faded_copies: copies of every real seed with the object fainter against its own background
             (:func:`~synthaug.detectors.training_sets.faded_positives`).
+        faded_contrast: their contrast range (None: the default; a negative range inverts the object's contrast).
         pose_sampling: poses of the synthetic positives (``"uniform"``: the paper; ``"fitted"``: around
             each seed's fitted pose).
         copy_paste_ratio: copy-paste patches per real seed (the real objects cut out with the fit's
@@ -113,6 +114,7 @@ class Condition:
     downscaled_copies: int = 0
     faded_copies: int = 0
     object_box: str | None = None
+    faded_contrast: tuple[float, float] | None = None
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -122,7 +124,7 @@ class Condition:
         else:
             d["frame_step"] = None
         for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling", "copy_paste_ratio",  # added later:
-                  "synthetic_share", "downscaled_copies", "faded_copies", "object_box"):
+                  "synthetic_share", "downscaled_copies", "faded_copies", "object_box", "faded_contrast"):
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         return d
@@ -199,7 +201,8 @@ class ProtocolRunner:
         if 1.0 not in self._eval:
             t0 = time.perf_counter()
             self._eval[1.0] = load_eval_set(self.test_videos(), self.paths.videos_dir, self.paths.labels_dir,
-                                            stride_k=self._frames().frame_stride)
+                                            stride_k=self._frames().frame_stride,
+                                            skip_unlabelled=self._frames().unlabelled_frames == "skip")
             es = self._eval[1.0]
             self.log(f"[test] {len(es.stems)} videos, {es.n_frames} frames (every {es.stride_k}th), "
                      f"{es.n_objects} objects, decoded in {time.perf_counter() - t0:.0f} s")
@@ -313,7 +316,8 @@ class ProtocolRunner:
                                  pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio,
                                  synthetic_share=condition.synthetic_share,
                                  downscaled_copies=condition.downscaled_copies,
-                                 faded_copies=condition.faded_copies, object_box=condition.object_box),
+                                 faded_copies=condition.faded_copies, object_box=condition.object_box,
+                                 faded_contrast=condition.faded_contrast),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -500,6 +504,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          copy_paste_ratios: Sequence[float] = (), seeds: Sequence[int] | None = None,
                          synthetic_share: float | None = None, downscaled_copies: Sequence[int] = (),
                          faded_copies: Sequence[int] = (), object_box: Sequence[str | None] = (None,),
+                         faded_contrast: tuple[float, float] | None = None,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -514,7 +519,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     silhouettes, pasted on other seeds' backgrounds), one condition per ratio. ``downscaled_copies``: the real seeds
     shown smaller (:func:`~synthaug.detectors.training_sets.downscaled_positives`), one condition per count;
     ``faded_copies`` likewise, the objects made fainter against their own backgrounds
-    (:func:`~synthaug.detectors.training_sets.faded_positives`). ``synthetic_share``: the added positives' share of
+    (:func:`~synthaug.detectors.training_sets.faded_positives`; ``faded_contrast``: their contrast range, a negative
+    one inverting the object's contrast). ``synthetic_share``: the added positives' share of
     the positive class's weight in every synthetic, perturbed, copy-paste, downscaled and faded condition.
     ``object_box``: each synthetic ratio once per framing (None: the paper's; ``"seed"``: as ingest frames a seed).
 
@@ -541,10 +547,13 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             seed_count=seed_count, params=params, mesh=mesh, fit_distance=dist, fit_options=fit_opts,
                             copy_paste_ratio=float(r), synthetic_share=synthetic_share)
                   for r in copy_paste_ratios]
-        for label, counts in (("downscaled", downscaled_copies), ("faded", faded_copies)):
-            conds += [Condition(f"{base} + {c}x {label}{share}", kind, seed_count=seed_count,
-                                synthetic_share=synthetic_share, **{f"{label}_copies": int(c)})
-                      for c in counts]
+        conds += [Condition(f"{base} + {c}x downscaled{share}", kind, seed_count=seed_count,
+                            synthetic_share=synthetic_share, downscaled_copies=int(c)) for c in downscaled_copies]
+        fc = None if faded_contrast is None else tuple(float(v) for v in faded_contrast)
+        faded = "faded" if fc is None else (f"{'inverted' if fc[0] < 0 else 'faded'} (contrast x{fc[0]:g} to x{fc[1]:g})")
+        conds += [Condition(f"{base} + {c}x {faded}{share}", kind, seed_count=seed_count,
+                            synthetic_share=synthetic_share, faded_copies=int(c), faded_contrast=fc)
+                  for c in faded_copies]
         for c in conds:
             _run_into(results, runner, c, seeds)
     if out is not None:
@@ -597,6 +606,8 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--no-patches", action="store_true", help="skip the paper's patch protocol")
     q.add_argument("--max-test-videos", type=int, default=None, help="first N test videos only (smoke runs)")
     q.add_argument("--mining-rounds", type=int, default=TrainOptions.mining_rounds, help="hard-negative mining rounds")
+    q.add_argument("--mining-stride", type=int_at_least(1), default=TrainOptions.mining_stride,
+                   help="hard-negative mining scans every k-th frame of the mining videos (part of a cell's key)")
     q.add_argument("--cnn-shift", type=int, default=TrainOptions.cnn_shift, help="CNN positives' random shift (pixels)")
     q.add_argument("--mining-select", default=TrainOptions.mining_select, choices=list(MINING_SELECT),
                    help="the mining round kept: fewest validation false positives (fp) or highest validation AP of "
@@ -651,6 +662,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--faded-copies", type=int_at_least(1), nargs="*", default=[],
                     help="copies of every real seed with the object fainter against its own background (contrast "
                          "x0.3-0.9); one condition per count")
+    sy.add_argument("--faded-contrast", type=float, nargs=2, metavar=("LOW", "HIGH"), default=None,
+                    help="the faded copies' contrast range (default 0.3 0.9); a negative range, e.g. -1 -0.5, inverts "
+                         "the object's contrast against its background (part of a cell's key)")
     sy.add_argument("--synthetic-share", type=float, default=None,
                     help="the added positives' share of the positive class's training weight (default: by count)")
     sy.add_argument("--object-box", nargs="+", choices=["none", "seed", "fit"], default=["none"],
@@ -662,6 +676,7 @@ def build_parser() -> argparse.ArgumentParser:
 def train_options(args: argparse.Namespace) -> TrainOptions:
     """The :class:`TrainOptions` of parsed runner arguments (budgets, mining, box model; the rest at defaults)."""
     return dataclasses.replace(TrainOptions(), **budget_options(args), mining_rounds=args.mining_rounds,
+                               mining_stride=args.mining_stride,
                                cnn_shift=args.cnn_shift, mining_select=args.mining_select,
                                mining_patience=args.mining_patience, box_model=args.box_model)
 
@@ -691,6 +706,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds,
                              synthetic_share=args.synthetic_share, downscaled_copies=args.downscaled_copies,
                              faded_copies=args.faded_copies,
+                             faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                              object_box=tuple(None if b == "none" else b for b in args.object_box), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0

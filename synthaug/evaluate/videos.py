@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Sequence
@@ -73,6 +74,7 @@ def load_eval_set(
     *,
     stride_k: int = 10,
     max_videos: int | None = None,
+    skip_unlabelled: bool = False,
 ) -> EvalSet:
     """Decode every ``stride_k``-th frame of labelled videos and their boxes.
 
@@ -86,6 +88,9 @@ def load_eval_set(
         labels_dir: folder of ``<stem>.json`` label files (shared format).
         stride_k: keep frames ``0, k, 2k, ...`` (only frames with a label entry).
         max_videos: use only the first this-many videos (evenly spaced over the list).
+        skip_unlabelled: leave out the kept frames that hold no labelled box (a protocol's
+            ``unlabelled_frames="skip"``: not annotated rather than empty); a video left with no frame is
+            left out, with a :class:`UserWarning` naming it.
 
     Returns:
         The :class:`EvalSet`.
@@ -119,8 +124,14 @@ def load_eval_set(
             raise ValueError(f"no frame decoded from {video_file}: {label_file} has no entry")
         decoded = read_video(video_file, max_frames=len(gts))
         idx = list(range(0, len(decoded), stride_k))
+        if skip_unlabelled:
+            idx = [j for j in idx if gts[j] is not None and len(gts[j])]
+            if not idx:
+                warnings.warn(f"video {stem!r}: no labelled box in its scored frames; left out "
+                              "(unlabelled frames are skipped)", UserWarning, stacklevel=2)
+                continue
         out.stems.append(stem)
-        out.frames.append(np.ascontiguousarray(decoded[::stride_k]))
+        out.frames.append(np.ascontiguousarray(decoded[idx]))
         out.frame_indices.append(idx)
         out.boxes.append([gts[j] for j in idx])
     return out

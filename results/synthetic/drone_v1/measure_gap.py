@@ -39,8 +39,15 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     ap.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=["uniform", "fitted"],
                     help="poses of the synthetic samples (each fit once per choice)")
+    ap.add_argument("--object-box", nargs="+", default=["none"], choices=["none", "seed", "fit"],
+                    help="framing of the synthetic objects (SyntheticObjectDataset's object_box), one comparison each")
     ap.add_argument("--fitted-renders", action="store_true",
                     help="also each fit's own renders S(Θ_i, B_i) (the fitted pose itself: no pose sampling)")
+    ap.add_argument("--seed-set", default="data/runs/ingest_drone_seed{s}/seedsets/drone_100",
+                    help="seed set of training seed {s}")
+    ap.add_argument("--fit", default="data/runs/fits/drone_100_seed{s}_{dist}.json",
+                    help="fit file of training seed {s} and fit name {dist}")
+    ap.add_argument("--mesh", default=MESH, help="mesh file or built-in name")
     ap.add_argument("--out", default=str(OUT))
     args = ap.parse_args()
     out = Path(args.out)
@@ -48,22 +55,25 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     for s in args.seeds:
         t0 = time.perf_counter()
-        ss = SeedSet.load(f"data/runs/ingest_drone_seed{s}/seedsets/drone_100")
+        ss = SeedSet.load(args.seed_set.format(s=s))
         n = len(ss)
         real = torch.as_tensor(np.asarray(ss.patches)).float().div(255).unsqueeze(1)
         groups = np.arange(n)
         syn = {}
         for dist in args.fits:
-            fit = Path(f"data/runs/fits/drone_100_seed{s}_{dist}.json")
+            fit = Path(args.fit.format(s=s, dist=dist))
             if fit.is_file():
                 CaptureParams.load_with_extra(fit)
                 for ps in args.pose_sampling:
-                    name = f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
-                    syn[name] = training_samples(ss, MESH, fit, 5 * n, seed=s + 2, pose_sampling=ps)
+                    for box in args.object_box:
+                        name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
+                                + ("" if box == "none" else f"_box_{box}"))
+                        syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2, pose_sampling=ps,
+                                                     object_box=None if box == "none" else box)
                 if args.fitted_renders:
                     from synthaug.fit.render_fit import render_fitted
 
-                    syn[f"fitted_renders_{dist}"] = (render_fitted(ss, fit, MESH)[1].clamp(0, 1), groups)
+                    syn[f"fitted_renders_{dist}"] = (render_fitted(ss, fit, args.mesh)[1].clamp(0, 1), groups)
         if not args.no_perturbed:
             per = perturb_patches(real, 5, generator=torch.Generator().manual_seed(s + 3))
             syn["perturbed"] = (per, np.tile(groups, 5))

@@ -69,13 +69,15 @@ def gap_section(
 
 
 def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count: int, *,
-                     seed: int = 0, pose_sampling: str = "uniform") -> tuple[Tensor, np.ndarray]:
+                     seed: int = 0, pose_sampling: str = "uniform",
+                     object_box: float | str | None = None) -> tuple[Tensor, np.ndarray]:
     """``count`` synthetic training patches of a fit, and the seed each one comes from.
 
     The dataset of :func:`synthaug.detectors.training_sets.synthetic_positives` (same arguments, same patches:
     one seed's fitted parameters and background, a random pose — ``pose_sampling="fitted"``: around the seed's
-    fitted pose), keeping each item's ``seed_index`` so the two-sample test can hold a seed's real and synthetic
-    patches out together.
+    fitted pose; ``object_box``: the objects' framing, as
+    :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes it), keeping each item's ``seed_index`` so the
+    two-sample test can hold a seed's real and synthetic patches out together.
 
     Returns:
         ``(patches (count, 1, P, P) float in [0, 1], seed_index (count,) int64)``.
@@ -86,7 +88,8 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
         raise ValueError(f"count must be an int >= 1, got {count!r}")
     p = int(seedset.patches.shape[-1])
     ds = SyntheticObjectDataset(mesh, seedset, params=str(fit_file), length=count, patch_size=p,
-                                negative_fraction=0.0, seed=seed, seed_geometry="auto", pose_sampling=pose_sampling)
+                                negative_fraction=0.0, seed=seed, seed_geometry="auto", pose_sampling=pose_sampling,
+                                object_box=object_box)
     items = ds.__getitems__(list(range(count)))
     patches = torch.stack([img for img, _ in items]).float().clamp(0, 1)
     return patches, np.array([int(t["seed_index"]) for _, t in items], dtype=np.int64)
