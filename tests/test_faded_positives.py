@@ -36,6 +36,13 @@ class _Seeds:
         return len(self.boxes)
 
 
+def _reference(seeds: _Seeds, i: int, c: float, sky: float) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
+    """Seed ``i``'s patch, sky level, box mask and the numpy reference of ``I' = I - (1 - c) m (I - B)`` in [0, 1]."""
+    real = seeds.patches[i].astype(np.float64) / 255
+    m = box_mask(seeds.boxes[i], seeds.crops[i], 40)
+    return real, sky / 255, m, np.clip(real - (1 - c) * m * (real - sky / 255), 0, 1)
+
+
 def test_box_mask_is_the_box_footprint_crop_patch_cuts() -> None:
     # hand-computed: a 20 x 20 box in a 40 px crop seen at 4 px covers the central 2 x 2 pixels exactly
     assert box_mask((10, 10, 20, 20), (20, 20, 40), 4, feather=0).tolist() == \
@@ -54,32 +61,36 @@ def test_box_mask_is_the_box_footprint_crop_patch_cuts() -> None:
         assert box_mask(box, crop, 40).sum() == pytest.approx(m.sum(), rel=1e-3)
 
 
-def test_faded_copies_scale_the_object_difference_inside_the_box_only() -> None:
+@pytest.mark.parametrize("contrast, sky, ink", [((0.3, 0.9), BG, FG), ((-1.0, -0.5), 120, 80)],
+                         ids=["fainter", "inverted"])
+def test_faded_copies_scale_the_object_difference_inside_the_box_only(contrast, sky, ink) -> None:
+    """``I' = I - (1 - c) m (I - B)``, |c| log-uniform in the range (negative: the object brighter than its sky,
+    a shallow object so that nothing clips), against numpy; nothing changes outside the feathered box."""
     seeds = _Seeds(np.array([[60.0, 40.0, 28.0, 14.0], [50.0, 50.0, 20.0, 30.0]]))
-    out, info = faded_positives(seeds, 3, contrast=(0.3, 0.9), seed=0)
+    seeds.patches = np.stack([crop_patch(_frame(b, bg=sky, fg=ink), crop=c)[0] for b, c in zip(seeds.boxes, seeds.crops)])
+    seeds.backgrounds = np.full_like(seeds.patches, sky)
+    out, info = faded_positives(seeds, 3, contrast=contrast, seed=0)
     assert out.shape == (6, 1, 40, 40) and out.dtype == torch.float32
-    assert info["count"] == 6 and info["contrast"] == [0.3, 0.9] and 0.3 <= info["contrast_median"] <= 0.9
-    # the draws: log-uniform in the range, from the explicit generator
-    rng = np.random.default_rng(0)
-    cs = np.exp(rng.uniform(np.log(0.3), np.log(0.9), 6))
+    lo, hi = contrast
+    assert info["count"] == 6 and info["contrast"] == [lo, hi] and lo <= info["contrast_median"] <= hi
+    # the draws: |c| log-uniform in the range, from the explicit generator, with the range's sign
+    a, b = sorted((abs(lo), abs(hi)))
+    cs = np.sign(lo) * np.exp(np.random.default_rng(0).uniform(np.log(a), np.log(b), 6))
     for k in range(6):
-        i = k // 3
-        real = seeds.patches[i].astype(np.float64) / 255
-        bg = BG / 255
-        m = box_mask(seeds.boxes[i], seeds.crops[i], 40)
+        real, bg, m, want = _reference(seeds, k // 3, cs[k], sky)
         got = out[k, 0].double().numpy()
-        # numpy reference of I' = I - (1 - c) m (I - B)
-        np.testing.assert_allclose(got, real - (1 - cs[k]) * m * (real - bg), atol=1e-6)
-        # deep inside the box (mask 1) the object's depth below the sky is c times the real one's
+        np.testing.assert_allclose(got, want, atol=1e-6)
+        # deep inside the box (mask 1) the object's difference from the sky is c times the real one's
         inner = m > 0.999
         assert inner.sum() > 20
-        np.testing.assert_allclose((bg - got[inner]) / (bg - real[inner]), cs[k], rtol=1e-3)  # float32 out
-        # outside the feathered box nothing changed
+        np.testing.assert_allclose((got[inner] - bg) / (real[inner] - bg), cs[k], rtol=1e-3)  # float32 out
+        if lo < 0:
+            assert (got[inner] > bg).all()  # the dark object now stands above the sky
         far = m == 0
         assert far.sum() > 500 and np.array_equal(got[far], real[far].astype(np.float32))
-    again, _ = faded_positives(seeds, 3, contrast=(0.3, 0.9), seed=0)
+    again, _ = faded_positives(seeds, 3, contrast=contrast, seed=0)
     assert torch.equal(out, again)
-    other, _ = faded_positives(seeds, 3, contrast=(0.3, 0.9), seed=1)
+    other, _ = faded_positives(seeds, 3, contrast=contrast, seed=1)
     assert not torch.equal(out, other)
 
 
@@ -98,41 +109,11 @@ def test_defaults_bad_inputs_and_none() -> None:
     np.testing.assert_allclose(same[0, 0].numpy(), seeds.patches[0] / 255.0, atol=1e-6)
 
 
-def test_a_negative_range_inverts_the_object_against_its_background() -> None:
-    """``contrast=INVERTED_CONTRAST``: the dark box becomes brighter than the sky, by |c| of its depth, c log-uniform."""
+def test_contrast_ranges_of_one_sign_only() -> None:
     from synthaug.detectors.training_sets import INVERTED_CONTRAST
 
-    seeds = _Seeds(np.array([[60.0, 40.0, 28.0, 14.0], [50.0, 50.0, 20.0, 30.0]]))
-    sky, ink = 120, 80  # a shallow object, so that the inverted one stays inside [0, 255]
-    seeds.patches = np.stack([crop_patch(_frame(b, bg=sky, fg=ink), crop=c)[0] for b, c in zip(seeds.boxes, seeds.crops)])
-    seeds.backgrounds = np.full_like(seeds.patches, sky)
+    seeds = _Seeds(np.array([[60.0, 40.0, 28.0, 14.0]]))
     assert INVERTED_CONTRAST == (-1.0, -0.5)
-    out, info = faded_positives(seeds, 2, contrast=INVERTED_CONTRAST, seed=3)
-    assert info["contrast"] == [-1.0, -0.5] and -1.0 <= info["contrast_median"] <= -0.5
-    rng = np.random.default_rng(3)
-    cs = -np.exp(rng.uniform(np.log(0.5), np.log(1.0), 4))  # |c| log-uniform in [0.5, 1], sign negative
-    for k in range(4):
-        i = k // 2
-        real = seeds.patches[i].astype(np.float64) / 255
-        bg = sky / 255
-        m = box_mask(seeds.boxes[i], seeds.crops[i], 40)
-        got = out[k, 0].double().numpy()
-        # numpy reference of I' = I - (1 - c) m (I - B), clipped to [0, 1]
-        np.testing.assert_allclose(got, np.clip(real - (1 - cs[k]) * m * (real - bg), 0, 1), atol=1e-6)
-        inner = m > 0.999
-        # the object now stands *above* the sky, at |c| of the depth it had below it (120 + 40 |c| <= 160: no clipping)
-        assert (got[inner] > bg).all()
-        np.testing.assert_allclose((got[inner] - bg) / (bg - real[inner]), -cs[k], rtol=1e-3)
-        far = m == 0
-        assert np.array_equal(got[far], real[far].astype(np.float32))
-    # a range across zero or beyond -1 is refused
     for bad in ((-1.0, 0.5), (-1.5, -0.5), (-0.5, -1.0), (-0.5, 0.0)):
         with pytest.raises(ValueError, match="contrast"):
             faded_positives(seeds, 1, contrast=bad)
-    # a positive range draws exactly as before the sign was allowed
-    before, _ = faded_positives(seeds, 2, contrast=(0.3, 0.9), seed=3)
-    rng = np.random.default_rng(3)
-    c0 = np.exp(rng.uniform(np.log(0.3), np.log(0.9)))
-    real0 = seeds.patches[0].astype(np.float64) / 255
-    m0 = box_mask(seeds.boxes[0], seeds.crops[0], 40)
-    np.testing.assert_allclose(before[0, 0].double().numpy(), real0 - (1 - c0) * m0 * (real0 - sky / 255), atol=1e-6)
