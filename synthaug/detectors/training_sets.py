@@ -142,7 +142,9 @@ FADED_CONTRAST: tuple[float, float] = (0.3, 0.9)
 """Contrast factors :func:`faded_positives` draws between by default (log-uniform): on the halmstad drones, the test
 split's objects stand 0.4x (under 24 px) and 0.33x (24-48 px) as deep below their surroundings as the training
 split's (median darkest-decile depth 2.0 vs 5.0 and 1.0 vs 3.0 gray levels,
-results/learning_curve/drone_downscaled/contrast.py)."""
+results/learning_curve/drone_downscaled/contrast.py). That measure reads only darkening: two thirds of the test
+split's drones are *brighter* than the sky (results/learning_curve/label_convention/README.md), which it counts as
+faint; :data:`INVERTED_CONTRAST` addresses those."""
 
 
 INVERTED_CONTRAST: tuple[float, float] = (-1.0, -0.5)
