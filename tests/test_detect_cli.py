@@ -87,6 +87,17 @@ def test_detect_video_then_evaluate(workspace: dict[str, Path], capsys: pytest.C
     assert metrics["ap"] > 0.9
     assert list(metrics["per_video"]) == ["V_TOY_001"]
     assert (eval_dir / "pr.png").read_bytes()[:4] == b"\x89PNG"
+    assert metrics["unlabelled_frames"] == "score"
+    # --unlabelled-frames skip (protocol v2): frame 3, whose label is null, is not scored; its detections go
+    rc = cli_main(["evaluate", "--detections", str(out), "--labels", str(workspace["labels"]), "--out",
+                   str(workspace["root"] / "eval_skip"), "--unlabelled-frames", "skip"])
+    assert rc == 0
+    skipped = json.loads(capsys.readouterr().out)
+    assert skipped["unlabelled_frames"] == "skip" and skipped["n_frames"] == N_FRAMES - 1
+    assert skipped["n_ground_truth"] == metrics["n_ground_truth"]
+    assert skipped["n_true_positives"] == metrics["n_true_positives"]
+    assert skipped["n_detections"] == metrics["n_detections"] - len(payload["detections"][3])
+    assert skipped["ap"] >= metrics["ap"]
 
 
 def test_frame_stride_gives_nulls_and_evaluate_skips_them(workspace: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:

@@ -42,6 +42,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, required=True, help="output folder for pr.png and metrics.json")
     parser.add_argument("--iou", type=float, default=0.5, help="IoU of a correct detection (default 0.5)")
     parser.add_argument("--title", default="", help="title of the PR plot")
+    parser.add_argument("--unlabelled-frames", choices=["score", "skip"], default="score",
+                        help="a frame whose label is null: a frame with no object, every detection on it a false "
+                             "positive (score, protocol halmstad_v1), or not annotated, not scored (skip, halmstad_v2)")
 
 
 def load_labels(path: Path) -> tuple[str, list[np.ndarray | None]]:
@@ -155,8 +158,13 @@ def pair_files(detection_files: list[Path], label_paths: list[Path]) -> list[tup
     return pairs
 
 
-def evaluate_files(detection_files: list[Path], label_paths: list[Path], *, iou: float = 0.5) -> tuple[Any, dict[str, Any]]:
-    """Pool all videos into one PR curve; returns ``(PRResult, metrics dict with per-video APs)``."""
+def evaluate_files(detection_files: list[Path], label_paths: list[Path], *, iou: float = 0.5,
+                   skip_unlabelled: bool = False) -> tuple[Any, dict[str, Any]]:
+    """Pool all videos into one PR curve; returns ``(PRResult, metrics dict with per-video APs)``.
+
+    ``skip_unlabelled``: frames without a labelled box are not scored (their detections are dropped, as for a frame
+    not processed): protocol v2's ``unlabelled_frames="skip"``.
+    """
     from synthaug.evaluate.ap import evaluate_detections
 
     all_dets: list[np.ndarray | None] = []
@@ -166,6 +174,8 @@ def evaluate_files(detection_files: list[Path], label_paths: list[Path], *, iou:
         video, dets = load_detections(det_file)
         _, gts = load_labels(label_file)
         n = min(len(dets), len(gts))
+        if skip_unlabelled:
+            dets = [None if g is None or len(g) == 0 else d for d, g in zip(dets[:n], gts[:n])]
         res = evaluate_detections(dets[:n], gts[:n], iou)
         per_video[Path(video).stem] = {"ap": res.metrics()["ap"], "n_frames": res.n_frames, "n_ground_truth": res.n_ground_truth}
         all_dets.extend(dets[:n])
@@ -196,7 +206,9 @@ def _run(args: argparse.Namespace) -> int:
         if not d.is_file():
             raise FileNotFoundError(f"detections file not found: {d}")
     check_output_dir(args.out)
-    result, metrics = evaluate_files(list(args.detections), list(args.labels), iou=args.iou)
+    result, metrics = evaluate_files(list(args.detections), list(args.labels), iou=args.iou,
+                                     skip_unlabelled=args.unlabelled_frames == "skip")
+    metrics["unlabelled_frames"] = args.unlabelled_frames
     args.out.mkdir(parents=True, exist_ok=True)
     label = "detector"
     try:
