@@ -277,8 +277,8 @@ def _train_and_score(args: argparse.Namespace, data: Path, split: dict[str, list
     results = {n: ProtocolResult(n, proto) for n in names}
     first: dict[str, Any] = {}
     # the ridge map (the ensemble's CNN map costs minutes); without validation videos the mining's stopping rule has
-    # nothing to count, so one mining round instead of up to three
-    options = TrainOptions(box_model="ridge", mining_rounds=3 if split["val"] else 1)
+    # nothing to count, so one mining round instead of the default's
+    options = TrainOptions(box_model="ridge", mining_rounds=TrainOptions.mining_rounds if split["val"] else 1)
     object_box = None if args.object_box == "none" else args.object_box
     conditions = (AddedPositives(), AddedPositives(params=fit_path, synthetic_ratio=args.ratio, object_box=object_box),
                   AddedPositives())

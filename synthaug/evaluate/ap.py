@@ -265,6 +265,17 @@ def average_precision(precision: np.ndarray, recall: np.ndarray, *, envelope: bo
     return float(np.sum(steps * precision))
 
 
+def has_labelled_box(ground_truth: np.ndarray | None) -> bool:
+    """Whether a frame's ground-truth entry (:func:`evaluate_detections`' convention) holds at least one box; frames
+    without one are left out of the frame protocol under ``unlabelled_frames="skip"`` (protocol v2).
+
+    Example:
+        >>> has_labelled_box(None), has_labelled_box(np.zeros((0, 4))), has_labelled_box(np.ones((1, 4)))
+        (False, False, True)
+    """
+    return ground_truth is not None and len(ground_truth) > 0
+
+
 def evaluate_detections(
     detections: Sequence[np.ndarray | None],
     ground_truth: Sequence[np.ndarray | None],

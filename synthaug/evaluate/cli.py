@@ -165,7 +165,7 @@ def evaluate_files(detection_files: list[Path], label_paths: list[Path], *, iou:
     ``skip_unlabelled``: frames without a labelled box are not scored (their detections are dropped, as for a frame
     not processed): protocol v2's ``unlabelled_frames="skip"``.
     """
-    from synthaug.evaluate.ap import evaluate_detections
+    from synthaug.evaluate.ap import evaluate_detections, has_labelled_box
 
     all_dets: list[np.ndarray | None] = []
     all_gts: list[np.ndarray | None] = []
@@ -175,7 +175,7 @@ def evaluate_files(detection_files: list[Path], label_paths: list[Path], *, iou:
         _, gts = load_labels(label_file)
         n = min(len(dets), len(gts))
         if skip_unlabelled:
-            dets = [None if g is None or len(g) == 0 else d for d, g in zip(dets[:n], gts[:n])]
+            dets = [d if has_labelled_box(g) else None for d, g in zip(dets[:n], gts[:n])]
         res = evaluate_detections(dets[:n], gts[:n], iou)
         per_video[Path(video).stem] = {"ap": res.metrics()["ap"], "n_frames": res.n_frames, "n_ground_truth": res.n_ground_truth}
         all_dets.extend(dets[:n])

@@ -99,6 +99,8 @@ def load_eval_set(
         ValueError: bad stride, no video, a missing video or label file, an
             undecodable video.
     """
+    from synthaug.evaluate.ap import has_labelled_box
+
     if stride_k < 1:
         raise ValueError(f"stride_k must be >= 1, got {stride_k}")
     videos = list(videos)
@@ -125,7 +127,7 @@ def load_eval_set(
         decoded = read_video(video_file, max_frames=len(gts))
         idx = list(range(0, len(decoded), stride_k))
         if skip_unlabelled:
-            idx = [j for j in idx if gts[j] is not None and len(gts[j])]
+            idx = [j for j in idx if has_labelled_box(gts[j])]
             if not idx:
                 warnings.warn(f"video {stem!r}: no labelled box in its scored frames; left out "
                               "(unlabelled frames are skipped)", UserWarning, stacklevel=2)
