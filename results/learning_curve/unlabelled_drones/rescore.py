@@ -7,6 +7,8 @@ not per frame, so here the three videos are dropped whole (V_DRONE_108's 88 labe
 approximation of v2 from results already computed, with the bootstrap over the 13 remaining videos.
 
     PYTHONPATH=. python results/learning_curve/unlabelled_drones/rescore.py BASELINE.json OTHER.json [...] [--out MD]
+    # one table of all the videos the results hold, nothing dropped (e.g. two runner invocations' v2 cells):
+    PYTHONPATH=. python results/learning_curve/unlabelled_drones/rescore.py BASELINE.json OTHER.json --keep-all
 
 Each file: a ``ProtocolResult`` JSON (``runner`` tables' per-condition files; files of the same condition, e.g. one
 per training seed, are combined); the first condition is the paired baseline.
@@ -34,22 +36,22 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", nargs="+")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--keep-all", action="store_true", help="one table of every video the results hold, nothing dropped")
     a = ap.parse_args()
     by_cond: dict[str, list[ProtocolResult]] = {}
     for f in a.results:
         r = ProtocolResult.load(f)
         by_cond.setdefault(r.condition, []).append(r)
-    res = {}
-    for cond, parts in by_cond.items():
-        r = ProtocolResult.combine(parts)
-        res[f"{cond} (16 videos)"] = r
-        res[f"{cond} (13 videos)"] = without(r)
+    combined = {cond: ProtocolResult.combine(parts) for cond, parts in by_cond.items()}
     first = next(iter(by_cond))
-    lines = [f"Baseline of the paired rows: {first} on the same videos.", ""]
-    for tag in ("16 videos", "13 videos"):
-        sub = {k: v for k, v in res.items() if k.endswith(f"({tag})")}
-        lines += [f"### {tag}", "", report_table(sub, baseline=f"{first} ({tag})"), ""]
-    text = "\n".join(lines)
+    if a.keep_all:
+        text = report_table(combined, baseline=first)
+    else:
+        lines = [f"Baseline of the paired rows: {first} on the same videos.", ""]
+        for tag, pick in (("16 videos", lambda r: r), ("13 videos", without)):
+            sub = {f"{c} ({tag})": pick(r) for c, r in combined.items()}
+            lines += [f"### {tag}", "", report_table(sub, baseline=f"{first} ({tag})"), ""]
+        text = "\n".join(lines)
     print(text)
     if a.out:
         Path(a.out).write_text(text + "\n")
