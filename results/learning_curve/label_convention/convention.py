@@ -20,7 +20,9 @@ import json
 from collections import defaultdict
 
 import numpy as np
+import torch
 from scipy import ndimage
+from torchvision.ops import box_iou
 
 from synthaug.data.seedset import SeedSet
 
@@ -76,22 +78,16 @@ def measure(seedset_dir: str, *, k: float, floor: float) -> dict[str, list[dict[
     return per_video
 
 
-def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    iw = np.clip(np.minimum(a[:, 2], b[:, 2]) - np.maximum(a[:, 0], b[:, 0]), 0, None)
-    ih = np.clip(np.minimum(a[:, 3], b[:, 3]) - np.maximum(a[:, 1], b[:, 1]), 0, None)
-    inter = iw * ih
-    area = lambda x: (x[:, 2] - x[:, 0]) * (x[:, 3] - x[:, 1])  # noqa: E731
-    return inter / (area(a) + area(b) - inter)
-
-
-def oracle_iou(per_video: dict[str, list[dict[str, float]]], w_ratio: float, h_ratio: float) -> np.ndarray:
-    """IoU with the labelled box of a perfect object localiser mapped to the annotators' box by one pooled margin:
-    the object's own box, same centre, width / ``w_ratio`` and height / ``h_ratio``."""
+def oracle_iou(per_video: dict[str, list[dict[str, float]]], w_ratio: float | np.ndarray,
+               h_ratio: float | np.ndarray) -> np.ndarray:
+    """IoU with the labelled box of a perfect object localiser mapped to the annotators' box by a margin: the
+    object's own box, same centre, width / ``w_ratio`` and height / ``h_ratio`` (one pooled value, or one per seed)."""
     obj = np.array([s["object"] for v in per_video.values() for s in v])
     lab = np.array([s["label"] for v in per_video.values() for s in v])
     cx, cy = (obj[:, 0] + obj[:, 2]) / 2, (obj[:, 1] + obj[:, 3]) / 2
     w, h = (obj[:, 2] - obj[:, 0]) / w_ratio, (obj[:, 3] - obj[:, 1]) / h_ratio
-    return _iou(np.stack([cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2], 1), lab)
+    boxes = torch.from_numpy(np.stack([cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2], 1))
+    return box_iou(boxes, torch.from_numpy(lab)).diagonal().numpy()
 
 
 def size_model(per_video: dict[str, list[dict[str, float]]]) -> tuple[float, float]:
@@ -104,14 +100,10 @@ def size_model(per_video: dict[str, list[dict[str, float]]]) -> tuple[float, flo
 
 
 def oracle_iou_sized(per_video: dict[str, list[dict[str, float]]], model: tuple[float, float]) -> np.ndarray:
-    """As :func:`oracle_iou`, the margin predicted from the object's size by :func:`size_model`."""
-    obj = np.array([s["object"] for v in per_video.values() for s in v])
-    lab = np.array([s["label"] for v in per_video.values() for s in v])
+    """As :func:`oracle_iou`, the margin predicted from each object's size by :func:`size_model`."""
     px = np.array([s["longest"] * s["label_px"] for v in per_video.values() for s in v])
     r = np.exp(model[0] + model[1] * np.log(px))
-    cx, cy = (obj[:, 0] + obj[:, 2]) / 2, (obj[:, 1] + obj[:, 3]) / 2
-    w, h = (obj[:, 2] - obj[:, 0]) / r, (obj[:, 3] - obj[:, 1]) / r
-    return _iou(np.stack([cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2], 1), lab)
+    return oracle_iou(per_video, r, r)
 
 
 def summary(per_video: dict[str, list[dict[str, float]]], reference: tuple[float, float] | None = None,
