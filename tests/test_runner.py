@@ -199,6 +199,47 @@ def test_eval_split_val_scores_the_validation_videos_in_their_own_cells(ws, curv
         make_runner(ws, eval_split="train")
 
 
+def test_positive_videos_draw_the_positives_from_k_training_videos_and_mine_all(ws, curve):
+    """``positive_videos`` (issue 15: more frames of the same videos vs more videos): the positives come from K
+    training videos drawn by the seed, nested in K; mining and the box map keep every training video; the seed
+    draw is ingested apart from the full set's; the key changes only when the option is set."""
+    from synthaug.data.seedset import SeedSet
+    from synthaug.data.video import read_labels
+    from synthaug.detectors.video_training import TrainingInputError, positive_video_subset
+
+    assert positive_video_subset(TRAIN, 3, 0) == sorted(TRAIN)
+    for seed in range(4):
+        one, two = positive_video_subset(TRAIN, 1, seed), positive_video_subset(TRAIN[::-1], 2, seed)
+        assert set(one) < set(two) < set(TRAIN) and positive_video_subset(TRAIN, 2, seed) == two
+    assert len({tuple(positive_video_subset(TRAIN, 1, s)) for s in range(8)}) > 1  # the seed draws the subset
+    for bad in (0, 4):
+        with pytest.raises(TrainingInputError, match="positive-videos"):
+            positive_video_subset(TRAIN, bad, 0)
+
+    runner = make_runner(ws, scale_check=False, patches=False)
+    full_seedset = Path(ws["paths"].work_dir) / "ingest_drone_seed1" / "seedsets" / "drone_6" / "seedset.json"
+    before = full_seedset.read_bytes()
+    frames = R.Condition("f", "hog", seed_count=None, all_frames=True, frame_step=4, positive_videos=1)
+    seeds = R.Condition("s", "hog", seed_count=4, positive_videos=2)
+    assert "positive_videos" not in R.Condition("s", "hog", seed_count=4).identity()
+    assert runner.identity(seeds, 1) != runner.identity(R.Condition("s", "hog", seed_count=4), 1)
+    meta_f = runner.run(frames, seeds=[1])[1.0].seeds[1].meta
+    chosen = positive_video_subset(TRAIN, 1, 1)
+    labelled = [i for i, b in enumerate(read_labels(Path(ws["paths"].labels_dir) / f"{chosen[0]}.json").boxes)
+                if b is not None]
+    assert meta_f["positives"] == len(labelled[::4])
+    res_s = runner.run(seeds, seeds=[1])[1.0]
+    ss = SeedSet.load(Path(ws["paths"].work_dir) / "ingest_drone_seed1" / "positive_videos_2_seed1" / "seedsets" / "drone_4")
+    assert len(ss) == 4 and {r["video"] for r in ss.records} <= set(positive_video_subset(TRAIN, 2, 1))
+    assert res_s.seeds[1].meta["positives"] == 4
+    assert full_seedset.read_bytes() == before  # the full set's seed draw is untouched
+    store = CellCache(Path(ws["paths"].work_dir) / "cells" / "detectors")
+    meta = store.get(runner.training_identity(frames, 1))["meta"]
+    assert meta["positives"]["positive_videos"] == chosen and meta["split"]["train"] == sorted(TRAIN)
+    args = R.build_parser().parse_args(["learning-curve", "--positive-videos", "14", "28", "--out", "x"])
+    assert args.positive_videos == [14, 28]
+
+
 def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_against_real(ws, curve):
     """Issue 16 under the protocol: + synthetic (a fit made on the fly per training seed) and + perturbed
     conditions share the real-only condition's seeds; each synthetic cell trains on its own seed set's fit."""

@@ -382,6 +382,8 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
         ("faded_with_all_frames", "--faded-copies"),
         ("contrast_without_faded", "--faded-contrast"),
         ("contrast_across_zero", "--faded-contrast"),
+        ("no_positive_videos", "--positive-videos"),
+        ("more_positive_videos_than_training_videos", "--positive-videos"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -432,6 +434,10 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--faded-contrast", "-1", "-0.5"]
     elif case == "contrast_across_zero":
         extra += ["--faded-copies", "1", "--faded-contrast", "-0.5", "0.5"]
+    elif case == "no_positive_videos":
+        extra += ["--positive-videos", "0"]
+    elif case == "more_positive_videos_than_training_videos":
+        extra += ["--positive-videos", "999"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
     capsys.readouterr()

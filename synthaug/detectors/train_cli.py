@@ -78,6 +78,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_option(pos, "--seed-set", aliases=["--seedset"], type=Path,
                help="use this seed set (`synthaug ingest` output) instead of drawing seeds")
     parser.add_argument("--frame-step", type=int, default=1, help="with --all-frames: every K-th labelled frame")
+    parser.add_argument("--positive-videos", type=int, default=None, metavar="K",
+                        help="positives (seeds or all frames) from only K of the training videos, drawn by --seed; the "
+                             "box map, mining and validation still use every training video (default: all)")
     parser.add_argument("--params", type=Path, help="`synthaug fit` output made on the seed set: adds synthetic positives")
     parser.add_argument("--mesh", help="mesh of the synthetic object (default: the fit's mesh, else the built-in quadcopter)")
     parser.add_argument("--synthetic-ratio", type=float, default=None,
@@ -182,7 +185,7 @@ def main(args: argparse.Namespace) -> int:
         det, meta = train_from_videos(
             args.detector, args.class_name, args.videos, args.labels, out=args.out, split=args.split, seed=args.seed,
             seed_count=100 if args.seed_counts is None else args.seed_counts, all_frames=args.all_frames,
-            frame_step=args.frame_step, seedset=args.seed_set,
+            frame_step=args.frame_step, seedset=args.seed_set, positive_videos=args.positive_videos,
             added=AddedPositives(params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
                                  perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
                                  object_box=args.object_box, copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,

@@ -267,6 +267,7 @@ def train_from_videos(
     all_frames: bool = False,
     frame_step: int = 1,
     seedset: str | Path | None = None,
+    positive_videos: int | None = None,
     added: AddedPositives = AddedPositives(),
     options: TrainOptions = TrainOptions(),
     work_dir: str | Path | None = None,
@@ -303,6 +304,10 @@ def train_from_videos(
         all_frames: every labelled frame of the training videos (every ``frame_step``-th).
         frame_step: see ``all_frames``.
         seedset: use this seed set (``synthaug ingest`` output) instead of ingesting.
+        positive_videos: draw the positives (seeds or all frames) from only this many of the training videos
+            (:func:`positive_video_subset`, drawn by ``seed``); the box map, the mining and the validation still use
+            every training video. The subset's seed draw is ingested into ``<work_dir>/positive_videos_<K>_seed<seed>``, apart
+            from the full set's. None: every training video.
         added: positives added to the real ones and their weight (:class:`AddedPositives`; default: none).
         options: budgets (:class:`~synthaug.detectors.training.TrainOptions`).
         work_dir: ingest output folder (default: ``<out>.work``; a temporary folder when ``out`` is None).
@@ -329,18 +334,26 @@ def train_from_videos(
                         negative_classes=negative_classes)
     say(f"{class_name}: {len(sp['train'])} training videos, {len(sp['val'])} validation videos, "
         f"{len(sp['negative_train'])} negative-class training videos ({sp['source']} split)")
-    _check_against_split(vs, sp, class_name, params=added.params, all_frames=all_frames, seedset=seedset,
+    pos_sp = _positive_split(sp, positive_videos, seed=seed, seedset=seedset)
+    ingest_dir = work_dir
+    if pos_sp is not sp:
+        say(f"positives from {len(pos_sp['train'])} of the {len(sp['train'])} training videos: {pos_sp['train']}")
+        given = _given_work_dir(work_dir, out)  # the subset's seed draw never touches the full set's seed sets
+        ingest_dir = None if given is None else given / f"positive_videos_{len(pos_sp['train'])}_seed{seed}"
+    _check_against_split(vs, pos_sp, class_name, params=added.params, all_frames=all_frames, seedset=seedset,
                          seed_count=seed_count)
 
     # ---------------------------------------------------------------- positives and negatives
     t0 = time.perf_counter()
     if seedset is not None or not all_frames:
-        ss = _seed_set(vs, sp, seedset=seedset, seed_count=seed_count, work_dir=work_dir, out=out,
+        ss = _seed_set(vs, pos_sp, seedset=seedset, seed_count=seed_count, work_dir=ingest_dir, out=out,
                        ingest_seed=ingest_seed, ingest_workers=ingest_workers, negative_classes=negative_classes, say=say)
         ts = _seed_set_training_set(ss, seedset, extra_negatives=extra_negatives, seed=seed, options=options,
                                     ingest_seed=ingest_seed)
     else:
-        ts = _all_frames_training_set(vs, sp, frame_step=frame_step, seed=seed)
+        ts = _all_frames_training_set(vs, pos_sp, frame_step=frame_step, seed=seed)
+    if pos_sp is not sp:
+        ts.info["positive_videos"] = list(pos_sp["train"])
     n_real = int(ts.positives.shape[0])
     perturb_info = _add_perturbed(ts, added.perturb_copies, seed=seed, say=say)
     downscaled_info = _add_downscaled(ts, added.downscaled_copies, options, seed=seed, say=say)
@@ -367,6 +380,25 @@ def train_from_videos(
     if out is not None:
         _write_outputs(res.detector, meta, Path(out), say)
     return res.detector, meta
+
+
+def positive_video_subset(videos: Sequence[str], k: int, seed: int) -> list[str]:
+    """``k`` of ``videos`` drawn by ``seed`` (sorted): the first ``k`` of one seeded permutation of the sorted stems,
+    so for one seed the subsets are nested (``k`` videos are among those of ``k + 1``)."""
+    stems = sorted(videos)
+    if not 1 <= k <= len(stems):
+        raise TrainingInputError("--positive-videos", f"must be in [1, {len(stems)}] (the training videos), got {k}")
+    order = np.random.default_rng(seed).permutation(len(stems))
+    return sorted(stems[i] for i in order[:k])
+
+
+def _positive_split(sp: dict[str, Any], k: int | None, *, seed: int, seedset: str | Path | None) -> dict[str, Any]:
+    """The split the positives are drawn from: ``sp`` itself, or with ``k`` of its training videos."""
+    if k is None:
+        return sp
+    if seedset is not None:
+        raise TrainingInputError("--positive-videos", "a given seed set already fixes its videos: drop --seed-set")
+    return {**sp, "train": positive_video_subset(sp["train"], int(k), seed)}
 
 
 def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_frames: bool,

@@ -74,6 +74,8 @@ class Condition:
         seed_count: real seeds drawn as ``synthaug ingest`` draws them (None with ``all_frames``).
         all_frames: every ``frame_step``-th labelled frame of the training videos.
         frame_step: see ``all_frames``.
+        positive_videos: positives from only this many training videos, drawn by the training seed (None: all;
+            :func:`~synthaug.detectors.video_training.positive_video_subset`); mining, box map and validation use all.
         params, synthetic_ratio, mesh: synthetic positives from a fit (``synthaug fit`` output) of the
             cell's seed set: ``params`` may hold ``{seed}`` (one fit per training seed, since each
             training seed draws its own seed set).
@@ -115,6 +117,7 @@ class Condition:
     faded_copies: int = 0
     object_box: str | None = None
     faded_contrast: tuple[float, float] | None = None
+    positive_videos: int | None = None
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -124,7 +127,8 @@ class Condition:
         else:
             d["frame_step"] = None
         for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling", "copy_paste_ratio",  # added later:
-                  "synthetic_share", "downscaled_copies", "faded_copies", "object_box", "faded_contrast"):
+                  "synthetic_share", "downscaled_copies", "faded_copies", "object_box", "faded_contrast",
+                  "positive_videos"):
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         return d
@@ -310,7 +314,7 @@ class ProtocolRunner:
         det, meta = train_from_videos(
             condition.kind, self.class_name, self.paths.videos_dir, self.paths.labels_dir,
             split=self.paths.split_file, seed=seed, seed_count=condition.seed_count, all_frames=condition.all_frames,
-            frame_step=condition.frame_step,
+            frame_step=condition.frame_step, positive_videos=condition.positive_videos,
             added=AddedPositives(params=self.params_for(condition, seed), mesh=condition.mesh,
                                  synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies,
                                  pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio,
@@ -391,8 +395,13 @@ def _json_safe(x: Any) -> Any:
 # ------------------------------------------------------------------------------------------ learning curve
 def learning_curve(runner: ProtocolRunner, *, detectors: Sequence[str], seed_counts: Sequence[int],
                    all_frames: bool, frame_step: int = 3, seeds: Sequence[int] | None = None,
+                   positive_videos: Sequence[int] = (),
                    out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Real data only: each detector at each seed count (and all training frames), both protocols.
+
+    ``positive_videos``: the same conditions again with the positives drawn from only K training videos, for
+    each K (:attr:`Condition.positive_videos`: more frames of the same videos vs more videos), beside the
+    conditions with all of them.
 
     Writes (when ``out``): ``<kind>_<condition>[_x<scale>].json`` (:class:`ProtocolResult`),
     ``learning_curve.md`` (a :func:`report_table` per detector and scale, the paired difference
@@ -401,10 +410,14 @@ def learning_curve(runner: ProtocolRunner, *, detectors: Sequence[str], seed_cou
     """
     results: dict[str, dict[str, ProtocolResult]] = {}
     for kind in detectors:
-        conds = [Condition(f"{kind} / {n} seeds", kind, seed_count=int(n)) for n in seed_counts]
-        if all_frames:
-            conds.append(Condition(f"{kind} / all training frames", kind, seed_count=None, all_frames=True,
-                                   frame_step=frame_step))
+        conds = []
+        for k in (None, *positive_videos):
+            of = "" if k is None else f" of {int(k)} videos"
+            conds += [Condition(f"{kind} / {n} seeds{of}", kind, seed_count=int(n),
+                                positive_videos=None if k is None else int(k)) for n in seed_counts]
+            if all_frames:
+                conds.append(Condition(f"{kind} / all training frames{of}", kind, seed_count=None, all_frames=True,
+                                       frame_step=frame_step, positive_videos=None if k is None else int(k)))
         for c in conds:
             _run_into(results, runner, c, seeds)
             _run_into(results, runner, c, seeds, window_boxes=True)  # item 5: AP before the box mapping
@@ -458,8 +471,10 @@ def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], pa
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for group, conds in results.items():
-        pts: dict[str, list[tuple[float, float, float, float]]] = {"frame": [], "patch": []}
+        lines: dict[str, dict[str, list[tuple[float, float, float, float]]]] = {}  # a line per video subset
         for res in conds.values():
+            k = res.meta.get("condition", {}).get("positive_videos")
+            pts = lines.setdefault(group if k is None else f"{group}, positives of {k} videos", {"frame": [], "patch": []})
             sm = summarize(res)
             x = _positives(res)
             for panel, iv in (("frame", sm.ap[res.protocol.main_iou]), ("patch", sm.patch_ap)):
@@ -467,10 +482,11 @@ def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], pa
                     lo = iv.estimate - iv.low if np.isfinite(iv.low) else 0.0
                     hi = iv.high - iv.estimate if np.isfinite(iv.high) else 0.0
                     pts[panel].append((x, iv.estimate, max(lo, 0.0), max(hi, 0.0)))
-        for ax, panel in zip(axes, ("frame", "patch")):
-            if pts[panel]:
-                xs, ys, lo, hi = map(np.asarray, zip(*sorted(pts[panel])))
-                ax.errorbar(xs, ys, yerr=[lo, hi], marker="o", capsize=3, label=group)
+        for label, pts in lines.items():
+            for ax, panel in zip(axes, ("frame", "patch")):
+                if pts[panel]:
+                    xs, ys, lo, hi = map(np.asarray, zip(*sorted(pts[panel])))
+                    ax.errorbar(xs, ys, yerr=[lo, hi], marker="o", capsize=3, label=label)
     titles = {"frame": "detection (frame AP@0.5)", "patch": "patch classification (paper's protocol)"}
     for ax, panel in zip(axes, ("frame", "patch")):
         ax.set_xscale("log")
@@ -640,6 +656,9 @@ def build_parser() -> argparse.ArgumentParser:
     lc.add_argument("--seed-counts", type=int, nargs="*", default=[12, 25, 100], help="real seed counts")
     lc.add_argument("--all-frames", action="store_true", help="also train on every --frame-step-th labelled frame")
     lc.add_argument("--frame-step", type=int, default=3, help="stride over labelled frames with --all-frames")
+    lc.add_argument("--positive-videos", type=int_at_least(1), nargs="*", default=[],
+                    help="also every condition with its positives from only K training videos (drawn by the training "
+                         "seed; mining, box map and validation still use all), one set of conditions per K")
     sy = sub.add_parser("synthetic", help="real seeds vs + synthetic (a fit per training seed) vs + perturbed, paired",
                         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     _common_arguments(sy)
@@ -697,7 +716,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     t0 = time.perf_counter()
     if args.what == "learning-curve":
         learning_curve(runner, detectors=args.detectors, seed_counts=args.seed_counts, all_frames=args.all_frames,
-                       frame_step=args.frame_step, seeds=args.training_seeds, out=args.out)
+                       frame_step=args.frame_step, seeds=args.training_seeds,
+                       positive_videos=args.positive_videos, out=args.out)
     else:
         dist = args.fit_distance or (None if args.params else OWN_DISTANCE)
         synthetic_comparison(runner, detectors=args.detectors, seed_count=args.seed_counts,
