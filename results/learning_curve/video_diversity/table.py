@@ -1,0 +1,67 @@
+"""Issue 15: does a detector learn from more frames of the same videos, or from more videos? One table.
+
+Each row is a stored ``ProtocolResult`` (runner JSON; files of one condition are combined), the first the paired
+baseline. Columns: the positives and the videos they come from, AP@0.5 and AP@0.3 with their 95 % CIs (bootstrap
+over test videos, seeds inside), and the paired difference to the baseline at both IoUs (same seeds, same resamples).
+
+    PYTHONPATH=. python results/learning_curve/video_diversity/table.py BASELINE.json OTHER.json [...] [--out MD]
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from synthaug.evaluate.results import ProtocolResult
+from synthaug.evaluate.stats import bootstrap_seed_mean, paired_difference
+
+
+def _iv(x) -> str:
+    return f"{x.estimate:.3f} [{x.low:.3f}, {x.high:.3f}]"
+
+
+def _d(x) -> str:
+    return f"{x.estimate:+.3f} [{x.low:+.3f}, {x.high:+.3f}]"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("results", nargs="+")
+    ap.add_argument("--out", default=None)
+    a = ap.parse_args()
+    by_cond: dict[str, list[ProtocolResult]] = {}
+    for f in a.results:
+        r = ProtocolResult.load(f)
+        by_cond.setdefault(r.condition, []).append(r)
+    res = {c: ProtocolResult.combine(parts) for c, parts in by_cond.items()}
+    base = res[next(iter(res))]
+    p = base.protocol
+    kw = dict(resamples=p.bootstrap.resamples, seed=p.bootstrap.seed, ci=p.bootstrap.ci)
+    lines = ["| condition | seeds | positives (mean) | positive videos | AP@0.5 [95 % CI] | AP@0.3 [CI] | "
+             f"Δ AP@0.5 vs {base.condition} [CI] | Δ AP@0.3 [CI] | videos improved (0.5) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, r in res.items():
+        assert r.protocol.fingerprint() == p.fingerprint() and r.stems == base.stems, name
+        pos = [sr.meta.get("positives") for sr in r.seeds.values() if sr.meta.get("positives")]
+        k = r.meta.get("condition", {}).get("positive_videos")
+        cells = [name, str(len(r.seeds)), f"{np.mean(pos):.0f}" if pos else "–", "all" if k is None else str(k),
+                 _iv(bootstrap_seed_mean(r.pools(0.5), **kw)), _iv(bootstrap_seed_mean(r.pools(0.3), **kw))]
+        if r is base:
+            cells += ["(baseline)", "", ""]
+        else:
+            d5 = paired_difference(base.pools(0.5), r.pools(0.5), stems=r.stems, **kw)
+            d3 = paired_difference(base.pools(0.3), r.pools(0.3), stems=r.stems, **kw)
+            cells += [_d(d5.difference), _d(d3.difference), f"{d5.wins.improved}/{d5.wins.improved + d5.wins.worse + d5.wins.tied}"]
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", f"Protocol `{p.name}` (fingerprint `{p.fingerprint()}`), split `{base.split}`, {len(base.stems)} test "
+              f"videos; {p.bootstrap.resamples} bootstrap resamples of the videos (seed {p.bootstrap.seed}); Δ paired "
+              "by training seed and resample."]
+    text = "\n".join(lines)
+    print(text)
+    if a.out:
+        Path(a.out).write_text(text + "\n")
+
+
+if __name__ == "__main__":
+    main()
