@@ -5,6 +5,7 @@ baseline. Columns: the positives and the videos they come from, AP@0.5 and AP@0.
 over test videos, seeds inside), and the paired difference to the baseline at both IoUs (same seeds, same resamples).
 
     PYTHONPATH=. python results/learning_curve/video_diversity/table.py BASELINE.json OTHER.json [...] [--out MD]
+    # FILE=LABEL names a row (e.g. one condition trained with other options)
 """
 from __future__ import annotations
 
@@ -31,9 +32,10 @@ def main() -> None:
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
     by_cond: dict[str, list[ProtocolResult]] = {}
-    for f in a.results:
+    for arg in a.results:
+        f, _, label = arg.partition("=")  # FILE=LABEL names a row (two runs of one condition under other options)
         r = ProtocolResult.load(f)
-        by_cond.setdefault(r.condition, []).append(r)
+        by_cond.setdefault(label or r.condition, []).append(r)
     res = {c: ProtocolResult.combine(parts) for c, parts in by_cond.items()}
     base = res[next(iter(res))]
     p = base.protocol
