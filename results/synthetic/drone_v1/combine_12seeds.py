@@ -27,6 +27,9 @@ from synthaug.evaluate.results import ProtocolResult
 from synthaug.evaluate.stats import percentile_interval, resample_counts, resample_indices, seed_mean_samples
 from synthaug.evaluate.summary import report_table
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from gap_closed import fmt, gap_lines  # noqa: E402  (results/synthetic/gap_closed.py: the one home of the statistic)
+
 D = Path("results/synthetic/drone_v1")
 DET = sys.argv[1] if len(sys.argv) > 1 else "hog"
 TAG = sys.argv[2] if len(sys.argv) > 2 else ""
@@ -48,10 +51,6 @@ FIT = {"hog": "d_HOG", "cnn": "d_CNN"}.get(DET, DET)
 LABEL = {"a": "(a) 12 real seeds", "b": f"(b) 12 seeds + 20x synthetic ({FIT})", "d": f"(d) 12 seeds + 50x synthetic ({FIT})",
          "c": "(c) 100 real seeds (stop 28's cells, same map)" if TAG == "ensemble" else "(c) 100 real seeds (recomputed)",
          "c_v6": "100 real seeds (learning curve v6 cells)"}
-
-
-def fmt(x: float, signed: bool = False) -> str:
-    return "nan" if not np.isfinite(x) else (f"{x:+.3f}" if signed else f"{x:.3f}")
 
 
 def main() -> int:
@@ -89,27 +88,8 @@ def main() -> int:
     lines += [f"## Paired against {LABEL[gap_ref]}", "",
               report_table({names[k]: res[k] for k in res}, baseline=names[gap_ref]), ""]
 
-    sa, sb, sc = samples["a"], samples["b"], samples[gap_ref]
     lines += [f"## Gap closed (gap reference: {LABEL[gap_ref]})", ""]
-    for cond in [k for k in ("b", "d") if k in res]:
-        sx = samples[cond]
-        gap = sc - sa
-        share = np.where(gap > 0, (sx - sa) / np.where(gap > 0, gap, 1.0), np.nan)
-        share_est = (est[cond] - est["a"]) / (est[gap_ref] - est["a"])
-        slo, shi = percentile_interval(share, bs.ci)
-        mid = sx - (sa + sc) / 2.0
-        mlo, mhi = percentile_interval(mid, bs.ci)
-        mid_est = est[cond] - (est["a"] + est[gap_ref]) / 2.0
-        glo, ghi = percentile_interval(gap, bs.ci)
-        lines += [
-            f"- {LABEL[cond]}: gap AP(100) - AP(12) = {fmt(est[gap_ref] - est['a'], True)} [{fmt(glo, True)}, {fmt(ghi, True)}] "
-            f"({int(np.sum(gap <= 0))} of {len(gap)} resamples with no positive gap, left out of the share's interval)",
-            f"  - closed share (AP(x) - AP(12)) / (AP(100) - AP(12)) = **{share_est:.2f}** [{slo:.2f}, {shi:.2f}] "
-            f"(percentile interval over the same video resamples; P(share >= 0.5) = {np.mean(share[~np.isnan(share)] >= 0.5):.2f} of the "
-            f"resamples with a positive gap)",
-            f"  - AP(x) - (AP(12) + AP(100)) / 2 = {fmt(mid_est, True)} [{fmt(mlo, True)}, {fmt(mhi, True)}] "
-            f"(>= 0 <=> the target's 50 % is met)",
-        ]
+    lines += gap_lines(samples, est, "a", gap_ref, [k for k in ("b", "d") if k in res], LABEL, bs.ci)
     lines.append("")
     out = D / ("tables_12seeds" + ("" if DET == "hog" else f"_{DET}") + (f"_{TAG}" if TAG else "") + ".md")
     out.write_text("\n".join(lines) + "\n")
