@@ -82,6 +82,16 @@ def test_learning_curve_results_and_files(ws, curve):
     # seeds differ in what they trained on: the seed drives the seed draw of ingest
     meta = [sr.meta for sr in res["hog"]["hog / 6 seeds"].seeds.values()]
     assert all(m["positives"] == 6 for m in meta)
+    # the plot's lines: the window-box rows are their own line, at the positives of the rows they re-score
+    pts = R.curve_points(res)
+    assert set(pts) == {"hog", "hog, window boxes", "hog x0.75", "hog x0.75, window boxes"}
+    n_all = sum(sr.meta["positives"] for sr in res["hog"]["hog / all training frames"].seeds.values()) / 2
+    for g in ("hog", "hog x0.75"):
+        assert sorted(x for x, *_ in pts[g]["frame"]) == sorted(x for x, *_ in pts[f"{g}, window boxes"]["frame"])
+        assert sorted(x for x, *_ in pts[g]["frame"]) == [6.0, n_all]
+    at = {x: ap for x, ap, *_ in pts["hog, window boxes"]["frame"]}
+    assert at[6.0] == pytest.approx(res["hog"]["hog / 6 seeds, window boxes"].mean_ap(0.5))
+    assert at[n_all] == pytest.approx(res["hog"]["hog / all training frames, window boxes"].mean_ap(0.5))
 
 
 def test_cells_are_reused_and_keyed_by_what_changes_a_result(ws, curve, monkeypatch):

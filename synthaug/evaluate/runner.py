@@ -384,6 +384,8 @@ class ProtocolRunner:
                 continue
             res = ProtocolResult.combine(parts, condition=name)
             res.meta.update({"kind": condition.kind, "condition": condition.identity()})
+            if window_boxes:
+                res.meta["window_boxes"] = True
             out[s] = res
         return out
 
@@ -470,23 +472,12 @@ def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], pa
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    for group, conds in results.items():
-        lines: dict[str, dict[str, list[tuple[float, float, float, float]]]] = {}  # a line per video subset
-        for res in conds.values():
-            k = res.meta.get("condition", {}).get("positive_videos")
-            pts = lines.setdefault(group if k is None else f"{group}, positives of {k} videos", {"frame": [], "patch": []})
-            sm = summarize(res)
-            x = _positives(res)
-            for panel, iv in (("frame", sm.ap[res.protocol.main_iou]), ("patch", sm.patch_ap)):
-                if iv is not None and np.isfinite(iv.estimate):
-                    lo = iv.estimate - iv.low if np.isfinite(iv.low) else 0.0
-                    hi = iv.high - iv.estimate if np.isfinite(iv.high) else 0.0
-                    pts[panel].append((x, iv.estimate, max(lo, 0.0), max(hi, 0.0)))
-        for label, pts in lines.items():
-            for ax, panel in zip(axes, ("frame", "patch")):
-                if pts[panel]:
-                    xs, ys, lo, hi = map(np.asarray, zip(*sorted(pts[panel])))
-                    ax.errorbar(xs, ys, yerr=[lo, hi], marker="o", capsize=3, label=label)
+    for label, pts in curve_points(results).items():
+        for ax, panel in zip(axes, ("frame", "patch")):
+            if pts[panel]:
+                xs, ys, lo, hi = map(np.asarray, zip(*sorted(pts[panel])))
+                ax.errorbar(xs, ys, yerr=[lo, hi], marker="o", capsize=3, label=label,
+                            linestyle="--" if label.endswith("window boxes") else "-")
     titles = {"frame": "detection (frame AP@0.5)", "patch": "patch classification (paper's protocol)"}
     for ax, panel in zip(axes, ("frame", "patch")):
         ax.set_xscale("log")
@@ -502,6 +493,31 @@ def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], pa
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def curve_points(results: Mapping[str, Mapping[str, ProtocolResult]]
+                 ) -> dict[str, dict[str, list[tuple[float, float, float, float]]]]:
+    """The learning curve's lines: ``{line label: {"frame" | "patch": [(positives, AP, CI below, CI above)]}}``.
+
+    One line per group, video subset (``positive_videos``) and box kind: the rows scored with the windows' boxes
+    (``..., window boxes``) form their own line, at the positives of the row they re-score.
+    """
+    lines: dict[str, dict[str, list[tuple[float, float, float, float]]]] = {}
+    for group, conds in results.items():
+        xs = {name: _positives(res) for name, res in conds.items() if not res.meta.get("window_boxes")}
+        for name, res in conds.items():
+            windows = bool(res.meta.get("window_boxes"))
+            k = res.meta.get("condition", {}).get("positive_videos")
+            label = group + ("" if k is None else f", positives of {k} videos") + (", window boxes" if windows else "")
+            pts = lines.setdefault(label, {"frame": [], "patch": []})
+            x = xs.get(name.removesuffix(", window boxes"), _positives(res)) if windows else xs[name]
+            sm = summarize(res)
+            for panel, iv in (("frame", sm.ap[res.protocol.main_iou]), ("patch", sm.patch_ap)):
+                if iv is not None and np.isfinite(iv.estimate):
+                    lo = iv.estimate - iv.low if np.isfinite(iv.low) else 0.0
+                    hi = iv.high - iv.estimate if np.isfinite(iv.high) else 0.0
+                    pts[panel].append((x, iv.estimate, max(lo, 0.0), max(hi, 0.0)))
+    return lines
 
 
 def _positives(res: ProtocolResult) -> float:
