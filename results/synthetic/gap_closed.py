@@ -4,6 +4,7 @@ the added positives close (trains nothing).
     PYTHONPATH=. python results/synthetic/gap_closed.py --few A.json --added B.json [--added D.json ...] --many C.json \
         [--title T] [--out MD]
 
+Each argument may list files of one condition separated by commas (e.g. one run per training seed).
 ``--few``: real seeds only (e.g. 12); ``--added``: the same seeds + added positives; ``--many``: more real seeds
 (e.g. 100), all with the same protocol, test videos and training seeds. Printed: AP@main IoU per condition with its
 95 % CI and per seed, the paired tables against ``--few`` and ``--many`` (the runner's ``report_table``), and per
@@ -76,7 +77,7 @@ def main() -> None:
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
     files = {"few": a.few, **{f"added{i}": f for i, f in enumerate(a.added)}, "many": a.many}
-    res = {k: ProtocolResult.load(f) for k, f in files.items()}
+    res = {k: ProtocolResult.combine([ProtocolResult.load(x) for x in f.split(",")]) for k, f in files.items()}
     labels = {k: r.condition for k, r in res.items()}
     assert len(set(labels.values())) == len(labels), f"two files hold one condition: {labels}"
     p = res["few"].protocol
