@@ -32,18 +32,24 @@ def without(res: ProtocolResult, stems: tuple[str, ...] = UNLABELLED) -> Protoco
     return out
 
 
+def load_conditions(files: list[str], labels: list[str | None] | None = None) -> dict[str, ProtocolResult]:
+    """Stored results, one row per condition in the order given: files of one condition (e.g. one per training
+    seed) are combined; ``labels[i]``, when given, names file ``i``'s row instead of its condition."""
+    by_cond: dict[str, list[ProtocolResult]] = {}
+    for f, label in zip(files, labels or [None] * len(files)):
+        r = ProtocolResult.load(f)
+        by_cond.setdefault(label or r.condition, []).append(r)
+    return {cond: ProtocolResult.combine(parts) for cond, parts in by_cond.items()}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", nargs="+")
     ap.add_argument("--out", default=None)
     ap.add_argument("--keep-all", action="store_true", help="one table of every video the results hold, nothing dropped")
     a = ap.parse_args()
-    by_cond: dict[str, list[ProtocolResult]] = {}
-    for f in a.results:
-        r = ProtocolResult.load(f)
-        by_cond.setdefault(r.condition, []).append(r)
-    combined = {cond: ProtocolResult.combine(parts) for cond, parts in by_cond.items()}
-    first = next(iter(by_cond))
+    combined = load_conditions(a.results)
+    first = next(iter(combined))
     if a.keep_all:
         text = report_table(combined, baseline=first)
     else:

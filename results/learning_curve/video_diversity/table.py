@@ -10,12 +10,15 @@ over test videos, seeds inside), and the paired difference to the baseline at bo
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
 
-from synthaug.evaluate.results import ProtocolResult
 from synthaug.evaluate.stats import bootstrap_seed_mean, paired_difference
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "unlabelled_drones"))
+from rescore import load_conditions  # noqa: E402  (one loader of stored results per condition)
 
 
 def _iv(x) -> str:
@@ -31,17 +34,15 @@ def main() -> None:
     ap.add_argument("results", nargs="+")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
-    by_cond: dict[str, list[ProtocolResult]] = {}
-    for arg in a.results:
-        f, _, label = arg.partition("=")  # FILE=LABEL names a row (two runs of one condition under other options)
-        r = ProtocolResult.load(f)
-        by_cond.setdefault(label or r.condition, []).append(r)
-    res = {c: ProtocolResult.combine(parts) for c, parts in by_cond.items()}
-    base = res[next(iter(res))]
+    # FILE=LABEL names a row (two runs of one condition under other options)
+    files, _, labels = zip(*(arg.partition("=") for arg in a.results))
+    res = load_conditions(list(files), [label or None for label in labels])
+    base_name = next(iter(res))
+    base = res[base_name]
     p = base.protocol
     kw = dict(resamples=p.bootstrap.resamples, seed=p.bootstrap.seed, ci=p.bootstrap.ci)
     lines = ["| condition | seeds | positives (mean) | positive videos | AP@0.5 [95 % CI] | AP@0.3 [CI] | "
-             f"Δ AP@0.5 vs {base.condition} [CI] | Δ AP@0.3 [CI] | videos improved (0.5) |",
+             f"Δ AP@0.5 vs {base_name} [CI] | Δ AP@0.3 [CI] | videos improved (0.5) |",
              "|---|---|---|---|---|---|---|---|---|"]
     for name, r in res.items():
         assert r.protocol.fingerprint() == p.fingerprint() and r.stems == base.stems, name
