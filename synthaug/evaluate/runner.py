@@ -413,13 +413,13 @@ def learning_curve(runner: ProtocolRunner, *, detectors: Sequence[str], seed_cou
     results: dict[str, dict[str, ProtocolResult]] = {}
     for kind in detectors:
         conds = []
-        for k in (None, *positive_videos):
-            of = "" if k is None else f" of {int(k)} videos"
-            conds += [Condition(f"{kind} / {n} seeds{of}", kind, seed_count=int(n),
-                                positive_videos=None if k is None else int(k)) for n in seed_counts]
+        for k in (None, *map(int, positive_videos)):
+            of = "" if k is None else f" of {k} videos"
+            conds += [Condition(f"{kind} / {n} seeds{of}", kind, seed_count=int(n), positive_videos=k)
+                      for n in seed_counts]
             if all_frames:
                 conds.append(Condition(f"{kind} / all training frames{of}", kind, seed_count=None, all_frames=True,
-                                       frame_step=frame_step, positive_videos=None if k is None else int(k)))
+                                       frame_step=frame_step, positive_videos=k))
         for c in conds:
             _run_into(results, runner, c, seeds)
             _run_into(results, runner, c, seeds, window_boxes=True)  # item 5: AP before the box mapping
