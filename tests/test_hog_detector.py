@@ -19,7 +19,7 @@ from synthaug.detectors.base import (
     save_detector,
 )
 from synthaug.detectors.hog import DEFAULT_HOG, dense_block_map
-from synthaug.detectors.hog_dpm import HOGDetector, kmeans, train_linear_svm
+from synthaug.detectors.hog_dpm import HOGDetector, kmeans, kmeans_inertia, train_linear_svm
 from synthaug.detectors.sliding import detect_multiscale
 
 
@@ -272,6 +272,62 @@ def test_kmeans_recovers_separated_clusters() -> None:
     for block in labels.reshape(3, 30):
         assert (block == block[0]).all()
     assert len(set(labels.tolist())) == 3
+
+
+def _blobs() -> torch.Tensor:
+    """240 points in 8-D from 6 Gaussian blobs: k = 3 has several k-means minima (single runs from generator seeds
+    0-9 end at inertia 5,208 / 5,269 / 5,575 / 5,579 / 5,696 / 5,905)."""
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    c = rng.standard_normal((6, 8)) * 3
+    return torch.tensor(np.concatenate([ci + rng.standard_normal((40, 8)) for ci in c]), dtype=torch.float32)
+
+
+def test_kmeans_inertia_against_numpy() -> None:
+    import numpy as np
+
+    x = _blobs()
+    labels = torch.arange(len(x)) % 4
+    xn, ln = x.double().numpy(), labels.numpy()
+    expected = sum(((xn[ln == j] - xn[ln == j].mean(0)) ** 2).sum() for j in range(4))
+    assert math.isclose(kmeans_inertia(x, labels), expected, rel_tol=1e-12)
+    assert math.isclose(kmeans_inertia(x, labels + 7), expected, rel_tol=1e-12)  # labels need not start at 0
+
+
+def test_kmeans_restarts_keep_the_lowest_inertia_run() -> None:
+    """``restarts = R`` is the lowest-inertia of R single runs drawn in turn from the same generator (the first of
+    them is ``restarts = 1``'s run), so it is never worse, and on these blobs it is better for some seeds."""
+    from synthaug.detectors.hog_dpm import _kmeans_once
+
+    x = _blobs()
+    single, best = [], []
+    for seed in range(10):
+        g = torch.Generator().manual_seed(seed)
+        runs = [_kmeans_once(x, 3, generator=g, iterations=30) for _ in range(10)]
+        first = kmeans(x, 3, generator=torch.Generator().manual_seed(seed))
+        torch.testing.assert_close(first, runs[0][0])
+        chosen = kmeans(x, 3, generator=torch.Generator().manual_seed(seed), restarts=10)
+        torch.testing.assert_close(chosen, min(runs, key=lambda r: r[1])[0])
+        single.append(kmeans_inertia(x, first))
+        best.append(kmeans_inertia(x, chosen))
+    assert all(b <= s + 1e-6 for b, s in zip(best, single))
+    assert max(s - b for b, s in zip(best, single)) > 100.0
+    assert max(best) - min(best) < 1e-3 < max(single) - min(single)  # ten runs reach one minimum from every seed
+    with pytest.raises(ValueError, match="restarts"):
+        kmeans(x, 3, generator=torch.Generator().manual_seed(0), restarts=0)
+
+
+def test_hog_fit_initialises_its_components_with_the_restarted_kmeans(monkeypatch: pytest.MonkeyPatch) -> None:
+    import synthaug.detectors.hog_dpm as hd
+
+    seen = []
+    real = hd.kmeans
+    monkeypatch.setattr(hd, "kmeans", lambda *a, **k: seen.append(k["restarts"]) or real(*a, **k))
+    pos, neg = _problem(seed=3, n_pos=12, n_neg=30)
+    HOGDetector.fit(pos, neg, components=2, mining_rounds=0)
+    HOGDetector.fit(pos, neg, components=2, mining_rounds=0, kmeans_restarts=1)
+    assert seen == [10, 1]
 
 
 def test_box_in_window_from_boxes() -> None:

@@ -318,6 +318,27 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
     assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100).key_fields("adaboost") == old
 
 
+def test_hog_kmeans_restarts_key_and_training(monkeypatch: pytest.MonkeyPatch) -> None:
+    """One k-means run is the training of the cells before the option (their keys leave it out); the default, 10,
+    and any other count are part of the key; the count reaches HOG's fit."""
+    from dataclasses import asdict
+
+    import synthaug.detectors.hog_dpm as hd
+
+    assert "hog_kmeans_restarts" not in TrainOptions(hog_kmeans_restarts=1).key_fields("hog")
+    assert TrainOptions().key_fields("hog")["hog_kmeans_restarts"] == 10 == asdict(TrainOptions())["hog_kmeans_restarts"]
+    assert TrainOptions(hog_kmeans_restarts=3).key_fields("cnn")["hog_kmeans_restarts"] == 3
+    seen = []
+    fit = hd.HOGDetector.fit
+    monkeypatch.setattr(hd.HOGDetector, "fit", classmethod(
+        lambda cls, *a, **k: seen.append(k["kmeans_restarts"]) or fit.__func__(cls, *a, **k)))
+    from synthaug.detectors.toy import toy_patches
+
+    pos, neg = toy_patches(8, 16, seed=0)
+    train_detector("hog", pos, neg, 0, options=TrainOptions(hog_components=2, hog_mining_rounds=0, hog_kmeans_restarts=4))
+    assert seen == [4]
+
+
 def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> None:
     """Fields left at None take the family's default where a detector is trained: AdaBoost gets 300 rounds and
     one round of patience by validation AP, HOG and the CNN keep the fewest validation FPs without patience;

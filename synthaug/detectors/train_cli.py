@@ -36,6 +36,9 @@ _DETECTORS = ("hog", "adaboost", "cnn")
 _BUDGETS = {
     "hog_components": ("--hog-components", 1, "HOG mixture components (aspect clusters)"),
     "hog_mining_rounds": ("--hog-mining-rounds", 0, "HOG's own cache-mining rounds per training"),
+    "hog_kmeans_restarts": ("--hog-kmeans-restarts", 1,
+                            "k-means runs of the HOG components' initialisation, the lowest inertia kept (1: the "
+                            "training before this option)"),
     "ada_rounds": ("--ada-rounds", 1, "AdaBoost boosting rounds (default 300)"),
     "ada_candidates": ("--ada-candidates", 1, "AdaBoost weak-learner candidates scored per round"),
     "cnn_epochs": ("--cnn-epochs", 1, "CNN passes over the training patches"),

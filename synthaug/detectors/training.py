@@ -93,6 +93,11 @@ class TrainOptions:
         hog_components: root filters of the HOG mixture (the paper's DPM: 3-5).
         hog_mining_rounds: HOG's own cache-mining rounds (negative pool + HOG mining frames).
         hog_mining_frames: at most this many frames (object boxes ignored) for HOG's own mining.
+        hog_kmeans_restarts: k-means runs of the components' initialisation, the lowest inertia kept
+            (:func:`~synthaug.detectors.hog_dpm.kmeans`). With one run, 2 of 5 all-frames drone detectors
+            (training seeds 1 and 3) started from a worse clustering and scored 0.50 instead of 0.59 on the test
+            videos, and their next mining round fired on ground texture (validation AP 0.02);
+            ``results/learning_curve/mining_collapse/README.md``.
         ada_rounds: boosting rounds T (None: the family's default, :data:`FAMILY_DEFAULTS`: 300 for
             AdaBoost).
         ada_candidates: random Levi-Weiss candidates (of the exhaustive grid).
@@ -152,14 +157,15 @@ class TrainOptions:
             0.312, 0.359, 0.353 (``results/learning_curve/drone_box_cnn/README.md``). The CNN map costs
             ~2 min to fit (ridge ~20 s).
 
-    The two ``mining_*`` selection fields and ``box_model`` were added after cells had been cached; at
-    ``"fp"``, 0 and ``"ridge"`` the training is the one before them, and
+    The two ``mining_*`` selection fields, ``box_model`` and ``hog_kmeans_restarts`` were added after cells had
+    been cached; at ``"fp"``, 0, ``"ridge"`` and 1 the training is the one before them, and
     :data:`LATER_FIELDS` lets a cache key leave them out (:meth:`key_fields`).
     """
 
     hog_components: int = 3
     hog_mining_rounds: int = 2
     hog_mining_frames: int = 40
+    hog_kmeans_restarts: int = 10
     ada_rounds: int | None = None
     ada_candidates: int = 2000
     cnn_epochs: int = 12
@@ -184,7 +190,7 @@ class TrainOptions:
     box_model: str = "ensemble"
 
     LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
-                                                           ("box_model", "ridge"))
+                                                           ("box_model", "ridge"), ("hog_kmeans_restarts", 1))
     """Fields added after cells were cached, with the value at which the training is the one before them
     (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys)."""
 
@@ -297,6 +303,7 @@ def _fit_once(
             ignore_boxes=boxes,
             components=options.hog_components,
             mining_rounds=options.hog_mining_rounds,
+            kmeans_restarts=options.hog_kmeans_restarts,
             window=window,
             generator=torch.Generator().manual_seed(seed),
             positive_weights=positive_weights,
