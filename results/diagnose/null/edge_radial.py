@@ -1,0 +1,132 @@
+"""Issue 20: does the frames' edge sharpness change with the distance from the centre under a lens, and not under
+in-camera sharpening? (Lens k1 +0.1, case 4 of the power table, has no scene motion to read the lens from, and
+its frames' mean edge ratio, 0.650, passes sharpening's floor, 0.647.)
+
+For each case (the power table's and the calibration's cases: the same seeds, nuisances and hidden settings as
+``benchmarks/bench_diagnose_null.py``; only the seed set is made, no fit: the frame statistics do not read it),
+each frame's edges are selected as :func:`synthaug.diagnose.frame_pattern.edge_ratio` selects them, and the
+per-edge steps A(2), A(4) are fitted as ``A(2) = (a + b r^2) A(4)`` by least squares over the frame's edges (r^2
+as the vignetting reads it: 1 at the frame's corners). Prints per case the frames' mean ratio, mean ``a`` and mean
+``b``, and writes them as JSON.
+
+Usage::
+
+    PYTHONPATH=. python results/diagnose/null/edge_radial.py --out results/diagnose/null/edge_radial.json \
+        clean:2000:24 lens_distortion:alt:8000:5 sharpening:default:8000:5 sharpening:alt:8000:5
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+
+from synthaug.diagnose import frame_pattern as fp
+
+
+def edge_steps(frame: np.ndarray, background: np.ndarray, outside: np.ndarray):
+    """Per edge: r^2, A(o1), A(o2) (edge_ratio's selection)."""
+    looks = fp._two_looks(frame, background, outside)
+    if looks is None:
+        return None
+    f, b, ok = looks
+    h, w = f.shape
+    f, b = fp.destripe(f, b)
+    gs = ndimage.gaussian_filter(b, 1.0)
+    gx, gy = ndimage.sobel(gs, 1), ndimage.sobel(gs, 0)
+    g = np.hypot(gx, gy)
+    o1, o2 = fp.EDGE_OFFSETS
+    m = 2 * o2
+    inner = np.zeros((h, w), bool)
+    inner[m:h - m, m:w - m] = True
+    inner &= ~ndimage.binary_dilation(~ok, np.ones((2 * o2 + 1, 2 * o2 + 1), bool))
+    ys, xs = np.nonzero(inner & (g >= np.quantile(g[inner], fp.EDGE_QUANTILE)) & (g > 0))
+    nx, ny = gx[ys, xs] / g[ys, xs], gy[ys, xs] / g[ys, xs]
+    at = lambda img, o: ndimage.map_coordinates(img, [ys + o * ny, xs + o * nx], order=1)  # noqa: E731
+    keep = (g[ys, xs] >= at(g, 1.0)) & (g[ys, xs] >= at(g, -1.0))
+    keep &= at(b, float(o2)) - at(b, -float(o2)) >= fp.EDGE_MIN_CONTRAST
+    ys, xs, nx, ny = ys[keep], xs[keep], nx[keep], ny[keep]
+    if len(ys) < fp.MIN_EDGES:
+        return None
+    a1 = at(f, float(o1)) - at(f, -float(o1))
+    a2 = at(f, float(o2)) - at(f, -float(o2))
+    r2 = ((xs - (w - 1) / 2) ** 2 + (ys - (h - 1) / 2) ** 2) / (0.25 * (w * w + h * h))
+    return r2, a1, a2
+
+
+def frame_fit(r2: np.ndarray, a1: np.ndarray, a2: np.ndarray) -> tuple[float, float, float]:
+    """(ratio, a, b): the frame's edge ratio and the least-squares fit of A1 = (a + b r^2) A2."""
+    x = np.stack([a2, a2 * r2], 1)
+    (a, b), *_ = np.linalg.lstsq(x, a1, rcond=None)
+    return float(a1.sum() / a2.sum()), float(a), float(b)
+
+
+def case_frames(work: Path, base: int, k: int, hidden: str | None, strength: str):
+    from benchmarks.bench_diagnose_null import hidden_settings
+    from synthaug.data.seedset import SeedSet
+    from synthaug.diagnose.nuisances import Nuisances
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+
+    seeds_dir = work / f"case_{k:03d}"
+    done = seeds_dir / "done"
+    if not done.exists():
+        if seeds_dir.exists():
+            shutil.rmtree(seeds_dir)
+        nz = Nuisances.draw(np.random.default_rng([base, k]))
+        make_measured_seedset(seeds_dir, n_seeds=60, hidden=hidden_settings(hidden, strength) if hidden else None,
+                              nuisances=nz, frame_size=(192, 256), object_px=(20.0, 32.0), view_step_deg=20.0,
+                              sprite_size=48, seed=base + k, paper_ranges={"w_d": (0.3, 0.45)})
+        done.write_text("1")
+    seeds = SeedSet.load(seeds_dir)
+    return seeds
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("groups", nargs="+", help="clean:BASE:N or EFFECT:STRENGTH:BASE:N")
+    ap.add_argument("--workdir", default="outputs/edge_radial")
+    ap.add_argument("--out", default=None)
+    a = ap.parse_args()
+    from synthaug.data.seedset import seed_geometry
+
+    out = {}
+    for group in a.groups:
+        parts = group.split(":")
+        if parts[0] == "clean":
+            hidden, strength, base, n = None, "default", int(parts[1]), int(parts[2])
+        else:
+            hidden, strength, base, n = parts[0], parts[1], int(parts[2]), int(parts[3])
+        rows = []
+        for k in range(n):
+            seeds = case_frames(Path(a.workdir) / group.replace(":", "_"), base, k, hidden, strength)
+            geo = seed_geometry(seeds)
+            p = seeds.patch_size
+            per = []
+            for i in range(len(seeds)):
+                f, bg = np.asarray(seeds.frame(i)), np.asarray(seeds.background_frame(i))
+                h, w = f.shape[:2]
+                outside = np.ones((h, w), bool)
+                x0, y0, side = float(geo["origin"][i, 0]), float(geo["origin"][i, 1]), p * float(geo["frame_scale"][i])
+                outside[int(max(0, np.floor(y0 - 2))):int(np.ceil(y0 + side + 2)),
+                        int(max(0, np.floor(x0 - 2))):int(np.ceil(x0 + side + 2))] = False
+                s = edge_steps(fp._gray(f), fp._gray(bg), outside)
+                if s is not None:
+                    per.append(frame_fit(*s))
+            per = np.array(per)
+            row = {"k": k, "frames": int(len(per)), "ratio": float(per[:, 0].mean()), "a": float(per[:, 1].mean()),
+                   "b": float(per[:, 2].mean()), "b_t": float(per[:, 2].mean() / (per[:, 2].std(ddof=1) / np.sqrt(len(per))))}
+            rows.append(row)
+            print(group, row, flush=True)
+        out[group] = rows
+    if a.out:
+        Path(a.out).write_text(json.dumps(out, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
