@@ -309,25 +309,29 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
     from dataclasses import asdict
 
     old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items() if k not in ("mining_select", "mining_patience")}
-    for kind in ("hog", "cnn", None):  # the keys of before the family defaults
-        assert TrainOptions().key_fields(kind) == old
-        assert TrainOptions(mining_select="ap").key_fields(kind) == {**old, "mining_select": "ap"}
-        assert TrainOptions(mining_patience=1).key_fields(kind) == {**old, "mining_patience": 1}
+    not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
+    for kind, base in (("hog", old), ("cnn", not_hog), (None, old)):  # the keys of before the family defaults
+        assert TrainOptions().key_fields(kind) == base
+        assert TrainOptions(mining_select="ap").key_fields(kind) == {**base, "mining_select": "ap"}
+        assert TrainOptions(mining_patience=1).key_fields(kind) == {**base, "mining_patience": 1}
     ada = TrainOptions().key_fields("adaboost")
     assert (ada["ada_rounds"], ada["mining_select"], ada["mining_patience"]) == (300, "ap", 1)
-    assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100).key_fields("adaboost") == old
+    assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100).key_fields("adaboost") == not_hog
 
 
 def test_hog_kmeans_restarts_key_and_training(monkeypatch: pytest.MonkeyPatch) -> None:
     """One k-means run is the training of the cells before the option (their keys leave it out); the default, 10,
-    and any other count are part of the key; the count reaches HOG's fit."""
+    and any other count are part of HOG's key and of no other family's; the count reaches HOG's fit."""
     from dataclasses import asdict
 
     import synthaug.detectors.hog_dpm as hd
 
     assert "hog_kmeans_restarts" not in TrainOptions(hog_kmeans_restarts=1).key_fields("hog")
     assert TrainOptions().key_fields("hog")["hog_kmeans_restarts"] == 10 == asdict(TrainOptions())["hog_kmeans_restarts"]
-    assert TrainOptions(hog_kmeans_restarts=3).key_fields("cnn")["hog_kmeans_restarts"] == 3
+    assert TrainOptions(hog_kmeans_restarts=3).key_fields("hog")["hog_kmeans_restarts"] == 3
+    for kind in ("cnn", "adaboost"):  # no k-means there: their keys stay the ones before the option
+        assert "hog_kmeans_restarts" not in TrainOptions(hog_kmeans_restarts=3).key_fields(kind)
+        assert TrainOptions().key_fields(kind) == TrainOptions(hog_kmeans_restarts=1).key_fields(kind)
     seen = []
     fit = hd.HOGDetector.fit
     monkeypatch.setattr(hd.HOGDetector, "fit", classmethod(

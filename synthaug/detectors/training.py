@@ -85,6 +85,11 @@ unused by HOG and the CNN; it is 100 there so that their cache keys stay those o
 
 
 # =========================================================================== options
+HOG_ONLY_LATER_FIELDS: tuple[str, ...] = ("hog_kmeans_restarts",)
+"""Later :class:`TrainOptions` fields that change only HOG's training: the other families' cache keys leave them
+out whatever their value (:meth:`TrainOptions.key_fields`)."""
+
+
 @dataclass(frozen=True)
 class TrainOptions:
     """Training budgets of the three families and of the hard-negative mining (CPU-only, shared machine).
@@ -192,7 +197,8 @@ class TrainOptions:
     LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
                                                            ("box_model", "ridge"), ("hog_kmeans_restarts", 1))
     """Fields added after cells were cached, with the value at which the training is the one before them
-    (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys)."""
+    (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys;
+    nor is ``hog_kmeans_restarts``' default, 10, which only HOG's keys carry: :data:`HOG_ONLY_LATER_FIELDS`)."""
 
     def for_family(self, kind: str | None) -> "TrainOptions":
         """These options with every field left at None set to ``kind``'s default (:data:`FAMILY_DEFAULTS`).
@@ -225,10 +231,12 @@ class TrainOptions:
             True
             >>> "box_model" in TrainOptions(box_model="ridge").key_fields("hog")  # the cells before box_model
             False
+            >>> "hog_kmeans_restarts" in TrainOptions().key_fields("cnn")  # no k-means outside HOG: the CNN's keys stay
+            False
         """
         d = asdict(self.for_family(kind))
         for name, default in self.LATER_FIELDS:
-            if d[name] == default:
+            if d[name] == default or (name in HOG_ONLY_LATER_FIELDS and kind not in (None, "hog")):
                 d.pop(name)
         return d
 
