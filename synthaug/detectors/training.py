@@ -246,6 +246,9 @@ class TrainOptions:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
         if self.mining_rounds < 0:
             raise ValueError(f"mining_rounds must be >= 0, got {self.mining_rounds}")
+        if isinstance(self.hog_kmeans_restarts, bool) or int(self.hog_kmeans_restarts) != self.hog_kmeans_restarts \
+                or self.hog_kmeans_restarts < 1:
+            raise ValueError(f"hog_kmeans_restarts must be an integer >= 1, got {self.hog_kmeans_restarts!r}")
         if self.mining_margin < 0:
             raise ValueError(f"mining_margin must be >= 0, got {self.mining_margin}")
         if not 0 <= int(self.cnn_shift) < 20:
