@@ -329,7 +329,7 @@ def test_hog_kmeans_restarts_key_and_training(monkeypatch: pytest.MonkeyPatch) -
     assert "hog_kmeans_restarts" not in TrainOptions(hog_kmeans_restarts=1).key_fields("hog")
     assert TrainOptions().key_fields("hog")["hog_kmeans_restarts"] == 10 == asdict(TrainOptions())["hog_kmeans_restarts"]
     assert TrainOptions(hog_kmeans_restarts=3).key_fields("hog")["hog_kmeans_restarts"] == 3
-    for bad in (0, -1, 2.5, True):
+    for bad in (0, -1, 2.5, True, None):
         with pytest.raises(ValueError, match="hog_kmeans_restarts"):
             TrainOptions(hog_kmeans_restarts=bad)
     for kind in ("cnn", "adaboost"):  # no k-means there: their keys stay the ones before the option

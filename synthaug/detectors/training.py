@@ -246,9 +246,6 @@ class TrainOptions:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
         if self.mining_rounds < 0:
             raise ValueError(f"mining_rounds must be >= 0, got {self.mining_rounds}")
-        if isinstance(self.hog_kmeans_restarts, bool) or int(self.hog_kmeans_restarts) != self.hog_kmeans_restarts \
-                or self.hog_kmeans_restarts < 1:
-            raise ValueError(f"hog_kmeans_restarts must be an integer >= 1, got {self.hog_kmeans_restarts!r}")
         if self.mining_margin < 0:
             raise ValueError(f"mining_margin must be >= 0, got {self.mining_margin}")
         if not 0 <= int(self.cnn_shift) < 20:
@@ -257,10 +254,13 @@ class TrainOptions:
             raise ValueError(f"val_target_recall and val_iou must be in (0, 1], got {self.val_target_recall}, {self.val_iou}")
         if self.mining_select is not None and self.mining_select not in MINING_SELECT:
             raise ValueError(f"mining_select must be one of {list(MINING_SELECT)} or None, got {self.mining_select!r}")
-        for name, low in (("mining_patience", 0), ("ada_rounds", 1)):  # None: the family's default
+        # (name, lowest value, None allowed: the family's default)
+        for name, low, optional in (("mining_patience", 0, True), ("ada_rounds", 1, True), ("hog_kmeans_restarts", 1, False)):
             v = getattr(self, name)
-            if v is not None and (isinstance(v, bool) or int(v) != v or v < low):
-                raise ValueError(f"{name} must be an integer >= {low} or None, got {v!r}")
+            if v is None and optional:
+                continue
+            if v is None or isinstance(v, bool) or int(v) != v or v < low:
+                raise ValueError(f"{name} must be an integer >= {low}{' or None' if optional else ''}, got {v!r}")
         if self.box_model not in BOX_MODELS:
             raise ValueError(f"box_model must be one of {list(BOX_MODELS)}, got {self.box_model!r}")
         if self.scales is not None:

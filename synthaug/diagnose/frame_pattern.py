@@ -92,7 +92,7 @@ import numpy as np
 
 __all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_summary", "scene_clusters", "radial_falloff",
            "block_grid", "jpeg_quality", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK",
-           "edge_ratio", "sharp_edges", "destripe", "unsharp_inverse", "sharpening_setting", "EDGE_OFFSETS",
+           "edge_ratio", "edge_steps", "sharp_edges", "destripe", "unsharp_inverse", "sharpening_setting", "EDGE_OFFSETS",
            "EDGE_QUANTILE", "EDGE_MIN_CONTRAST", "SETTING_FRAMES",
            "radial_flow", "lens_flow", "MIN_DRIFT_PX"]
 
@@ -447,6 +447,47 @@ def sharpening_setting(summaries: Sequence[dict[str, Any]], grid: Sequence[dict[
     return {"setting": dict(grid[int(np.nanargmin(err))]), "ratios": ratios}
 
 
+def edge_steps(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray | None = None,
+               offsets: tuple[int, int] = EDGE_OFFSETS) -> dict[str, Any] | None:
+    """Each edge :func:`edge_ratio` reads, and its steps across it: the edges found, oriented and kept on
+    ``background``, the steps read on ``frame`` (arguments as :func:`edge_ratio`).
+
+    Returns:
+        None where :func:`edge_ratio` is NaN for want of looks or edges; else ``y``, ``x`` (frame px of each edge's
+        centre), ``a1``, ``a2`` (the frame's step between ``±offsets[0]`` and ``±offsets[1]`` px across it) and
+        ``shape`` (H, W).
+    """
+    from scipy import ndimage
+
+    looks = _two_looks(frame, background, outside)
+    if looks is None:
+        return None
+    f, b, ok = looks
+    h, w = f.shape
+    f, b = destripe(f, b)  # a fixed line pattern is in both looks: it would choose the edges it is read on
+    gs = ndimage.gaussian_filter(b, 1.0)
+    gx, gy = ndimage.sobel(gs, 1), ndimage.sobel(gs, 0)
+    g = np.hypot(gx, gy)
+    o1, o2 = offsets
+    m = 2 * o2  # the profile must stay inside the frame
+    inner = np.zeros((h, w), bool)
+    inner[m:h - m, m:w - m] = True
+    if outside is not None:  # away from the crop by the profile's reach (the object's edges are not the scene's)
+        inner &= ~ndimage.binary_dilation(~ok, np.ones((2 * o2 + 1, 2 * o2 + 1), bool))
+    if inner.sum() < MIN_EDGES:
+        return None
+    ys, xs = np.nonzero(inner & (g >= np.quantile(g[inner], EDGE_QUANTILE)) & (g > 0))
+    nx, ny = gx[ys, xs] / g[ys, xs], gy[ys, xs] / g[ys, xs]
+    at = lambda img, o: ndimage.map_coordinates(img, [ys + o * ny, xs + o * nx], order=1)  # noqa: E731
+    keep = (g[ys, xs] >= at(g, 1.0)) & (g[ys, xs] >= at(g, -1.0))  # the edge's centre: a maximum across it
+    keep &= at(b, float(o2)) - at(b, -float(o2)) >= EDGE_MIN_CONTRAST
+    ys, xs, nx, ny = ys[keep], xs[keep], nx[keep], ny[keep]
+    if len(ys) < MIN_EDGES:
+        return None
+    return {"y": ys, "x": xs, "a1": at(f, float(o1)) - at(f, -float(o1)), "a2": at(f, float(o2)) - at(f, -float(o2)),
+            "shape": (int(h), int(w))}
+
+
 def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray | None = None,
                offsets: tuple[int, int] = EDGE_OFFSETS) -> float:
     """The sharpness of a frame's edges: ``A(o1) / A(o2)`` of the mean antisymmetric edge profile (module docstring).
@@ -471,35 +512,10 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
         >>> edge_ratio(look(sharp), look(sharp)) > edge_ratio(look(scene), look(scene)) + 0.1
         True
     """
-    from scipy import ndimage
-
-    looks = _two_looks(frame, background, outside)
-    if looks is None:
+    steps = edge_steps(frame, background, outside=outside, offsets=offsets)
+    if steps is None:
         return float("nan")
-    f, b, ok = looks
-    h, w = f.shape
-    f, b = destripe(f, b)  # a fixed line pattern is in both looks: it would choose the edges it is read on
-    gs = ndimage.gaussian_filter(b, 1.0)
-    gx, gy = ndimage.sobel(gs, 1), ndimage.sobel(gs, 0)
-    g = np.hypot(gx, gy)
-    o1, o2 = offsets
-    m = 2 * o2  # the profile must stay inside the frame
-    inner = np.zeros((h, w), bool)
-    inner[m:h - m, m:w - m] = True
-    if outside is not None:  # away from the crop by the profile's reach (the object's edges are not the scene's)
-        inner &= ~ndimage.binary_dilation(~ok, np.ones((2 * o2 + 1, 2 * o2 + 1), bool))
-    if inner.sum() < MIN_EDGES:
-        return float("nan")
-    ys, xs = np.nonzero(inner & (g >= np.quantile(g[inner], EDGE_QUANTILE)) & (g > 0))
-    nx, ny = gx[ys, xs] / g[ys, xs], gy[ys, xs] / g[ys, xs]
-    at = lambda img, o: ndimage.map_coordinates(img, [ys + o * ny, xs + o * nx], order=1)  # noqa: E731
-    keep = (g[ys, xs] >= at(g, 1.0)) & (g[ys, xs] >= at(g, -1.0))  # the edge's centre: a maximum across it
-    keep &= at(b, float(o2)) - at(b, -float(o2)) >= EDGE_MIN_CONTRAST
-    ys, xs, nx, ny = ys[keep], xs[keep], nx[keep], ny[keep]
-    if len(ys) < MIN_EDGES:
-        return float("nan")
-    a1 = float(np.sum(at(f, float(o1)) - at(f, -float(o1))))
-    a2 = float(np.sum(at(f, float(o2)) - at(f, -float(o2))))
+    a1, a2 = float(np.sum(steps["a1"])), float(np.sum(steps["a2"]))
     return a1 / a2 if a2 > 0 else float("nan")
 
 

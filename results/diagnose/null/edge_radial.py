@@ -4,7 +4,7 @@ its frames' mean edge ratio, 0.650, passes sharpening's floor, 0.647.)
 
 For each case (the power table's and the calibration's cases: the same seeds, nuisances and hidden settings as
 ``benchmarks/bench_diagnose_null.py``; only the seed set is made, no fit: the frame statistics do not read it),
-each frame's edges are selected as :func:`synthaug.diagnose.frame_pattern.edge_ratio` selects them, and the
+each frame's edges are those :func:`synthaug.diagnose.frame_pattern.edge_ratio` reads (``edge_steps``), and the
 per-edge steps A(2), A(4) are fitted as ``A(2) = (a + b r^2) A(4)`` by least squares over the frame's edges (r^2
 as the vignetting reads it: 1 at the frame's corners). Prints per case the frames' mean ratio, mean ``a`` and mean
 ``b``, and writes them as JSON.
@@ -24,39 +24,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage
 
 from synthaug.diagnose import frame_pattern as fp
-
-
-def edge_steps(frame: np.ndarray, background: np.ndarray, outside: np.ndarray):
-    """Per edge: r^2, A(o1), A(o2) (edge_ratio's selection)."""
-    looks = fp._two_looks(frame, background, outside)
-    if looks is None:
-        return None
-    f, b, ok = looks
-    h, w = f.shape
-    f, b = fp.destripe(f, b)
-    gs = ndimage.gaussian_filter(b, 1.0)
-    gx, gy = ndimage.sobel(gs, 1), ndimage.sobel(gs, 0)
-    g = np.hypot(gx, gy)
-    o1, o2 = fp.EDGE_OFFSETS
-    m = 2 * o2
-    inner = np.zeros((h, w), bool)
-    inner[m:h - m, m:w - m] = True
-    inner &= ~ndimage.binary_dilation(~ok, np.ones((2 * o2 + 1, 2 * o2 + 1), bool))
-    ys, xs = np.nonzero(inner & (g >= np.quantile(g[inner], fp.EDGE_QUANTILE)) & (g > 0))
-    nx, ny = gx[ys, xs] / g[ys, xs], gy[ys, xs] / g[ys, xs]
-    at = lambda img, o: ndimage.map_coordinates(img, [ys + o * ny, xs + o * nx], order=1)  # noqa: E731
-    keep = (g[ys, xs] >= at(g, 1.0)) & (g[ys, xs] >= at(g, -1.0))
-    keep &= at(b, float(o2)) - at(b, -float(o2)) >= fp.EDGE_MIN_CONTRAST
-    ys, xs, nx, ny = ys[keep], xs[keep], nx[keep], ny[keep]
-    if len(ys) < fp.MIN_EDGES:
-        return None
-    a1 = at(f, float(o1)) - at(f, -float(o1))
-    a2 = at(f, float(o2)) - at(f, -float(o2))
-    r2 = ((xs - (w - 1) / 2) ** 2 + (ys - (h - 1) / 2) ** 2) / (0.25 * (w * w + h * h))
-    return r2, a1, a2
 
 
 def frame_fit(r2: np.ndarray, a1: np.ndarray, a2: np.ndarray) -> tuple[float, float, float]:
@@ -114,9 +83,11 @@ def main() -> int:
                 x0, y0, side = float(geo["origin"][i, 0]), float(geo["origin"][i, 1]), p * float(geo["frame_scale"][i])
                 outside[int(max(0, np.floor(y0 - 2))):int(np.ceil(y0 + side + 2)),
                         int(max(0, np.floor(x0 - 2))):int(np.ceil(x0 + side + 2))] = False
-                s = edge_steps(fp._gray(f), fp._gray(bg), outside)
+                s = fp.edge_steps(fp._gray(f), fp._gray(bg), outside=outside)  # the edges edge_ratio reads
                 if s is not None:
-                    per.append(frame_fit(*s))
+                    (fh, fw), y, x = s["shape"], s["y"], s["x"]
+                    r2 = ((x - (fw - 1) / 2) ** 2 + (y - (fh - 1) / 2) ** 2) / (0.25 * (fw * fw + fh * fh))
+                    per.append(frame_fit(r2, s["a1"], s["a2"]))
             per = np.array(per)
             row = {"k": k, "frames": int(len(per)), "ratio": float(per[:, 0].mean()), "a": float(per[:, 1].mean()),
                    "b": float(per[:, 2].mean()), "b_t": float(per[:, 2].mean() / (per[:, 2].std(ddof=1) / np.sqrt(len(per))))}
