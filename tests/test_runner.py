@@ -376,7 +376,7 @@ def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(caps
         return R.ProtocolRunner(proto, "drone", paths, options=TrainOptions(**kw), log=lambda m: None).identity(c, 1)
 
     base = ident(box_model="ridge")
-    later = ("mining_select", "mining_patience", "box_model", "hog_kmeans_restarts")
+    later = ("mining_select", "mining_patience", "box_model", "hog_kmeans_restarts", "cnn_finetune_epochs")
     assert base["options"] == {k: v for k, v in dataclasses.asdict(TrainOptions(ada_rounds=100)).items() if k not in later}
     assert ident(mining_select="fp", mining_patience=0, box_model="ridge") == base
     if R.TRAINING_VERSION == 6:  # the key computed before the three options existed (same protocol, paths, condition)
@@ -408,11 +408,13 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
     default = R.train_options(R.build_parser().parse_args(["learning-curve", "--out", "x"]))
     assert default == TrainOptions()
     args = R.build_parser().parse_args(["synthetic", "--ada-rounds", "300", "--ada-candidates", "4000",
-                                        "--cnn-epochs", "5", "--mining-rounds", "2", "--mining-stride", "10", "--out", "x"])
+                                        "--cnn-epochs", "5", "--mining-rounds", "2", "--mining-stride", "10",
+                                        "--cnn-finetune-epochs", "3", "--out", "x"])
     opts = R.train_options(args)
-    assert (opts.ada_rounds, opts.ada_candidates, opts.cnn_epochs, opts.mining_rounds, opts.mining_stride) == (300, 4000, 5, 2, 10)
+    assert (opts.ada_rounds, opts.ada_candidates, opts.cnn_epochs, opts.mining_rounds, opts.mining_stride,
+            opts.cnn_finetune_epochs) == (300, 4000, 5, 2, 10, 3)
     assert dataclasses.replace(opts, ada_rounds=None, ada_candidates=2000, cnn_epochs=12, mining_rounds=3,
-                               mining_stride=30) == default
+                               mining_stride=30, cnn_finetune_epochs=0) == default
     proto = Protocol.from_dict(example_protocol_dict(name="tiny", split_file="split.json"))
     paths = R.DataPaths("videos", "labels", "split.json", "work")
     c = R.Condition("adaboost / 12 seeds", "adaboost", seed_count=12)
@@ -432,7 +434,15 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
                                      log=lambda m: None).identity(hog, 0)
     assert key(dataclasses.replace(default, ada_candidates=4000)) != key(default)
     assert key(dataclasses.replace(default, mining_stride=10)) != key(default)
-    for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"], ["--mining-stride", "0"]):
+    cnn = R.Condition("cnn / 12 seeds", "cnn", seed_count=12)
+
+    def cnn_key(o):
+        return cell_key(R.ProtocolRunner(proto, "drone", paths, options=o, log=lambda m: None).identity(cnn, 0))
+
+    # the CNN's fine-tuning is in the CNN's key only
+    assert cnn_key(dataclasses.replace(default, cnn_finetune_epochs=3)) != cnn_key(default)
+    assert key(dataclasses.replace(default, cnn_finetune_epochs=3)) == key(default)
+    for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"], ["--mining-stride", "0"], ["--cnn-finetune-epochs", "-1"]):
         with pytest.raises(SystemExit) as e:
             R.build_parser().parse_args(["learning-curve", *bad, "--out", "x"])
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err

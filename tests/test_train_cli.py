@@ -233,7 +233,8 @@ def test_metadata_split_by_video_deterministic(ws: dict[str, Path], trained: dic
     assert torch.equal(a["state"]["weights"], b["state"]["weights"])
 
 
-def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], trained: dict[str, Any]) -> None:
+def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], trained: dict[str, Any],
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     out = ws["root"] / "runs" / "ada.pt"
     assert _train(ws, out, "--detector", "adaboost", "--all-frames", "--frame-step", "2", "--ada-rounds", "10",
                   "--ada-candidates", "200", "--mining-rounds", "1") == 0
@@ -242,9 +243,17 @@ def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], traine
     assert meta["mining"]["rounds"][1]["added"] > 0
     out = ws["root"] / "runs" / "cnn.pt"
     seedset = trained["meta"]["positives"]["seedset"]
+    import synthaug.detectors.lightning_module as lm
+
+    fitted, fit = [], lm.fit_patch_detector
+    monkeypatch.setattr(lm, "fit_patch_detector", lambda p, n, **kw: fitted.append(len(p)) or fit(p, n, **kw))
     assert _train(ws, out, "--detector", "cnn", "--seedset", seedset, "--cnn-epochs", "2", "--mining-rounds", "0",
-                  "--downscaled-copies", "2", "--faded-copies", "1") == 0
+                  "--downscaled-copies", "2", "--faded-copies", "1", "--cnn-finetune-epochs", "1") == 0
     meta = json.loads(out.with_suffix(".json").read_text())
+    # --cnn-finetune-epochs: trained on every positive, then fine-tuned on the seed set's real positives alone
+    real = meta["positives"]["count"]
+    assert meta["options"]["cnn_finetune_epochs"] == 1
+    assert fitted == [real + meta["downscaled"]["count"] + meta["faded"]["count"], real]
     assert meta["positives"]["mode"] == "seedset" and [r["round"] for r in meta["mining"]["rounds"]] == [0]
     # --downscaled-copies: 2 copies of each seed of at least 16 px, windows down to the pyramid's largest scale (1.0)
     down = meta["downscaled"]

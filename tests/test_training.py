@@ -310,6 +310,7 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
 
     old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items() if k not in ("mining_select", "mining_patience")}
     not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
+    old.pop("cnn_finetune_epochs"), not_hog.pop("cnn_finetune_epochs")  # 0: the training before the option
     for kind, base in (("hog", old), ("cnn", not_hog), (None, old)):  # the keys of before the family defaults
         assert TrainOptions().key_fields(kind) == base
         assert TrainOptions(mining_select="ap").key_fields(kind) == {**base, "mining_select": "ap"}
@@ -344,6 +345,84 @@ def test_hog_kmeans_restarts_key_and_training(monkeypatch: pytest.MonkeyPatch) -
     pos, neg = toy_patches(8, 16, seed=0)
     train_detector("hog", pos, neg, 0, options=TrainOptions(hog_components=2, hog_mining_rounds=0, hog_kmeans_restarts=4))
     assert seen == [4]
+
+
+def test_cnn_finetune_epochs_key_and_checks() -> None:
+    """No fine-tuning (0) is the training of the cells before the option; any other count is in the CNN's key and
+    in no other family's; a bad count or a bad number of real positives is a clear error."""
+    assert "cnn_finetune_epochs" not in TrainOptions().key_fields("cnn")
+    assert TrainOptions(cnn_finetune_epochs=3).key_fields("cnn")["cnn_finetune_epochs"] == 3
+    for kind in ("hog", "adaboost"):
+        assert TrainOptions(cnn_finetune_epochs=3).key_fields(kind) == TrainOptions().key_fields(kind)
+    for bad in (-1, 1.5, True, None):
+        with pytest.raises(ValueError, match="cnn_finetune_epochs"):
+            TrainOptions(cnn_finetune_epochs=bad)
+    from synthaug.detectors.toy import toy_patches
+
+    pos, neg = toy_patches(6, 12, seed=0)
+    for bad in (-1, 7, 2.5):
+        with pytest.raises(ValueError, match="real_positives"):
+            train_with_mining("cnn", pos, neg, 0, options=TrainOptions(cnn_epochs=1, mining_rounds=0), real_positives=bad)
+
+
+def test_cnn_finetune_trains_on_the_real_positives_after_the_mixed_set(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With ``cnn_finetune_epochs`` the CNN is trained on every positive, then the same module continues on the first
+    ``real_positives`` alone and the same negatives at a tenth of the rate; without added positives, or at 0, there is
+    one training, the one before the option."""
+    import synthaug.detectors.lightning_module as lm
+    from synthaug.detectors.toy import toy_patches
+
+    calls: list[dict[str, Any]] = []
+    fit = lm.fit_patch_detector
+
+    def spy(p, n, **kw):
+        m = fit(p, n, **kw)
+        calls.append({"pos": p.clone(), "neg": n.clone(), "lr": kw.get("lr", 3e-3), "given": kw.get("module"),
+                      "module": m, "weights": {k: v.clone() for k, v in m.net.state_dict().items()}})
+        return m
+
+    monkeypatch.setattr(lm, "fit_patch_detector", spy)
+    pos, neg = toy_patches(10, 30, seed=1)
+    opts = TrainOptions(cnn_epochs=2, cnn_batch_size=16, mining_rounds=0, cnn_finetune_epochs=2)
+    det = train_detector("cnn", pos, neg, 3, options=opts, real_positives=4)
+    assert len(calls) == 2
+    first, second = calls
+    assert torch.equal(first["pos"], pos) and first["given"] is None
+    assert torch.equal(second["pos"], pos[:4]) and torch.equal(second["neg"], neg)
+    assert second["given"] is first["module"] and second["lr"] == pytest.approx(first["lr"] * 0.1)
+    # the detector is the fine-tuned network, which moved away from the mixed-set training
+    final = {k: v for k, v in det.net.state_dict().items()}
+    assert all(torch.equal(final[k], second["weights"][k]) for k in final)
+    assert any(not torch.equal(first["weights"][k], second["weights"][k]) for k in final if final[k].is_floating_point())
+    # the first stage is exactly the training without the option (same seed, same data)
+    calls.clear()
+    base = train_detector("cnn", pos, neg, 3, options=TrainOptions(cnn_epochs=2, cnn_batch_size=16, mining_rounds=0))
+    assert len(calls) == 1 and all(torch.equal(calls[0]["weights"][k], first["weights"][k]) for k in final)
+    assert all(torch.equal(v, calls[0]["weights"][k]) for k, v in base.net.state_dict().items())
+    for real in (None, 10, 0):  # nothing added (or nothing real to fine-tune on): one training
+        calls.clear()
+        train_detector("cnn", pos, neg, 3, options=opts, real_positives=real)
+        assert len(calls) == 1
+
+
+def test_fit_patch_detector_continues_a_given_module() -> None:
+    """``module=`` keeps the given network's weights as the starting point: at a negligible rate they stay put, while
+    a new training from the same seed starts elsewhere; a window mismatch is refused."""
+    from synthaug.detectors.lightning_module import fit_patch_detector
+    from synthaug.detectors.toy import toy_patches
+
+    pos, neg = toy_patches(8, 24, seed=2)
+    m = fit_patch_detector(pos, neg, epochs=2, batch_size=16, seed=5)
+    before = {k: v.clone() for k, v in m.net.state_dict().items()}
+    m2 = fit_patch_detector(pos, neg, epochs=1, batch_size=16, seed=5, lr=1e-12, module=m)
+    assert m2 is m
+    for k, v in m.net.state_dict().items():
+        if v.is_floating_point() and "running" not in k:
+            torch.testing.assert_close(v, before[k], atol=1e-6, rtol=0)
+    fresh = fit_patch_detector(pos, neg, epochs=1, batch_size=16, seed=5, lr=1e-12)
+    assert any(not torch.allclose(fresh.net.state_dict()[k], before[k]) for k in before if before[k].is_floating_point())
+    with pytest.raises(ValueError, match="window"):
+        fit_patch_detector(pos[:, :, :32, :32], neg[:, :, :32, :32], epochs=1, module=m)
 
 
 def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> None:

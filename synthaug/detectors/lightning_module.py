@@ -407,6 +407,7 @@ def fit_patch_detector(
     val_fraction: float = 0.0,
     shift: int = 0,
     positive_weights: Tensor | None = None,
+    module: PatchDetectorModule | None = None,
 ) -> PatchDetectorModule:
     """Train a :class:`PatchDetectorModule` on patches in memory: the CNN's one training loop.
 
@@ -438,6 +439,8 @@ def fit_patch_detector(
             :func:`~synthaug.detectors.video_training.share_weights` gives mean-1 weights, so the
             positive class keeps its total weight (N/P balance) and only its split between real
             and added positives changes. None: the unweighted loss (the default, unchanged).
+        module: continue training this module (its weights, a fresh Adam at ``lr``; ``channels`` and the
+            initialisation are its own) instead of a new one: fine-tuning. None: a new module.
 
     Returns:
         The trained module (``.net`` in eval mode; ``.to_detector()`` for a detector).
@@ -455,8 +458,16 @@ def fit_patch_detector(
     dm.setup("fit")
     n_train = len(dm.train_set) // 2  # the set holds every patch and its mirror image
     max_steps = math.ceil(epochs * n_train / batch_size)
-    module = PatchDetectorModule(tuple(int(c) for c in channels), window=int(positives.shape[-1]), lr=lr,
-                                 weight_decay=weight_decay, init_seed=seed, shift=shift)
+    if module is None:
+        module = PatchDetectorModule(tuple(int(c) for c in channels), window=int(positives.shape[-1]), lr=lr,
+                                     weight_decay=weight_decay, init_seed=seed, shift=shift)
+    else:
+        if int(module.net.window) != int(positives.shape[-1]):
+            raise ValueError(f"module's window is {module.net.window}, the patches are {positives.shape[-1]} px")
+        if lr <= 0:
+            raise ValueError(f"lr must be > 0, got {lr}")
+        module.lr = lr  # configure_optimizers reads it: a fresh optimiser at the fine-tuning rate
+        module.net.train()
     rank_zero = logging.getLogger("lightning.pytorch.utilities.rank_zero")
     level = rank_zero.level
     rank_zero.setLevel(logging.WARNING)  # no "GPU available: ..." banner per call

@@ -43,6 +43,9 @@ _BUDGETS = {
     "ada_candidates": ("--ada-candidates", 1, "AdaBoost weak-learner candidates scored per round"),
     "cnn_epochs": ("--cnn-epochs", 1, "CNN passes over the training patches"),
     "cnn_max_steps": ("--cnn-max-steps", 1, "cap on CNN optimiser steps"),
+    "cnn_finetune_epochs": ("--cnn-finetune-epochs", 0,
+                            "CNN passes over the real positives alone after training on all of them, at a tenth of the "
+                            "learning rate (0: off; used when synthetic or other added positives are mixed in)"),
 }
 
 

@@ -85,9 +85,11 @@ unused by HOG and the CNN; it is 100 there so that their cache keys stay those o
 
 
 # =========================================================================== options
-HOG_ONLY_LATER_FIELDS: tuple[str, ...] = ("hog_kmeans_restarts",)
-"""Later :class:`TrainOptions` fields that change only HOG's training: the other families' cache keys leave them
-out whatever their value (:meth:`TrainOptions.key_fields`)."""
+CNN_FINETUNE_LR_SCALE: float = 0.1
+"""The CNN's fine-tuning learning rate as a share of its training rate (``TrainOptions.cnn_finetune_epochs``)."""
+FAMILY_ONLY_LATER_FIELDS: dict[str, str] = {"hog_kmeans_restarts": "hog", "cnn_finetune_epochs": "cnn"}
+"""Later :class:`TrainOptions` fields that change only one family's training (field -> family): the other
+families' cache keys leave them out whatever their value (:meth:`TrainOptions.key_fields`)."""
 
 
 @dataclass(frozen=True)
@@ -111,6 +113,12 @@ class TrainOptions:
         cnn_batch_size: mini-batch size.
         cnn_max_steps: the number of epochs is reduced so that training takes
             at most about this many optimiser steps (large synthetic sets).
+        cnn_finetune_epochs: after the CNN's training on every positive, this many further passes over the
+            *real* positives and the same negatives at a tenth of the learning rate (the added positives --
+            synthetic, perturbed, ... -- left out; :data:`CNN_FINETUNE_LR_SCALE`): pre-train on the mixed set,
+            fine-tune on real data, the usual schedule for a small network and synthetic images. Used only when
+            the caller says which positives are real (``real_positives`` of :func:`train_with_mining`; ``synthaug
+            train`` and the runner do) and some are not; 0 = off (the training before this option).
         cnn_shift: positives moved by random whole-pixel offsets up to this many pixels
             each step (the CNN scans every 8 pixels; ``PatchDetectorModule(shift=)``).
         mining_rounds: rounds of :func:`train_with_mining` (mine, add, retrain) at most;
@@ -177,6 +185,7 @@ class TrainOptions:
     cnn_batch_size: int = 128
     cnn_max_steps: int = 1200
     cnn_shift: int = 0
+    cnn_finetune_epochs: int = 0
     mining_rounds: int = 3
     mining_stride: int = 30
     mining_per_frame: int = 5
@@ -195,10 +204,11 @@ class TrainOptions:
     box_model: str = "ensemble"
 
     LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
-                                                           ("box_model", "ridge"), ("hog_kmeans_restarts", 1))
+                                                           ("box_model", "ridge"), ("hog_kmeans_restarts", 1),
+                                                           ("cnn_finetune_epochs", 0))
     """Fields added after cells were cached, with the value at which the training is the one before them
     (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys;
-    nor is ``hog_kmeans_restarts``' default, 10, which only HOG's keys carry: :data:`HOG_ONLY_LATER_FIELDS`)."""
+    nor is ``hog_kmeans_restarts``' default, 10, which only HOG's keys carry: :data:`FAMILY_ONLY_LATER_FIELDS`)."""
 
     def for_family(self, kind: str | None) -> "TrainOptions":
         """These options with every field left at None set to ``kind``'s default (:data:`FAMILY_DEFAULTS`).
@@ -236,7 +246,8 @@ class TrainOptions:
         """
         d = asdict(self.for_family(kind))
         for name, default in self.LATER_FIELDS:
-            if d[name] == default or (name in HOG_ONLY_LATER_FIELDS and kind not in (None, "hog")):
+            family = FAMILY_ONLY_LATER_FIELDS.get(name)
+            if d[name] == default or (family is not None and kind is not None and kind != family):
                 d.pop(name)
         return d
 
@@ -255,7 +266,8 @@ class TrainOptions:
         if self.mining_select is not None and self.mining_select not in MINING_SELECT:
             raise ValueError(f"mining_select must be one of {list(MINING_SELECT)} or None, got {self.mining_select!r}")
         # (name, lowest value, None allowed: the family's default)
-        for name, low, optional in (("mining_patience", 0, True), ("ada_rounds", 1, True), ("hog_kmeans_restarts", 1, False)):
+        for name, low, optional in (("mining_patience", 0, True), ("ada_rounds", 1, True), ("hog_kmeans_restarts", 1, False),
+                                     ("cnn_finetune_epochs", 0, False)):
             v = getattr(self, name)
             if v is None and optional:
                 continue
@@ -290,6 +302,7 @@ def _fit_once(
     mining_boxes: Sequence[Tensor | None] | None,
     options: TrainOptions,
     positive_weights: Tensor | None = None,
+    real_positives: int | None = None,
 ) -> Any:
     from synthaug.detectors.base import check_patches
 
@@ -328,14 +341,30 @@ def _fit_once(
         # the one CNN training loop: PatchDetectorModule + PatchDataModule.from_tensors under a CPU lightning.Trainer
         from synthaug.detectors.lightning_module import fit_patch_detector
 
-        n = positives.shape[0] + negatives.shape[0]
-        steps_per_epoch = max(1, math.ceil(n / options.cnn_batch_size))
-        epochs = max(1, min(options.cnn_epochs, options.cnn_max_steps // steps_per_epoch))
-        module = fit_patch_detector(positives, negatives, epochs=epochs, batch_size=options.cnn_batch_size, seed=seed,
-                                    shift=options.cnn_shift, positive_weights=positive_weights)
+        def capped(epochs: int, n: int) -> int:
+            return max(1, min(epochs, options.cnn_max_steps // max(1, math.ceil(n / options.cnn_batch_size))))
+
+        module = fit_patch_detector(positives, negatives, epochs=capped(options.cnn_epochs, len(positives) + len(negatives)),
+                                    batch_size=options.cnn_batch_size, seed=seed, shift=options.cnn_shift,
+                                    positive_weights=positive_weights)
+        n_real = _real_count(real_positives, len(positives))
+        if options.cnn_finetune_epochs and 0 < n_real < len(positives):  # fine-tune on the real positives only
+            real = positives[:n_real]
+            module = fit_patch_detector(real, negatives, epochs=capped(options.cnn_finetune_epochs, n_real + len(negatives)),
+                                        batch_size=options.cnn_batch_size, seed=seed, shift=options.cnn_shift,
+                                        lr=float(module.hparams["lr"]) * CNN_FINETUNE_LR_SCALE, module=module)
         det = module.to_detector()
     det.box_in_window = None if box_in_window is None else tuple(float(v) for v in box_in_window)
     return det
+
+
+def _real_count(real_positives: int | None, n: int) -> int:
+    """How many of ``n`` positives are real (the first ones): ``real_positives``, all of them when None."""
+    if real_positives is None:
+        return n
+    if isinstance(real_positives, bool) or int(real_positives) != real_positives or not 0 <= real_positives <= n:
+        raise ValueError(f"real_positives must be an integer in [0, {n}] (the number of positives), got {real_positives!r}")
+    return int(real_positives)
 
 
 def train_detector(
@@ -351,6 +380,7 @@ def train_detector(
     mining_source: Iterable[Any] | None = None,
     val_frames: Iterable[Any] | None = None,
     log: Callable[[str], None] | None = None,
+    real_positives: int | None = None,
 ) -> Any:
     """Train one detector family on positive and negative patches (with mining rounds when given a source).
 
@@ -371,6 +401,8 @@ def train_detector(
             mining rounds (a single fit, as before).
         val_frames: validation frames for the stopping rule (see :func:`train_with_mining`).
         log: progress printer.
+        real_positives: the first this many ``positives`` are real, the rest added (synthetic, perturbed, ...);
+            None: all real. Read by the CNN's fine-tuning (``options.cnn_finetune_epochs``) only.
 
     Returns:
         A :class:`~synthaug.detectors.base.PatchDetector` (the round chosen by ``options.mining_select``:
@@ -381,10 +413,10 @@ def train_detector(
     """
     if mining_source is None or options.mining_rounds == 0:
         return _fit_once(kind, positives, negatives, seed, box_in_window=box_in_window, mining_frames=mining_frames,
-                         mining_boxes=mining_boxes, options=options)
+                         mining_boxes=mining_boxes, options=options, real_positives=real_positives)
     return train_with_mining(kind, positives, negatives, seed, box_in_window=box_in_window, mining_frames=mining_frames,
                              mining_boxes=mining_boxes, options=options, mining_source=mining_source,
-                             val_frames=val_frames, log=log).detector
+                             val_frames=val_frames, log=log, real_positives=real_positives).detector
 
 
 # =========================================================================== mining rounds
@@ -421,6 +453,7 @@ def train_with_mining(
     fit: Callable[[Tensor, Tensor], Any] | None = None,
     box_regressor: Any = None,
     positive_weights: Tensor | None = None,
+    real_positives: int | None = None,
 ) -> TrainResult:
     """Train, then mine hard negatives and retrain in rounds until the validation false positives stop falling.
 
@@ -456,17 +489,21 @@ def train_with_mining(
             (:meth:`~synthaug.detectors.hog_dpm.HOGDetector.fit`) or the CNN's per-sample BCE weight
             (:func:`~synthaug.detectors.lightning_module.fit_patch_detector`) or AdaBoost's starting weights
             (:func:`~synthaug.detectors.adaboost.train_adaboost`). None: all equal.
+        real_positives: the first this many ``positives`` are real (see :func:`train_detector`); every round's
+            CNN fine-tunes on them when ``options.cnn_finetune_epochs`` > 0.
 
     Returns:
         A :class:`TrainResult`.
     """
     say = log or (lambda m: None)
     options = options.for_family(kind)
+    _real_count(real_positives, int(positives.shape[0]))  # a bad count fails before the first training
 
     def train(neg: Tensor) -> Any:
         if fit is None:
             det = _fit_once(kind, positives, neg, seed, box_in_window=box_in_window, mining_frames=mining_frames,
-                            mining_boxes=mining_boxes, options=options, positive_weights=positive_weights)
+                            mining_boxes=mining_boxes, options=options, positive_weights=positive_weights,
+                            real_positives=real_positives)
         else:
             det = fit(positives, neg)
             det.box_in_window = None if box_in_window is None else tuple(float(v) for v in box_in_window)

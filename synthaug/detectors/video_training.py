@@ -369,7 +369,8 @@ def train_from_videos(
     weights = share_weights(n_real, int(ts.positives.shape[0]), added.synthetic_share)
     if weights is not None:
         ts.info["synthetic_share"] = added.synthetic_share
-    res = _mine_and_train(kind, ts, vs, sp, options, seed=seed, regressor=regressor, say=say, positive_weights=weights)
+    res = _mine_and_train(kind, ts, vs, sp, options, seed=seed, regressor=regressor, say=say, positive_weights=weights,
+                          real_positives=n_real)
     t_train = time.perf_counter() - t0
     meta = _metadata(kind, class_name, seed, videos_dir, labels_dir, sp, ts, res, options=options,
                      synthetic_info=synthetic_info, perturb_info=perturb_info, downscaled_info=downscaled_info,
@@ -749,7 +750,8 @@ def share_weights(n_real: int, n_all: int, share: float | None) -> Tensor | None
 
 
 def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, *,
-                    seed: int, regressor: Any, say: Callable[[str], None], positive_weights: Tensor | None = None) -> Any:
+                    seed: int, regressor: Any, say: Callable[[str], None], positive_weights: Tensor | None = None,
+                    real_positives: int | None = None) -> Any:
     """:func:`~synthaug.detectors.training.train_with_mining` on ``ts``, mining every ``options.mining_stride``-th
     frame of the training videos (+ negative-class videos), stopped on the validation videos."""
     mine_src = VideoFrames(vs.videos_dir, vs.labels_dir, positive=sp["train"], negative=sp["negative_train"],
@@ -759,7 +761,7 @@ def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, 
     return train_with_mining(kind, ts.positives, ts.negatives, seed, box_in_window=ts.box_in_window,
                              mining_frames=ts.hog_frames, mining_boxes=ts.hog_boxes, options=options,
                              mining_source=mine_src if options.mining_rounds else None, val_frames=val_src, log=say,
-                             box_regressor=regressor, positive_weights=positive_weights)
+                             box_regressor=regressor, positive_weights=positive_weights, real_positives=real_positives)
 
 
 def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, labels_dir: str | Path,
