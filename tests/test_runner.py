@@ -439,7 +439,12 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
     def cnn_key(o):
         return cell_key(R.ProtocolRunner(proto, "drone", paths, options=o, log=lambda m: None).identity(cnn, 0))
 
-    # the CNN's fine-tuning is in the CNN's key only
+    # the CNN's fine-tuning is in the CNN's key only, and only where positives are added (real only: nothing to
+    # fine-tune after, the same training)
+    assert cnn_key(dataclasses.replace(default, cnn_finetune_epochs=3)) == cnn_key(default)
+    cnn = R.Condition("cnn / 12 seeds + 20x synthetic", "cnn", seed_count=12, params="p.json", synthetic_ratio=20)
+    assert cnn_key(dataclasses.replace(default, cnn_finetune_epochs=3)) != cnn_key(default)
+    cnn = R.Condition("cnn / 12 seeds + perturbed", "cnn", seed_count=12, perturb_copies=2)
     assert cnn_key(dataclasses.replace(default, cnn_finetune_epochs=3)) != cnn_key(default)
     assert key(dataclasses.replace(default, cnn_finetune_epochs=3)) == key(default)
     for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"], ["--mining-stride", "0"], ["--cnn-finetune-epochs", "-1"]):

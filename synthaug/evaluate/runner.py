@@ -133,6 +133,11 @@ class Condition:
                 d.pop(k)
         return d
 
+    def adds_positives(self) -> bool:
+        """Whether the training set holds positives besides the real ones (synthetic, perturbed, copy-paste, ...)."""
+        return bool(self.synthetic_ratio or self.perturb_copies or self.copy_paste_ratio or self.downscaled_copies
+                    or self.faded_copies)
+
 
 @dataclass(frozen=True)
 class DataPaths:
@@ -229,8 +234,11 @@ class ProtocolRunner:
 
             path = Path(condition.params.format(seed=seed))
             cond["params_sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()[:16] if path.is_file() else None
+        options = self.options.key_fields(condition.kind)
+        if not condition.adds_positives():  # the CNN fine-tunes on the real positives after the added ones: nothing
+            options.pop("cnn_finetune_epochs", None)  # to do without them, the same training and the same cell
         return {"what": "protocol_cell", "protocol": self.protocol.fingerprint(), "class": self.class_name,
-                "condition": cond, "seed": int(seed), "options": self.options.key_fields(condition.kind),
+                "condition": cond, "seed": int(seed), "options": options,
                 "scales": None if self.scales is None else list(self.scales), "scored_scales": list(self.scales_scored()),
                 "patches": self.patches, "max_test_videos": self.max_test_videos,
                 **({} if self.eval_split == "test" else {"eval_split": self.eval_split}),
