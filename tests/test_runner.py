@@ -414,7 +414,7 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
     assert (opts.ada_rounds, opts.ada_candidates, opts.cnn_epochs, opts.mining_rounds, opts.mining_stride,
             opts.cnn_finetune_epochs) == (300, 4000, 5, 2, 10, 3)
     assert dataclasses.replace(opts, ada_rounds=None, ada_candidates=2000, cnn_epochs=12, mining_rounds=3,
-                               mining_stride=30, cnn_finetune_epochs=0) == default
+                               mining_stride=30, cnn_finetune_epochs=4) == default
     proto = Protocol.from_dict(example_protocol_dict(name="tiny", split_file="split.json"))
     paths = R.DataPaths("videos", "labels", "split.json", "work")
     c = R.Condition("adaboost / 12 seeds", "adaboost", seed_count=12)

@@ -310,14 +310,15 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
 
     old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items() if k not in ("mining_select", "mining_patience")}
     not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
-    old.pop("cnn_finetune_epochs"), not_hog.pop("cnn_finetune_epochs")  # 0: the training before the option
-    for kind, base in (("hog", old), ("cnn", not_hog), (None, old)):  # the keys of before the family defaults
+    only_hog = {k: v for k, v in old.items() if k != "cnn_finetune_epochs"}  # the CNN's fine-tuning: the CNN's keys
+    for kind, base in (("hog", only_hog), ("cnn", not_hog), (None, old)):  # the keys of before the family defaults
         assert TrainOptions().key_fields(kind) == base
         assert TrainOptions(mining_select="ap").key_fields(kind) == {**base, "mining_select": "ap"}
         assert TrainOptions(mining_patience=1).key_fields(kind) == {**base, "mining_patience": 1}
     ada = TrainOptions().key_fields("adaboost")
     assert (ada["ada_rounds"], ada["mining_select"], ada["mining_patience"]) == (300, "ap", 1)
-    assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100).key_fields("adaboost") == not_hog
+    assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100).key_fields("adaboost") == \
+        {k: v for k, v in not_hog.items() if k != "cnn_finetune_epochs"}
 
 
 def test_hog_kmeans_restarts_key_and_training(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -350,7 +351,8 @@ def test_hog_kmeans_restarts_key_and_training(monkeypatch: pytest.MonkeyPatch) -
 def test_cnn_finetune_epochs_key_and_checks() -> None:
     """No fine-tuning (0) is the training of the cells before the option; any other count is in the CNN's key and
     in no other family's; a bad count or a bad number of real positives is a clear error."""
-    assert "cnn_finetune_epochs" not in TrainOptions().key_fields("cnn")
+    assert "cnn_finetune_epochs" not in TrainOptions(cnn_finetune_epochs=0).key_fields("cnn")
+    assert TrainOptions().key_fields("cnn")["cnn_finetune_epochs"] == 4  # the default (measured) is a new training
     assert TrainOptions(cnn_finetune_epochs=3).key_fields("cnn")["cnn_finetune_epochs"] == 3
     for kind in ("hog", "adaboost"):
         assert TrainOptions(cnn_finetune_epochs=3).key_fields(kind) == TrainOptions().key_fields(kind)
@@ -396,7 +398,8 @@ def test_cnn_finetune_trains_on_the_real_positives_after_the_mixed_set(monkeypat
     assert any(not torch.equal(first["weights"][k], second["weights"][k]) for k in final if final[k].is_floating_point())
     # the first stage is exactly the training without the option (same seed, same data)
     calls.clear()
-    base = train_detector("cnn", pos, neg, 3, options=TrainOptions(cnn_epochs=2, cnn_batch_size=16, mining_rounds=0))
+    base = train_detector("cnn", pos, neg, 3, options=TrainOptions(cnn_epochs=2, cnn_batch_size=16, mining_rounds=0,
+                                                                   cnn_finetune_epochs=0), real_positives=4)
     assert len(calls) == 1 and all(torch.equal(calls[0]["weights"][k], first["weights"][k]) for k in final)
     assert all(torch.equal(v, calls[0]["weights"][k]) for k, v in base.net.state_dict().items())
     for real in (None, 10, 0):  # nothing added (or nothing real to fine-tune on): one training

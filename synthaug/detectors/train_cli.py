@@ -45,7 +45,8 @@ _BUDGETS = {
     "cnn_max_steps": ("--cnn-max-steps", 1, "cap on CNN optimiser steps"),
     "cnn_finetune_epochs": ("--cnn-finetune-epochs", 0,
                             "CNN passes over the real positives alone after training on all of them, at a tenth of the "
-                            "learning rate (0: off; used when synthetic or other added positives are mixed in)"),
+                            "learning rate (default 4; 0: off, the training before this option; used when synthetic or other "
+                            "added positives are mixed in)"),
 }
 
 
