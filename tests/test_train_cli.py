@@ -362,8 +362,10 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
     seedset = trained["meta"]["positives"]["seedset"]
     assert _train(ws, out, "--detector", kind, "--seedset", seedset, "--perturb-copies", "3", "--synthetic-share", "0.25",
                   "--mining-rounds", "0") == 0
-    (n, w), = seen
+    (n, w), *finetune = seen
     assert n == 32 and w.shape == (32,)
+    # the CNN then fine-tunes on the 8 real positives alone, unweighted (TrainOptions.cnn_finetune_epochs)
+    assert finetune == ([(8, None)] if kind == "cnn" else [])
     assert float(w[:8].sum()) == pytest.approx(0.75 * 32) and float(w[8:].sum()) == pytest.approx(0.25 * 32)
     assert json.loads(out.with_suffix(".json").read_text())["positives"]["synthetic_share"] == 0.25
 

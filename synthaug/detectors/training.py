@@ -317,6 +317,7 @@ def _fit_once(
     options = options.for_family(kind)
     if not isinstance(positives, Tensor) or positives.dim() != 4 or positives.shape[0] == 0:
         raise ValueError(f"positives must be a non-empty (P, 1, S, S) float tensor, got {getattr(positives, 'shape', positives)}")
+    n_real = _real_count(real_positives, len(positives))
     if not isinstance(negatives, Tensor) or negatives.dim() != 4 or negatives.shape[0] == 0:
         raise ValueError(f"negatives must be a non-empty (N, 1, S, S) float tensor, got {getattr(negatives, 'shape', negatives)}")
     window = int(positives.shape[-1])
@@ -354,7 +355,6 @@ def _fit_once(
         module = fit_patch_detector(positives, negatives, epochs=capped(options.cnn_epochs, len(positives) + len(negatives)),
                                     batch_size=options.cnn_batch_size, seed=seed, shift=options.cnn_shift,
                                     positive_weights=positive_weights)
-        n_real = _real_count(real_positives, len(positives))
         if options.cnn_finetune_epochs and 0 < n_real < len(positives):  # fine-tune on the real positives only
             real = positives[:n_real]
             module = fit_patch_detector(real, negatives, epochs=capped(options.cnn_finetune_epochs, n_real + len(negatives)),
