@@ -239,8 +239,10 @@ class TrainOptions:
 
         Example:
             >>> TrainOptions().key_fields("hog") == {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items()
-            ...                                      if k not in ("mining_select", "mining_patience")}
+            ...                                      if k not in ("mining_select", "mining_patience", "cnn_finetune_epochs")}
             True
+            >>> TrainOptions().key_fields("cnn")["cnn_finetune_epochs"]  # the CNN's fine-tuning is in its keys only
+            4
             >>> TrainOptions(mining_patience=1).key_fields("hog")["mining_patience"]
             1
             >>> TrainOptions().key_fields("adaboost") == TrainOptions(ada_rounds=300, mining_select="ap",
