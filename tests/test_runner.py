@@ -326,6 +326,35 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     assert cell["train"]["faded"]["copies"] == 1 and cell["train"]["faded"]["count"] == 6
 
 
+def test_runner_fits_one_file_per_mesh_and_refuses_a_stored_fit_of_another_mesh(ws, tmp_path):
+    """A cell with ``mesh`` reads and writes ``..._<distance>_<mesh stem>.json``: a fit made for another shape (the
+    default quadcopter's, at the path without a mesh) is never rendered with this mesh; a stored file whose
+    recorded mesh differs from the cell's is refused with a clear error instead of being used."""
+    import torch
+
+    from synthaug.params import CaptureParams
+
+    runner = R.ProtocolRunner(ws["proto"], "drone", dataclasses.replace(ws["paths"], work_dir=str(tmp_path)),
+                              log=lambda m: None, options=FAST, scales=(1.0, 0.8))
+    fits = tmp_path / "fits"
+    fits.mkdir()
+    theta = CaptureParams.sample(6, generator=torch.Generator().manual_seed(0))
+    theta.save(fits / "drone_6_seed0_eucl.json", metadata={"mesh": "quadcopter"})
+    glb = tmp_path / "twin_prop_airplane.glb"
+    theta.save(fits / "drone_6_seed0_eucl_twin_prop_airplane.json", metadata={"mesh": str(glb)})
+    plain = R.Condition("s", "hog", seed_count=6, synthetic_ratio=2.0, fit_distance="eucl")
+    assert runner.params_for(plain, 0)(tmp_path) == fits / "drone_6_seed0_eucl.json"
+    meshed = dataclasses.replace(plain, mesh=str(glb))
+    assert runner.params_for(meshed, 0)(tmp_path) == fits / "drone_6_seed0_eucl_twin_prop_airplane.json"
+    # the same stem, another shape: the recorded mesh decides
+    other = dataclasses.replace(plain, mesh=str(tmp_path / "elsewhere" / "twin_prop_airplane.glb"))
+    with pytest.raises(ValueError, match="fitted with mesh"):
+        runner.params_for(other, 0)(tmp_path)
+    # a fit without a recorded mesh (older files) is read as before
+    theta.save(fits / "drone_6_seed1_eucl.json")
+    assert runner.params_for(plain, 1)(tmp_path) == fits / "drone_6_seed1_eucl.json"
+
+
 def test_runner_scales_option_parses_and_refuses_a_non_positive_factor(capsys):
     """``--scales`` (the pyramid of mining, validation and scoring; part of a cell's key) for both subcommands."""
     args = R.build_parser().parse_args(["learning-curve", "--scales", "1.25", "0.33", "--out", "x"])

@@ -80,7 +80,8 @@ class Condition:
             cell's seed set: ``params`` may hold ``{seed}`` (one fit per training seed, since each
             training seed draws its own seed set).
         fit_distance: fit the cell's seed set with this distance (``synthaug fit``'s defaults) when
-            the ``params`` file is missing (default path: ``<work>/fits/<class>_<n>_seed<seed>_<distance>.json``).
+            the ``params`` file is missing (default path: ``<work>/fits/<class>_<n>_seed<seed>_<distance>.json``,
+            ``..._<distance>_<mesh stem>.json`` with a ``mesh``; a stored fit of another mesh is refused).
         fit_options: other :class:`~synthaug.fit.fitting.FitConfig` fields of that fit, as
             ``(name, value)`` pairs (default: ``synthaug fit``'s).
         perturb_copies: perturbed copies of every real positive (the paper's baseline).
@@ -250,13 +251,16 @@ class ProtocolRunner:
         if condition.params is None and condition.fit_distance is None:
             return None
         n = condition.seed_count
+        mesh_tag = "" if condition.mesh is None else f"_{Path(condition.mesh).stem}"  # one fit file per mesh
         path = Path(condition.params.format(seed=seed)) if condition.params is not None else \
-            Path(self.paths.work_dir) / "fits" / f"{self.class_name}_{n}_seed{seed}_{condition.fit_distance}.json"
+            Path(self.paths.work_dir) / "fits" / f"{self.class_name}_{n}_seed{seed}_{condition.fit_distance}{mesh_tag}.json"
         if condition.fit_distance is None:
             return path
 
         def make(seedset_path: Path) -> Path:
-            if not path.is_file():
+            if path.is_file():
+                _check_fit_mesh(path, condition.mesh or "quadcopter")
+            else:
                 from synthaug.fit.fitting import FitConfig, fit_seedset
 
                 t0 = time.perf_counter()
@@ -396,6 +400,20 @@ class ProtocolRunner:
                 res.meta["window_boxes"] = True
             out[s] = res
         return out
+
+
+def _check_fit_mesh(path: Path, mesh: str) -> None:
+    """Refuse a stored fit made with another mesh than the cell's: its poses, scales and effects belong to that shape."""
+    from synthaug.params import CaptureParams
+
+    _, _, meta = CaptureParams.load_with_extra(path)
+    made = meta.get("mesh")
+    if made is None or str(made) == str(mesh):
+        return
+    if Path(str(made)).is_file() and Path(mesh).is_file() and Path(str(made)).resolve() == Path(mesh).resolve():
+        return
+    raise ValueError(f"{path} was fitted with mesh {made!r}, not {mesh!r}: remove it (it is made again) or pass the "
+                     f"mesh it was fitted with")
 
 
 def _json_safe(x: Any) -> Any:
