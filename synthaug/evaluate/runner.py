@@ -555,6 +555,18 @@ def _positives(res: ProtocolResult) -> float:
 
 
 # ------------------------------------------------------------------------------------------ synthetic data
+def _fit_label(distance: str | None, params: str | None, mesh: str | None) -> str:
+    """How a condition's name says where its added positives come from: the fit's distance (or file), and the mesh
+    when one is given (conditions of two meshes are otherwise named alike).
+
+    >>> _fit_label("hog", None, None), _fit_label("hog", None, "../meshes/jet_airliner.ply")
+    ('hog', 'hog, jet_airliner')
+    >>> _fit_label(None, "fits/drone_100_seed{seed}_hog.json", None)
+    'drone_100_seed{seed}_hog'
+    """
+    return f"{distance or Path(str(params)).stem}{'' if mesh is None else f', {Path(mesh).stem}'}"
+
+
 def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
                          synthetic_ratios: Sequence[float] = (), fit_distance: str | Mapping[str, str] | None = None,
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
@@ -592,7 +604,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
         share = "" if synthetic_share is None else f", share {synthetic_share:g}"
         conds = [Condition(base, kind, seed_count=seed_count)]
-        conds += [Condition(f"{base} + {r:g}x synthetic ({dist or Path(str(params)).stem}"
+        fit = _fit_label(dist, params, mesh)
+        conds += [Condition(f"{base} + {r:g}x synthetic ({fit}"
                             f"{'' if ps == 'uniform' else f', {ps} poses'}{share}"
                             f"{'' if ob is None else f', framed as the seeds ({ob})'})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
@@ -601,7 +614,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
-        conds += [Condition(f"{base} + {r:g}x copy-paste ({dist or Path(str(params)).stem} silhouettes{share})", kind,
+        conds += [Condition(f"{base} + {r:g}x copy-paste ({fit} silhouettes{share})", kind,
                             seed_count=seed_count, params=params, mesh=mesh, fit_distance=dist, fit_options=fit_opts,
                             copy_paste_ratio=float(r), synthetic_share=synthetic_share)
                   for r in copy_paste_ratios]
