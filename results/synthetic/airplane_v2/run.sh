@@ -11,4 +11,4 @@ PYOPENGL_PLATFORM=egl OMP_NUM_THREADS=1 /usr/bin/time -f "wall %e s, max RSS %M 
   --detectors "$det" --seed-counts 100 --synthetic-ratios 20 --fit-distance hog \
   --mesh ../shared/data/meshes/twin_prop_airplane.glb --scales 1.25 1.0 0.8 0.64 0.51 0.41 0.33 0.26 \
   --no-scale-check --no-patches --training-seeds $seeds --threads 1 "$@" \
-  --out "results/synthetic/airplane_v2/$tag" > "results/synthetic/airplane_v2/$tag.log" 2>&1
+  --out "results/synthetic/airplane_v2/$tag" > "results/synthetic/airplane_v2/$tag${LOG_SUFFIX:-}.log" 2>&1
