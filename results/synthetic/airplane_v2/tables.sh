@@ -13,6 +13,10 @@ $R cnn cnn_100_fitted_poses "0 1 2" --pose-sampling fitted
 $R hog hog_12 "0 1 2" --seed-counts 12
 $R hog hog_12_fitted_poses "0 1 2" --seed-counts 12 --pose-sampling fitted
 $R cnn cnn_12 "0 1 2" --seed-counts 12
+$R hog hog_100_val "0 1 2" --pose-sampling uniform fitted --eval-split val
+$R cnn cnn_100_val "0 1 2" --pose-sampling uniform fitted --eval-split val
+$R hog hog_100_5seeds "0 1 2 3 4" --pose-sampling uniform fitted
+$R cnn cnn_100_5seeds "0 1 2 3 4"
 SYN=20x_synthetic_hog_twin_prop_airplane; FIT=20x_synthetic_hog_twin_prop_airplane_fitted_poses
 CP=20x_copy_paste_hog_twin_prop_airplane_silhouettes
 for d in hog cnn; do
@@ -34,3 +38,8 @@ PYTHONPATH=. python $T "$A/hog_100/hog_100_seeds_$SYN.json=+20x synthetic, twin_
   "$A/hog_100_jet/hog_100_seeds_20x_synthetic_hog_jet_airliner.json=+20x synthetic, jet_airliner.ply" --out $A/hog_100_jet/jet_vs_twin.md > /dev/null
 PYTHONPATH=. python results/synthetic/gap_closed.py --few $A/hog_12/hog_12_seeds.json \
   --added $A/hog_12_fitted_poses/hog_12_seeds_$FIT.json --many $A/hog_100/hog_100_seeds.json --out $A/hog_12_fitted_poses/gap_closed.md > /dev/null
+for d in hog_100_val cnn_100_val hog_100_5seeds; do
+  k=${d%%_*}
+  PYTHONPATH=. python $T "$A/$d/${k}_100_seeds_$SYN.json=uniform poses" "$A/$d/${k}_100_seeds_$FIT.json=fitted poses" \
+    --out $A/$d/fitted_vs_uniform.md > /dev/null
+done
