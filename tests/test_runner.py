@@ -378,6 +378,13 @@ def test_runner_downscaled_copies_option_parses_and_refuses_zero(capsys):
     assert R.build_parser().parse_args(["synthetic", "--out", "x"]).object_box == ["none"]
     assert R.build_parser().parse_args(["synthetic", "--object-box", "none", "seed", "--out", "x"]).object_box == [
         "none", "seed"]
+    assert R.build_parser().parse_args(["synthetic", "--out", "x"]).shape_variation == [0.0]
+    assert R.build_parser().parse_args(["synthetic", "--shape-variation", "0", "0.3", "--out", "x"]).shape_variation == [
+        0.0, 0.3]
+    # a varied-shape condition has its own key; at 0 the key is the one cells had before the option existed
+    plain = R.Condition("c", "cnn", seed_count=100, synthetic_ratio=20.0)
+    assert "shape_variation" not in plain.identity()
+    assert dataclasses.replace(plain, shape_variation=0.3).identity()["shape_variation"] == 0.3
     with pytest.raises(SystemExit) as e:
         R.build_parser().parse_args(["synthetic", "--faded-copies", "0", "--out", "x"])
     assert e.value.code == 2 and "--faded-copies" in capsys.readouterr().err

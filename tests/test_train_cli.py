@@ -283,8 +283,9 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     calls = []
 
     def fake(seedset: Any, mesh: Any, fit_file: Any, count: int, *, seed: int = 0, pose_sampling: str = "uniform",
-             object_box: Any = None, **_: Any) -> torch.Tensor:
-        calls.append((len(seedset), str(mesh), count, seed, pose_sampling) + ((object_box,) if object_box else ()))
+             object_box: Any = None, shape_variation: float = 0.0, **_: Any) -> torch.Tensor:
+        calls.append((len(seedset), str(mesh), count, seed, pose_sampling) + ((object_box,) if object_box else ())
+                     + ((shape_variation,) if shape_variation else ()))
         return torch.rand(count, 1, 40, 40, generator=torch.Generator().manual_seed(seed))
 
     monkeypatch.setattr(video_training, "synthetic_positives", fake)
@@ -312,6 +313,13 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
                   "--object-box", "seed", "--mining-rounds", "0") == 0
     assert calls[-1] == (8, "quadcopter", 24, 2, "uniform", "seed")
     assert json.loads(out_box.with_suffix(".json").read_text())["synthetic"]["object_box"] == "seed"
+    # --shape-variation likewise (absent from the metadata at its default 0, above)
+    out_shape = ws["root"] / "runs" / "hog_syn_shape.pt"
+    assert _train(ws, out_shape, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio",
+                  "3", "--shape-variation", "0.3", "--mining-rounds", "0") == 0
+    assert calls[-1] == (8, "quadcopter", 24, 2, "uniform", 0.3)
+    assert json.loads(out_shape.with_suffix(".json").read_text())["synthetic"]["shape_variation"] == 0.3
+    assert "shape_variation" not in meta["synthetic"]
     from synthaug.data.seedset import SeedSet
     from synthaug.detectors.training_sets import synthetic_positives  # the real generator: "seed" reads the seed set
 

@@ -39,6 +39,7 @@ class ItemParams:
             ``"uniform"``: the density's vector order), or None (the seed's own, ``"seed"``).
         fields: the random effects' noise fields, ``{field name: (1, C, crop, crop) tensor}`` (not JSON: everything
             else is, ``dataclasses.asdict(p)`` without ``fields``).
+        variant: which of the dataset's shapes the object has (``shape_variation``: 0 is the mesh itself).
     """
 
     index: int
@@ -51,6 +52,7 @@ class ItemParams:
     object_px: float | None = None
     capture: tuple[float, ...] | None = None
     fields: Mapping[str, torch.Tensor] = field(default_factory=dict)
+    variant: int = 0
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, ItemParams):

@@ -163,6 +163,14 @@ class SyntheticObjectDataset(Dataset):
             lens distortion, the JPEG block grid). ``"auto"`` (default): the seed
             set's own when ``backgrounds`` is a seed set, else None; None: the
             patch is taken as the frame. The paper's four effects do not read it.
+        shape_variation: domain randomisation of the silhouette (0, default: the paper, the mesh alone). > 0:
+            each synthetic item draws one of ``shape_variants`` shapes made from the mesh by
+            :func:`~synthaug.render.mesh.shape_variants` (the mesh itself, and variations with its axes stretched
+            and every part, e.g. an arm, a rotor, a wing, scaled about its own centre, each factor log-uniform
+            within ``±shape_variation``, drawn from ``seed``): arm length, rotor size and body proportions
+            around a coarse model. The fitted capture parameters and object scale are used as they are.
+        shape_variants: how many shapes ``shape_variation`` makes (>= 2; the first is the mesh itself); each is
+            rendered into its own view cache once.
         transforms: a callable ``(image, target) -> (image, target)`` applied to
             every item, real and synthetic alike, as torchvision datasets take
             one (e.g. ``transforms.v2.Compose([...])``: frame-mode boxes are
@@ -197,6 +205,8 @@ class SyntheticObjectDataset(Dataset):
         capture_sampling: Literal["seed", "kde", "uniform"] | CaptureSampler = "seed",
         pose_sampling: Literal["uniform", "fitted"] | PoseSampler = "uniform",
         seed_geometry: Mapping[str, Any] | Literal["auto"] | None = "auto",
+        shape_variation: float = 0.0,
+        shape_variants: int = 8,
         transforms: Any = None,
         **deprecated: Any,
     ) -> None:
@@ -231,7 +241,7 @@ class SyntheticObjectDataset(Dataset):
         self._real_items = None if real is None else RealItems(
             real, mode=self.mode, channels=self.channels, patch_size=self.patch_size, label=self.label,
             theta_size=theta_size)
-        self._set_up_renderer(mesh, render)
+        self._set_up_renderer(mesh, render, shape_variation=shape_variation, shape_variants=shape_variants)
         if self.object_box == "fit":
             if params is None or self.seed_scales is None:
                 raise ValueError("object_box='fit' reads each seed's fitted pose and object scale: give params from a "
@@ -301,12 +311,26 @@ class SyntheticObjectDataset(Dataset):
             raise ValueError(f"the FittedPose holds {len(self.pose_sampler.rotations)} rotations but there are "
                              f"{len(self.backgrounds)} seeds (one fitted rotation per seed)")
 
-    def _set_up_renderer(self, mesh: Any, render: Any) -> None:
+    def _set_up_renderer(self, mesh: Any, render: Any, *, shape_variation: float = 0.0,
+                         shape_variants: int = 8) -> None:
         """The view cache (given, or built now with the options ``render`` maps) or the exact renderer (its GL
-        subprocess starts lazily)."""
+        subprocess starts lazily); one per shape with ``shape_variation``."""
+        if not (isinstance(shape_variation, (int, float)) and math.isfinite(shape_variation) and shape_variation >= 0):
+            raise ValueError(f"shape_variation must be a number >= 0, got {shape_variation!r}")
+        self.shape_variation = float(shape_variation)
+        meshes = [mesh]
+        if self.shape_variation > 0:
+            if isinstance(shape_variants, bool) or int(shape_variants) != shape_variants or shape_variants < 2:
+                raise ValueError(f"shape_variants must be an integer >= 2 with shape_variation > 0, got {shape_variants!r}")
+            if self.backend == "cache" and not isinstance(render, (str, Mapping)):
+                raise ValueError("shape_variation renders every shape into its own view cache: give render as "
+                                 "'cache' or a mapping of cache options, not a prebuilt ViewCache")
+            from synthaug.render.mesh import shape_variants as make_variants
+
+            meshes = make_variants(mesh, int(shape_variants), strength=self.shape_variation, seed=self.seed)
         self._mesh = mesh
-        self._cache = None
-        self._renderer = None
+        self._caches: list[Any] = []
+        self._renderers: list[Any] = []
         if self.backend == "cache":
             if isinstance(render, (str, Mapping)):
                 # built here (in the main process, through a GL subprocess), memory-mapped by workers
@@ -314,13 +338,20 @@ class SyntheticObjectDataset(Dataset):
 
                 opts = {"sprite_size": 96 if self.mode == "patch" else 128,
                         **({} if isinstance(render, str) else dict(render))}
-                self._cache = ViewCache.build(mesh, **opts)
+                self._caches = [ViewCache.build(m, **opts) for m in meshes]
             else:
-                self._cache = render  # a prebuilt ViewCache
+                self._caches = [render]  # a prebuilt ViewCache
         else:
             from synthaug.render.server import Renderer
 
-            self._renderer = Renderer(mesh)  # starts its GL subprocess lazily, per process
+            self._renderers = [Renderer(m) for m in meshes]  # each starts its GL subprocess lazily, per process
+        self._cache = self._caches[0] if self._caches else None
+        self._renderer = self._renderers[0] if self._renderers else None
+
+    @property
+    def n_shapes(self) -> int:
+        """How many shapes the synthetic objects are drawn from (1 without ``shape_variation``)."""
+        return max(len(self._caches), len(self._renderers))
 
     # ----------------------------------------------------------- set-up
     def _load_backgrounds(self, backgrounds: Any) -> list[torch.Tensor]:
@@ -447,13 +478,16 @@ class SyntheticObjectDataset(Dataset):
         for eff in self._random_effects:
             fields.update(eff.sample_fields((1, self.channels, crop, crop), g))
         capture = self.capture_sampler.sample(g, seed_index)
+        pose = self.pose_sampler.sample(g, seed_index, u[2:7])
+        shapes = self.n_shapes  # drawn last, and only with shape_variation: no other draw moves
+        variant = min(int(torch.rand(1, generator=g, dtype=torch.float64).item() * shapes), shapes - 1) if shapes > 1 else 0
         lo, hi = self.object_size
         return ItemParams(
             index=index, epoch=epoch, real=False, seed_index=seed_index, negative=u[1] < self.negative_fraction,
-            pose=self.pose_sampler.sample(g, seed_index, u[2:7]),
+            pose=pose,
             crop_xy=(min(int(u[7] * (w - crop + 1)), w - crop), min(int(u[8] * (h - crop + 1)), h - crop)),
             object_px=lo + (hi - lo) * u[9] if self.mode == "frame" else None,
-            capture=capture, fields=fields)
+            capture=capture, fields=fields, variant=variant)
 
     @overload
     def render(self, params: ItemParams) -> tuple[Any, dict[str, Any]]: ...
@@ -478,6 +512,8 @@ class SyntheticObjectDataset(Dataset):
             if not p.real and not 0 <= p.seed_index < len(self.backgrounds):
                 raise ValueError(f"seed_index {p.seed_index} out of range: this dataset has "
                                  f"{len(self.backgrounds)} seeds")
+            if not p.real and not 0 <= p.variant < self.n_shapes:
+                raise ValueError(f"variant {p.variant} out of range: this dataset has {self.n_shapes} shape(s)")
         out: list[Any] = [None] * len(batch)
         for k, p in enumerate(batch):
             if p.real:
@@ -500,14 +536,30 @@ class SyntheticObjectDataset(Dataset):
         return out[0], out[1]
 
     # -------------------------------------------------------- synthesis
-    def _layers(self, pose: dict[str, torch.Tensor], size: int, object_scale: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    def _layers(self, pose: dict[str, torch.Tensor], size: int, object_scale: torch.Tensor,
+                variant: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+        """Coverage and normals of each pose, of shape ``variant`` (None: the mesh itself)."""
+        if variant is not None and bool((variant != 0).any()):
+            cov = nrm = None
+            for v in variant.unique().tolist():  # each shape's items together, put back in place
+                at = (variant == v).nonzero().flatten()
+                c, n = self._shape_layers(int(v), {k: t[at] for k, t in pose.items()}, size, object_scale[at])
+                if cov is None:
+                    cov = c.new_zeros((len(variant), *c.shape[1:]))
+                    nrm = n.new_zeros((len(variant), *n.shape[1:]))
+                cov[at], nrm[at] = c, n
+            return cov, nrm
+        return self._shape_layers(0, pose, size, object_scale)
+
+    def _shape_layers(self, shape: int, pose: dict[str, torch.Tensor], size: int,
+                      object_scale: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         if self.backend == "cache":
-            return self._cache.layers(pose["alpha"], pose["beta"], pose["gamma"], pose["t_x"], pose["t_y"],
-                                      size=size, object_scale=object_scale)
+            return self._caches[shape].layers(pose["alpha"], pose["beta"], pose["gamma"], pose["t_x"], pose["t_y"],
+                                              size=size, object_scale=object_scale)
         covs, nrms = [], []
         for k in range(len(object_scale)):  # exact: one GL render per item (scale may differ)
-            c, n = self._renderer.layers(*(pose[p][k:k + 1] for p in POSE_NAMES), size=size,
-                                         scale=float(object_scale[k]))
+            c, n = self._renderers[shape].layers(*(pose[p][k:k + 1] for p in POSE_NAMES), size=size,
+                                                 scale=float(object_scale[k]))
             covs.append(c)
             nrms.append(n)
         return torch.cat(covs), torch.cat(nrms)
@@ -518,11 +570,12 @@ class SyntheticObjectDataset(Dataset):
         seeds = torch.tensor([p.seed_index for p in batch])
         theta_rows = self.capture_sampler.rows(seeds, [p.capture for p in batch])
         pose = {n: torch.tensor([p.pose[n] for p in batch]) for n in POSE_NAMES}
+        variant = torch.tensor([p.variant for p in batch], dtype=torch.int64)
         if self.mode == "patch":
             scale = (self.seed_scales[seeds].float() if self.seed_scales is not None
                      else torch.full((len(batch),), self.object_scale))
             if self.object_box is not None:
-                pose, scale = self._box_framed(pose, crop, scale)
+                pose, scale = self._box_framed(pose, crop, scale, variant)
         else:
             scale = torch.tensor([p.object_px / crop for p in batch])
         theta = theta_rows.replace(**pose) if self._pose_in_range(pose) else CaptureParams(
@@ -554,7 +607,7 @@ class SyntheticObjectDataset(Dataset):
         covs, chunks = [], []
         for i in range(0, len(batch), step):
             sl = slice(i, i + step)
-            cov, nrm = self._layers({k: v[sl] for k, v in pose.items()}, crop, scale[sl])
+            cov, nrm = self._layers({k: v[sl] for k, v in pose.items()}, crop, scale[sl], variant[sl])
             covs.append(cov)
             chunks.append(simulate(cov, nrm, bgs[sl], theta[sl], effects=self.effects,
                                    fields={k: v[sl] for k, v in fields.items()},
@@ -596,14 +649,15 @@ class SyntheticObjectDataset(Dataset):
         return out
 
     def _coverage_boxes(self, pose: dict[str, torch.Tensor], size: int, scale: torch.Tensor,
-                        ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+                        variant: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """Each pose's coverage box on a ``size`` square (≥ 0.5, else > 0; rendered in chunks as the items are):
         ``(B, 4)`` XYXY boxes (float64, px), their longest sides, and whether any pixel was covered."""
         step = max(1, _CHUNK_PIXELS // (size * size))
         boxes, seen = [], []
         for i in range(0, len(scale), step):
             sl = slice(i, i + step)
-            cov, _ = self._layers({k: v[sl] for k, v in pose.items()}, size, scale[sl])
+            cov, _ = self._layers({k: v[sl] for k, v in pose.items()}, size, scale[sl],
+                                  None if variant is None else variant[sl])
             b, n = _boxes_from_coverage(cov[:, 0], torch.zeros(cov.shape[0]), torch.zeros(cov.shape[0]))
             boxes.append(b)
             seen += n
@@ -622,7 +676,7 @@ class SyntheticObjectDataset(Dataset):
         return float(min(1.0, longest[seen].median().item() / size))
 
     def _box_framed(self, pose: dict[str, torch.Tensor], size: int, scale: torch.Tensor,
-                    ) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
+                    variant: torch.Tensor | None = None) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
         """The pose and scale that frame each object as ingest frames a labelled seed (``object_box``).
 
         A first look at the pose, untranslated, on a square twice the patch's side at the same pixel size (so
@@ -632,7 +686,7 @@ class SyntheticObjectDataset(Dataset):
         """
         big = 2 * size
         zero = {**pose, "t_x": torch.zeros_like(pose["t_x"]), "t_y": torch.zeros_like(pose["t_y"])}
-        box, longest, ok = self._coverage_boxes(zero, big, scale * (size / big))
+        box, longest, ok = self._coverage_boxes(zero, big, scale * (size / big), variant)
         k = torch.where(ok, self.object_box * size / longest.clamp_min(1.0), torch.ones_like(longest))
         cx = (box[:, 0] + box[:, 2]) / 2 - big / 2  # the box centre's offset from the square's centre, px
         cy = (box[:, 1] + box[:, 3]) / 2 - big / 2

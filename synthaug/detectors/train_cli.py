@@ -98,6 +98,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="frame each synthetic object as ingest frames a labelled seed, its box centred and its "
                              "longest side the seed set's object_fraction of the patch (seed) or the median size of the "
                              "fitted renders' boxes (fit); default: the paper's mesh-scale framing")
+    parser.add_argument("--shape-variation", type=float, default=0.0,
+                        help="vary the synthetic objects' shape around the mesh (axes stretched, parts such as arms and "
+                             "rotors scaled) within +- this fraction, e.g. 0.3; default 0: the mesh alone")
     parser.add_argument("--perturb-copies", type=int, default=0,
                         help="perturbed copies (rotation, shift, mirror, blur, noise) of every real positive: the paper's baseline")
     parser.add_argument("--downscaled-copies", type=int, default=0,
@@ -195,7 +198,8 @@ def main(args: argparse.Namespace) -> int:
             frame_step=args.frame_step, seedset=args.seed_set, positive_videos=args.positive_videos,
             added=AddedPositives(params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
                                  perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
-                                 object_box=args.object_box, copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
+                                 object_box=args.object_box, shape_variation=args.shape_variation,
+                                 copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,
                                  faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast)),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,

@@ -257,6 +257,7 @@ def synthetic_positives(
     seed_geometry: Mapping[str, Any] | str | None = "auto",
     pose_sampling: str = "uniform",
     object_box: float | str | None = None,
+    shape_variation: float = 0.0,
 ) -> Tensor:
     """``count`` synthetic object patches generated from a capture-parameter fit.
 
@@ -280,6 +281,9 @@ def synthetic_positives(
         object_box: None (the paper) or each object framed as ingest frames a labelled seed: its coverage box
             centred, its longest side this fraction of the patch (``"seed"``: the seed set's ``object_fraction``;
             see :class:`~synthaug.data.synthetic.SyntheticObjectDataset`).
+        shape_variation: 0 (the paper: the mesh alone) or > 0: each patch's object one of
+            :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s shapes around the mesh (its
+            ``shape_variation``: stretched axes, parts scaled, within ± this fraction).
 
     Returns:
         Float patches ``(count, 1, P, P)`` in [0, 1].
@@ -295,6 +299,7 @@ def synthetic_positives(
         mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
         effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
         seed_geometry=seed_geometry, pose_sampling=pose_sampling, object_box=object_box,  # type: ignore[arg-type]
+        shape_variation=shape_variation,
     )
     out = []
     for start in range(0, count, batch):

@@ -89,6 +89,8 @@ class AddedPositives:
             seed's fitted pose).
         object_box: None (the paper) or ``"seed"`` / a fraction: each synthetic object framed as ingest frames a
             labelled seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
+        shape_variation: 0 (the paper) or > 0: the synthetic objects' shapes vary around the mesh within ± this
+            fraction (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``shape_variation``).
         copy_paste_ratio: copy-paste patches per real seed: the seeds' objects cut out with their fitted
             silhouettes and pasted on other seeds' backgrounds (:func:`~synthaug.data.copypaste.copy_paste_positives`;
             a user's baseline).
@@ -114,6 +116,7 @@ class AddedPositives:
     synthetic_ratio: float = 0.0
     pose_sampling: str = "uniform"
     object_box: float | str | None = None
+    shape_variation: float = 0.0
     copy_paste_ratio: float = 0.0
     perturb_copies: int = 0
     synthetic_share: float | None = None
@@ -601,12 +604,13 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, *, seed: int,
     if n_syn:
         t0 = time.perf_counter()
         syn = synthetic_positives(ss, mesh, params, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
-                                  object_box=added.object_box)
+                                  object_box=added.object_box, shape_variation=added.shape_variation)
         ts.positives = torch.cat([ts.positives, syn])
         say(f"synthetic: {n_syn} patches from {params} ({time.perf_counter() - t0:.0f}s)")
     info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
                             "pose_sampling": pose_sampling,
-                            **({"object_box": added.object_box} if added.object_box is not None else {})}
+                            **({"object_box": added.object_box} if added.object_box is not None else {}),
+                            **({"shape_variation": added.shape_variation} if added.shape_variation else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

@@ -98,6 +98,8 @@ class Condition:
             count; :func:`~synthaug.detectors.video_training.train_from_videos`).
         object_box: None (the paper's framing) or ``"seed"``: synthetic objects framed as ingest frames a labelled
             seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
+        shape_variation: 0 (the paper) or the synthetic objects' shape variation around the mesh
+            (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``shape_variation``).
     """
 
     name: str
@@ -119,6 +121,7 @@ class Condition:
     object_box: str | None = None
     faded_contrast: tuple[float, float] | None = None
     positive_videos: int | None = None
+    shape_variation: float = 0.0
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -129,7 +132,7 @@ class Condition:
             d["frame_step"] = None
         for k in ("fit_distance", "fit_options", "perturb_copies", "pose_sampling", "copy_paste_ratio",  # added later:
                   "synthetic_share", "downscaled_copies", "faded_copies", "object_box", "faded_contrast",
-                  "positive_videos"):
+                  "positive_videos", "shape_variation"):
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         return d
@@ -333,7 +336,7 @@ class ProtocolRunner:
                                  synthetic_share=condition.synthetic_share,
                                  downscaled_copies=condition.downscaled_copies,
                                  faded_copies=condition.faded_copies, object_box=condition.object_box,
-                                 faded_contrast=condition.faded_contrast),
+                                 faded_contrast=condition.faded_contrast, shape_variation=condition.shape_variation),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -575,6 +578,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          synthetic_share: float | None = None, downscaled_copies: Sequence[int] = (),
                          faded_copies: Sequence[int] = (), object_box: Sequence[str | None] = (None,),
                          faded_contrast: tuple[float, float] | None = None,
+                         shape_variation: Sequence[float] = (0.0,),
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -593,6 +597,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     one inverting the object's contrast). ``synthetic_share``: the added positives' share of
     the positive class's weight in every synthetic, perturbed, copy-paste, downscaled and faded condition.
     ``object_box``: each synthetic ratio once per framing (None: the paper's; ``"seed"``: as ingest frames a seed).
+    ``shape_variation``: each synthetic ratio once per value (0: the mesh alone; > 0: shapes varied around it).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -607,10 +612,12 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         fit = _fit_label(dist, params, mesh)
         conds += [Condition(f"{base} + {r:g}x synthetic ({fit}"
                             f"{'' if ps == 'uniform' else f', {ps} poses'}{share}"
-                            f"{'' if ob is None else f', framed as the seeds ({ob})'})", kind, seed_count=seed_count,
+                            f"{'' if ob is None else f', framed as the seeds ({ob})'}"
+                            f"{'' if not sv else f', shapes varied {sv:g}'})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
-                            fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob)
-                  for r in synthetic_ratios for ps in pose_sampling for ob in object_box]
+                            fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
+                            shape_variation=float(sv))
+                  for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -744,6 +751,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--object-box", nargs="+", choices=["none", "seed", "fit"], default=["none"],
                     help="framing of the synthetic objects, one condition per value: none (the paper's mesh scale), "
                          "seed (as ingest frames a labelled seed) or fit (at the fitted renders' median box size)")
+    sy.add_argument("--shape-variation", type=float, nargs="+", default=[0.0],
+                    help="the synthetic objects' shape variation around the mesh (axes stretched, parts such as arms "
+                         "and rotors scaled within +- this fraction), one condition per value; 0: the mesh alone")
     return p
 
 
@@ -782,7 +792,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              synthetic_share=args.synthetic_share, downscaled_copies=args.downscaled_copies,
                              faded_copies=args.faded_copies,
                              faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
-                             object_box=tuple(None if b == "none" else b for b in args.object_box), out=args.out)
+                             object_box=tuple(None if b == "none" else b for b in args.object_box),
+                             shape_variation=tuple(args.shape_variation), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
