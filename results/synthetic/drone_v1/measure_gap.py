@@ -41,6 +41,9 @@ def main() -> None:
                     help="poses of the synthetic samples (each fit once per choice)")
     ap.add_argument("--object-box", nargs="+", default=["none"], choices=["none", "seed", "fit"],
                     help="framing of the synthetic objects (SyntheticObjectDataset's object_box), one comparison each")
+    ap.add_argument("--shape-variation", type=float, nargs="+", default=[0.0],
+                    help="the synthetic objects' shape variation (SyntheticObjectDataset's shape_variation), one "
+                         "comparison each; 0: the mesh alone")
     ap.add_argument("--fitted-renders", action="store_true",
                     help="also each fit's own renders S(Θ_i, B_i) (the fitted pose itself: no pose sampling)")
     ap.add_argument("--seed-set", default="data/runs/ingest_drone_seed{s}/seedsets/drone_100",
@@ -66,10 +69,12 @@ def main() -> None:
                 CaptureParams.load_with_extra(fit)
                 for ps in args.pose_sampling:
                     for box in args.object_box:
-                        name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
-                                + ("" if box == "none" else f"_box_{box}"))
-                        syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2, pose_sampling=ps,
-                                                     object_box=None if box == "none" else box)
+                        for sv in args.shape_variation:
+                            name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
+                                    + ("" if box == "none" else f"_box_{box}") + ("" if not sv else f"_shapes_{sv:g}"))
+                            syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2, pose_sampling=ps,
+                                                         object_box=None if box == "none" else box,
+                                                         shape_variation=sv)
                 if args.fitted_renders:
                     from synthaug.fit.render_fit import render_fitted
 
