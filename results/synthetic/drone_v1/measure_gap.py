@@ -71,7 +71,7 @@ def main() -> None:
                     for box in args.object_box:
                         for sv in args.shape_variation:
                             name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
-                                    + ("" if box == "none" else f"_box_{box}") + ("" if not sv else f"_shapes_{sv:g}"))
+                                    + ("" if box == "none" else f"_box_{box}") + ("" if not sv else "_shapes_" + f"{sv:g}".replace(".", "p")))
                             syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2, pose_sampling=ps,
                                                          object_box=None if box == "none" else box,
                                                          shape_variation=sv)
