@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Issue 16 factor ablations on the drones: 100 real seeds + 20x synthetic (d_HOG fits of each training seed's 100-seed
+# set, data/runs/fits/drone_100_seed{s}_hog.json), protocol halmstad_v2, defaults (ensemble box map; the CNN fine-tuned
+# on the real seeds afterwards), plus the runner options that set the factor.
+# usage (repository root): results/synthetic/run_100.sh DETECTOR OUT SPLIT "SEEDS" [runner options...]
+#   run_100.sh cnn results/synthetic/shape_variation/cnn_test test "0 1 2 3 4" --shape-variation 0.3
+#   (writes OUT/ and OUT.log)
+set -euo pipefail
+det=$1; out=$2; split=$3; seeds=$4; shift 4
+PYOPENGL_PLATFORM=egl OMP_NUM_THREADS=1 /usr/bin/time -f "wall %e s, max RSS %M kB" \
+  python -m synthaug.evaluate.runner synthetic --protocol configs/protocol/halmstad_v2.json --class drone \
+  --detectors "$det" --seed-counts 100 --synthetic-ratios 20 --params 'data/runs/fits/drone_100_seed{seed}_hog.json' \
+  --no-scale-check --no-patches --eval-split "$split" --training-seeds $seeds --threads 1 "$@" \
+  --out "$out" > "$out.log" 2>&1
