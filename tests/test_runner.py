@@ -379,6 +379,9 @@ def test_runner_downscaled_copies_option_parses_and_refuses_zero(capsys):
     assert R.build_parser().parse_args(["synthetic", "--object-box", "none", "seed", "--out", "x"]).object_box == [
         "none", "seed"]
     assert R.build_parser().parse_args(["synthetic", "--out", "x"]).shape_variation == [0.0]
+    with pytest.raises(SystemExit) as e:
+        R.build_parser().parse_args(["synthetic", "--shape-variation", "-0.2", "--out", "x"])
+    assert e.value.code == 2 and "--shape-variation" in capsys.readouterr().err
     assert R.build_parser().parse_args(["synthetic", "--shape-variation", "0", "0.3", "--out", "x"]).shape_variation == [
         0.0, 0.3]
     # a varied-shape condition has its own key; at 0 the key is the one cells had before the option existed

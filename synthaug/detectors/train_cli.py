@@ -67,7 +67,7 @@ def budget_options(args: argparse.Namespace) -> dict[str, int]:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from synthaug._checks import add_option, dataclass_defaults
+    from synthaug._checks import add_option, dataclass_defaults, nonneg_float
     from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
@@ -98,7 +98,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="frame each synthetic object as ingest frames a labelled seed, its box centred and its "
                              "longest side the seed set's object_fraction of the patch (seed) or the median size of the "
                              "fitted renders' boxes (fit); default: the paper's mesh-scale framing")
-    parser.add_argument("--shape-variation", type=float, default=0.0,
+    parser.add_argument("--shape-variation", type=nonneg_float, default=0.0,
                         help="vary the synthetic objects' shape around the mesh (axes stretched, parts such as arms and "
                              "rotors scaled) within +- this fraction, e.g. 0.3; default 0: the mesh alone")
     parser.add_argument("--perturb-copies", type=int, default=0,

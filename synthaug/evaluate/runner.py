@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from synthaug._checks import add_option, int_at_least, positive_float
+from synthaug._checks import add_option, int_at_least, nonneg_float, positive_float
 from synthaug.detectors.train_cli import add_budget_options, budget_options
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import AddedPositives, train_from_videos
@@ -751,7 +751,7 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--object-box", nargs="+", choices=["none", "seed", "fit"], default=["none"],
                     help="framing of the synthetic objects, one condition per value: none (the paper's mesh scale), "
                          "seed (as ingest frames a labelled seed) or fit (at the fitted renders' median box size)")
-    sy.add_argument("--shape-variation", type=float, nargs="+", default=[0.0],
+    sy.add_argument("--shape-variation", type=nonneg_float, nargs="+", default=[0.0],
                     help="the synthetic objects' shape variation around the mesh (axes stretched, parts such as arms "
                          "and rotors scaled within +- this fraction), one condition per value; 0: the mesh alone")
     return p
