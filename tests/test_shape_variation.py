@@ -137,10 +137,12 @@ def test_shape_variation_frames_objects_as_seeds_with_their_own_shape():
 
 
 def test_bad_shape_variation_is_refused():
-    with pytest.raises(ValueError, match="shape_variation must be a number >= 0"):
-        _dataset("quadcopter", shape_variation=-0.1)
-    with pytest.raises(ValueError, match="shape_variants must be an integer >= 2"):
-        _dataset("quadcopter", shape_variation=0.2, shape_variants=1)
+    for bad in (-0.1, float("nan"), True, "0.3"):
+        with pytest.raises(ValueError, match="shape_variation must be a number >= 0"):
+            _dataset("quadcopter", shape_variation=bad)
+    for bad in (1, 2.5, True):
+        with pytest.raises(ValueError, match="shape_variants must be an integer >= 2"):
+            _dataset("quadcopter", shape_variation=0.2, shape_variants=bad)
     from synthaug.render.cache import ViewCache
 
     cache = ViewCache.build("quadcopter", **CACHE)

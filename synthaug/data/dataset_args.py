@@ -43,7 +43,8 @@ def is_integral(x: Any) -> bool:
 
 def check_arguments(*, transforms: Any, mode: str, channels: int, patch_size: Any,
                      synthetic_per_real: Any, length: Any, real: Any, object_scale: float | None,
-                     negative_fraction: float | None, object_size: tuple[float, float]) -> float:
+                     negative_fraction: float | None, object_size: tuple[float, float],
+                     shape_variation: Any = 0.0, shape_variants: Any = 8) -> float:
     """:class:`SyntheticObjectDataset`'s plain arguments on their own; returns the negative fraction
     (default 0.5 in patch mode, 0 in frame mode)."""
     if transforms is not None and not callable(transforms):
@@ -70,6 +71,11 @@ def check_arguments(*, transforms: Any, mode: str, channels: int, patch_size: An
     lo_sz, hi_sz = object_size
     if not (0 < lo_sz <= hi_sz):
         raise ValueError(f"object_size must be (min, max) with 0 < min <= max, got {object_size}")
+    if isinstance(shape_variation, (bool, np.bool_)) or not isinstance(shape_variation, numbers.Real) or \
+            not math.isfinite(shape_variation) or shape_variation < 0:
+        raise ValueError(f"shape_variation must be a number >= 0, got {shape_variation!r}")
+    if shape_variation > 0 and (not is_integral(shape_variants) or shape_variants < 2):
+        raise ValueError(f"shape_variants must be an integer >= 2 with shape_variation > 0, got {shape_variants!r}")
     return neg
 
 

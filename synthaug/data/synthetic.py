@@ -216,7 +216,8 @@ class SyntheticObjectDataset(Dataset):
         backend = render_backend(render)
         neg = check_arguments(transforms=transforms, mode=mode, channels=channels, patch_size=patch_size,
                                synthetic_per_real=synthetic_per_real, length=length, real=real,
-                               object_scale=object_scale, negative_fraction=negative_fraction, object_size=object_size)
+                               object_scale=object_scale, negative_fraction=negative_fraction, object_size=object_size,
+                               shape_variation=shape_variation, shape_variants=shape_variants)
         self.transforms = transforms
         self.mode: Mode = mode
         self.channels = channels
@@ -311,17 +312,12 @@ class SyntheticObjectDataset(Dataset):
             raise ValueError(f"the FittedPose holds {len(self.pose_sampler.rotations)} rotations but there are "
                              f"{len(self.backgrounds)} seeds (one fitted rotation per seed)")
 
-    def _set_up_renderer(self, mesh: Any, render: Any, *, shape_variation: float = 0.0,
-                         shape_variants: int = 8) -> None:
+    def _set_up_renderer(self, mesh: Any, render: Any, *, shape_variation: float, shape_variants: int) -> None:
         """The view cache (given, or built now with the options ``render`` maps) or the exact renderer (its GL
-        subprocess starts lazily); one per shape with ``shape_variation``."""
-        if not (isinstance(shape_variation, (int, float)) and math.isfinite(shape_variation) and shape_variation >= 0):
-            raise ValueError(f"shape_variation must be a number >= 0, got {shape_variation!r}")
+        subprocess starts lazily); one per shape with ``shape_variation`` (checked by ``check_arguments``)."""
         self.shape_variation = float(shape_variation)
         meshes = [mesh]
         if self.shape_variation > 0:
-            if isinstance(shape_variants, bool) or int(shape_variants) != shape_variants or shape_variants < 2:
-                raise ValueError(f"shape_variants must be an integer >= 2 with shape_variation > 0, got {shape_variants!r}")
             if self.backend == "cache" and not isinstance(render, (str, Mapping)):
                 raise ValueError("shape_variation renders every shape into its own view cache: give render as "
                                  "'cache' or a mapping of cache options, not a prebuilt ViewCache")
@@ -345,8 +341,6 @@ class SyntheticObjectDataset(Dataset):
             from synthaug.render.server import Renderer
 
             self._renderers = [Renderer(m) for m in meshes]  # each starts its GL subprocess lazily, per process
-        self._cache = self._caches[0] if self._caches else None
-        self._renderer = self._renderers[0] if self._renderers else None
 
     @property
     def n_shapes(self) -> int:
