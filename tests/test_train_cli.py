@@ -169,6 +169,7 @@ def test_mining_round_choice_options_reach_the_training(ws: dict[str, Path], tmp
                   "--mining-select", "ap", "--mining-patience", "1") == 0
     meta = json.loads(out.with_suffix(".json").read_text())
     assert meta["options"]["mining_select"] == "ap" and meta["options"]["mining_patience"] == 1
+    assert meta["mining"]["mining"]["frame_scale"] == [1.0, 1.0]  # the family's default: native frames
     assert meta["mining"]["mining"]["select"] == "ap" and meta["mining"]["mining"]["patience"] == 1
     rounds = meta["mining"]["rounds"]
     aps = [r["val"]["ap"] for r in rounds if r.get("val")]
@@ -395,6 +396,7 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
         ("share_out_of_range", "--synthetic-share"),
         ("share_without_added", "--synthetic-share"),
         ("negative_patience", "--mining-patience"),
+        ("frame_scale_reversed", "--mining-frame-scale"),
         ("negative_downscaled", "--downscaled-copies"),
         ("downscaled_with_all_frames", "--downscaled-copies"),
         ("negative_faded", "--faded-copies"),
@@ -441,6 +443,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--synthetic-share", "0.5"]
     elif case == "negative_patience":
         extra += ["--mining-patience", "-1"]
+    elif case == "frame_scale_reversed":
+        extra += ["--mining-frame-scale", "2", "1"]
     elif case == "negative_downscaled":
         extra += ["--downscaled-copies", "-1"]
     elif case == "downscaled_with_all_frames":

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import inspect
 import json
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -529,6 +530,66 @@ def test_every_family_mines_and_logs(videos: Path, kind: str) -> None:
     assert r0["val"]["frames"] == 4 and r0["val"]["objects"] == 4 and isinstance(r1["val"]["fp"], int)
     assert res.detector.kind == kind and res.detector.box_in_window == (6.0, 6.0, 28.0, 28.0)
     assert res.log["chosen_round"] == (1 if r1["val"]["fp"] < r0["val"]["fp"] else 0)
+
+
+def test_mining_frame_scale_mines_rescaled_frames_masking_their_boxes(videos: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """TrainOptions(mining_frame_scale=...): every mined frame reaches the scan resized by its own factor (the one
+    frame_scale draws from the seed, video and index), its labelled boxes scaled with it; native frames otherwise."""
+    import synthaug.detectors.training as training
+    from synthaug.detectors.frames import frame_scale
+    from synthaug.detectors.training_sets import frames_training_set
+
+    d = frames_training_set(["V_DRONE_003"], videos / "videos", videos / "labels", frame_step=2, negatives_per_video=40)
+    src = VideoFrames(videos / "videos", videos / "labels", positive=["V_DRONE_003"], negative=["V_BIRD_002"], stride=3)
+    native = {(f.video, f.index): f for f in src}
+    seen: list[tuple[str, int, tuple[int, int], np.ndarray | None]] = []
+    real_mine = training.mine_hard_negatives
+
+    def spy(det, frames, **kw):
+        for f in frames:
+            seen.append((f.video, f.index, tuple(f.image.shape[-2:]), f.boxes))
+        return real_mine(det, frames, **kw)
+
+    monkeypatch.setattr(training, "mine_hard_negatives", spy)
+    opts = TrainOptions(ada_rounds=10, ada_candidates=200, mining_rounds=2, mining_per_frame=4, scales=(1.0, 0.8),
+                        mining_frame_scale=(0.75, 2.0))
+    res = train_with_mining("adaboost", d["positives"], d["negatives"], 3, options=opts, mining_source=src)
+    assert len(seen) == 2 * len(native) and res.log["mining"]["frame_scale"] == [0.75, 2.0]
+    factors = []
+    for video, index, shape, boxes in seen:
+        f = frame_scale((0.75, 2.0), 3, video, index)
+        h, w = native[(video, index)].image.shape
+        assert shape == (round(h * f), round(w * f))  # resize_image's rounding
+        if native[(video, index)].boxes is None:
+            assert boxes is None
+        else:
+            s = np.array([shape[1] / w, shape[0] / h] * 2)
+            np.testing.assert_allclose(boxes, native[(video, index)].boxes * s)
+        factors.append(f)
+    assert [a[:3] for a in seen[: len(native)]] == [b[:3] for b in seen[len(native):]]  # same factors every round
+    assert min(factors) < 1.0 < max(factors) and len(set(factors)) > 3
+    assert [frame_scale((0.75, 2.0), 4, v, i) for v, i in native] != [frame_scale((0.75, 2.0), 3, v, i) for v, i in native]
+    seen.clear()
+    train_with_mining("adaboost", d["positives"], d["negatives"], 3, options=replace(opts, mining_frame_scale=(1, 1)),
+                      mining_source=src)
+    assert [s[2] for s in seen] == [native[(v, i)].image.shape for v, i, _, _ in seen]
+
+
+def test_frame_scale_is_log_uniform_and_refuses_bad_ranges() -> None:
+    from scipy import stats
+
+    from synthaug.detectors.frames import RescaledFrames, frame_scale
+
+    f = np.array([frame_scale((0.5, 2.0), 0, f"V_{v:03d}", i) for v in range(40) for i in range(0, 300, 10)])
+    assert f.min() >= 0.5 and f.max() <= 2.0
+    assert stats.kstest(np.log(f), stats.uniform(np.log(0.5), np.log(4.0)).cdf).pvalue > 0.01
+    for bad in [(2.0, 1.0), (0.0, 1.0), (1.0, float("inf")), (1.0,), "ab"]:
+        with pytest.raises(ValueError, match="frame scale range"):
+            TrainOptions(mining_frame_scale=bad)
+        with pytest.raises(ValueError, match="frame scale range"):
+            RescaledFrames([], bad)
+    assert "mining_frame_scale" not in TrainOptions(mining_frame_scale=(1, 1)).key_fields("adaboost")  # native: the old key
+    assert TrainOptions(mining_frame_scale=[0.75, 2]).key_fields("hog")["mining_frame_scale"] == (0.75, 2.0)
 
 
 # ----------------------------------------------------------------- split by video

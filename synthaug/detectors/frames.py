@@ -8,6 +8,8 @@ one frame whatever the number of videos.
 
 from __future__ import annotations
 
+import math
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterator, NamedTuple, Sequence
@@ -16,7 +18,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-__all__ = ["MiningFrame", "VideoFrames"]
+__all__ = ["MiningFrame", "VideoFrames", "RescaledFrames", "frame_scale"]
 
 
 class MiningFrame(NamedTuple):
@@ -116,6 +118,88 @@ class VideoFrames:
             if frame is not None:
                 b = boxes[i] if positive else None
                 yield MiningFrame(frame, None if b is None else np.asarray(b, np.float64).reshape(-1, 4), stem, i)
+
+
+def frame_scale(scale_range: Sequence[float], seed: int, video: str, index: int) -> float:
+    """The resize factor of one mining frame: log-uniform in ``scale_range``, drawn from a generator seeded by
+    ``(seed, video, index)`` only, so a frame gets the same factor in every mining round and in any order.
+
+    Example:
+        >>> f = frame_scale((0.75, 2.0), 0, "V_DRONE_001", 30)
+        >>> 0.75 <= f <= 2.0 and f == frame_scale((0.75, 2.0), 0, "V_DRONE_001", 30)
+        True
+        >>> frame_scale((1.0, 1.0), 3, "V", 0)
+        1.0
+    """
+    lo, hi = (float(v) for v in scale_range)
+    if lo == hi:
+        return lo
+    key = zlib.crc32(f"{int(seed)}:{video}:{int(index)}".encode())
+    u = float(torch.rand((), generator=torch.Generator().manual_seed(key), dtype=torch.float64))
+    return float(lo * (hi / lo) ** u)
+
+
+@dataclass
+class RescaledFrames:
+    """Mining frames resized by a per-frame factor (scale jitter of the hard-negative mining), boxes with them.
+
+    Each frame of ``source`` is resized by :func:`frame_scale` ``(scale_range, seed, video, index)`` (bilinear,
+    antialiased when shrinking: :func:`~synthaug.detectors.sliding.resize_image`, the pyramid's resize) and its
+    labelled boxes are scaled by the true factors of the resized size. The detector's pyramid then sees the
+    clutter of a frame at magnifications its native frames never reach: an upsampled frame holds smoother,
+    blurrier structures than any native level (``TrainOptions.mining_frame_scale``).
+
+    Args:
+        source: re-iterable :class:`MiningFrame` items (e.g. :class:`VideoFrames`).
+        scale_range: ``(low, high)`` factors, ``0 < low <= high``.
+        seed: the training seed (the factors depend on it, on the video stem and on the frame index only).
+
+    Example:
+        >>> frames = [MiningFrame(np.zeros((40, 60), np.uint8), np.array([[10., 10., 8., 6.]]), "V", 0)]
+        >>> out = list(RescaledFrames(frames, (2.0, 2.0)))
+        >>> tuple(out[0].image.shape), out[0].boxes.tolist(), out[0].video, out[0].index
+        ((80, 120), [[20.0, 20.0, 16.0, 12.0]], 'V', 0)
+    """
+
+    source: Any
+    scale_range: tuple[float, float]
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        self.scale_range = check_scale_range(self.scale_range)
+
+    @property
+    def stride(self) -> Any:  # the mining log reads the source's frame stride
+        return getattr(self.source, "stride", None)
+
+    def __iter__(self) -> Iterator[MiningFrame]:
+        from synthaug.detectors.sliding import resize_image
+
+        for j, raw in enumerate(self.source):
+            item = _as_item(raw)
+            index = item.index if item.index >= 0 else j
+            f = frame_scale(self.scale_range, self.seed, item.video or "_", index)
+            image = _image_tensor(item.image)
+            if f == 1.0:
+                yield item._replace(image=image)
+                continue
+            out = resize_image(image[None, None], f)[0, 0]
+            boxes = item.boxes
+            if boxes is not None:
+                sx, sy = out.shape[-1] / image.shape[-1], out.shape[-2] / image.shape[-2]
+                boxes = np.asarray(boxes, np.float64).reshape(-1, 4) * np.array([sx, sy, sx, sy])
+            yield MiningFrame(out, boxes, item.video, item.index)
+
+
+def check_scale_range(scale_range: Any) -> tuple[float, float]:
+    """``(low, high)`` as floats, refusing anything but two finite factors with ``0 < low <= high``."""
+    try:
+        lo, hi = (float(v) for v in scale_range)
+    except (TypeError, ValueError):
+        raise ValueError(f"a frame scale range must be two numbers (low, high), got {scale_range!r}") from None
+    if not (0 < lo <= hi and math.isfinite(hi)):
+        raise ValueError(f"a frame scale range must have 0 < low <= high (finite), got {scale_range!r}")
+    return lo, hi
 
 
 def _as_item(item: Any) -> MiningFrame:

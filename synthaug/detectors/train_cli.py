@@ -67,7 +67,7 @@ def budget_options(args: argparse.Namespace) -> dict[str, int]:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from synthaug._checks import add_option, dataclass_defaults, nonneg_float
+    from synthaug._checks import add_option, dataclass_defaults, nonneg_float, positive_float
     from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
@@ -133,6 +133,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mining-patience", type=int, default=d["mining_patience"],
                         help="mining rounds without a new best still run before stopping (0: stop at the first); "
                              "default: the family's (0 for hog and cnn, 1 for adaboost)")
+    parser.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"), default=None,
+                        help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] (per frame, from "
+                             "--seed) before the pyramid scans it: negatives at magnifications the native frames never "
+                             "reach; default: the family's (1 1: native frames)")
     add_option(parser, "--val-frame-stride", aliases=["--val-stride"], type=int, default=d["val_stride"],
                help="validation false positives counted on every K-th validation frame")
     parser.add_argument("--scales", type=float, nargs="+", default=None,
@@ -168,6 +172,8 @@ def main(args: argparse.Namespace) -> int:
         return _err(f"--seed-counts: must be >= 1, got {args.seed_counts}")
     if args.threads is not None and args.threads < 1:
         return _err(f"--threads: must be >= 1, got {args.threads}")
+    if args.mining_frame_scale is not None and args.mining_frame_scale[0] > args.mining_frame_scale[1]:
+        return _err(f"--mining-frame-scale: LOW must be <= HIGH, got {args.mining_frame_scale[0]:g} {args.mining_frame_scale[1]:g}")
     if args.synthetic_ratio is not None and args.params is None:
         return _err("--synthetic-ratio: synthetic positives need a fit: give --params FIT.json")
     ratio = args.synthetic_ratio if args.synthetic_ratio is not None else (10.0 if args.params is not None else 0.0)
@@ -183,7 +189,8 @@ def main(args: argparse.Namespace) -> int:
         options = TrainOptions(**budget_options(args), cnn_shift=args.cnn_shift, mining_rounds=args.mining_rounds,
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
                                mining_select=args.mining_select, mining_patience=args.mining_patience,
-                               val_stride=args.val_frame_stride, box_model=args.box_model, scales=None if args.scales is None else tuple(args.scales))
+                               val_stride=args.val_frame_stride, box_model=args.box_model, scales=None if args.scales is None else tuple(args.scales),
+                               mining_frame_scale=None if args.mining_frame_scale is None else tuple(args.mining_frame_scale))
     except ValueError as e:
         return _err(str(e))
 

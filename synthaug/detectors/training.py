@@ -68,8 +68,8 @@ MINING_SELECT: tuple[str, ...] = ("fp", "ap")
 BOX_MODELS: tuple[str, ...] = ("cnn", "ridge", "ensemble")
 """The box regression's models (``TrainOptions.box_model``)."""
 FAMILY_DEFAULTS: dict[str | None, dict[str, Any]] = {
-    None: {"ada_rounds": 100, "mining_select": "fp", "mining_patience": 0},
-    "adaboost": {"ada_rounds": 300, "mining_select": "ap", "mining_patience": 1},
+    None: {"ada_rounds": 100, "mining_select": "fp", "mining_patience": 0, "mining_frame_scale": (1.0, 1.0)},
+    "adaboost": {"ada_rounds": 300, "mining_select": "ap", "mining_patience": 1, "mining_frame_scale": (1.0, 1.0)},
 }
 """What :class:`TrainOptions` fields left at None mean for each family (``None``: HOG, the CNN and any other
 registered family).
@@ -139,6 +139,12 @@ class TrainOptions:
         mining_nms_iou: NMS among a frame's windows before the per-frame top-k
             (one clutter object gives one negative per round, not ten shifted copies).
         scales: pyramid of mining and validation (None: ``sliding.DEFAULT_SCALES``).
+        mining_frame_scale: ``(low, high)``: every mining frame is resized by a factor drawn log-uniformly in
+            this range (per frame, from the training seed, the video and the frame index:
+            :class:`~synthaug.detectors.frames.RescaledFrames`) before the pyramid scans it, so the mined
+            negatives include clutter at magnifications the native frames never reach (an upsampled frame is
+            smoother than any native level). None: the family's default (:data:`FAMILY_DEFAULTS`); ``(1, 1)``:
+            native frames (the mining before this option).
         val_stride: every k-th frame of the validation videos is scored.
         val_top_k: detections kept per validation frame.
         val_iou: matching IoU of the validation count.
@@ -207,10 +213,11 @@ class TrainOptions:
     mining_select: str | None = None
     mining_patience: int | None = None
     box_model: str = "ensemble"
+    mining_frame_scale: tuple[float, float] | None = None
 
     LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
                                                            ("box_model", "ridge"), ("hog_kmeans_restarts", 1),
-                                                           ("cnn_finetune_epochs", 0))
+                                                           ("cnn_finetune_epochs", 0), ("mining_frame_scale", (1.0, 1.0)))
     """Fields added after cells were cached, with the value at which the training is the one before them
     (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys;
     nor are ``hog_kmeans_restarts``' default, 10, and ``cnn_finetune_epochs``' default, 4, which only HOG's and the
@@ -239,7 +246,8 @@ class TrainOptions:
 
         Example:
             >>> TrainOptions().key_fields("hog") == {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items()
-            ...                                      if k not in ("mining_select", "mining_patience", "cnn_finetune_epochs")}
+            ...                                      if k not in ("mining_select", "mining_patience", "cnn_finetune_epochs",
+            ...                                                   "mining_frame_scale")}
             True
             >>> TrainOptions().key_fields("cnn")["cnn_finetune_epochs"]  # the CNN's fine-tuning is in its keys only
             4
@@ -286,6 +294,10 @@ class TrainOptions:
             raise ValueError(f"box_model must be one of {list(BOX_MODELS)}, got {self.box_model!r}")
         if self.scales is not None:
             object.__setattr__(self, "scales", tuple(float(s) for s in self.scales))
+        if self.mining_frame_scale is not None:
+            from synthaug.detectors.frames import check_scale_range
+
+            object.__setattr__(self, "mining_frame_scale", check_scale_range(self.mining_frame_scale))
 
     def pyramid(self) -> tuple[float, ...]:
         from synthaug.detectors.sliding import DEFAULT_SCALES
@@ -546,6 +558,10 @@ def train_with_mining(
     stop = "mining_rounds reached" if options.mining_rounds else "no mining (mining_rounds = 0)"
     if mining_source is None:
         stop = "no mining source"
+    if mining_source is not None and tuple(options.mining_frame_scale) != (1.0, 1.0):
+        from synthaug.detectors.frames import RescaledFrames
+
+        mining_source = RescaledFrames(mining_source, options.mining_frame_scale, seed=seed)
     for r in range(1, options.mining_rounds + 1 if mining_source is not None else 1):
         mined = mine_hard_negatives(det, mining_source, scales=scales, per_frame=options.mining_per_frame,
                                     max_negatives=options.mining_max_per_round, margin=options.mining_margin,
@@ -638,6 +654,7 @@ def _settings_log(options: TrainOptions, scales: Sequence[float], mining_source:
     return {"mining": {"stride": getattr(mining_source, "stride", None), "per_frame": options.mining_per_frame,
                        "max_per_round": options.mining_max_per_round, "margin": options.mining_margin,
                        "scales": list(scales), "max_rounds": options.mining_rounds,
-                       "select": options.mining_select, "patience": options.mining_patience},
+                       "select": options.mining_select, "patience": options.mining_patience,
+                       "frame_scale": None if options.mining_frame_scale is None else list(options.mining_frame_scale)},
             "validation": None if val is None else {"frames": len(val), "top_k": options.val_top_k, "iou": options.val_iou,
                                                     "target_recall": options.val_target_recall}}

@@ -694,6 +694,9 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--mining-patience", type=int_at_least(0), default=TrainOptions.mining_patience,
                    help="mining rounds without a new best still run before stopping (0: stop at the first; default: "
                         "the family's, 0 for hog and cnn, 1 for adaboost); part of a cell's key only when not 0")
+    q.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"), default=None,
+                   help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] before the pyramid scans "
+                        "it (default: the family's; part of a cell's key unless native)")
     q.add_argument("--box-model", default=TrainOptions.box_model, choices=list(BOX_MODELS),
                    help="the box regression: a small CNN on the detection's context pixels (cnn), ridge on its HOG "
                         "cells (ridge, the model before this option: its cells keep their keys) or the mean of both "
@@ -762,18 +765,25 @@ def train_options(args: argparse.Namespace) -> TrainOptions:
     return dataclasses.replace(TrainOptions(), **budget_options(args), mining_rounds=args.mining_rounds,
                                mining_stride=args.mining_stride,
                                cnn_shift=args.cnn_shift, mining_select=args.mining_select,
-                               mining_patience=args.mining_patience, box_model=args.box_model)
+                               mining_patience=args.mining_patience, box_model=args.box_model,
+                               mining_frame_scale=None if args.mining_frame_scale is None
+                               else tuple(args.mining_frame_scale))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.mining_frame_scale is not None and args.mining_frame_scale[0] > args.mining_frame_scale[1]:
+        parser.error(f"--mining-frame-scale: LOW must be <= HIGH, got {args.mining_frame_scale[0]:g} "
+                     f"{args.mining_frame_scale[1]:g}")
+    options = train_options(args)
     import torch
 
     torch.set_num_threads(args.threads)
     proto = load_protocol(args.protocol)
     paths = DataPaths(args.videos, args.labels, args.split, args.work)
     runner = ProtocolRunner(proto, args.class_name, paths, CellCache(Path(args.work) / "cells", read_only=args.read_only),
-                            options=train_options(args),
+                            options=options,
                             scales=None if args.scales is None else tuple(args.scales),
                             detect_scales=None if args.detect_scales is None else tuple(args.detect_scales),
                             scale_check=not args.no_scale_check, patches=not args.no_patches,
