@@ -213,3 +213,76 @@ def test_bad_inputs() -> None:
         train_adaboost(pos, pos.clone(), n_rounds=3, candidates=50)
     with pytest.raises(ValueError, match=r"\(N, 1, 40, 40\)"):
         AdaBoostDetector(WeakLearners.random(3, generator=torch.Generator())).score_patches(torch.rand(2, 1, 20, 20))
+
+
+# ----------------------------------------------------------------- the energy floor
+def test_energy_floor_matches_a_numpy_energy_and_keeps_dense_scoring_exact() -> None:
+    """E = G_o / (Σ G + ε + floor |R|), against per-pixel numpy sums; training, score_patches, the dense map (both
+    paths, cascade on and off) and the reference map agree with a floor; save / load keeps it; older states load."""
+    pos, neg = toy_patches(20, 30, seed=3)
+    rects, orients = exhaustive_candidates(40, 4, step=8, min_size=4)
+    x = torch.cat([pos, neg]).double()
+    floor = 0.01
+    e = edge_orientation_energy(x, rects, orients, 4, 1e-3, floor).numpy()
+    # numpy: central differences of the interior pixels, magnitude binned by unsigned angle, as orientation_maps
+    a = x[:, 0].numpy()
+    gx = np.zeros_like(a)
+    gy = np.zeros_like(a)
+    gx[:, 1:-1, 1:-1] = (a[:, 1:-1, 2:] - a[:, 1:-1, :-2]) / 2
+    gy[:, 1:-1, 1:-1] = (a[:, 2:, 1:-1] - a[:, :-2, 1:-1]) / 2
+    from synthaug.detectors.weak_learners import orientation_maps
+
+    maps = orientation_maps(x, 4).numpy()  # (B, K, H, W), checked against numpy in test_weak_learners
+    for m in range(0, len(rects), 37):
+        y0, x0, h, w = rects[m].tolist()
+        go = maps[:, orients[m], y0:y0 + h, x0:x0 + w].sum((1, 2))
+        g = maps[:, :, y0:y0 + h, x0:x0 + w].sum((1, 2, 3))
+        np.testing.assert_allclose(e[:, m], go / (g + 1e-3 + floor * h * w), rtol=1e-9)
+    mag = np.sqrt(gx**2 + gy**2)[:, 1:-1, 1:-1]
+    np.testing.assert_allclose(maps.sum(1)[:, 1:-1, 1:-1], mag, atol=1e-6)
+    assert (e < edge_orientation_energy(x, rects, orients, 4, 1e-3).numpy() + 1e-12).all()  # a floor only lowers E
+
+    det = train_adaboost(pos, neg, n_rounds=15, candidates=200, seed=0, energy_floor=floor)
+    assert det.learners.floor == floor
+    frame, _ = toy_frame(163, 201, n_objects=3, seed=5)
+    cols = torch.nn.functional.unfold(frame, 40, stride=det.stride)[0].T.reshape(-1, 1, 40, 40)
+    det.cascade = False
+    dense = det.score_map(frame)
+    torch.testing.assert_close(dense, det.score_patches(cols).reshape(dense.shape), atol=1e-5, rtol=0)
+    torch.testing.assert_close(dense, det._score_map_reference(frame), atol=1e-5, rtol=0)
+    det.cascade = True
+    torch.testing.assert_close(det.score_map(frame), det._score_map_reference(frame), atol=1e-5, rtol=0)
+    state = det.learners.state_dict()
+    assert WeakLearners.from_state_dict(state).floor == floor
+    assert WeakLearners.from_state_dict({k: v for k, v in state.items() if k != "floor"}).floor == 0.0
+    with pytest.raises(ValueError, match="floor"):
+        WeakLearners(**{**{k: v for k, v in state.items()}, "floor": -1.0})
+    with pytest.raises(ValueError, match="floor"):
+        edge_orientation_energy(x, rects, orients, 4, 1e-3, float("nan"))
+
+
+def test_energy_floor_silences_faint_structure_that_the_paper_energy_shows_at_full_strength() -> None:
+    """The same edge at 1/50 of the contrast: the paper's E is unchanged (contrast-invariant), a floor at the
+    faint edge's gradient level lowers its energy by about half and leaves the strong edge's nearly unchanged."""
+    strong = torch.zeros(1, 1, 40, 40, dtype=torch.float64)
+    strong[..., :, 20:] = 0.5
+    faint = strong / 50
+    rects, orients = torch.tensor([[4, 12, 16, 16]]), torch.tensor([0])  # a rectangle across the vertical edge
+    e0 = [edge_orientation_energy(p, rects, orients, 4, 1e-3).item() for p in (strong, faint)]
+    from synthaug.detectors.weak_learners import orientation_maps
+
+    level = float(orientation_maps(faint, 4)[..., 4:20, 12:28].sum()) / 256  # the faint rectangle's mean magnitude
+    e1 = [edge_orientation_energy(p, rects, orients, 4, 1e-3, level).item() for p in (strong, faint)]
+    assert e0[0] == pytest.approx(e0[1], rel=0.02)
+    assert e1[1] == pytest.approx(e0[1] / 2, rel=0.05) and e1[0] == pytest.approx(e0[0], rel=0.03)
+
+
+def test_gradient_level_is_the_median_of_the_patches_mean_magnitude() -> None:
+    from synthaug.detectors.adaboost import gradient_level
+
+    g = torch.Generator().manual_seed(0)
+    x = torch.rand(7, 1, 40, 40, generator=g, dtype=torch.float64) * torch.linspace(0.1, 1, 7).view(7, 1, 1, 1)
+    a = x[:, 0].numpy()
+    gx = (a[:, 1:-1, 2:] - a[:, 1:-1, :-2]) / 2
+    gy = (a[:, 2:, 1:-1] - a[:, :-2, 1:-1]) / 2
+    assert gradient_level(x) == pytest.approx(float(np.median(np.sqrt(gx**2 + gy**2).mean((1, 2)))), rel=1e-6)

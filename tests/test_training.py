@@ -309,7 +309,8 @@ def test_train_options_refuse_a_bad_mining_rule(field: str, value: Any) -> None:
 def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults() -> None:
     from dataclasses import asdict
 
-    old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items() if k not in ("mining_select", "mining_patience")}
+    old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items()
+           if k not in ("mining_select", "mining_patience", "mining_frame_scale", "ada_energy_floor")}
     not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
     only_hog = {k: v for k, v in old.items() if k != "cnn_finetune_epochs"}  # the CNN's fine-tuning: the CNN's keys
     for kind, base in (("hog", only_hog), ("cnn", not_hog), (None, old)):  # the keys of before the family defaults
@@ -573,6 +574,23 @@ def test_mining_frame_scale_mines_rescaled_frames_masking_their_boxes(videos: Pa
     train_with_mining("adaboost", d["positives"], d["negatives"], 3, options=replace(opts, mining_frame_scale=(1, 1)),
                       mining_source=src)
     assert [s[2] for s in seen] == [native[(v, i)].image.shape for v, i, _, _ in seen]
+
+
+def test_ada_energy_floor_is_in_units_of_the_negatives_gradient_level() -> None:
+    from synthaug.detectors.adaboost import gradient_level
+    from synthaug.detectors.toy import toy_patches
+
+    pos, neg = toy_patches(30, 40, seed=2)
+    det = train_detector("adaboost", pos, neg, 0, options=TrainOptions(ada_rounds=8, ada_candidates=100,
+                                                                      ada_energy_floor=0.5))
+    assert det.learners.floor == pytest.approx(0.5 * gradient_level(neg), rel=1e-12) and det.learners.floor > 0
+    assert train_detector("adaboost", pos, neg, 0, options=TrainOptions(ada_rounds=8, ada_candidates=100)).learners.floor == 0
+    o = TrainOptions(ada_energy_floor=0.5)
+    assert o.key_fields("adaboost")["ada_energy_floor"] == 0.5 and "ada_energy_floor" not in o.key_fields("hog")
+    assert "ada_energy_floor" not in TrainOptions().key_fields("adaboost")  # 0: the key of the cells before it
+    for bad in (-0.1, float("inf"), True):
+        with pytest.raises(ValueError, match="ada_energy_floor"):
+            TrainOptions(ada_energy_floor=bad)
 
 
 def test_frame_scale_is_log_uniform_and_refuses_bad_ranges() -> None:

@@ -56,7 +56,21 @@ from synthaug.detectors.weak_learners import (
     interior_orientation_maps,
 )
 
-__all__ = ["AdaBoostDetector", "train_adaboost", "best_stumps"]
+__all__ = ["AdaBoostDetector", "train_adaboost", "best_stumps", "gradient_level"]
+
+
+def gradient_level(patches: Tensor, chunk: int = 1024) -> float:
+    """The median over ``patches`` of their mean gradient magnitude per pixel (the weak learners' magnitude,
+    interior pixels): the gradient level of typical background, the unit of ``TrainOptions.ada_energy_floor``.
+
+    Example:
+        >>> x = torch.linspace(0, 1, 12).repeat(3, 1, 12, 1)  # a ramp of 1/11 per pixel down the rows
+        >>> round(gradient_level(x), 4) == round(1 / 11, 4)
+        True
+    """
+    patches = check_patches(patches, int(patches.shape[-1]))
+    means = torch.cat([interior_orientation_maps(c.double(), 2).sum(1).mean((-2, -1)) for c in patches.split(chunk)])
+    return float(means.median())
 
 
 class _StumpSearch:
@@ -186,6 +200,7 @@ def train_adaboost(
     cascade_quantile: float = 0.0,
     cascade_margin: float = 0.3,
     positive_weights: Tensor | None = None,
+    energy_floor: float = 0.0,
 ) -> "AdaBoostDetector":
     """Train discrete AdaBoost on Levi–Weiss stumps.
 
@@ -213,6 +228,9 @@ def train_adaboost(
             so a weight of 2 boosts as the sample twice would; boosting reweights from there.
             :func:`~synthaug.detectors.video_training.share_weights` gives the real and added positives their
             shares. None: every positive the same (unchanged).
+        energy_floor: the stumps' energy floor per pixel (``WeakLearners.floor``,
+            :func:`~synthaug.detectors.weak_learners.edge_orientation_energy`): rectangles whose gradients are at
+            the floor's level score low in every orientation. 0: the paper's energy.
 
     Returns:
         A trained :class:`AdaBoostDetector`.
@@ -244,7 +262,7 @@ def train_adaboost(
 
     x = torch.cat([positives, negatives]).double()
     labels = torch.cat([torch.ones(len(positives)), torch.zeros(len(negatives))]).long()
-    features = _features_chunked(x, rects, orients, n_bins, eps)  # (N, M) float64
+    features = _features_chunked(x, rects, orients, n_bins, eps, energy_floor)  # (N, M) float64
     search = _StumpSearch(features.float(), labels)
     n_pos, n_neg = len(positives), len(negatives)
     w = torch.where(labels == 1, 0.5 / n_pos, 0.5 / n_neg).double()
@@ -278,14 +296,15 @@ def train_adaboost(
         raise ValueError("AdaBoost found no weak learner better than chance: are positives and negatives identical?")
     idx = torch.tensor(chosen)
     learners = WeakLearners(rects[idx], orients[idx], torch.tensor(taus), torch.tensor(pols),
-                            torch.tensor(alphas), window, n_bins, eps)
+                            torch.tensor(alphas), window, n_bins, eps, energy_floor)
     det = AdaBoostDetector(learners, stride=stride, stage_size=stage_size)
     det.calibrate_cascade(positives, quantile=cascade_quantile, margin=cascade_margin)
     return det
 
 
-def _features_chunked(x: Tensor, rects: Tensor, orients: Tensor, n_bins: int, eps: float, chunk: int = 512) -> Tensor:
-    return torch.cat([edge_orientation_energy(c, rects, orients, n_bins, eps) for c in x.split(chunk)])
+def _features_chunked(x: Tensor, rects: Tensor, orients: Tensor, n_bins: int, eps: float, floor: float = 0.0,
+                      chunk: int = 512) -> Tensor:
+    return torch.cat([edge_orientation_energy(c, rects, orients, n_bins, eps, floor) for c in x.split(chunk)])
 
 
 @register_detector
@@ -342,7 +361,7 @@ class AdaBoostDetector(PatchDetector):
         """Cumulative scores F_t after every stump, shape (N, T) float64."""
         patches = check_patches(patches, self.window)
         wl = self.learners
-        e = edge_orientation_energy(patches.double(), wl.rects, wl.orientations, wl.n_bins, wl.eps)
+        e = edge_orientation_energy(patches.double(), wl.rects, wl.orientations, wl.n_bins, wl.eps, wl.floor)
         h = (((e - wl.thresholds.double()) * wl.polarity.double()) > 0).double()
         return ((2 * h - 1) * wl.weights.double()).cumsum(1)
 
@@ -433,6 +452,7 @@ class AdaBoostDetector(PatchDetector):
         y0s, x0s = ((wl.rects[:, 0] - 1) // g).tolist(), ((wl.rects[:, 1] - 1) // g).tolist()
         hs, ws = (wl.rects[:, 2] // g).tolist(), (wl.rects[:, 3] // g).tolist()
         planes, taus = wl.orientations.tolist(), wl.thresholds.double().tolist()
+        offsets = wl.offsets().tolist()  # ε + floor · |R| of each stump
         positive = (wl.polarity > 0).tolist()
         alpha = wl.weights.double()
         alphas = alpha.tolist()
@@ -466,9 +486,9 @@ class AdaBoostDetector(PatchDetector):
                 else:
                     torch.sub(d[h::step][:h_out], d[::step][:h_out], out=v)
                     torch.sub(v[:, w::step][:, :w_out], v[:, ::step][:, :w_out], out=margin)
-                # margin = G_o - τ G; E > τ  <=>  G_o - τ (G + ε) > 0; the in-place
+                # margin = G_o - τ G; E > τ  <=>  G_o - τ (G + c) > 0 (c = ε + floor |R|); the in-place
                 # comparison leaves 1.0 / 0.0 in margin (no bool-to-float copy)
-                (margin.gt_ if positive[t] else margin.lt_)(taus[t] * wl.eps)
+                (margin.gt_ if positive[t] else margin.lt_)(taus[t] * offsets[t])
                 gained.add_(margin, alpha=2.0 * alphas[t])
             run = run + gained.sub_(alpha[start:end].sum())
             if use_cascade and end < len(wl):
@@ -518,7 +538,7 @@ class AdaBoostDetector(PatchDetector):
         base = (live // w_out) * (step * w1) + (live % w_out) * step
         vals = torch.take(full.reshape(-1), (cc * plane + cy * w1 + cx)[..., None] + base)  # (2, 4, t, P)
         sums = vals[:, 0] - vals[:, 1] - vals[:, 2] + vals[:, 3]  # bin energy, total energy
-        margin = sums[0] - wl.thresholds[start:end].double()[:, None] * (sums[1] + wl.eps)
+        margin = sums[0] - wl.thresholds[start:end].double()[:, None] * (sums[1] + wl.offsets()[start:end, None])
         vote = torch.where(margin * wl.polarity[start:end].double()[:, None] > 0, 1.0, -1.0).to(torch.float64)
         return wl.weights[start:end].double() @ vote
 
@@ -593,7 +613,7 @@ class AdaBoostDetector(PatchDetector):
                 vals = torch.take(flat, (c_idx * plane + y_idx * w1 + x_idx)[..., None] + base[live])
             sums = vals[:, 0] - vals[:, 1] - vals[:, 2] + vals[:, 3]  # (2, t, P): bin energy, total energy
             # E > τ  <=>  G_o > τ (Σ_k G_k + ε): no division needed
-            margin = sums[0] - tau[start:end, None] * (sums[1] + wl.eps)
+            margin = sums[0] - tau[start:end, None] * (sums[1] + wl.offsets()[start:end, None])
             vote = torch.where(margin * pol[start:end, None] > 0, 1.0, -1.0).to(torch.float64)
             gained = alpha[start:end] @ vote
             part = scores[live] + (gained if sel is None else gained[sel])

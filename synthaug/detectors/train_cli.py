@@ -133,6 +133,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mining-patience", type=int, default=d["mining_patience"],
                         help="mining rounds without a new best still run before stopping (0: stop at the first); "
                              "default: the family's (0 for hog and cnn, 1 for adaboost)")
+    parser.add_argument("--ada-energy-floor", type=nonneg_float, default=d["ada_energy_floor"],
+                        help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
+                             "gradient level (0: the paper's energy)")
     parser.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"), default=None,
                         help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] (per frame, from "
                              "--seed) before the pyramid scans it: negatives at magnifications the native frames never "
@@ -190,7 +193,8 @@ def main(args: argparse.Namespace) -> int:
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
                                mining_select=args.mining_select, mining_patience=args.mining_patience,
                                val_stride=args.val_frame_stride, box_model=args.box_model, scales=None if args.scales is None else tuple(args.scales),
-                               mining_frame_scale=None if args.mining_frame_scale is None else tuple(args.mining_frame_scale))
+                               mining_frame_scale=None if args.mining_frame_scale is None else tuple(args.mining_frame_scale),
+                               ada_energy_floor=args.ada_energy_floor)
     except ValueError as e:
         return _err(str(e))
 

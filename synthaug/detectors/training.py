@@ -87,7 +87,8 @@ unused by HOG and the CNN; it is 100 there so that their cache keys stay those o
 # =========================================================================== options
 CNN_FINETUNE_LR_SCALE: float = 0.1
 """The CNN's fine-tuning learning rate as a share of its training rate (``TrainOptions.cnn_finetune_epochs``)."""
-FAMILY_ONLY_LATER_FIELDS: dict[str, str] = {"hog_kmeans_restarts": "hog", "cnn_finetune_epochs": "cnn"}
+FAMILY_ONLY_LATER_FIELDS: dict[str, str] = {"hog_kmeans_restarts": "hog", "cnn_finetune_epochs": "cnn",
+                                             "ada_energy_floor": "adaboost"}
 """Later :class:`TrainOptions` fields that change only one family's training (field -> family): the other
 families' cache keys leave them out whatever their value (:meth:`TrainOptions.key_fields`)."""
 
@@ -108,6 +109,10 @@ class TrainOptions:
         ada_rounds: boosting rounds T (None: the family's default, :data:`FAMILY_DEFAULTS`: 300 for
             AdaBoost).
         ada_candidates: random Levi-Weiss candidates (of the exhaustive grid).
+        ada_energy_floor: AdaBoost's energy floor per pixel (:func:`~synthaug.detectors.weak_learners.edge_orientation_energy`)
+            in units of its training negatives' gradient level (:func:`~synthaug.detectors.adaboost.gradient_level`,
+            measured at each training): a rectangle whose gradients are at that level no longer shows its faint
+            structure at full strength. 0: the paper's energy (the training before this option).
         cnn_epochs: passes over the training patches (each mirrored or not;
             ``PatchDetectorModule`` under ``lightning.Trainer``).
         cnn_batch_size: mini-batch size.
@@ -192,6 +197,7 @@ class TrainOptions:
     hog_kmeans_restarts: int = 10
     ada_rounds: int | None = None
     ada_candidates: int = 2000
+    ada_energy_floor: float = 0.0
     cnn_epochs: int = 12
     cnn_batch_size: int = 128
     cnn_max_steps: int = 1200
@@ -217,7 +223,8 @@ class TrainOptions:
 
     LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
                                                            ("box_model", "ridge"), ("hog_kmeans_restarts", 1),
-                                                           ("cnn_finetune_epochs", 0), ("mining_frame_scale", (1.0, 1.0)))
+                                                           ("cnn_finetune_epochs", 0), ("mining_frame_scale", (1.0, 1.0)),
+                                                           ("ada_energy_floor", 0.0))
     """Fields added after cells were cached, with the value at which the training is the one before them
     (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys;
     nor are ``hog_kmeans_restarts``' default, 10, and ``cnn_finetune_epochs``' default, 4, which only HOG's and the
@@ -247,7 +254,7 @@ class TrainOptions:
         Example:
             >>> TrainOptions().key_fields("hog") == {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items()
             ...                                      if k not in ("mining_select", "mining_patience", "cnn_finetune_epochs",
-            ...                                                   "mining_frame_scale")}
+            ...                                                   "mining_frame_scale", "ada_energy_floor")}
             True
             >>> TrainOptions().key_fields("cnn")["cnn_finetune_epochs"]  # the CNN's fine-tuning is in its keys only
             4
@@ -276,6 +283,9 @@ class TrainOptions:
             raise ValueError(f"mining_rounds must be >= 0, got {self.mining_rounds}")
         if self.mining_margin < 0:
             raise ValueError(f"mining_margin must be >= 0, got {self.mining_margin}")
+        if isinstance(self.ada_energy_floor, bool) or not (float(self.ada_energy_floor) >= 0
+                                                           and math.isfinite(float(self.ada_energy_floor))):
+            raise ValueError(f"ada_energy_floor must be a finite number >= 0, got {self.ada_energy_floor!r}")
         if not 0 <= int(self.cnn_shift) < 20:
             raise ValueError(f"cnn_shift must be in [0, 20) pixels, got {self.cnn_shift}")
         if not 0 < self.val_target_recall <= 1 or not 0 < self.val_iou <= 1:
@@ -357,8 +367,13 @@ def _fit_once(
     elif kind == "adaboost":
         from synthaug.detectors.adaboost import train_adaboost
 
+        floor = 0.0
+        if options.ada_energy_floor:
+            from synthaug.detectors.adaboost import gradient_level
+
+            floor = options.ada_energy_floor * gradient_level(negatives)
         det = train_adaboost(positives, negatives, n_rounds=options.ada_rounds, candidates=options.ada_candidates, seed=seed,
-                             positive_weights=positive_weights)
+                             positive_weights=positive_weights, energy_floor=floor)
     else:
         # the one CNN training loop: PatchDetectorModule + PatchDataModule.from_tensors under a CPU lightning.Trainer
         from synthaug.detectors.lightning_module import fit_patch_detector

@@ -280,6 +280,7 @@ def edge_orientation_energy(
     orientations: Tensor,
     n_bins: int = 4,
     eps: float = DEFAULT_EPS,
+    floor: float = 0.0,
 ) -> Tensor:
     """E(X, R, o): normalised gradient energy of each image over each (rectangle, bin) pair.
 
@@ -289,6 +290,9 @@ def edge_orientation_energy(
         orientations: one bin index per rectangle, in ``[0, n_bins)``.
         n_bins: number of orientation bins K.
         eps: ε of the normalisation ``G_o / (Σ_k G_k + ε)``.
+        floor: an energy floor per pixel: the normalisation becomes ``G_o / (Σ_k G_k + ε + floor · |R|)``
+            (|R| the rectangle's area), so a rectangle whose gradients are at or below the floor's level scores
+            low in every bin instead of showing its faint structure at full strength (0: the paper's E).
 
     Returns:
         Energies in [0, 1).
@@ -301,6 +305,8 @@ def edge_orientation_energy(
     """
     if eps < 0 or not math.isfinite(eps):
         raise ValueError(f"eps must be finite and >= 0, got {eps}")
+    if not (floor >= 0 and math.isfinite(floor)):
+        raise ValueError(f"floor must be finite and >= 0, got {floor}")
     orientations = torch.as_tensor(orientations).long()
     if orientations.dim() != 1 or orientations.shape[0] != rects.shape[0]:
         raise ValueError(f"orientations must be (M,) with M = {rects.shape[0]} rectangles, got shape {tuple(orientations.shape)}")
@@ -322,6 +328,8 @@ def edge_orientation_energy(
     own, tot = own.view(b, 4, m), tot.view(b, 4, m)
     g_o = own[:, 0] - own[:, 1] - own[:, 2] + own[:, 3]
     g = tot[:, 0] - tot[:, 1] - tot[:, 2] + tot[:, 3]
+    if floor:
+        return g_o / (g + (eps + floor * (rects[:, 2] * rects[:, 3]).to(g.device, g.dtype)))
     return g_o / (g + eps)
 
 
@@ -457,6 +465,7 @@ class WeakLearners:
         window: side of the window the rectangles live in.
         n_bins: number of orientation bins K.
         eps: ε of the energy normalisation.
+        floor: energy floor per pixel of the normalisation (:func:`edge_orientation_energy`; 0: none).
 
     Example:
         >>> g = torch.Generator().manual_seed(0)
@@ -475,6 +484,7 @@ class WeakLearners:
     window: int = 40
     n_bins: int = 4
     eps: float = DEFAULT_EPS
+    floor: float = 0.0
 
     def __post_init__(self) -> None:
         self.rects = _check_rects(self.rects)
@@ -495,6 +505,9 @@ class WeakLearners:
                              f"got corner {int((self.rects[:, :2] + self.rects[:, 2:]).max())}")
         if not (self.polarity.abs() == 1).all():
             raise ValueError(f"polarity must be +1 or -1, got {self.polarity.unique().tolist()}")
+        self.floor = float(self.floor)
+        if not (self.floor >= 0 and math.isfinite(self.floor)):
+            raise ValueError(f"floor must be finite and >= 0, got {self.floor}")
 
     def __len__(self) -> int:
         return int(self.rects.shape[0])
@@ -539,7 +552,11 @@ class WeakLearners:
 
     def energies(self, x: Tensor) -> Tensor:
         """E(X, R_i, o_i) for every learner, shape (B, M)."""
-        return edge_orientation_energy(x, self.rects, self.orientations, self.n_bins, self.eps)
+        return edge_orientation_energy(x, self.rects, self.orientations, self.n_bins, self.eps, self.floor)
+
+    def offsets(self) -> Tensor:
+        """Each learner's constant of the normalisation, ``ε + floor · |R|``, float64 (M,)."""
+        return self.eps + self.floor * (self.rects[:, 2] * self.rects[:, 3]).double()
 
     def responses(self, x: Tensor, temperature: float | None = None) -> Tensor:
         """h_i(X) in {0, 1} (or its sigmoid), shape (B, M); ``polarity`` is applied."""
@@ -548,7 +565,7 @@ class WeakLearners:
     def subset(self, index: Tensor | slice) -> "WeakLearners":
         """The learners selected by ``index``."""
         return WeakLearners(self.rects[index], self.orientations[index], self.thresholds[index],
-                            self.polarity[index], self.weights[index], self.window, self.n_bins, self.eps)
+                            self.polarity[index], self.weights[index], self.window, self.n_bins, self.eps, self.floor)
 
     def state_dict(self) -> dict[str, Any]:
         """Tensors and plain Python values only (loads with ``weights_only=True``)."""
@@ -556,11 +573,12 @@ class WeakLearners:
             "rects": self.rects.clone(), "orientations": self.orientations.clone(),
             "thresholds": self.thresholds.clone(), "polarity": self.polarity.clone(),
             "weights": self.weights.clone(), "window": int(self.window),
-            "n_bins": int(self.n_bins), "eps": float(self.eps),
+            "n_bins": int(self.n_bins), "eps": float(self.eps), "floor": float(self.floor),
         }
 
     @classmethod
     def from_state_dict(cls, state: dict[str, Any]) -> "WeakLearners":
         """Inverse of :meth:`state_dict`; raises KeyError/ValueError on a bad state."""
         return cls(state["rects"], state["orientations"], state["thresholds"], state["polarity"],
-                   state["weights"], int(state["window"]), int(state["n_bins"]), float(state["eps"]))
+                   state["weights"], int(state["window"]), int(state["n_bins"]), float(state["eps"]),
+                   float(state.get("floor", 0.0)))  # files written before the floor have none

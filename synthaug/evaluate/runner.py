@@ -694,6 +694,9 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--mining-patience", type=int_at_least(0), default=TrainOptions.mining_patience,
                    help="mining rounds without a new best still run before stopping (0: stop at the first; default: "
                         "the family's, 0 for hog and cnn, 1 for adaboost); part of a cell's key only when not 0")
+    q.add_argument("--ada-energy-floor", type=nonneg_float, default=TrainOptions.ada_energy_floor,
+                   help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
+                        "gradient level (0: the paper's energy; part of AdaBoost's cell keys otherwise)")
     q.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"), default=None,
                    help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] before the pyramid scans "
                         "it (default: the family's; part of a cell's key unless native)")
@@ -767,7 +770,7 @@ def train_options(args: argparse.Namespace) -> TrainOptions:
                                cnn_shift=args.cnn_shift, mining_select=args.mining_select,
                                mining_patience=args.mining_patience, box_model=args.box_model,
                                mining_frame_scale=None if args.mining_frame_scale is None
-                               else tuple(args.mining_frame_scale))
+                               else tuple(args.mining_frame_scale), ada_energy_floor=args.ada_energy_floor)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
