@@ -313,14 +313,16 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
            if k not in ("mining_select", "mining_patience", "mining_frame_scale", "ada_energy_floor")}
     not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
     only_hog = {k: v for k, v in old.items() if k != "cnn_finetune_epochs"}  # the CNN's fine-tuning: the CNN's keys
-    for kind, base in (("hog", only_hog), ("cnn", not_hog), (None, old)):  # the keys of before the family defaults
+    # the keys of before the family defaults; no kind keeps every family-only field (AdaBoost's floor at its default)
+    for kind, base in (("hog", only_hog), ("cnn", not_hog), (None, {**old, "ada_energy_floor": 1.0})):
         assert TrainOptions().key_fields(kind) == base
         assert TrainOptions(mining_select="ap").key_fields(kind) == {**base, "mining_select": "ap"}
         assert TrainOptions(mining_patience=1).key_fields(kind) == {**base, "mining_patience": 1}
     ada = TrainOptions().key_fields("adaboost")
     assert (ada["ada_rounds"], ada["mining_select"], ada["mining_patience"]) == (300, "ap", 1)
-    assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100).key_fields("adaboost") == \
-        {k: v for k, v in not_hog.items() if k != "cnn_finetune_epochs"}
+    assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100, ada_energy_floor=0).key_fields("adaboost") \
+        == {k: v for k, v in not_hog.items() if k != "cnn_finetune_epochs"}
+    assert ada["ada_energy_floor"] == 1.0  # the floor changed AdaBoost's training: its default cells have new keys
 
 
 def test_hog_kmeans_restarts_key_and_training(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -438,7 +440,8 @@ def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> 
 
     seen = []
     monkeypatch.setattr(ab, "train_adaboost",
-                        lambda pos, neg, n_rounds, candidates, seed, positive_weights=None: seen.append(n_rounds) or 1 / 0)
+                        lambda pos, neg, n_rounds, candidates, seed, positive_weights=None, energy_floor=0.0:
+                        seen.append(n_rounds) or 1 / 0)
     from synthaug.detectors.toy import toy_patches
 
     pos, neg = toy_patches(8, 8, seed=0)
@@ -584,10 +587,13 @@ def test_ada_energy_floor_is_in_units_of_the_negatives_gradient_level() -> None:
     det = train_detector("adaboost", pos, neg, 0, options=TrainOptions(ada_rounds=8, ada_candidates=100,
                                                                       ada_energy_floor=0.5))
     assert det.learners.floor == pytest.approx(0.5 * gradient_level(neg), rel=1e-12) and det.learners.floor > 0
-    assert train_detector("adaboost", pos, neg, 0, options=TrainOptions(ada_rounds=8, ada_candidates=100)).learners.floor == 0
+    paper = train_detector("adaboost", pos, neg, 0, options=TrainOptions(ada_rounds=8, ada_candidates=100, ada_energy_floor=0))
+    assert paper.learners.floor == 0
+    default = train_detector("adaboost", pos, neg, 0, options=TrainOptions(ada_rounds=8, ada_candidates=100))
+    assert default.learners.floor == pytest.approx(gradient_level(neg), rel=1e-12)  # the default: 1 x the level
     o = TrainOptions(ada_energy_floor=0.5)
     assert o.key_fields("adaboost")["ada_energy_floor"] == 0.5 and "ada_energy_floor" not in o.key_fields("hog")
-    assert "ada_energy_floor" not in TrainOptions().key_fields("adaboost")  # 0: the key of the cells before it
+    assert "ada_energy_floor" not in TrainOptions(ada_energy_floor=0).key_fields("adaboost")  # the cells before it
     for bad in (-0.1, float("inf"), True):
         with pytest.raises(ValueError, match="ada_energy_floor"):
             TrainOptions(ada_energy_floor=bad)
