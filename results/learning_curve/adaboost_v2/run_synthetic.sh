@@ -5,4 +5,5 @@
 # (the runner call is results/synthetic/run_100.sh's, with AdaBoost, the test split and this folder)
 set -euo pipefail
 tag=$1; seeds=$2; shift 2
-exec results/synthetic/run_100.sh adaboost "results/learning_curve/adaboost_v2/$tag" test "$seeds" "$@"
+# --ada-energy-floor 0: made before AdaBoost's energy floor became its default (stop 49, ../adaboost_scale/README.md).
+exec results/synthetic/run_100.sh adaboost "results/learning_curve/adaboost_v2/$tag" test "$seeds" --ada-energy-floor 0 "$@"

@@ -7,4 +7,5 @@
 out=results/synthetic/drone_adaboost share=()
 if [ -n "${4:-}" ]; then out=results/synthetic/drone_adaboost_share share=(--synthetic-share "$4"); fi
 exec bash "$(dirname "$0")/../../learning_curve/added_positives.sh" run --synthetic-ratios \
-  "$out" "$1" adaboost "$2" "$3" --mesh ../shared/data/meshes/quadcopter.glb "${share[@]}"
+  "$out" "$1" adaboost "$2" "$3" --mesh ../shared/data/meshes/quadcopter.glb "${share[@]}" \
+  --ada-energy-floor 0  # the paper's energy: run before the floor became AdaBoost's default (stop 49)
