@@ -15,6 +15,12 @@ G_k(R) the sum over R of the gradient magnitude of the pixels whose (unsigned)
 gradient orientation falls in bin k. The sums come from one integral image per
 bin, so any rectangle costs four look-ups.
 
+An optional energy *floor* per pixel (``floor``, the AdaBoost detector's
+``ada_energy_floor``) adds ``floor · |R|`` to the denominator: the paper's E is
+contrast-invariant, so a rectangle of faint, smooth structure shows its
+orientations at the strength of a sharp edge; with the floor it scores low in
+every bin. The distances keep the paper's E (floor 0).
+
 Definitions used here (the numpy reference in ``tests/test_weak_learners.py``
 implements them independently):
     - gradient: central differences ``g_x = (X[y, x+1] - X[y, x-1]) / 2``,
