@@ -423,7 +423,8 @@ def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(caps
         return R.ProtocolRunner(proto, "drone", paths, options=TrainOptions(**kw), log=lambda m: None).identity(c, 1)
 
     base = ident(box_model="ridge")
-    later = ("mining_select", "mining_patience", "box_model", "hog_kmeans_restarts", "cnn_finetune_epochs")
+    later = ("mining_select", "mining_patience", "box_model", "hog_kmeans_restarts", "cnn_finetune_epochs",
+             "mining_frame_scale", "ada_energy_floor")
     assert base["options"] == {k: v for k, v in dataclasses.asdict(TrainOptions(ada_rounds=100)).items() if k not in later}
     assert ident(mining_select="fp", mining_patience=0, box_model="ridge") == base
     if R.TRAINING_VERSION == 6:  # the key computed before the three options existed (same protocol, paths, condition)
