@@ -382,11 +382,17 @@ def test_runner_downscaled_copies_option_parses_and_refuses_zero(capsys):
     # --mining-frame-scale: a training option (TrainOptions), refused at parse time when not 0 < LOW <= HIGH
     args = R.build_parser().parse_args(["learning-curve", "--mining-frame-scale", "0.75", "2", "--out", "x"])
     assert R.train_options(args).mining_frame_scale == (0.75, 2.0)
-    assert R.train_options(R.build_parser().parse_args(["learning-curve", "--out", "x"])).mining_frame_scale is None
+    assert R.train_options(R.build_parser().parse_args(["learning-curve", "--out", "x"])).mining_frame_scale == (1.0, 1.0)
     for bad in (["2", "1"], ["0", "1"]):
         with pytest.raises(SystemExit) as e:
             R.main(["learning-curve", "--mining-frame-scale", *bad, "--out", "x"])
         assert e.value.code == 2 and "--mining-frame-scale" in capsys.readouterr().err
+    # --ada-energy-floor: AdaBoost's training option, a number >= 0 (1, the default, is part of AdaBoost's keys)
+    assert R.train_options(R.build_parser().parse_args(["learning-curve", "--ada-energy-floor", "0", "--out", "x"])
+                           ).ada_energy_floor == 0.0
+    with pytest.raises(SystemExit) as e:
+        R.build_parser().parse_args(["learning-curve", "--ada-energy-floor", "-1", "--out", "x"])
+    assert e.value.code == 2 and "--ada-energy-floor" in capsys.readouterr().err
     with pytest.raises(SystemExit) as e:
         R.build_parser().parse_args(["synthetic", "--shape-variation", "-0.2", "--out", "x"])
     assert e.value.code == 2 and "--shape-variation" in capsys.readouterr().err

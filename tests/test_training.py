@@ -449,10 +449,8 @@ def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> 
         with pytest.raises(ZeroDivisionError):
             train_detector("adaboost", pos, neg, 0, options=opts)
         assert seen[-1] == want
-    assert TrainOptions().for_family("cnn") == TrainOptions(ada_rounds=100, mining_select="fp", mining_patience=0,
-                                                            mining_frame_scale=(1, 1))
-    assert TrainOptions().for_family("adaboost") == TrainOptions(ada_rounds=300, mining_select="ap", mining_patience=1,
-                                                                 mining_frame_scale=(1, 1))
+    assert TrainOptions().for_family("cnn") == TrainOptions(ada_rounds=100, mining_select="fp", mining_patience=0)
+    assert TrainOptions().for_family("adaboost") == TrainOptions(ada_rounds=300, mining_select="ap", mining_patience=1)
     assert TrainOptions().for_family("some_plugin") == TrainOptions().for_family("hog")
     with pytest.raises(ValueError, match="ada_rounds"):
         TrainOptions(ada_rounds=0)

@@ -136,10 +136,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--ada-energy-floor", type=nonneg_float, default=d["ada_energy_floor"],
                         help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
                              "gradient level (0: the paper's energy)")
-    parser.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"), default=None,
+    parser.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
+                        default=d["mining_frame_scale"],
                         help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] (per frame, from "
                              "--seed) before the pyramid scans it: negatives at magnifications the native frames never "
-                             "reach; default: the family's (1 1: native frames)")
+                             "reach; default 1 1: native frames")
     add_option(parser, "--val-frame-stride", aliases=["--val-stride"], type=int, default=d["val_stride"],
                help="validation false positives counted on every K-th validation frame")
     parser.add_argument("--scales", type=float, nargs="+", default=None,
@@ -175,7 +176,7 @@ def main(args: argparse.Namespace) -> int:
         return _err(f"--seed-counts: must be >= 1, got {args.seed_counts}")
     if args.threads is not None and args.threads < 1:
         return _err(f"--threads: must be >= 1, got {args.threads}")
-    if args.mining_frame_scale is not None and args.mining_frame_scale[0] > args.mining_frame_scale[1]:
+    if args.mining_frame_scale[0] > args.mining_frame_scale[1]:
         return _err(f"--mining-frame-scale: LOW must be <= HIGH, got {args.mining_frame_scale[0]:g} {args.mining_frame_scale[1]:g}")
     if args.synthetic_ratio is not None and args.params is None:
         return _err("--synthetic-ratio: synthetic positives need a fit: give --params FIT.json")
@@ -193,7 +194,7 @@ def main(args: argparse.Namespace) -> int:
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
                                mining_select=args.mining_select, mining_patience=args.mining_patience,
                                val_stride=args.val_frame_stride, box_model=args.box_model, scales=None if args.scales is None else tuple(args.scales),
-                               mining_frame_scale=None if args.mining_frame_scale is None else tuple(args.mining_frame_scale),
+                               mining_frame_scale=tuple(args.mining_frame_scale),
                                ada_energy_floor=args.ada_energy_floor)
     except ValueError as e:
         return _err(str(e))

@@ -68,8 +68,8 @@ MINING_SELECT: tuple[str, ...] = ("fp", "ap")
 BOX_MODELS: tuple[str, ...] = ("cnn", "ridge", "ensemble")
 """The box regression's models (``TrainOptions.box_model``)."""
 FAMILY_DEFAULTS: dict[str | None, dict[str, Any]] = {
-    None: {"ada_rounds": 100, "mining_select": "fp", "mining_patience": 0, "mining_frame_scale": (1.0, 1.0)},
-    "adaboost": {"ada_rounds": 300, "mining_select": "ap", "mining_patience": 1, "mining_frame_scale": (1.0, 1.0)},
+    None: {"ada_rounds": 100, "mining_select": "fp", "mining_patience": 0},
+    "adaboost": {"ada_rounds": 300, "mining_select": "ap", "mining_patience": 1},
 }
 """What :class:`TrainOptions` fields left at None mean for each family (``None``: HOG, the CNN and any other
 registered family).
@@ -154,8 +154,9 @@ class TrainOptions:
             this range (per frame, from the training seed, the video and the frame index:
             :class:`~synthaug.detectors.frames.RescaledFrames`) before the pyramid scans it, so the mined
             negatives include clutter at magnifications the native frames never reach (an upsampled frame is
-            smoother than any native level). None: the family's default (:data:`FAMILY_DEFAULTS`); ``(1, 1)``:
-            native frames (the mining before this option).
+            smoother than any native level). ``(1, 1)``, the default: native frames (the mining before this
+            option). Scale-jittered mining did not fix AdaBoost's x2 check and cost it x1 AP
+            (``results/learning_curve/adaboost_scale/README.md``).
         val_stride: every k-th frame of the validation videos is scored.
         val_top_k: detections kept per validation frame.
         val_iou: matching IoU of the validation count.
@@ -225,7 +226,7 @@ class TrainOptions:
     mining_select: str | None = None
     mining_patience: int | None = None
     box_model: str = "ensemble"
-    mining_frame_scale: tuple[float, float] | None = None
+    mining_frame_scale: tuple[float, float] = (1.0, 1.0)
 
     LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
                                                            ("box_model", "ridge"), ("hog_kmeans_restarts", 1),
@@ -310,10 +311,9 @@ class TrainOptions:
             raise ValueError(f"box_model must be one of {list(BOX_MODELS)}, got {self.box_model!r}")
         if self.scales is not None:
             object.__setattr__(self, "scales", tuple(float(s) for s in self.scales))
-        if self.mining_frame_scale is not None:
-            from synthaug.detectors.frames import check_scale_range
+        from synthaug.detectors.frames import check_scale_range
 
-            object.__setattr__(self, "mining_frame_scale", check_scale_range(self.mining_frame_scale))
+        object.__setattr__(self, "mining_frame_scale", check_scale_range(self.mining_frame_scale))
 
     def pyramid(self) -> tuple[float, ...]:
         from synthaug.detectors.sliding import DEFAULT_SCALES
@@ -579,7 +579,7 @@ def train_with_mining(
     stop = "mining_rounds reached" if options.mining_rounds else "no mining (mining_rounds = 0)"
     if mining_source is None:
         stop = "no mining source"
-    if mining_source is not None and tuple(options.mining_frame_scale) != (1.0, 1.0):
+    if mining_source is not None and options.mining_frame_scale != (1.0, 1.0):
         from synthaug.detectors.frames import RescaledFrames
 
         mining_source = RescaledFrames(mining_source, options.mining_frame_scale, seed=seed)
@@ -676,6 +676,6 @@ def _settings_log(options: TrainOptions, scales: Sequence[float], mining_source:
                        "max_per_round": options.mining_max_per_round, "margin": options.mining_margin,
                        "scales": list(scales), "max_rounds": options.mining_rounds,
                        "select": options.mining_select, "patience": options.mining_patience,
-                       "frame_scale": None if options.mining_frame_scale is None else list(options.mining_frame_scale)},
+                       "frame_scale": list(options.mining_frame_scale)},
             "validation": None if val is None else {"frames": len(val), "top_k": options.val_top_k, "iou": options.val_iou,
                                                     "target_recall": options.val_target_recall}}

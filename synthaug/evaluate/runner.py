@@ -697,9 +697,10 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--ada-energy-floor", type=nonneg_float, default=TrainOptions.ada_energy_floor,
                    help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
                         "gradient level (0: the paper's energy; part of AdaBoost's cell keys otherwise)")
-    q.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"), default=None,
+    q.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
+                   default=TrainOptions.mining_frame_scale,
                    help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] before the pyramid scans "
-                        "it (default: the family's; part of a cell's key unless native)")
+                        "it (default 1 1: native frames; part of a cell's key otherwise)")
     q.add_argument("--box-model", default=TrainOptions.box_model, choices=list(BOX_MODELS),
                    help="the box regression: a small CNN on the detection's context pixels (cnn), ridge on its HOG "
                         "cells (ridge, the model before this option: its cells keep their keys) or the mean of both "
@@ -769,14 +770,13 @@ def train_options(args: argparse.Namespace) -> TrainOptions:
                                mining_stride=args.mining_stride,
                                cnn_shift=args.cnn_shift, mining_select=args.mining_select,
                                mining_patience=args.mining_patience, box_model=args.box_model,
-                               mining_frame_scale=None if args.mining_frame_scale is None
-                               else tuple(args.mining_frame_scale), ada_energy_floor=args.ada_energy_floor)
+                               mining_frame_scale=tuple(args.mining_frame_scale), ada_energy_floor=args.ada_energy_floor)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.mining_frame_scale is not None and args.mining_frame_scale[0] > args.mining_frame_scale[1]:
+    if args.mining_frame_scale[0] > args.mining_frame_scale[1]:
         parser.error(f"--mining-frame-scale: LOW must be <= HIGH, got {args.mining_frame_scale[0]:g} "
                      f"{args.mining_frame_scale[1]:g}")
     options = train_options(args)
