@@ -505,3 +505,32 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
         with pytest.raises(SystemExit) as e:
             R.build_parser().parse_args(["learning-curve", *bad, "--out", "x"])
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err
+
+
+def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effect_left_out(monkeypatch, capsys):
+    """The paper's Figs. 10 and 9 under the protocol: ``--capture-sampling`` and ``--effects-off`` each add a
+    synthetic condition per value, with keys of their own; at their defaults the keys are the ones cells had."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=100, synthetic_ratios=[20], params="f{seed}.json",
+                           capture_sampling=("seed", "uniform"), effects_off=(None, "motion_blur"))
+    syn = [c for c in made if c.synthetic_ratio]
+    assert [(c.capture_sampling, c.effects_off) for c in syn] == [
+        ("seed", ()), ("seed", ("motion_blur",)), ("uniform", ()), ("uniform", ("motion_blur",))]
+    assert [c.name for c in syn][1:3] == ["hog / 100 seeds + 20x synthetic (f{seed}, without motion_blur)",
+                                          "hog / 100 seeds + 20x synthetic (f{seed}, capture uniform)"]
+    keys = [c.identity() for c in syn]
+    assert "capture_sampling" not in keys[0] and "effects_off" not in keys[0]  # the paper's: the former key
+    assert keys[0] == R.Condition("x", "hog", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0).identity()
+    assert keys[1]["effects_off"] == ("motion_blur",) and keys[2]["capture_sampling"] == "uniform"
+    assert len({json.dumps(k, sort_keys=True) for k in keys}) == 4
+    # the command line: one condition per value; effect names checked when parsed
+    args = R.build_parser().parse_args(["synthetic", "--capture-sampling", "seed", "uniform", "--effects-off", "none",
+                                        "object_noise", "--out", "x"])
+    assert args.capture_sampling == ["seed", "uniform"] and args.effects_off == ["none", "object_noise"]
+    plain = R.build_parser().parse_args(["synthetic", "--out", "x"])
+    assert plain.capture_sampling == ["seed"] and plain.effects_off == ["none"]
+    for bad in (["--effects-off", "speckle"], ["--capture-sampling", "fitted"]):
+        with pytest.raises(SystemExit) as e:
+            R.build_parser().parse_args(["synthetic", *bad, "--out", "x"])
+        assert e.value.code == 2 and bad[0] in capsys.readouterr().err

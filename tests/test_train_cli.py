@@ -405,6 +405,9 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
         ("contrast_across_zero", "--faded-contrast"),
         ("no_positive_videos", "--positive-videos"),
         ("more_positive_videos_than_training_videos", "--positive-videos"),
+        ("capture_sampling_without_synthetic", "--capture-sampling"),
+        ("effects_off_without_synthetic", "--effects-off"),
+        ("effect_off_not_in_the_fit", "--effects-off"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -461,6 +464,14 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--positive-videos", "0"]
     elif case == "more_positive_videos_than_training_videos":
         extra += ["--positive-videos", "999"]
+    elif case == "capture_sampling_without_synthetic":
+        extra += ["--capture-sampling", "uniform"]
+    elif case == "effects_off_without_synthetic":
+        extra += ["--effects-off", "motion_blur"]
+    elif case == "effect_off_not_in_the_fit":  # rotor_blur is a registered effect, but not one the paper's fit holds
+        fit8 = tmp_path / "fit8.json"
+        CaptureParams.sample(8, generator=torch.Generator().manual_seed(0)).save(fit8)
+        extra += ["--params", str(fit8), "--synthetic-ratio", "1", "--effects-off", "rotor_blur"]
     out = tmp_path / "det.pt"
     argv = ["train", *[x for kv in base.items() for x in kv], "--out", str(out), *FAST, *extra]
     capsys.readouterr()
@@ -478,3 +489,46 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         assert "must be >= 0, got -1" in err
     if case == "copy_paste_without_params":
         assert "--params" in err
+
+
+def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict[str, Path], trained: dict[str, Any],
+                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """--capture-sampling (the paper's Fig. 10) and --effects-off (Fig. 9) reach the generator: the effects left
+    out are removed from the fit's own list, in its order; both are in the metadata only when not at the default."""
+    import synthaug.detectors.video_training as video_training
+    from synthaug.params import CaptureParams
+
+    calls = []
+
+    def fake(seedset: Any, mesh: Any, fit_file: Any, count: int, *, seed: int = 0, capture_sampling: str = "seed",
+             effects: Any = None, **_: Any) -> torch.Tensor:
+        calls.append((count, capture_sampling, effects))
+        return torch.rand(count, 1, 40, 40, generator=torch.Generator().manual_seed(seed))
+
+    monkeypatch.setattr(video_training, "synthetic_positives", fake)
+    fit = ws["root"] / "fit8_fig9.json"
+    theta = CaptureParams.sample(8, generator=torch.Generator().manual_seed(0))
+    theta.save(fit)
+    seedset = trained["meta"]["positives"]["seedset"]
+    out = ws["root"] / "runs" / "hog_fig9.pt"
+    assert _train(ws, out, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
+                  "--capture-sampling", "uniform", "--effects-off", "motion_blur", "object_noise",
+                  "--mining-rounds", "0") == 0
+    kept = [e for e in theta.effects if e not in ("motion_blur", "object_noise")]
+    assert calls == [(16, "uniform", kept)] and kept == ["boundary_blur", "material"]
+    syn = json.loads(out.with_suffix(".json").read_text())["synthetic"]
+    assert syn["capture_sampling"] == "uniform" and syn["effects_off"] == ["motion_blur", "object_noise"]
+    out2 = ws["root"] / "runs" / "hog_fig9_default.pt"
+    assert _train(ws, out2, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
+                  "--mining-rounds", "0") == 0
+    assert calls[-1] == (16, "seed", None)
+    syn2 = json.loads(out2.with_suffix(".json").read_text())["synthetic"]
+    assert "capture_sampling" not in syn2 and "effects_off" not in syn2
+    # the dataclass refuses what the command line cannot give
+    from synthaug.detectors.video_training import AddedPositives
+
+    with pytest.raises(ValueError, match="capture_sampling"):
+        AddedPositives(capture_sampling="fitted")
+    with pytest.raises(ValueError, match="effects_off"):
+        AddedPositives(effects_off="motion_blur")  # type: ignore[arg-type]
+    assert AddedPositives(effects_off=["material"]).effects_off == ("material",)  # type: ignore[arg-type]

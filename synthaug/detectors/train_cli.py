@@ -101,6 +101,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--shape-variation", type=nonneg_float, default=0.0,
                         help="vary the synthetic objects' shape around the mesh (axes stretched, parts such as arms and "
                              "rotors scaled) within +- this fraction, e.g. 0.3; default 0: the mesh alone")
+    parser.add_argument("--capture-sampling", choices=["seed", "uniform", "kde"], default="seed",
+                        help="how the synthetic positives' capture parameters are drawn: seed (the paper: one seed's "
+                             "fitted row), uniform (each between its fitted extremes, the paper's Fig. 10) or kde")
+    parser.add_argument("--effects-off", nargs="+", default=[], metavar="EFFECT",
+                        help="fitted effects left out of the synthetic positives (the paper's Fig. 9 ablation), e.g. "
+                             "motion_blur")
     parser.add_argument("--perturb-copies", type=int, default=0,
                         help="perturbed copies (rotation, shift, mirror, blur, noise) of every real positive: the paper's baseline")
     parser.add_argument("--downscaled-copies", type=int, default=0,
@@ -211,6 +217,7 @@ def main(args: argparse.Namespace) -> int:
             added=AddedPositives(params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
                                  perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
                                  object_box=args.object_box, shape_variation=args.shape_variation,
+                                 capture_sampling=args.capture_sampling, effects_off=tuple(args.effects_off),
                                  copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,
                                  faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast)),

@@ -91,6 +91,11 @@ class AddedPositives:
             labelled seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
         shape_variation: 0 (the paper) or > 0: the synthetic objects' shapes vary around the mesh within ± this
             fraction (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``shape_variation``).
+        capture_sampling: how each synthetic patch's capture parameters are drawn: ``"seed"`` (the paper: one seed's
+            fitted row), ``"uniform"`` (each parameter uniform between its fitted extremes: the paper's Fig. 10
+            baseline) or ``"kde"`` (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``capture_sampling``).
+        effects_off: fitted effects left out of the synthetic patches (the paper's Fig. 9 ablation), by name
+            (e.g. ``("motion_blur",)``); each must be one of the fit's effects.
         copy_paste_ratio: copy-paste patches per real seed: the seeds' objects cut out with their fitted
             silhouettes and pasted on other seeds' backgrounds (:func:`~synthaug.data.copypaste.copy_paste_positives`;
             a user's baseline).
@@ -117,12 +122,23 @@ class AddedPositives:
     pose_sampling: str = "uniform"
     object_box: float | str | None = None
     shape_variation: float = 0.0
+    capture_sampling: str = "seed"
+    effects_off: tuple[str, ...] = ()
     copy_paste_ratio: float = 0.0
     perturb_copies: int = 0
     synthetic_share: float | None = None
     downscaled_copies: int = 0
     faded_copies: int = 0
     faded_contrast: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        from synthaug.data.captures import CAPTURE_SAMPLERS
+
+        if self.capture_sampling not in CAPTURE_SAMPLERS:
+            raise ValueError(f"capture_sampling must be one of {list(CAPTURE_SAMPLERS)}, got {self.capture_sampling!r}")
+        if isinstance(self.effects_off, str) or not all(isinstance(e, str) for e in self.effects_off):
+            raise ValueError(f"effects_off must be a sequence of effect names, got {self.effects_off!r}")
+        object.__setattr__(self, "effects_off", tuple(self.effects_off))
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
@@ -425,6 +441,11 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
         raise TrainingInputError("--synthetic-ratio", f"must be >= 0, got {synthetic_ratio}")
     if synthetic_ratio > 0 and params is None:
         raise TrainingInputError("--synthetic-ratio", "synthetic positives need a fit: give --params FIT.json")
+    for option, changed in (("--capture-sampling", added.capture_sampling != "seed"),
+                            ("--effects-off", bool(added.effects_off))):
+        if changed and synthetic_ratio <= 0:
+            raise TrainingInputError(option, "it changes the synthetic positives, and there are none: give "
+                                             "--params FIT.json and a --synthetic-ratio above 0")
     if not all_frames and seedset is None and (seed_count is None or seed_count < 1):
         raise TrainingInputError("--seed-counts", f"must be >= 1, got {seed_count}")
     if perturb_copies < 0:
@@ -600,17 +621,27 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, *, seed: int,
                                              f"({ts.info.get('seedset')}): a fit holds one row per seed of the seed set "
                                              f"it was made on")
     mesh = added.mesh or fit_meta.get("mesh") or "quadcopter"
+    effects = None
+    if added.effects_off:
+        unknown = sorted(set(added.effects_off) - set(theta.effects))
+        if unknown:
+            raise TrainingInputError("--effects-off", f"{unknown} not among the effects of {params} "
+                                                      f"({list(theta.effects)})")
+        effects = [e for e in theta.effects if e not in added.effects_off]
     n_syn = int(round(synthetic_ratio * len(ss)))
     if n_syn:
         t0 = time.perf_counter()
         syn = synthetic_positives(ss, mesh, params, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
-                                  object_box=added.object_box, shape_variation=added.shape_variation)
+                                  object_box=added.object_box, shape_variation=added.shape_variation,
+                                  capture_sampling=added.capture_sampling, effects=effects)
         ts.positives = torch.cat([ts.positives, syn])
         say(f"synthetic: {n_syn} patches from {params} ({time.perf_counter() - t0:.0f}s)")
     info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
                             "pose_sampling": pose_sampling,
                             **({"object_box": added.object_box} if added.object_box is not None else {}),
-                            **({"shape_variation": added.shape_variation} if added.shape_variation else {})}
+                            **({"shape_variation": added.shape_variation} if added.shape_variation else {}),
+                            **({"capture_sampling": added.capture_sampling} if added.capture_sampling != "seed" else {}),
+                            **({"effects_off": list(added.effects_off)} if added.effects_off else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

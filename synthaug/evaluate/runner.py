@@ -100,6 +100,9 @@ class Condition:
             seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
         shape_variation: 0 (the paper) or the synthetic objects' shape variation around the mesh
             (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``shape_variation``).
+        capture_sampling: ``"seed"`` (the paper) or how else the synthetic positives' capture parameters are drawn
+            (``"uniform"``: between the fitted extremes, the paper's Fig. 10; ``"kde"``).
+        effects_off: fitted effects left out of the synthetic positives (the paper's Fig. 9).
     """
 
     name: str
@@ -122,6 +125,8 @@ class Condition:
     faded_contrast: tuple[float, float] | None = None
     positive_videos: int | None = None
     shape_variation: float = 0.0
+    capture_sampling: str = "seed"
+    effects_off: tuple[str, ...] = ()
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -134,6 +139,9 @@ class Condition:
                   "synthetic_share", "downscaled_copies", "faded_copies", "object_box", "faded_contrast",
                   "positive_videos", "shape_variation"):
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
+                d.pop(k)
+        for k, default in (("capture_sampling", "seed"), ("effects_off", ())):  # added later still: the same, with
+            if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
 
@@ -336,7 +344,8 @@ class ProtocolRunner:
                                  synthetic_share=condition.synthetic_share,
                                  downscaled_copies=condition.downscaled_copies,
                                  faded_copies=condition.faded_copies, object_box=condition.object_box,
-                                 faded_contrast=condition.faded_contrast, shape_variation=condition.shape_variation),
+                                 faded_contrast=condition.faded_contrast, shape_variation=condition.shape_variation,
+                                 capture_sampling=condition.capture_sampling, effects_off=condition.effects_off),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -579,6 +588,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          faded_copies: Sequence[int] = (), object_box: Sequence[str | None] = (None,),
                          faded_contrast: tuple[float, float] | None = None,
                          shape_variation: Sequence[float] = (0.0,),
+                         capture_sampling: Sequence[str] = ("seed",),
+                         effects_off: Sequence[str | None] = (None,),
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -598,6 +609,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     the positive class's weight in every synthetic, perturbed, copy-paste, downscaled and faded condition.
     ``object_box``: each synthetic ratio once per framing (None: the paper's; ``"seed"``: as ingest frames a seed).
     ``shape_variation``: each synthetic ratio once per value (0: the mesh alone; > 0: shapes varied around it).
+    ``capture_sampling``: each synthetic ratio once per way of drawing the capture parameters (``"seed"``: the
+    paper's, one seed's fitted row; ``"uniform"``: between the fitted extremes, Fig. 10). ``effects_off``: each
+    synthetic ratio once per fitted effect left out (None: none; Fig. 9).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -613,11 +627,14 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         conds += [Condition(f"{base} + {r:g}x synthetic ({fit}"
                             f"{'' if ps == 'uniform' else f', {ps} poses'}{share}"
                             f"{'' if ob is None else f', framed as the seeds ({ob})'}"
-                            f"{'' if not sv else f', shapes varied {sv:g}'})", kind, seed_count=seed_count,
+                            f"{'' if not sv else f', shapes varied {sv:g}'}"
+                            f"{'' if cs == 'seed' else f', capture {cs}'}"
+                            f"{'' if off is None else f', without {off}'})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
-                            shape_variation=float(sv))
-                  for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation]
+                            shape_variation=float(sv), capture_sampling=cs, effects_off=() if off is None else (off,))
+                  for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
+                  for cs in capture_sampling for off in effects_off]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -761,7 +778,22 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--shape-variation", type=nonneg_float, nargs="+", default=[0.0],
                     help="the synthetic objects' shape variation around the mesh (axes stretched, parts such as arms "
                          "and rotors scaled within +- this fraction), one condition per value; 0: the mesh alone")
+    sy.add_argument("--capture-sampling", nargs="+", choices=["seed", "uniform", "kde"], default=["seed"],
+                    help="how the synthetic positives' capture parameters are drawn, one condition per value: seed "
+                         "(the paper: one seed's fitted row), uniform (each between its fitted extremes: Fig. 10), kde")
+    sy.add_argument("--effects-off", nargs="+", default=["none"], metavar="EFFECT", type=_effect_or_none,
+                    help="fitted effects left out of the synthetic positives, one condition per effect (the paper's "
+                         "Fig. 9: boundary_blur, motion_blur, object_noise, material); none: every effect (default)")
     return p
+
+
+def _effect_or_none(name: str) -> str:
+    """``--effects-off`` values: a registered effect's name, or ``none``."""
+    from synthaug.effects.registry import list_effects
+
+    if name != "none" and name not in list_effects():
+        raise argparse.ArgumentTypeError(f"unknown effect {name!r}; choose from none, {', '.join(list_effects())}")
+    return name
 
 
 def train_options(args: argparse.Namespace) -> TrainOptions:
@@ -806,7 +838,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                              faded_copies=args.faded_copies,
                              faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                              object_box=tuple(None if b == "none" else b for b in args.object_box),
-                             shape_variation=tuple(args.shape_variation), out=args.out)
+                             shape_variation=tuple(args.shape_variation),
+                             capture_sampling=tuple(args.capture_sampling),
+                             effects_off=tuple(None if e == "none" else e for e in args.effects_off), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
