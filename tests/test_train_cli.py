@@ -492,7 +492,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
 
 
 def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict[str, Path], trained: dict[str, Any],
-                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+                                                                        monkeypatch: pytest.MonkeyPatch,
+                                                                        capsys: pytest.CaptureFixture[str]) -> None:
     """--capture-sampling (the paper's Fig. 10) and --effects-off (Fig. 9) reach the generator: the effects left
     out are removed from the fit's own list, in its order; both are in the metadata only when not at the default."""
     import synthaug.detectors.video_training as video_training
@@ -532,3 +533,14 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
     with pytest.raises(ValueError, match="effects_off"):
         AddedPositives(effects_off="motion_blur")  # type: ignore[arg-type]
     assert AddedPositives(effects_off=["material"]).effects_off == ("material",)  # type: ignore[arg-type]
+    # a name that is no registered effect is refused when the command line is parsed, before any ingest
+    import argparse
+
+    from synthaug.detectors.train_cli import add_arguments
+
+    parser = argparse.ArgumentParser(prog="synthaug train")
+    add_arguments(parser)
+    with pytest.raises(SystemExit) as e:
+        parser.parse_args(["--detector", "hog", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o",
+                           "--effects-off", "speckle"])
+    assert e.value.code == 2 and "unknown effect 'speckle'" in capsys.readouterr().err

@@ -66,8 +66,18 @@ def budget_options(args: argparse.Namespace) -> dict[str, int]:
     return {name: getattr(args, name) for name in _BUDGETS}
 
 
+def effect_name(name: str) -> str:
+    """An argparse type: the name of a registered capture effect (``--effects-off``)."""
+    from synthaug.effects.registry import list_effects
+
+    if name not in list_effects():
+        raise argparse.ArgumentTypeError(f"unknown effect {name!r}; choose from {', '.join(list_effects())}")
+    return name
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug._checks import add_option, dataclass_defaults, nonneg_float, positive_float
+    from synthaug.data.captures import CAPTURE_SAMPLERS
     from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
@@ -101,10 +111,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--shape-variation", type=nonneg_float, default=0.0,
                         help="vary the synthetic objects' shape around the mesh (axes stretched, parts such as arms and "
                              "rotors scaled) within +- this fraction, e.g. 0.3; default 0: the mesh alone")
-    parser.add_argument("--capture-sampling", choices=["seed", "uniform", "kde"], default="seed",
+    parser.add_argument("--capture-sampling", choices=list(CAPTURE_SAMPLERS), default="seed",
                         help="how the synthetic positives' capture parameters are drawn: seed (the paper: one seed's "
                              "fitted row), uniform (each between its fitted extremes, the paper's Fig. 10) or kde")
-    parser.add_argument("--effects-off", nargs="+", default=[], metavar="EFFECT",
+    parser.add_argument("--effects-off", nargs="+", default=[], metavar="EFFECT", type=effect_name,
                         help="fitted effects left out of the synthetic positives (the paper's Fig. 9 ablation), e.g. "
                              "motion_blur")
     parser.add_argument("--perturb-copies", type=int, default=0,

@@ -39,7 +39,8 @@ from typing import Any
 import numpy as np
 
 from synthaug._checks import add_option, int_at_least, nonneg_float, positive_float
-from synthaug.detectors.train_cli import add_budget_options, budget_options
+from synthaug.data.captures import CAPTURE_SAMPLERS
+from synthaug.detectors.train_cli import add_budget_options, budget_options, effect_name
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import AddedPositives, train_from_videos
 from synthaug.evaluate.cells import CellCache
@@ -778,7 +779,7 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--shape-variation", type=nonneg_float, nargs="+", default=[0.0],
                     help="the synthetic objects' shape variation around the mesh (axes stretched, parts such as arms "
                          "and rotors scaled within +- this fraction), one condition per value; 0: the mesh alone")
-    sy.add_argument("--capture-sampling", nargs="+", choices=["seed", "uniform", "kde"], default=["seed"],
+    sy.add_argument("--capture-sampling", nargs="+", choices=list(CAPTURE_SAMPLERS), default=["seed"],
                     help="how the synthetic positives' capture parameters are drawn, one condition per value: seed "
                          "(the paper: one seed's fitted row), uniform (each between its fitted extremes: Fig. 10), kde")
     sy.add_argument("--effects-off", nargs="+", default=["none"], metavar="EFFECT", type=_effect_or_none,
@@ -788,12 +789,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _effect_or_none(name: str) -> str:
-    """``--effects-off`` values: a registered effect's name, or ``none``."""
-    from synthaug.effects.registry import list_effects
-
-    if name != "none" and name not in list_effects():
-        raise argparse.ArgumentTypeError(f"unknown effect {name!r}; choose from none, {', '.join(list_effects())}")
-    return name
+    """``--effects-off`` values: ``none`` or a registered effect's name (:func:`effect_name`)."""
+    return name if name == "none" else effect_name(name)
 
 
 def train_options(args: argparse.Namespace) -> TrainOptions:
