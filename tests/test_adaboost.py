@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from synthaug.detectors.adaboost import AdaBoostDetector, best_stumps, train_adaboost
+from synthaug.detectors.adaboost import AdaBoostDetector, best_stumps, train_adaboost, transfer_update
 from synthaug.detectors.base import load_detector, save_detector
 from synthaug.detectors.toy import toy_frame, toy_patches
 from synthaug.detectors.weak_learners import WeakLearners, edge_orientation_energy, exhaustive_candidates
@@ -109,6 +109,76 @@ def test_positive_weights_start_the_boosting_as_the_numpy_reference_and_as_repea
     for bad in (torch.ones(19), -torch.ones(20), torch.zeros(20), torch.full((20,), float("nan"))):
         with pytest.raises(ValueError, match="positive_weights"):
             train_adaboost(pos, neg, n_rounds=2, candidates=10, positive_weights=bad)
+
+
+def _np_tradaboost(f: np.ndarray, y: np.ndarray, source: np.ndarray, rounds: int) -> tuple[list[int], list[float]]:
+    """Dynamic-TrAdaBoost written from the papers (Dai et al. 2007; Al-Stouhi and Reddy 2011): the stump chosen on
+    every weighted sample, its error and α on the target samples only; target misses x (1 - ε) / ε, source samples x
+    2 (1 - ε) and their misses x β more; a stump with target error >= 1/2 is not kept and the source weights x β."""
+    n_pos, n_neg = y.sum(), (1 - y).sum()
+    w = np.where(y == 1, 0.5 / n_pos, 0.5 / n_neg)
+    beta = 1 / (1 + math.sqrt(2 * math.log(source.sum()) / rounds))
+    chosen, alphas = [], []
+    for _ in range(rounds):
+        errs = [_np_best_stump(f[:, j], y, w) for j in range(f.shape[1])]
+        j = int(np.argmin([e[0] for e in errs]))
+        _, tau, pol = errs[j]
+        miss = (pol * (f[:, j] - tau) > 0).astype(float) != y
+        t = ~source
+        eps = float((w[t] * miss[t]).sum() / w[t].sum())
+        if eps >= 0.5 - 1e-12:  # (1/2 to float rounding: a stump that repeats the last one's target misses)
+            w = np.where(source, w * beta, w)
+        else:
+            w = w * np.where(source, 2 * (1 - eps) * np.where(miss, beta, 1.0), np.where(miss, (1 - eps) / eps, 1.0))
+            chosen.append(j)
+            alphas.append(0.5 * math.log((1 - eps) / eps))
+        w = w / w.sum()
+    return chosen, alphas
+
+
+def test_source_positives_boost_as_the_numpy_dynamic_tradaboost_reference() -> None:
+    pos, neg = toy_patches(20, 30, seed=3)
+    src = toy_patches(12, 12, seed=8)
+    added = torch.cat([src[0][:6], src[1][:6]])  # half object-like, half background-like "synthetic" positives
+    det = train_adaboost(torch.cat([pos, added]), neg, n_rounds=6, candidates=40, step=8, seed=1, source_positives=12)
+    rects, orients = exhaustive_candidates(40, 4, step=8, min_size=4)
+    pick = torch.randperm(len(rects), generator=torch.Generator().manual_seed(1))[:40].sort().values
+    f = edge_orientation_energy(torch.cat([pos, added, neg]).double(), rects[pick], orients[pick]).numpy()
+    y = np.r_[np.ones(32), np.zeros(30)]
+    source = np.r_[np.zeros(20), np.ones(12), np.zeros(30)].astype(bool)
+    chosen, alphas = _np_tradaboost(f, y, source, 6)
+    assert len(chosen) >= 3
+    assert det.learners.rects.tolist() == rects[pick][chosen].tolist()
+    np.testing.assert_allclose(det.alphas.numpy(), alphas, rtol=1e-4)
+    # 0 source positives: plain AdaBoost
+    a = train_adaboost(pos, neg, n_rounds=5, candidates=40, seed=2, source_positives=0)
+    b = train_adaboost(pos, neg, n_rounds=5, candidates=40, seed=2)
+    assert a.learners.rects.tolist() == b.learners.rects.tolist()
+    torch.testing.assert_close(a.alphas, b.alphas)
+    for bad in (-1, 20, 2.5, True):  # all positives from the source, or not a count
+        with pytest.raises(ValueError, match="source_positives"):
+            train_adaboost(pos, neg, n_rounds=2, candidates=10, source_positives=bad)
+
+
+def test_source_positives_that_look_like_background_cost_less_with_the_transfer_rule() -> None:
+    """Added "positives" that are background patches pull plain AdaBoost's stumps off the objects; the transfer rule
+    measures α on the real samples and lets those patches lose weight (held-out ROC-AUC from scipy's U statistic)."""
+    from scipy.stats import mannwhitneyu
+
+    pos, neg = toy_patches(60, 120, seed=2)
+    bad = toy_patches(10, 120, seed=5)[1]
+    test_pos, test_neg = toy_patches(200, 400, seed=7)
+
+    def auc(det: AdaBoostDetector) -> float:
+        s1, s0 = det.score_patches(test_pos).numpy(), det.score_patches(test_neg).numpy()
+        return float(mannwhitneyu(s1, s0).statistic) / (len(s1) * len(s0))
+
+    plain = auc(train_adaboost(torch.cat([pos, bad]), neg, n_rounds=40, candidates=300, seed=0))
+    transfer = auc(train_adaboost(torch.cat([pos, bad]), neg, n_rounds=40, candidates=300, seed=0,
+                                  source_positives=len(bad)))
+    clean = auc(train_adaboost(pos, neg, n_rounds=40, candidates=300, seed=0))
+    assert plain < clean - 0.1  # measured 0.837 against 0.995
+    assert transfer > plain + 0.1 and transfer > clean - 0.02  # measured 0.993
 
 
 @pytest.fixture(scope="module")
@@ -286,3 +356,38 @@ def test_gradient_level_is_the_median_of_the_patches_mean_magnitude() -> None:
     gx = (a[:, 1:-1, 2:] - a[:, 1:-1, :-2]) / 2
     gy = (a[:, 2:, 1:-1] - a[:, :-2, 1:-1]) / 2
     assert gradient_level(x) == pytest.approx(float(np.median(np.sqrt(gx**2 + gy**2).mean((1, 2)))), rel=1e-6)
+
+
+def test_transfer_update_against_the_hand_computed_factors() -> None:
+    rng = np.random.default_rng(3)
+    w = rng.uniform(0.1, 1.0, 10)
+    miss = rng.uniform(size=10) < 0.4
+    source = np.arange(10) >= 6
+    eps, beta = 0.2, 0.7
+    ref = w * np.where(source, 2 * 0.8 * np.where(miss, 0.7, 1.0), np.where(miss, 4.0, 1.0))
+    out = transfer_update(torch.from_numpy(w), torch.from_numpy(miss), torch.from_numpy(source), eps, beta)
+    np.testing.assert_allclose(out.numpy(), ref / ref.sum(), rtol=1e-12)
+
+
+def test_a_stump_that_fails_the_target_is_skipped_and_the_source_weights_shrink(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Many source positives choose a stump that only they pass: once the target weights are balanced its target
+    error reaches 1/2, it is not kept, and the source weights shrink until a stump of the target's is chosen (the
+    numpy reference on the same hand-made feature matrix; without the shrinking the same stump is chosen forever)."""
+    import synthaug.detectors.adaboost as ada
+
+    n_real, n_src, n_neg = 4, 40, 20
+    y = np.r_[np.ones(n_real + n_src), np.zeros(n_neg)]
+    source = np.r_[np.zeros(n_real), np.ones(n_src), np.zeros(n_neg)].astype(bool)
+    rng = np.random.default_rng(0)
+    f = np.stack([source.astype(float),                                        # passes the source positives only
+                  np.r_[np.ones(n_real), np.zeros(n_src), np.ones(2), np.zeros(n_neg - 2)],  # real + 2 negatives
+                  rng.uniform(size=len(y))], 1)
+    monkeypatch.setattr(ada, "_features_chunked", lambda *a, **k: torch.from_numpy(f))
+    pos, neg = toy_patches(n_real + n_src, n_neg, seed=1)
+    det = train_adaboost(pos, neg, n_rounds=6, candidates=3, seed=0, source_positives=n_src)
+    chosen, alphas = _np_tradaboost(f, y, source, 6)
+    assert len(chosen) < 6  # the reference skipped a round
+    rects, orients = exhaustive_candidates(40, 4, step=4, min_size=4)
+    pick = torch.randperm(len(rects), generator=torch.Generator().manual_seed(0))[:3].sort().values
+    assert det.learners.rects.tolist() == rects[pick][chosen].tolist()
+    np.testing.assert_allclose(det.alphas.numpy(), alphas, rtol=1e-4)

@@ -430,7 +430,7 @@ def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(caps
 
     base = ident(box_model="ridge")
     later = ("mining_select", "mining_patience", "box_model", "hog_kmeans_restarts", "cnn_finetune_epochs",
-             "mining_frame_scale", "ada_energy_floor")
+             "mining_frame_scale", "ada_energy_floor", "ada_transfer")
     assert base["options"] == {k: v for k, v in dataclasses.asdict(TrainOptions(ada_rounds=100)).items() if k not in later}
     assert ident(mining_select="fp", mining_patience=0, box_model="ridge") == base
     if R.TRAINING_VERSION == 6:  # the key computed before the three options existed (same protocol, paths, condition)
@@ -501,6 +501,21 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
     cnn = R.Condition("cnn / 12 seeds + perturbed", "cnn", seed_count=12, perturb_copies=2)
     assert cnn_key(dataclasses.replace(default, cnn_finetune_epochs=3)) != cnn_key(default)
     assert key(dataclasses.replace(default, cnn_finetune_epochs=3)) == key(default)
+    # AdaBoost's transfer rule: in AdaBoost's keys only where positives are added (real only: the same training);
+    # the flag reaches the options
+    ada = R.Condition("adaboost / 12 seeds", "adaboost", seed_count=12)
+
+    def ada_key(o, c):
+        return cell_key(R.ProtocolRunner(proto, "drone", paths, options=o, log=lambda m: None).identity(c, 0))
+
+    on = dataclasses.replace(default, ada_transfer=True)
+    assert ada_key(on, ada) == ada_key(default, ada)
+    ada_syn = R.Condition("adaboost / 12 seeds + 20x synthetic", "adaboost", seed_count=12, params="p.json",
+                          synthetic_ratio=20)
+    assert ada_key(on, ada_syn) != ada_key(default, ada_syn)
+    assert cnn_key(on) == cnn_key(default)
+    assert R.train_options(R.build_parser().parse_args(["synthetic", "--ada-transfer", "--out", "x"])).ada_transfer
+    assert not R.train_options(R.build_parser().parse_args(["synthetic", "--out", "x"])).ada_transfer
     for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"], ["--mining-stride", "0"], ["--cnn-finetune-epochs", "-1"]):
         with pytest.raises(SystemExit) as e:
             R.build_parser().parse_args(["learning-curve", *bad, "--out", "x"])

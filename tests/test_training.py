@@ -310,7 +310,7 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
     from dataclasses import asdict
 
     old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items()
-           if k not in ("mining_select", "mining_patience", "mining_frame_scale", "ada_energy_floor")}
+           if k not in ("mining_select", "mining_patience", "mining_frame_scale", "ada_energy_floor", "ada_transfer")}
     not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
     only_hog = {k: v for k, v in old.items() if k != "cnn_finetune_epochs"}  # the CNN's fine-tuning: the CNN's keys
     # the keys of before the family defaults; no kind keeps every family-only field (AdaBoost's floor at its default)
@@ -440,7 +440,8 @@ def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> 
 
     seen = []
     monkeypatch.setattr(ab, "train_adaboost",
-                        lambda pos, neg, n_rounds, candidates, seed, positive_weights=None, energy_floor=0.0:
+                        lambda pos, neg, n_rounds, candidates, seed, positive_weights=None, energy_floor=0.0,
+                               source_positives=0:
                         seen.append(n_rounds) or 1 / 0)
     from synthaug.detectors.toy import toy_patches
 
@@ -645,3 +646,33 @@ def test_split_by_video_deterministic_any_numbering(videos: Path, tmp_path: Path
 def test_train_options_refuse_bad_values_naming_the_field(field: str, value: int) -> None:
     with pytest.raises(ValueError, match=field):
         TrainOptions(**{field: value})
+
+
+def test_ada_transfer_makes_the_added_positives_adaboosts_source(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``TrainOptions.ada_transfer``: the positives after the real ones reach ``train_adaboost`` as its source
+    positives; without a real count, with only real positives or when off, none do; AdaBoost's keys carry it when
+    set, no other family's."""
+    import synthaug.detectors.adaboost as ada
+    from synthaug.detectors.toy import toy_patches
+
+    seen: list[int] = []
+    real_train = ada.train_adaboost
+
+    def spy(*a, **k):
+        seen.append(k.get("source_positives", 0))
+        return real_train(*a, **k)
+
+    monkeypatch.setattr(ada, "train_adaboost", spy)
+    pos, neg = toy_patches(30, 40, seed=2)
+    small = TrainOptions(ada_rounds=6, ada_candidates=60)
+    on = replace(small, ada_transfer=True)
+    train_detector("adaboost", pos, neg, 0, options=on, real_positives=20)
+    train_detector("adaboost", pos, neg, 0, options=on)                      # no real count: all real
+    train_detector("adaboost", pos, neg, 0, options=on, real_positives=30)   # nothing added
+    train_detector("adaboost", pos, neg, 0, options=small, real_positives=20)  # off
+    assert seen == [10, 0, 0, 0]
+    assert TrainOptions(ada_transfer=True).key_fields("adaboost")["ada_transfer"] is True
+    assert "ada_transfer" not in TrainOptions().key_fields("adaboost")  # the cells before it
+    assert "ada_transfer" not in TrainOptions(ada_transfer=True).key_fields("hog")
+    with pytest.raises(ValueError, match="ada_transfer"):
+        TrainOptions(ada_transfer=1)

@@ -201,6 +201,7 @@ def train_adaboost(
     cascade_margin: float = 0.3,
     positive_weights: Tensor | None = None,
     energy_floor: float = 0.0,
+    source_positives: int = 0,
 ) -> "AdaBoostDetector":
     """Train discrete AdaBoost on Levi–Weiss stumps.
 
@@ -231,6 +232,16 @@ def train_adaboost(
         energy_floor: the stumps' energy floor per pixel (``WeakLearners.floor``,
             :func:`~synthaug.detectors.weak_learners.edge_orientation_energy`): rectangles whose gradients are at
             the floor's level score low in every orientation. 0: the paper's energy.
+        source_positives: the last this many ``positives`` come from another distribution than the images the
+            detector will see (synthetic, perturbed, ...), the rest of the set (the first positives and every
+            negative) from the target one. 0: plain AdaBoost. Otherwise the rounds follow Dynamic-TrAdaBoost
+            (Dai et al., "Boosting for Transfer Learning", ICML 2007, with the weight correction of Al-Stouhi and
+            Reddy, ECML-PKDD 2011; :func:`transfer_update`): each stump is still chosen on all weighted samples,
+            but its error and α are measured on the target samples only, and a source positive the stump gets
+            wrong *loses* weight (β = 1 / (1 + √(2 ln n_src / T))) instead of gaining it, so the added positives
+            that look least like the target ones stop steering the later stumps. A stump whose target error is
+            ≥ 1/2 is not kept and every source sample's weight is multiplied by β (the source positives steer the
+            choice away from the target ones).
 
     Returns:
         A trained :class:`AdaBoostDetector`.
@@ -269,6 +280,13 @@ def train_adaboost(
     if positive_weights is not None:
         pw = check_weights(positive_weights, n_pos, flatten=True)
         w[:n_pos] = 0.5 * pw / pw.sum()
+    if isinstance(source_positives, bool) or int(source_positives) != source_positives \
+            or not 0 <= source_positives < n_pos:
+        raise ValueError(f"source_positives must be an integer in [0, {n_pos}) (some positives must be target ones), "
+                         f"got {source_positives!r}")
+    source = torch.zeros(len(labels), dtype=torch.bool)
+    source[n_pos - int(source_positives): n_pos] = True
+    beta_src = 1.0 / (1.0 + math.sqrt(2.0 * math.log(source_positives) / n_rounds)) if source_positives > 1 else 1.0
 
     chosen: list[int] = []
     taus: list[float] = []
@@ -279,13 +297,27 @@ def train_adaboost(
         k, tau_k, pol_k, _ = search.best(w)
         # the threshold is a float32 midpoint; re-measure the chosen stump's error exactly
         h = ((features[:, k] - tau_k) * pol_k > 0).double() * 2 - 1
-        e = float((w * (h != y_pm).double()).sum() / w.sum())
+        miss = h != y_pm
+        if source_positives:
+            e = float((w[~source] * miss[~source].double()).sum() / w[~source].sum())
+        else:
+            e = float((w * miss.double()).sum() / w.sum())
         if e >= 0.5 - 1e-12:
-            break
+            if not source_positives:
+                break
+            # the stump fits the source positives but not the target samples: it is not kept, and every source
+            # sample loses weight (x β), the target weights stay, so the choice is soon the target's (without this,
+            # 20 synthetic positives per real one chose the same skipped stump for every remaining round)
+            w = torch.where(source, w * beta_src, w)
+            w = w / w.sum()
+            continue
         e_c = min(max(e, 1e-10), 1 - 1e-10)
         alpha = 0.5 * math.log((1 - e_c) / e_c)
-        w = w * torch.exp(-alpha * y_pm * h)
-        w = w / w.sum()
+        if source_positives:
+            w = transfer_update(w, miss, source, e_c, beta_src)
+        else:
+            w = w * torch.exp(-alpha * y_pm * h)
+            w = w / w.sum()
         chosen.append(k)
         taus.append(tau_k)
         pols.append(pol_k)
@@ -300,6 +332,34 @@ def train_adaboost(
     det = AdaBoostDetector(learners, stride=stride, stage_size=stage_size)
     det.calibrate_cascade(positives, quantile=cascade_quantile, margin=cascade_margin)
     return det
+
+
+def transfer_update(w: Tensor, miss: Tensor, source: Tensor, error: float, beta: float) -> Tensor:
+    """One round's sample reweighting of Dynamic-TrAdaBoost (the ``source_positives`` rule of :func:`train_adaboost`).
+
+    Target samples: a miss is multiplied by (1 - ε) / ε (AdaBoost's update, up to the normalisation). Source
+    samples: a miss is multiplied by β < 1, and every source sample by the correction C = 2 (1 - ε) that keeps
+    the source weights from draining only because the target misses grew (Al-Stouhi and Reddy, 2011). The
+    result is normalised to sum 1.
+
+    Args:
+        w: ``(N,)`` current weights.
+        miss: ``(N,)`` bool, the stump got the sample wrong.
+        source: ``(N,)`` bool, the sample comes from the source (added) distribution.
+        error: ε, the stump's weighted error on the target samples, in (0, 0.5).
+        beta: β of the source misses, in (0, 1].
+
+    Example:
+        >>> w = transfer_update(torch.full((4,), 0.25, dtype=torch.float64), torch.tensor([True, False, True, False]),
+        ...                     torch.tensor([False, False, True, True]), 0.25, 0.5)
+        >>> [round(v, 4) for v in (w * 16).tolist()]  # target miss x3, target hit x1, source x1.5 x (0.5 | 1)
+        [7.68, 2.56, 1.92, 3.84]
+    """
+    miss_d = miss.double()
+    target_factor = torch.pow(torch.tensor((1.0 - error) / error, dtype=torch.float64), miss_d)
+    source_factor = 2.0 * (1.0 - error) * torch.pow(torch.tensor(beta, dtype=torch.float64), miss_d)
+    w = w * torch.where(source, source_factor, target_factor)
+    return w / w.sum()
 
 
 def _features_chunked(x: Tensor, rects: Tensor, orients: Tensor, n_bins: int, eps: float, floor: float = 0.0,

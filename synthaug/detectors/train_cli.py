@@ -152,6 +152,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--ada-energy-floor", type=nonneg_float, default=d["ada_energy_floor"],
                         help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
                              "gradient level (0: the paper's energy)")
+    parser.add_argument("--ada-transfer", action="store_true",
+                        help="AdaBoost: train as Dynamic-TrAdaBoost, the added positives (synthetic, perturbed, ...) as "
+                             "the source distribution: their misses lose weight, alpha is measured on the real positives "
+                             "and the negatives (used only with added positives)")
     parser.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
                         default=d["mining_frame_scale"],
                         help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] (per frame, from "
@@ -211,7 +215,7 @@ def main(args: argparse.Namespace) -> int:
                                mining_select=args.mining_select, mining_patience=args.mining_patience,
                                val_stride=args.val_frame_stride, box_model=args.box_model, scales=None if args.scales is None else tuple(args.scales),
                                mining_frame_scale=tuple(args.mining_frame_scale),
-                               ada_energy_floor=args.ada_energy_floor)
+                               ada_energy_floor=args.ada_energy_floor, ada_transfer=args.ada_transfer)
     except ValueError as e:
         return _err(str(e))
 

@@ -88,7 +88,7 @@ unused by HOG and the CNN; it is 100 there so that their cache keys stay those o
 CNN_FINETUNE_LR_SCALE: float = 0.1
 """The CNN's fine-tuning learning rate as a share of its training rate (``TrainOptions.cnn_finetune_epochs``)."""
 FAMILY_ONLY_LATER_FIELDS: dict[str, str] = {"hog_kmeans_restarts": "hog", "cnn_finetune_epochs": "cnn",
-                                             "ada_energy_floor": "adaboost"}
+                                             "ada_energy_floor": "adaboost", "ada_transfer": "adaboost"}
 """Later :class:`TrainOptions` fields that change only one family's training (field -> family): the other
 families' cache keys leave them out whatever their value (:meth:`TrainOptions.key_fields`)."""
 
@@ -119,6 +119,11 @@ class TrainOptions:
             +0.307] (x2 keeps 0.69 of x1 instead of 0.37); x0.75 +0.054 [+0.013, +0.098]. Without it the stumps
             score faint, smooth structure (sky and cloud texture, most of all on upsampled frames) like a drone's
             edges: the ranked false positives at x2 were mostly windows of the finest levels.
+        ada_transfer: train AdaBoost as Dynamic-TrAdaBoost with the added positives (synthetic, perturbed, ...) as
+            the source distribution (``source_positives`` of :func:`~synthaug.detectors.adaboost.train_adaboost`):
+            α is measured on the real positives and the negatives only, and an added positive the stumps keep
+            getting wrong loses weight instead of gaining it. Used only when the caller says which positives are
+            real (``real_positives`` of :func:`train_with_mining`) and some are not. False: plain AdaBoost.
         cnn_epochs: passes over the training patches (each mirrored or not;
             ``PatchDetectorModule`` under ``lightning.Trainer``).
         cnn_batch_size: mini-batch size.
@@ -205,6 +210,7 @@ class TrainOptions:
     ada_rounds: int | None = None
     ada_candidates: int = 2000
     ada_energy_floor: float = 1.0
+    ada_transfer: bool = False
     cnn_epochs: int = 12
     cnn_batch_size: int = 128
     cnn_max_steps: int = 1200
@@ -231,7 +237,7 @@ class TrainOptions:
     LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
                                                            ("box_model", "ridge"), ("hog_kmeans_restarts", 1),
                                                            ("cnn_finetune_epochs", 0), ("mining_frame_scale", (1.0, 1.0)),
-                                                           ("ada_energy_floor", 0.0))
+                                                           ("ada_energy_floor", 0.0), ("ada_transfer", False))
     """Fields added after cells were cached, with the value at which the training is the one before them
     (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys;
     nor are ``hog_kmeans_restarts``' default, 10, and ``cnn_finetune_epochs``' default, 4, which only HOG's and the
@@ -261,7 +267,7 @@ class TrainOptions:
         Example:
             >>> TrainOptions().key_fields("hog") == {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items()
             ...                                      if k not in ("mining_select", "mining_patience", "cnn_finetune_epochs",
-            ...                                                   "mining_frame_scale", "ada_energy_floor")}
+            ...                                                   "mining_frame_scale", "ada_energy_floor", "ada_transfer")}
             True
             >>> TrainOptions().key_fields("cnn")["cnn_finetune_epochs"]  # the CNN's fine-tuning is in its keys only
             4
@@ -293,6 +299,8 @@ class TrainOptions:
         if isinstance(self.ada_energy_floor, bool) or not (float(self.ada_energy_floor) >= 0
                                                            and math.isfinite(float(self.ada_energy_floor))):
             raise ValueError(f"ada_energy_floor must be a finite number >= 0, got {self.ada_energy_floor!r}")
+        if not isinstance(self.ada_transfer, bool):
+            raise ValueError(f"ada_transfer must be a bool, got {self.ada_transfer!r}")
         if not 0 <= int(self.cnn_shift) < 20:
             raise ValueError(f"cnn_shift must be in [0, 20) pixels, got {self.cnn_shift}")
         if not 0 < self.val_target_recall <= 1 or not 0 < self.val_iou <= 1:
@@ -378,8 +386,9 @@ def _fit_once(
             from synthaug.detectors.adaboost import gradient_level
 
             floor = options.ada_energy_floor * gradient_level(negatives)
+        source = len(positives) - n_real if options.ada_transfer and 0 < n_real < len(positives) else 0
         det = train_adaboost(positives, negatives, n_rounds=options.ada_rounds, candidates=options.ada_candidates, seed=seed,
-                             positive_weights=positive_weights, energy_floor=floor)
+                             positive_weights=positive_weights, energy_floor=floor, source_positives=source)
     else:
         # the one CNN training loop: PatchDetectorModule + PatchDataModule.from_tensors under a CPU lightning.Trainer
         from synthaug.detectors.lightning_module import fit_patch_detector

@@ -248,8 +248,9 @@ class ProtocolRunner:
             path = Path(condition.params.format(seed=seed))
             cond["params_sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()[:16] if path.is_file() else None
         options = self.options.key_fields(condition.kind)
-        if not condition.adds_positives():  # the CNN fine-tunes on the real positives after the added ones: nothing
-            options.pop("cnn_finetune_epochs", None)  # to do without them, the same training and the same cell
+        if not condition.adds_positives():  # the CNN's fine-tuning on the real positives and AdaBoost's transfer
+            options.pop("cnn_finetune_epochs", None)  # rule act on added positives only: without them, the same
+            options.pop("ada_transfer", None)  # training and the same cell
         return {"what": "protocol_cell", "protocol": self.protocol.fingerprint(), "class": self.class_name,
                 "condition": cond, "seed": int(seed), "options": options,
                 "scales": None if self.scales is None else list(self.scales), "scored_scales": list(self.scales_scored()),
@@ -715,6 +716,10 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--ada-energy-floor", type=nonneg_float, default=TrainOptions.ada_energy_floor,
                    help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
                         "gradient level (0: the paper's energy; part of AdaBoost's cell keys otherwise)")
+    q.add_argument("--ada-transfer", action="store_true",
+                   help="AdaBoost: train as Dynamic-TrAdaBoost, the added positives (synthetic, perturbed, ...) as the "
+                        "source distribution (their misses lose weight; alpha measured on the real positives and the "
+                        "negatives); part of AdaBoost's cell keys when set")
     q.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
                    default=TrainOptions.mining_frame_scale,
                    help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] before the pyramid scans "
@@ -799,7 +804,8 @@ def train_options(args: argparse.Namespace) -> TrainOptions:
                                mining_stride=args.mining_stride,
                                cnn_shift=args.cnn_shift, mining_select=args.mining_select,
                                mining_patience=args.mining_patience, box_model=args.box_model,
-                               mining_frame_scale=tuple(args.mining_frame_scale), ada_energy_floor=args.ada_energy_floor)
+                               mining_frame_scale=tuple(args.mining_frame_scale), ada_energy_floor=args.ada_energy_floor,
+                               ada_transfer=args.ada_transfer)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
