@@ -10,3 +10,6 @@ D=results/synthetic/drone_v2_adaboost_transfer
   results/synthetic/run_100.sh adaboost $D/transfer_s2 test 2 --ada-transfer ) &
 ( results/synthetic/run_100.sh adaboost $D/transfer_s1 test 1 --ada-transfer ) &
 wait
+# seeds 3 and 4 (real only and + synthetic, one process each), added after seeds 0-2 were read:
+#   results/synthetic/run_100.sh adaboost $D/transfer_s3 test 3 --ada-transfer &
+#   results/synthetic/run_100.sh adaboost $D/transfer_s4 test 4 --ada-transfer
