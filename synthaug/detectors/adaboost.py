@@ -286,7 +286,8 @@ def train_adaboost(
                          f"got {source_positives!r}")
     source = torch.zeros(len(labels), dtype=torch.bool)
     source[n_pos - int(source_positives): n_pos] = True
-    beta_src = 1.0 / (1.0 + math.sqrt(2.0 * math.log(source_positives) / n_rounds)) if source_positives > 1 else 1.0
+    target = ~source  # every sample in plain AdaBoost
+    beta_src = 1.0 / (1.0 + math.sqrt(2.0 * math.log(source_positives) / n_rounds)) if source_positives else 1.0
 
     chosen: list[int] = []
     taus: list[float] = []
@@ -298,10 +299,7 @@ def train_adaboost(
         # the threshold is a float32 midpoint; re-measure the chosen stump's error exactly
         h = ((features[:, k] - tau_k) * pol_k > 0).double() * 2 - 1
         miss = h != y_pm
-        if source_positives:
-            e = float((w[~source] * miss[~source].double()).sum() / w[~source].sum())
-        else:
-            e = float((w * miss.double()).sum() / w.sum())
+        e = float((w[target] * miss[target].double()).sum() / w[target].sum())
         if e >= 0.5 - 1e-12:
             if not source_positives:
                 break
