@@ -532,6 +532,12 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
     syn = [c for c in made if c.synthetic_ratio]
     assert [(c.capture_sampling, c.effects_off) for c in syn] == [
         ("seed", ()), ("seed", ("motion_blur",)), ("uniform", ()), ("uniform", ("motion_blur",))]
+    made.clear()  # several effects left out in one condition
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=100, synthetic_ratios=[20], params="f{seed}.json",
+                           effects_off=(("boundary_blur", "motion_blur"),))
+    both = [c for c in made if c.synthetic_ratio]
+    assert [c.effects_off for c in both] == [("boundary_blur", "motion_blur")]
+    assert both[0].name == "hog / 100 seeds + 20x synthetic (f{seed}, without boundary_blur and motion_blur)"
     assert [c.name for c in syn][1:3] == ["hog / 100 seeds + 20x synthetic (f{seed}, without motion_blur)",
                                           "hog / 100 seeds + 20x synthetic (f{seed}, capture uniform)"]
     keys = [c.identity() for c in syn]
@@ -545,7 +551,10 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
     assert args.capture_sampling == ["seed", "uniform"] and args.effects_off == ["none", "object_noise"]
     plain = R.build_parser().parse_args(["synthetic", "--out", "x"])
     assert plain.capture_sampling == ["seed"] and plain.effects_off == ["none"]
-    for bad in (["--effects-off", "speckle"], ["--capture-sampling", "fitted"]):
+    joined = R.build_parser().parse_args(["synthetic", "--effects-off", "motion_blur+boundary_blur", "--out", "x"])
+    assert joined.effects_off == ["boundary_blur+motion_blur"]  # one spelling whatever the order
+    for bad in (["--effects-off", "speckle"], ["--capture-sampling", "fitted"], ["--effects-off", "motion_blur+speckle"],
+                ["--effects-off", "motion_blur+motion_blur"]):
         with pytest.raises(SystemExit) as e:
             R.build_parser().parse_args(["synthetic", *bad, "--out", "x"])
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err

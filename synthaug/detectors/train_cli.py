@@ -75,6 +75,25 @@ def effect_name(name: str) -> str:
     return name
 
 
+def add_adaboost_options(parser: argparse.ArgumentParser, *, keyed: bool = False) -> None:
+    """AdaBoost's training options, one declaration for ``synthaug train`` and the evaluation runner.
+
+    ``keyed``: say in the help when an option becomes part of a runner cell's key.
+    """
+    from synthaug._checks import nonneg_float
+    from synthaug.detectors.training import TrainOptions
+
+    parser.add_argument("--ada-energy-floor", type=nonneg_float, default=TrainOptions.ada_energy_floor,
+                        help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
+                             "gradient level (0: the paper's energy" + ("; part of AdaBoost's cell keys otherwise)"
+                                                                        if keyed else ")"))
+    parser.add_argument("--ada-transfer", action="store_true",
+                        help="AdaBoost: train as Dynamic-TrAdaBoost, the added positives (synthetic, perturbed, ...) as "
+                             "the source distribution: their misses lose weight, alpha is measured on the real positives "
+                             "and the negatives (used only with added positives" +
+                             ("; part of AdaBoost's cell keys when set)" if keyed else ")"))
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug._checks import add_option, dataclass_defaults, nonneg_float, positive_float
     from synthaug.data.captures import CAPTURE_SAMPLERS
@@ -149,13 +168,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mining-patience", type=int, default=d["mining_patience"],
                         help="mining rounds without a new best still run before stopping (0: stop at the first); "
                              "default: the family's (0 for hog and cnn, 1 for adaboost)")
-    parser.add_argument("--ada-energy-floor", type=nonneg_float, default=d["ada_energy_floor"],
-                        help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
-                             "gradient level (0: the paper's energy)")
-    parser.add_argument("--ada-transfer", action="store_true",
-                        help="AdaBoost: train as Dynamic-TrAdaBoost, the added positives (synthetic, perturbed, ...) as "
-                             "the source distribution: their misses lose weight, alpha is measured on the real positives "
-                             "and the negatives (used only with added positives)")
+    add_adaboost_options(parser)
     parser.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
                         default=d["mining_frame_scale"],
                         help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] (per frame, from "

@@ -40,7 +40,7 @@ import numpy as np
 
 from synthaug._checks import add_option, int_at_least, nonneg_float, positive_float
 from synthaug.data.captures import CAPTURE_SAMPLERS
-from synthaug.detectors.train_cli import add_budget_options, budget_options, effect_name
+from synthaug.detectors.train_cli import add_adaboost_options, add_budget_options, budget_options, effect_name
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import AddedPositives, train_from_videos
 from synthaug.evaluate.cells import CellCache
@@ -591,7 +591,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          faded_contrast: tuple[float, float] | None = None,
                          shape_variation: Sequence[float] = (0.0,),
                          capture_sampling: Sequence[str] = ("seed",),
-                         effects_off: Sequence[str | None] = (None,),
+                         effects_off: Sequence[str | Sequence[str] | None] = (None,),
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -613,12 +613,13 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``shape_variation``: each synthetic ratio once per value (0: the mesh alone; > 0: shapes varied around it).
     ``capture_sampling``: each synthetic ratio once per way of drawing the capture parameters (``"seed"``: the
     paper's, one seed's fitted row; ``"uniform"``: between the fitted extremes, Fig. 10). ``effects_off``: each
-    synthetic ratio once per fitted effect left out (None: none; Fig. 9).
+    synthetic ratio once per entry: None (every effect), an effect's name, or several names left out together (Fig. 9).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
     """
     results: dict[str, dict[str, ProtocolResult]] = {}
+    offs = [() if off is None else (off,) if isinstance(off, str) else tuple(off) for off in effects_off]
     for kind in detectors:
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
@@ -631,12 +632,12 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{'' if ob is None else f', framed as the seeds ({ob})'}"
                             f"{'' if not sv else f', shapes varied {sv:g}'}"
                             f"{'' if cs == 'seed' else f', capture {cs}'}"
-                            f"{'' if off is None else f', without {off}'})", kind, seed_count=seed_count,
+                            f"{'' if not off else ', without ' + ' and '.join(off)})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
-                            shape_variation=float(sv), capture_sampling=cs, effects_off=() if off is None else (off,))
+                            shape_variation=float(sv), capture_sampling=cs, effects_off=off)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
-                  for cs in capture_sampling for off in effects_off]
+                  for cs in capture_sampling for off in offs]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -713,13 +714,7 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--mining-patience", type=int_at_least(0), default=TrainOptions.mining_patience,
                    help="mining rounds without a new best still run before stopping (0: stop at the first; default: "
                         "the family's, 0 for hog and cnn, 1 for adaboost); part of a cell's key only when not 0")
-    q.add_argument("--ada-energy-floor", type=nonneg_float, default=TrainOptions.ada_energy_floor,
-                   help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
-                        "gradient level (0: the paper's energy; part of AdaBoost's cell keys otherwise)")
-    q.add_argument("--ada-transfer", action="store_true",
-                   help="AdaBoost: train as Dynamic-TrAdaBoost, the added positives (synthetic, perturbed, ...) as the "
-                        "source distribution (their misses lose weight; alpha measured on the real positives and the "
-                        "negatives); part of AdaBoost's cell keys when set")
+    add_adaboost_options(q, keyed=True)
     q.add_argument("--mining-frame-scale", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
                    default=TrainOptions.mining_frame_scale,
                    help="resize every mined frame by a factor drawn log-uniformly in [LOW, HIGH] before the pyramid scans "
@@ -788,14 +783,20 @@ def build_parser() -> argparse.ArgumentParser:
                     help="how the synthetic positives' capture parameters are drawn, one condition per value: seed "
                          "(the paper: one seed's fitted row), uniform (each between its fitted extremes: Fig. 10), kde")
     sy.add_argument("--effects-off", nargs="+", default=["none"], metavar="EFFECT", type=_effect_or_none,
-                    help="fitted effects left out of the synthetic positives, one condition per effect (the paper's "
-                         "Fig. 9: boundary_blur, motion_blur, object_noise, material); none: every effect (default)")
+                    help="fitted effects left out of the synthetic positives, one condition per value (the paper's "
+                         "Fig. 9: boundary_blur, motion_blur, object_noise, material); a+b: both left out in one "
+                         "condition; none: every effect (default)")
     return p
 
 
 def _effect_or_none(name: str) -> str:
-    """``--effects-off`` values: ``none`` or a registered effect's name (:func:`effect_name`)."""
-    return name if name == "none" else effect_name(name)
+    """``--effects-off`` values: ``none``, a registered effect's name (:func:`effect_name`) or several joined by ``+``."""
+    if name == "none":
+        return name
+    names = [effect_name(n) for n in name.split("+")]
+    if len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(f"an effect named twice in {name!r}")
+    return "+".join(sorted(names))  # one spelling, one cell key
 
 
 def train_options(args: argparse.Namespace) -> TrainOptions:
@@ -843,7 +844,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              object_box=tuple(None if b == "none" else b for b in args.object_box),
                              shape_variation=tuple(args.shape_variation),
                              capture_sampling=tuple(args.capture_sampling),
-                             effects_off=tuple(None if e == "none" else e for e in args.effects_off), out=args.out)
+                             effects_off=tuple(None if e == "none" else tuple(e.split("+")) for e in args.effects_off), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
