@@ -538,6 +538,20 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
     both = [c for c in made if c.synthetic_ratio]
     assert [c.effects_off for c in both] == [("boundary_blur", "motion_blur")]
     assert both[0].name == "hog / 100 seeds + 20x synthetic (f{seed}, without boundary_blur and motion_blur)"
+    # the family's default (None): resolved into the key, so a CNN's default cell is the cell that names its blurs
+    # left out, and the CNN with every effect ((), "none") keeps the key its cells had before the default
+    made.clear()
+    R.synthetic_comparison(None, detectors=["cnn", "hog"], seed_count=100, synthetic_ratios=[20],
+                           params="f{seed}.json", effects_off=(None, (), ("boundary_blur", "motion_blur")))
+    fam = [c for c in made if c.synthetic_ratio]
+    blurs = ("boundary_blur", "motion_blur")
+    assert [(c.kind, c.effects_off) for c in fam] == [("cnn", blurs), ("cnn", ()), ("hog", ()), ("hog", blurs)]
+    cnn_default = R.Condition("x", "cnn", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0)
+    assert cnn_default.identity() == fam[0].identity() and cnn_default.effects_off == ("boundary_blur", "motion_blur")
+    assert "effects_off" not in fam[1].identity() and "effects_off" not in R.Condition("x", "cnn").identity()
+    assert fam[1].name == "cnn / 100 seeds + 20x synthetic (f{seed})"
+    none = R.build_parser().parse_args(["synthetic", "--effects-off", "none", "default", "--out", "x"])
+    assert none.effects_off == ["none", "default"]
     assert [c.name for c in syn][1:3] == ["hog / 100 seeds + 20x synthetic (f{seed}, without motion_blur)",
                                           "hog / 100 seeds + 20x synthetic (f{seed}, capture uniform)"]
     keys = [c.identity() for c in syn]
@@ -550,7 +564,8 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
                                         "object_noise", "--out", "x"])
     assert args.capture_sampling == ["seed", "uniform"] and args.effects_off == ["none", "object_noise"]
     plain = R.build_parser().parse_args(["synthetic", "--out", "x"])
-    assert plain.capture_sampling == ["seed"] and plain.effects_off == ["none"]
+    assert plain.capture_sampling == ["seed"] and plain.effects_off == ["default"]
+    assert R.build_parser().parse_args(["synthetic", "--out", "x"]).effects_off == ["default"]
     joined = R.build_parser().parse_args(["synthetic", "--effects-off", "motion_blur+boundary_blur", "--out", "x"])
     assert joined.effects_off == ["boundary_blur+motion_blur"]  # one spelling whatever the order
     for bad in (["--effects-off", "speckle"], ["--capture-sampling", "fitted"], ["--effects-off", "motion_blur+speckle"],

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import pytest
@@ -529,8 +530,35 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
     assert calls[-1] == (16, "seed", None)
     syn2 = json.loads(out2.with_suffix(".json").read_text())["synthetic"]
     assert "capture_sampling" not in syn2 and "effects_off" not in syn2
+    # the family's default (effects_off=None): the CNN's synthetic positives leave the fitted blurs out (only those
+    # the fit has), HOG and AdaBoost keep every effect, () keeps every effect for the CNN too
+    from synthaug.detectors.train_cli import _effects_off
+    from synthaug.detectors.video_training import FAMILY_EFFECTS_OFF, AddedPositives, TrainingInputError, _add_from_fit
+
+    assert FAMILY_EFFECTS_OFF == {"cnn": ("boundary_blur", "motion_blur")}
+    no_mb = ws["root"] / "fit8_no_motion_blur.json"
+    CaptureParams.sample(8, generator=torch.Generator().manual_seed(1),
+                         effects=["boundary_blur", "object_noise", "material"]).save(no_mb)
+
+    class _SeedSet(list):
+        path = seedset
+
+    for kind, off, fit_file, effects, recorded in (
+            ("cnn", None, fit, ["object_noise", "material"], ["boundary_blur", "motion_blur"]),
+            ("hog", None, fit, None, None), ("adaboost", None, fit, None, None), ("cnn", (), fit, None, None),
+            ("cnn", None, no_mb, ["object_noise", "material"], ["boundary_blur"])):
+        ts = SimpleNamespace(seedset=_SeedSet(range(8)), positives=torch.zeros(8, 1, 40, 40), info={})
+        info = _add_from_fit(ts, AddedPositives(params=fit_file, synthetic_ratio=1.0, effects_off=off), kind, seed=0,
+                             say=lambda m: None)
+        assert calls[-1] == (8, "seed", effects), (kind, off)
+        assert info.get("effects_off") == recorded and ts.positives.shape[0] == 16
+    ts = SimpleNamespace(seedset=_SeedSet(range(8)), positives=torch.zeros(8, 1, 40, 40), info={})  # no synthetic
+    assert "effects_off" not in _add_from_fit(ts, AddedPositives(params=fit, copy_paste_ratio=0.0), "cnn", seed=0,
+                                              say=lambda m: None)
+    assert _effects_off(None) is None and _effects_off(["none"]) == () and _effects_off(["material"]) == ("material",)
+    with pytest.raises(TrainingInputError, match="none"):
+        _effects_off(["none", "material"])
     # the dataclass refuses what the command line cannot give
-    from synthaug.detectors.video_training import AddedPositives
 
     with pytest.raises(ValueError, match="capture_sampling"):
         AddedPositives(capture_sampling="fitted")

@@ -75,6 +75,20 @@ def effect_name(name: str) -> str:
     return name
 
 
+def _effects_off(values: list[str] | None) -> tuple[str, ...] | None:
+    """``--effects-off`` as :class:`~synthaug.detectors.video_training.AddedPositives` takes it (None: the family's)."""
+    from synthaug.detectors.video_training import TrainingInputError
+
+    if values is None:
+        return None
+    if "none" in values:
+        if len(values) > 1:
+            raise TrainingInputError("--effects-off", f"'none' (every fitted effect) cannot be given with effect names, "
+                                                      f"got {' '.join(values)}")
+        return ()
+    return tuple(values)
+
+
 def add_adaboost_options(parser: argparse.ArgumentParser, *, keyed: bool = False) -> None:
     """AdaBoost's training options, one declaration for ``synthaug train`` and the evaluation runner.
 
@@ -133,9 +147,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--capture-sampling", choices=list(CAPTURE_SAMPLERS), default="seed",
                         help="how the synthetic positives' capture parameters are drawn: seed (the paper: one seed's "
                              "fitted row), uniform (each between its fitted extremes, the paper's Fig. 10) or kde")
-    parser.add_argument("--effects-off", nargs="+", default=[], metavar="EFFECT", type=effect_name,
+    parser.add_argument("--effects-off", nargs="+", default=None, metavar="EFFECT",
+                        type=lambda n: n if n == "none" else effect_name(n),
                         help="fitted effects left out of the synthetic positives (the paper's Fig. 9 ablation), e.g. "
-                             "motion_blur")
+                             "motion_blur; none: every fitted effect; default: the detector family's (the CNN leaves "
+                             "boundary_blur and motion_blur out, measured on the drone videos; HOG and AdaBoost none)")
     parser.add_argument("--perturb-copies", type=int, default=0,
                         help="perturbed copies (rotation, shift, mirror, blur, noise) of every real positive: the paper's baseline")
     parser.add_argument("--downscaled-copies", type=int, default=0,
@@ -244,7 +260,7 @@ def main(args: argparse.Namespace) -> int:
             added=AddedPositives(params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
                                  perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
                                  object_box=args.object_box, shape_variation=args.shape_variation,
-                                 capture_sampling=args.capture_sampling, effects_off=tuple(args.effects_off),
+                                 capture_sampling=args.capture_sampling, effects_off=_effects_off(args.effects_off),
                                  copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,
                                  faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast)),

@@ -42,7 +42,7 @@ from synthaug._checks import add_option, int_at_least, nonneg_float, positive_fl
 from synthaug.data.captures import CAPTURE_SAMPLERS
 from synthaug.detectors.train_cli import add_adaboost_options, add_budget_options, budget_options, effect_name
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
-from synthaug.detectors.video_training import AddedPositives, train_from_videos
+from synthaug.detectors.video_training import FAMILY_EFFECTS_OFF, AddedPositives, train_from_videos
 from synthaug.evaluate.cells import CellCache
 from synthaug.evaluate.matching import match_videos
 from synthaug.evaluate.patches import patch_eval_set, score_patch_set
@@ -103,7 +103,9 @@ class Condition:
             (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``shape_variation``).
         capture_sampling: ``"seed"`` (the paper) or how else the synthetic positives' capture parameters are drawn
             (``"uniform"``: between the fitted extremes, the paper's Fig. 10; ``"kde"``).
-        effects_off: fitted effects left out of the synthetic positives (the paper's Fig. 9).
+        effects_off: fitted effects left out of the synthetic positives (the paper's Fig. 9); ``()``: every effect;
+            None (the default): the family's (:data:`~synthaug.detectors.video_training.FAMILY_EFFECTS_OFF`), resolved
+            here so that a cell's key names what its training draws.
     """
 
     name: str
@@ -127,7 +129,13 @@ class Condition:
     positive_videos: int | None = None
     shape_variation: float = 0.0
     capture_sampling: str = "seed"
-    effects_off: tuple[str, ...] = ()
+    effects_off: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        off = self.effects_off
+        if off is None:
+            off = FAMILY_EFFECTS_OFF.get(self.kind, ()) if self.synthetic_ratio else ()
+        object.__setattr__(self, "effects_off", tuple(off))
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -613,14 +621,17 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``shape_variation``: each synthetic ratio once per value (0: the mesh alone; > 0: shapes varied around it).
     ``capture_sampling``: each synthetic ratio once per way of drawing the capture parameters (``"seed"``: the
     paper's, one seed's fitted row; ``"uniform"``: between the fitted extremes, Fig. 10). ``effects_off``: each
-    synthetic ratio once per entry: None (every effect), an effect's name, or several names left out together (Fig. 9).
+    synthetic ratio once per entry: None (the detector family's default, :data:`FAMILY_EFFECTS_OFF`), ``()`` (every
+    fitted effect), an effect's name, or several names left out together (Fig. 9).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
     """
     results: dict[str, dict[str, ProtocolResult]] = {}
-    offs = [() if off is None else (off,) if isinstance(off, str) else tuple(off) for off in effects_off]
     for kind in detectors:
+        offs = list(dict.fromkeys(  # one condition per capture set, however it was asked for
+            FAMILY_EFFECTS_OFF.get(kind, ()) if off is None else (off,) if isinstance(off, str) else tuple(off)
+            for off in effects_off))
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
@@ -782,16 +793,18 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--capture-sampling", nargs="+", choices=list(CAPTURE_SAMPLERS), default=["seed"],
                     help="how the synthetic positives' capture parameters are drawn, one condition per value: seed "
                          "(the paper: one seed's fitted row), uniform (each between its fitted extremes: Fig. 10), kde")
-    sy.add_argument("--effects-off", nargs="+", default=["none"], metavar="EFFECT", type=_effect_or_none,
+    sy.add_argument("--effects-off", nargs="+", default=["default"], metavar="EFFECT", type=_effect_or_none,
                     help="fitted effects left out of the synthetic positives, one condition per value (the paper's "
                          "Fig. 9: boundary_blur, motion_blur, object_noise, material); a+b: both left out in one "
-                         "condition; none: every effect (default)")
+                         "condition; none: every fitted effect; default: the detector family's (the CNN leaves "
+                         "boundary_blur and motion_blur out, the others none)")
     return p
 
 
 def _effect_or_none(name: str) -> str:
-    """``--effects-off`` values: ``none``, a registered effect's name (:func:`effect_name`) or several joined by ``+``."""
-    if name == "none":
+    """``--effects-off`` values: ``none``, ``default``, a registered effect's name (:func:`effect_name`) or several
+    joined by ``+``."""
+    if name in ("none", "default"):
         return name
     names = [effect_name(n) for n in name.split("+")]
     if len(set(names)) != len(names):
@@ -844,7 +857,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              object_box=tuple(None if b == "none" else b for b in args.object_box),
                              shape_variation=tuple(args.shape_variation),
                              capture_sampling=tuple(args.capture_sampling),
-                             effects_off=tuple(None if e == "none" else tuple(e.split("+")) for e in args.effects_off), out=args.out)
+                             effects_off=tuple(None if e == "default" else () if e == "none" else tuple(e.split("+"))
+                                               for e in args.effects_off), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 

@@ -12,3 +12,7 @@ for s in $1; do
     synthaug fit --seed-set data/runs/ingest_drone_seed${s}/seedsets/drone_100 --mesh quadcopter --distance cnn \
     --seed 0 --workers 1 --no-progress --out "$out"
 done
+# then the CNN cells (validation first, then test; the trained detectors are shared):
+#   R=results/synthetic/run_100.sh; P='data/runs/fits/drone_100_seed{seed}_cnn.json'
+#   $R cnn results/synthetic/cnn_dcnn/val val "0 1 2 3 4" --params "$P"
+#   $R cnn results/synthetic/cnn_dcnn/test test "0 1 2 3 4" --params "$P"
