@@ -442,3 +442,9 @@ def test_training_samples_are_the_detectors_synthetic_positives(tmp_path, pose_s
     if pose_sampling == "fitted" or object_box is not None:  # not the paper's uniform draw at the mesh's scale
         other, _ = training_samples(seeds, "quadcopter", fit, 6, seed=3)
         assert not torch.equal(x, other)
+    else:  # the effects left out (the CNN's default) and the capture sampling: the training's patches too
+        kept = ["object_noise", "material"]
+        y, _ = training_samples(seeds, "quadcopter", fit, 6, seed=3, effects=kept, capture_sampling="uniform")
+        torch.testing.assert_close(y, synthetic_positives(seeds, "quadcopter", fit, 6, seed=3, effects=kept,
+                                                          capture_sampling="uniform"))
+        assert not torch.equal(y, x)

@@ -44,6 +44,9 @@ def main() -> None:
     ap.add_argument("--shape-variation", type=float, nargs="+", default=[0.0],
                     help="the synthetic objects' shape variation (SyntheticObjectDataset's shape_variation), one "
                          "comparison each; 0: the mesh alone")
+    ap.add_argument("--effects-off", nargs="+", default=["none"],
+                    help="synthetic samples once per value: none (every fitted effect) or effects joined by + left out, "
+                         "e.g. boundary_blur+motion_blur (the CNN's default)")
     ap.add_argument("--fitted-renders", action="store_true",
                     help="also each fit's own renders S(Θ_i, B_i) (the fitted pose itself: no pose sampling)")
     ap.add_argument("--seed-set", default="data/runs/ingest_drone_seed{s}/seedsets/drone_100",
@@ -70,11 +73,17 @@ def main() -> None:
                 for ps in args.pose_sampling:
                     for box in args.object_box:
                         for sv in args.shape_variation:
-                            name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
-                                    + ("" if box == "none" else f"_box_{box}") + ("" if not sv else "_shapes_" + f"{sv:g}".replace(".", "p")))
-                            syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2, pose_sampling=ps,
-                                                         object_box=None if box == "none" else box,
-                                                         shape_variation=sv)
+                            for off in args.effects_off:
+                                gone = [] if off == "none" else off.split("+")
+                                name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
+                                        + ("" if box == "none" else f"_box_{box}")
+                                        + ("" if not sv else "_shapes_" + f"{sv:g}".replace(".", "p"))
+                                        + ("" if not gone else "_without_" + "_".join(gone)))
+                                effects = None if not gone else [
+                                    e for e in CaptureParams.load_with_extra(fit)[0].effects if e not in gone]
+                                syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2, pose_sampling=ps,
+                                                             object_box=None if box == "none" else box,
+                                                             shape_variation=sv, effects=effects)
                 if args.fitted_renders:
                     from synthaug.fit.render_fit import render_fitted
 

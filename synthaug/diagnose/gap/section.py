@@ -71,13 +71,15 @@ def gap_section(
 def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count: int, *,
                      seed: int = 0, pose_sampling: str = "uniform",
                      object_box: float | str | None = None,
-                     shape_variation: float = 0.0) -> tuple[Tensor, np.ndarray]:
+                     shape_variation: float = 0.0, effects: Sequence[str] | None = None,
+                     capture_sampling: str = "seed") -> tuple[Tensor, np.ndarray]:
     """``count`` synthetic training patches of a fit, and the seed each one comes from.
 
     The dataset of :func:`synthaug.detectors.training_sets.synthetic_positives` (same arguments, same patches:
     one seed's fitted parameters and background, a random pose — ``pose_sampling="fitted"``: around the seed's
-    fitted pose; ``object_box``: the objects' framing; ``shape_variation``: shapes varied around the mesh; as
-    :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes them), keeping each item's ``seed_index`` so the
+    fitted pose; ``object_box``: the objects' framing; ``shape_variation``: shapes varied around the mesh;
+    ``effects``: the effects drawn, None: every fitted one; ``capture_sampling``: how the capture parameters are drawn;
+    as :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes them), keeping each item's ``seed_index`` so the
     two-sample test can hold a seed's real and synthetic patches out together.
 
     Returns:
@@ -90,7 +92,9 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
     p = int(seedset.patches.shape[-1])
     ds = SyntheticObjectDataset(mesh, seedset, params=str(fit_file), length=count, patch_size=p,
                                 negative_fraction=0.0, seed=seed, seed_geometry="auto", pose_sampling=pose_sampling,
-                                object_box=object_box, shape_variation=shape_variation)
+                                object_box=object_box, shape_variation=shape_variation,
+                                effects=None if effects is None else list(effects),
+                                capture_sampling=capture_sampling)  # type: ignore[arg-type]
     items = ds.__getitems__(list(range(count)))
     patches = torch.stack([img for img, _ in items]).float().clamp(0, 1)
     return patches, np.array([int(t["seed_index"]) for _, t in items], dtype=np.int64)
