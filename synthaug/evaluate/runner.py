@@ -355,7 +355,10 @@ class ProtocolRunner:
                                  downscaled_copies=condition.downscaled_copies,
                                  faded_copies=condition.faded_copies, object_box=condition.object_box,
                                  faded_contrast=condition.faded_contrast, shape_variation=condition.shape_variation,
-                                 capture_sampling=condition.capture_sampling, effects_off=condition.effects_off),
+                                 capture_sampling=condition.capture_sampling,
+                                 # the family's own set goes as None: training keeps those the fit has
+                                 effects_off=None if condition.effects_off == FAMILY_EFFECTS_OFF.get(condition.kind, ())
+                                 else condition.effects_off),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
