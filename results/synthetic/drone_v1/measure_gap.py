@@ -69,7 +69,11 @@ def main() -> None:
         for dist in args.fits:
             fit = Path(args.fit.format(s=s, dist=dist))
             if fit.is_file():
-                CaptureParams.load_with_extra(fit)
+                fit_effects = CaptureParams.load_with_extra(fit)[0].effects
+                unknown = sorted({e for off in args.effects_off if off != "none" for e in off.split("+")}
+                                 - set(fit_effects))
+                if unknown:
+                    ap.error(f"--effects-off: {unknown} not among the effects of {fit} ({list(fit_effects)})")
                 for ps in args.pose_sampling:
                     for box in args.object_box:
                         for sv in args.shape_variation:
@@ -79,8 +83,7 @@ def main() -> None:
                                         + ("" if box == "none" else f"_box_{box}")
                                         + ("" if not sv else "_shapes_" + f"{sv:g}".replace(".", "p"))
                                         + ("" if not gone else "_without_" + "_".join(gone)))
-                                effects = None if not gone else [
-                                    e for e in CaptureParams.load_with_extra(fit)[0].effects if e not in gone]
+                                effects = None if not gone else [e for e in fit_effects if e not in gone]
                                 syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2, pose_sampling=ps,
                                                              object_box=None if box == "none" else box,
                                                              shape_variation=sv, effects=effects)
