@@ -115,3 +115,44 @@ def test_new_synthetic_poses_every_epoch(tmp_path, workers):
     dm.synthetic.set_epoch(1)
     replay = [dm.train_set[i][0] for i in range(len(dm.train_set))]
     assert _keys([torch.stack(replay)]) == k[1]
+
+
+def test_refit_with_network_is_fit_seedset_with_a_frozen_copy_of_the_network(tmp_path):
+    """The one d_CNN refit (the callback's and the mining rounds'): the same file as ``fit_seedset`` given the
+    network as the ``cnn`` distance, the given options kept but the distance, the caller's network untouched."""
+    from synthaug.detectors.cnn import PatchCNN
+    from synthaug.distances.cnn import CNNDistance
+    from synthaug.fit.config import FitConfig
+    from synthaug.fit.refit import refit_with_network
+    from synthaug.fit.run import fit_seedset
+
+    seeds = _seeds(tmp_path)
+    net = PatchCNN((4, 8, 8, 8), window=40, generator=torch.Generator().manual_seed(3)).train()
+    before = {k: v.clone() for k, v in net.state_dict().items()}
+    cfg = FitConfig(distance="hog", budget=30, step_deg=30.0, sprite_size=48, init="uniform", seed=5,
+                    effects=("boundary_blur", "object_noise"))
+    out = refit_with_network(net, seeds, "quadcopter", tmp_path / "refit.json", cfg)
+    assert net.training and all(p.requires_grad for p in net.parameters())  # the caller's network is not frozen
+    assert all(torch.equal(before[k], v) for k, v in net.state_dict().items())
+    ref = fit_seedset(seeds, "quadcopter", tmp_path / "direct.json",
+                      FitConfig(distance="cnn", budget=30, step_deg=30.0, sprite_size=48, init="uniform", seed=5,
+                                effects=("boundary_blur", "object_noise")),
+                      distance=CNNDistance(PatchCNN((4, 8, 8, 8), window=40,
+                                                    generator=torch.Generator().manual_seed(3))))
+    got, ref_doc = json.loads(out.read_text()), json.loads(ref.read_text())
+    assert got["rows"] == ref_doc["rows"]
+    assert got["metadata"]["config"] == ref_doc["metadata"]["config"]
+    assert got["metadata"]["config"]["distance"] == "cnn" and got["metadata"]["config"]["seed"] == 5
+    assert tuple(CaptureParams.load(out).effects) == ("boundary_blur", "object_noise")
+
+
+def test_fit_config_reads_back_from_a_fit_files_metadata():
+    """``config_from_json`` inverts what a fit file records (``_cfg_json``), tuples and the bounds included; a field
+    FitConfig does not have is refused by name."""
+    from synthaug.fit.config import FitConfig, _cfg_json, config_from_json
+
+    for cfg in (FitConfig(), FitConfig(distance="cnn", effects=("motion_blur", "object_noise"), object_noise="measured",
+                                       bounds={"sigma_n": (0.0, 0.05)}, scale_range=(0.5, 1.5), budget=99)):
+        assert config_from_json(json.loads(json.dumps(_cfg_json(cfg)))) == cfg
+    with pytest.raises(ValueError, match="'colour'"):
+        config_from_json({**_cfg_json(FitConfig()), "colour": True})

@@ -573,3 +573,50 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
         with pytest.raises(SystemExit) as e:
             R.build_parser().parse_args(["synthetic", *bad, "--out", "x"])
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err
+
+
+def test_dcnn_refit_cells_refit_against_each_rounds_network_and_redraw_the_synthetic_positives(ws, monkeypatch, capsys):
+    """The d_CNN refit under the protocol (the paper's refit experiment, issue 16 item 5): a cell of its own key;
+    after round 0 each seed's fit is refitted with round 0's CNN as the distance (the fit's own options, its seed
+    moved by 1) and round 1 trains on synthetic positives redrawn from that file with the same draws; the cell
+    records the refit. Refused for a family without a network, and at the command line."""
+    import synthaug.detectors.video_training as VT
+    from synthaug.params import CaptureParams
+
+    drawn = []
+    real_draw = VT.synthetic_positives
+
+    def spy(ss, mesh, fit, n, **kw):
+        drawn.append((str(fit), n, kw["seed"]))
+        return real_draw(ss, mesh, fit, n, **kw)
+
+    monkeypatch.setattr(VT, "synthetic_positives", spy)
+    fit_opts = {"budget": 30, "step_deg": 30.0, "sprite_size": 32, "init": "uniform"}
+    opts = dataclasses.replace(FAST, cnn_epochs=2, cnn_finetune_epochs=1)
+    runner = make_runner(ws, options=opts)
+    res = R.synthetic_comparison(runner, detectors=["cnn"], seed_count=6, synthetic_ratios=[2], fit_distance="eucl",
+                                 fit_options=fit_opts, effects_off=((),), dcnn_refit=(True,), seeds=[0, 1],
+                                 out=ws["root"] / "refit")
+    refit = "cnn / 6 seeds + 2x synthetic (eucl, d_CNN refit every round)"
+    assert list(res["cnn"]) == ["cnn / 6 seeds", refit]
+    cond = R.Condition(refit, "cnn", seed_count=6, synthetic_ratio=2.0, fit_distance="eucl",
+                       fit_options=tuple(sorted(fit_opts.items())), effects_off=(), dcnn_refit=True)
+    assert cond.identity()["dcnn_refit"] is True and "dcnn_refit" not in dataclasses.replace(cond, dcnn_refit=False).identity()
+    cache = CellCache(Path(ws["paths"].work_dir) / "cells")
+    for seed in (0, 1):
+        cell = cache.get_or_compute(runner.identity(cond, seed), lambda: pytest.fail("refit cell not cached"))
+        (rec,) = cell["train"]["synthetic"]["refits"]  # one mining round: one refit, after round 0
+        start = Path(ws["paths"].work_dir) / "fits" / f"drone_6_seed{seed}_eucl.json"
+        assert rec["after_round"] == 0 and Path(rec["params"]).parent == cache.root / "refits"
+        _, _, meta = CaptureParams.load_with_extra(rec["params"])
+        _, _, start_meta = CaptureParams.load_with_extra(start)
+        assert meta["config"] == {**start_meta["config"], "distance": "cnn", "seed": start_meta["config"]["seed"] + 1}
+        # the refitted file drew round 1's synthetic positives, with the same count and draw seed as round 0's
+        assert [d for d in drawn if d[0] == rec["params"]] == [(rec["params"], 12, seed + 2)]
+        assert (str(start), 12, seed + 2) in drawn
+    with pytest.raises(ValueError, match="no network"):
+        R.synthetic_comparison(runner, detectors=["cnn", "hog"], seed_count=6, synthetic_ratios=[2], dcnn_refit=(True,))
+    assert R.build_parser().parse_args(["synthetic", "--out", "x"]).dcnn_refit == ["off"]
+    with pytest.raises(SystemExit) as e:
+        R.main(["synthetic", "--detectors", "hog", "cnn", "--dcnn-refit", "on", "--out", "x"])
+    assert e.value.code == 2 and "--dcnn-refit" in capsys.readouterr().err

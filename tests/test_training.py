@@ -676,3 +676,40 @@ def test_ada_transfer_makes_the_added_positives_adaboosts_source(monkeypatch: py
     assert "ada_transfer" not in TrainOptions(ada_transfer=True).key_fields("hog")
     with pytest.raises(ValueError, match="ada_transfer"):
         TrainOptions(ada_transfer=1)
+
+
+def test_refresh_positives_redraws_the_added_positives_between_rounds() -> None:
+    """``refresh_positives`` (the d_CNN refit's hook) is called with round r's detector once round r + 1's negatives
+    are mined; round r + 1 trains on what it returns; a wrong shape or changed real positives are refused."""
+    mining = [MiningFrame(_frame([(4 * i, 8, 100), (80, 60, 0)]), np.array([[4.0 * i, 8.0, 40.0, 40.0]]), "V_M_001", i)
+              for i in range(4)]
+    grey = torch.full((20, 1, 40, 40), GREY / 255.0)
+    pos = torch.cat([torch.full((5, 1, 40, 40), 100 / 255.0), torch.full((3, 1, 40, 40), 90 / 255.0)])  # 5 real, 3 added
+    seen, calls = [], []
+
+    def fit(p: torch.Tensor, n: torch.Tensor) -> Darkness:
+        seen.append(p.clone())
+        return Darkness.fit(p, n)
+
+    def refresh(det: Any, r: int) -> torch.Tensor:
+        calls.append((det, r))
+        new = pos.clone()
+        new[5:] = (80 - r) / 255.0
+        return new
+
+    opts = TrainOptions(mining_rounds=2, mining_per_frame=3, scales=(1.0,))
+    res = train_with_mining("toy", pos, grey, 0, options=opts, mining_source=mining, fit=fit, real_positives=5,
+                            refresh_positives=refresh)
+    assert [r["round"] for r in res.log["rounds"]] == [0, 1, 2]
+    assert [r for _, r in calls] == [0, 1] and all(isinstance(d, Darkness) for d, _ in calls)
+    assert calls[1][0] is not calls[0][0]  # round 1's detector, not round 0's
+    assert torch.equal(seen[0], pos)  # round 0: the given positives
+    for k, r in ((1, 0), (2, 1)):  # round k: what the refresh after round k - 1 returned
+        assert torch.equal(seen[k][:5], pos[:5]) and torch.allclose(seen[k][5:], torch.full((3, 1, 40, 40), (80 - r) / 255.0))
+    assert "refresh_s" in res.log["rounds"][1] and "refresh_s" not in res.log["rounds"][0]
+    with pytest.raises(ValueError, match="shape"):
+        train_with_mining("toy", pos, grey, 0, options=opts, mining_source=mining, fit=fit, real_positives=5,
+                          refresh_positives=lambda d, r: pos[:7])
+    with pytest.raises(ValueError, match="real"):
+        train_with_mining("toy", pos, grey, 0, options=opts, mining_source=mining, fit=fit, real_positives=5,
+                          refresh_positives=lambda d, r: torch.zeros_like(pos))

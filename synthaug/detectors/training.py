@@ -505,6 +505,7 @@ def train_with_mining(
     box_regressor: Any = None,
     positive_weights: Tensor | None = None,
     real_positives: int | None = None,
+    refresh_positives: Callable[[Any, int], Tensor] | None = None,
 ) -> TrainResult:
     """Train, then mine hard negatives and retrain in rounds until the validation false positives stop falling.
 
@@ -542,6 +543,11 @@ def train_with_mining(
             (:func:`~synthaug.detectors.adaboost.train_adaboost`). None: all equal.
         real_positives: the first this many ``positives`` are real (see :func:`train_detector`); every round's
             CNN fine-tunes on them when ``options.cnn_finetune_epochs`` > 0.
+        refresh_positives: ``(detector, r) -> positives`` called with round ``r``'s detector once round ``r + 1``'s
+            negatives are mined; round ``r + 1`` and later train on what it returns, which must have the shape of
+            ``positives`` (the real ones first, unchanged). The d_CNN refit: the synthetic positives redrawn from
+            capture parameters refitted against the network just trained (``AddedPositives.refit`` of
+            :func:`~synthaug.detectors.video_training.train_from_videos`). None: the same positives every round.
 
     Returns:
         A :class:`TrainResult`.
@@ -603,6 +609,13 @@ def train_with_mining(
             say(f"round {r}: nothing new mined on {mined.frames_scanned} frames ({mined.seconds:.0f}s); stop")
             break
         current_neg = torch.cat([current_neg, mined.patches.to(current_neg.dtype)])
+        refresh: dict[str, Any] = {}
+        if refresh_positives is not None:
+            t0 = time.perf_counter()
+            positives = _refreshed(refresh_positives(det, r - 1), positives, n_real=_real_count(real_positives,
+                                                                                                   len(positives)))
+            refresh = {"refresh_s": round(time.perf_counter() - t0, 1)}
+            say(f"round {r}: positives redrawn after round {r - 1} ({refresh['refresh_s']:.0f}s)")
         t0 = time.perf_counter()
         det = train(current_neg)
         t_train = time.perf_counter() - t0
@@ -610,7 +623,7 @@ def train_with_mining(
         rounds.append({"round": r, "added": len(mined), "negatives": int(current_neg.shape[0]),
                        "frames_scanned": mined.frames_scanned, "val": v, "mine_s": round(mined.seconds, 1),
                        "train_s": round(t_train, 1), "val_s": round(t_val, 1),
-                       "videos": len({s for s, _ in mined.sources})})
+                       "videos": len({s for s, _ in mined.sources}), **refresh})
         say(f"round {r}: +{len(mined)} negatives from {mined.frames_scanned} frames (scan {mined.seconds:.0f}s), "
             f"{current_neg.shape[0]} in all, train {t_train:.0f}s" + _val_text(v))
         if v is None:
@@ -630,6 +643,16 @@ def train_with_mining(
     out_log = {"rounds": rounds, "chosen_round": best[2], "stop_reason": stop,
                **_settings_log(options, scales, mining_source, val)}
     return TrainResult(best[0], out_log, best[3])
+
+
+def _refreshed(new: Any, old: Tensor, *, n_real: int) -> Tensor:
+    """``refresh_positives``' result, checked: the shape of the positives it replaces, the real ones unchanged."""
+    if not isinstance(new, Tensor) or new.shape != old.shape:
+        raise ValueError(f"refresh_positives must return a tensor of the positives' shape {tuple(old.shape)}, got "
+                         f"{getattr(new, 'shape', type(new).__name__)}")
+    if not torch.equal(new[:n_real], old[:n_real]):
+        raise ValueError(f"refresh_positives changed the first {n_real} (real) positives: only the added ones may change")
+    return new.to(old.dtype)
 
 
 def _val_text(v: dict[str, Any] | None) -> str:

@@ -116,6 +116,12 @@ class AddedPositives:
         faded_contrast: the range the faded copies' contrast factor is drawn from (None:
             :data:`~synthaug.detectors.training_sets.FADED_CONTRAST`); a negative range (e.g.
             :data:`~synthaug.detectors.training_sets.INVERTED_CONTRAST`) inverts the object's contrast.
+        refit: the d_CNN refit (CNN only): a callable ``(fit, seed_set_folder, detector, r) -> fit file`` that
+            refits the fit ``fit`` of the seed set against round ``r``'s detector (e.g. its network as the ``cnn``
+            distance, :func:`synthaug.fit.refit.refit_with_network`); the synthetic positives of rounds ``r + 1``
+            and later are redrawn from the file it returns (the same poses and draws, the same effects left out;
+            the copy-paste positives keep ``params``' silhouettes). None: one fit for every round (the paper's
+            default). Needs synthetic positives and mining rounds.
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; None: every positive weighs the same, so the added ones hold
             ``added / (real + added)``. HOG: the SVM's per-sample cost; CNN: the BCE loss's per-sample weight (kept
@@ -137,6 +143,7 @@ class AddedPositives:
     downscaled_copies: int = 0
     faded_copies: int = 0
     faded_contrast: tuple[float, float] | None = None
+    refit: Callable[[Path, Path, Any, int], str | Path] | None = None
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
@@ -355,6 +362,8 @@ def train_from_videos(
     """
     say = log or (lambda m: None)
     _check_options(kind, added, frame_step=frame_step, all_frames=all_frames, seedset=seedset, seed_count=seed_count)
+    if added.refit is not None and not options.mining_rounds:
+        raise TrainingInputError("--dcnn-refit", "the refit runs between mining rounds, and there are none (mining_rounds = 0)")
     t_start = time.perf_counter()
     vs = discover_videos(videos_dir, labels_dir)
     sp = split_by_video(vs, class_name, split=split, seed=seed, val_fraction=val_fraction, block=split_block,
@@ -396,8 +405,9 @@ def train_from_videos(
     weights = share_weights(n_real, int(ts.positives.shape[0]), added.synthetic_share)
     if weights is not None:
         ts.info["synthetic_share"] = added.synthetic_share
+    refresh = _refit_refresh(ts, added, synthetic_info, say) if added.refit is not None else None
     res = _mine_and_train(kind, ts, vs, sp, options, seed=seed, regressor=regressor, say=say, positive_weights=weights,
-                          real_positives=n_real)
+                          real_positives=n_real, refresh_positives=refresh)
     t_train = time.perf_counter() - t0
     meta = _metadata(kind, class_name, seed, videos_dir, labels_dir, sp, ts, res, options=options,
                      synthetic_info=synthetic_info, perturb_info=perturb_info, downscaled_info=downscaled_info,
@@ -450,10 +460,12 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
     if synthetic_ratio > 0 and params is None:
         raise TrainingInputError("--synthetic-ratio", "synthetic positives need a fit: give --params FIT.json")
     for option, changed in (("--capture-sampling", added.capture_sampling != "seed"),
-                            ("--effects-off", bool(added.effects_off))):
+                            ("--effects-off", bool(added.effects_off)), ("--dcnn-refit", added.refit is not None)):
         if changed and synthetic_ratio <= 0:
             raise TrainingInputError(option, "it changes the synthetic positives, and there are none: give "
                                              "--params FIT.json and a --synthetic-ratio above 0")
+    if added.refit is not None and kind != "cnn":
+        raise TrainingInputError("--dcnn-refit", f"the d_CNN refit follows the CNN being trained; {kind!r} has no network")
     if not all_frames and seedset is None and (seed_count is None or seed_count < 1):
         raise TrainingInputError("--seed-counts", f"must be >= 1, got {seed_count}")
     if perturb_copies < 0:
@@ -508,6 +520,8 @@ class _TrainingSet:
     box_in_window: Any
     info: dict[str, Any]
     seedset: Any = None
+    redraw_synthetic: Callable[[str | Path], Tensor] | None = None  # the synthetic positives again, from another fit
+    synthetic_slice: tuple[int, int] = (0, 0)  # where they sit in ``positives``
 
 
 def _given_work_dir(work_dir: str | Path | None, out: str | Path | None) -> Path | None:
@@ -642,10 +656,15 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
         effects = [e for e in theta.effects if e not in effects_off]
     n_syn = int(round(synthetic_ratio * len(ss)))
     if n_syn:
+        def draw(fit: str | Path) -> Tensor:
+            return synthetic_positives(ss, mesh, fit, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
+                                       object_box=added.object_box, shape_variation=added.shape_variation,
+                                       capture_sampling=added.capture_sampling, effects=effects)
+
         t0 = time.perf_counter()
-        syn = synthetic_positives(ss, mesh, params, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
-                                  object_box=added.object_box, shape_variation=added.shape_variation,
-                                  capture_sampling=added.capture_sampling, effects=effects)
+        syn = draw(params)
+        ts.synthetic_slice = (int(ts.positives.shape[0]), int(ts.positives.shape[0]) + n_syn)
+        ts.redraw_synthetic = draw
         ts.positives = torch.cat([ts.positives, syn])
         say(f"synthetic: {n_syn} patches from {params}"
             f"{', without ' + ' and '.join(effects_off) if effects_off else ''} ({time.perf_counter() - t0:.0f}s)")
@@ -797,9 +816,33 @@ def share_weights(n_real: int, n_all: int, share: float | None) -> Tensor | None
     return w
 
 
+def _refit_refresh(ts: _TrainingSet, added: AddedPositives, synthetic_info: dict[str, Any] | None,
+                   say: Callable[[str], None]) -> Callable[[Any, int], Tensor]:
+    """The mining rounds' ``refresh_positives`` of the d_CNN refit: ``added.refit`` on round r's detector, then the
+    synthetic positives redrawn from its fit into their slice of the positives (recorded in ``synthetic_info``)."""
+    if ts.redraw_synthetic is None or synthetic_info is None:
+        raise TrainingInputError("--dcnn-refit", "it refits the synthetic positives, and there are none: give --params "
+                                                 "FIT.json and a --synthetic-ratio above 0")
+    refits = synthetic_info.setdefault("refits", [])
+    lo, hi = ts.synthetic_slice
+
+    def refresh(det: Any, r: int) -> Tensor:
+        t0 = time.perf_counter()
+        fit = Path(added.refit(Path(synthetic_info["params"]), Path(ts.seedset.path), det, r))  # type: ignore[misc]
+        t_fit = time.perf_counter() - t0
+        positives = ts.positives.clone()
+        positives[lo:hi] = ts.redraw_synthetic(fit).to(positives.dtype)  # type: ignore[misc]
+        ts.positives = positives
+        refits.append({"after_round": r, "params": str(fit), "fit_s": round(t_fit, 1)})
+        say(f"d_CNN refit after round {r}: {fit} ({t_fit:.0f}s fit, {time.perf_counter() - t0 - t_fit:.0f}s draw)")
+        return positives
+
+    return refresh
+
+
 def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, Any], options: TrainOptions, *,
                     seed: int, regressor: Any, say: Callable[[str], None], positive_weights: Tensor | None = None,
-                    real_positives: int | None = None) -> Any:
+                    real_positives: int | None = None, refresh_positives: Callable[[Any, int], Tensor] | None = None) -> Any:
     """:func:`~synthaug.detectors.training.train_with_mining` on ``ts``, mining every ``options.mining_stride``-th
     frame of the training videos (+ negative-class videos), stopped on the validation videos."""
     mine_src = VideoFrames(vs.videos_dir, vs.labels_dir, positive=sp["train"], negative=sp["negative_train"],
@@ -809,7 +852,8 @@ def _mine_and_train(kind: str, ts: _TrainingSet, vs: VideoSet, sp: Mapping[str, 
     return train_with_mining(kind, ts.positives, ts.negatives, seed, box_in_window=ts.box_in_window,
                              mining_frames=ts.hog_frames, mining_boxes=ts.hog_boxes, options=options,
                              mining_source=mine_src if options.mining_rounds else None, val_frames=val_src, log=say,
-                             box_regressor=regressor, positive_weights=positive_weights, real_positives=real_positives)
+                             box_regressor=regressor, positive_weights=positive_weights, real_positives=real_positives,
+                             refresh_positives=refresh_positives)
 
 
 def _metadata(kind: str, class_name: str, seed: int, videos_dir: str | Path, labels_dir: str | Path,

@@ -106,6 +106,9 @@ class Condition:
         effects_off: fitted effects left out of the synthetic positives (the paper's Fig. 9); ``()``: every effect;
             None (the default): the family's (:data:`~synthaug.detectors.video_training.FAMILY_EFFECTS_OFF`), resolved
             here so that a cell's key names what its training draws.
+        dcnn_refit: the d_CNN refit (CNN only): after every mining round the fit is refitted with the network just
+            trained as its distance (:func:`~synthaug.fit.refit.refit_with_network`, the fit's own options otherwise)
+            and the next round's synthetic positives are redrawn from it (``AddedPositives.refit``). False: one fit.
     """
 
     name: str
@@ -130,6 +133,7 @@ class Condition:
     shape_variation: float = 0.0
     capture_sampling: str = "seed"
     effects_off: tuple[str, ...] | None = None
+    dcnn_refit: bool = False
 
     def __post_init__(self) -> None:
         off = self.effects_off
@@ -149,7 +153,8 @@ class Condition:
                   "positive_videos", "shape_variation"):
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
-        for k, default in (("capture_sampling", "seed"), ("effects_off", ())):  # added later still: the same, with
+        for k, default in (("capture_sampling", "seed"), ("effects_off", ()),  # added later still: the same, with
+                           ("dcnn_refit", False)):
             if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
@@ -358,11 +363,30 @@ class ProtocolRunner:
                                  capture_sampling=condition.capture_sampling,
                                  # the family's own set goes as None: training keeps those the fit has
                                  effects_off=None if condition.effects_off == FAMILY_EFFECTS_OFF.get(condition.kind, ())
-                                 else condition.effects_off),
+                                 else condition.effects_off,
+                                 refit=self._refit(condition, seed) if condition.dcnn_refit else None),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
         return det, meta, time.perf_counter() - t0
+
+    def _refit(self, condition: Condition, seed: int) -> Callable[[Path, Path, Any, int], Path]:
+        """The d_CNN refit of a cell: the fit refitted against round r's network, the fit's own options otherwise
+        (its seed moved by r + 1), into ``<cache>/refits/<detector key>_round<r>.json`` (kept for inspection)."""
+        from synthaug.fit.config import config_from_json
+        from synthaug.fit.refit import refit_with_network
+        from synthaug.params import CaptureParams
+
+        key = CellCache(self.cache.root / "detectors").path(self.training_identity(condition, seed)).stem  # type: ignore[union-attr]
+
+        def refit(fit: Path, seedset: Path, det: Any, r: int) -> Path:
+            _, _, meta = CaptureParams.load_with_extra(fit)
+            cfg = config_from_json(meta["config"])
+            cfg = dataclasses.replace(cfg, seed=cfg.seed + r + 1)
+            out = self.cache.root / "refits" / f"{key}_round{r}.json"  # type: ignore[union-attr]
+            return refit_with_network(det.net, seedset, condition.mesh or meta.get("mesh") or "quadcopter", out, cfg)
+
+        return refit
 
     def _train_and_score(self, condition: Condition, seed: int) -> dict[str, Any]:
         t0 = time.perf_counter()
@@ -603,6 +627,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          shape_variation: Sequence[float] = (0.0,),
                          capture_sampling: Sequence[str] = ("seed",),
                          effects_off: Sequence[str | Sequence[str] | None] = (None,),
+                         dcnn_refit: Sequence[bool] = (False,),
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -625,12 +650,18 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``capture_sampling``: each synthetic ratio once per way of drawing the capture parameters (``"seed"``: the
     paper's, one seed's fitted row; ``"uniform"``: between the fitted extremes, Fig. 10). ``effects_off``: each
     synthetic ratio once per entry: None (the detector family's default, :data:`FAMILY_EFFECTS_OFF`), ``()`` (every
-    fitted effect), an effect's name, or several names left out together (Fig. 9).
+    fitted effect), an effect's name, or several names left out together (Fig. 9). ``dcnn_refit``: each synthetic
+    ratio once per value (True: the fit refitted against the CNN after every mining round, :class:`Condition`'s
+    ``dcnn_refit``; CNN only).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
     """
     results: dict[str, dict[str, ProtocolResult]] = {}
+    refits = list(dict.fromkeys(bool(v) for v in dcnn_refit))
+    if True in refits and set(detectors) - {"cnn"}:
+        raise ValueError(f"the d_CNN refit follows a CNN being trained; detectors {sorted(set(detectors) - {'cnn'})} "
+                         f"have no network (run them without dcnn_refit)")
     for kind in detectors:
         offs = list(dict.fromkeys(  # one condition per capture set, however it was asked for
             FAMILY_EFFECTS_OFF.get(kind, ()) if off is None else (off,) if isinstance(off, str) else tuple(off)
@@ -646,12 +677,13 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{'' if ob is None else f', framed as the seeds ({ob})'}"
                             f"{'' if not sv else f', shapes varied {sv:g}'}"
                             f"{'' if cs == 'seed' else f', capture {cs}'}"
-                            f"{'' if not off else ', without ' + ' and '.join(off)})", kind, seed_count=seed_count,
+                            f"{'' if not off else ', without ' + ' and '.join(off)}"
+                            f"{', d_CNN refit every round' if rf else ''})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
-                            shape_variation=float(sv), capture_sampling=cs, effects_off=off)
+                            shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
-                  for cs in capture_sampling for off in offs]
+                  for cs in capture_sampling for off in offs for rf in refits]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -801,6 +833,10 @@ def build_parser() -> argparse.ArgumentParser:
                          "Fig. 9: boundary_blur, motion_blur, object_noise, material); a+b: both left out in one "
                          "condition; none: every fitted effect; default: the detector family's (the CNN leaves "
                          "boundary_blur and motion_blur out, the others none)")
+    sy.add_argument("--dcnn-refit", nargs="+", choices=["off", "on"], default=["off"],
+                    help="the d_CNN refit, one condition per value: on refits each seed's fit with the CNN just trained "
+                         "as the distance after every mining round and redraws the next round's synthetic positives "
+                         "from it (CNN only); off keeps one fit")
     return p
 
 
@@ -832,6 +868,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--mining-frame-scale: LOW must be <= HIGH, got {args.mining_frame_scale[0]:g} "
                      f"{args.mining_frame_scale[1]:g}")
     options = train_options(args)
+    if args.what == "synthetic" and "on" in args.dcnn_refit and set(args.detectors) - {"cnn"}:
+        parser.error(f"--dcnn-refit on: the refit follows a CNN being trained; drop {sorted(set(args.detectors) - {'cnn'})} "
+                     f"from --detectors")
     import torch
 
     torch.set_num_threads(args.threads)
@@ -861,7 +900,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              shape_variation=tuple(args.shape_variation),
                              capture_sampling=tuple(args.capture_sampling),
                              effects_off=tuple(None if e == "default" else () if e == "none" else tuple(e.split("+"))
-                                               for e in args.effects_off), out=args.out)
+                                               for e in args.effects_off),
+                             dcnn_refit=tuple(v == "on" for v in args.dcnn_refit), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 

@@ -2,12 +2,13 @@
 generator seed (:func:`seed_seed`) and the view cache its options describe.
 
 :func:`_cfg_json` is the options as stored in a fit file's metadata and in its inputs' fingerprint
-(:mod:`synthaug.fit.fingerprint`).
+(:mod:`synthaug.fit.fingerprint`); :func:`config_from_json` reads them back.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -150,6 +151,26 @@ def _cfg_json(cfg: FitConfig) -> dict[str, Any]:
     if d["object_noise"] == "fit":  # added later: absent at the paper's setting, so earlier fits stay current
         d.pop("object_noise")
     return d
+
+
+def config_from_json(d: Mapping[str, Any]) -> FitConfig:
+    """The :class:`FitConfig` a fit file's ``config`` metadata records (the inverse of what ``fit_seedset`` writes).
+
+    Raises:
+        ValueError: a field :class:`FitConfig` does not have (a file of another version), or a bad value.
+    """
+    known = {f.name for f in fields(FitConfig)}
+    unknown = sorted(set(d) - known)
+    if unknown:
+        raise ValueError(f"fit config fields {unknown} are not FitConfig's ({sorted(known)})")
+    kw = dict(d)
+    if kw.get("effects") is not None:
+        kw["effects"] = tuple(kw["effects"])
+    if "scale_range" in kw:
+        kw["scale_range"] = tuple(kw["scale_range"])
+    if "bounds" in kw:
+        kw["bounds"] = {k: tuple(v) for k, v in kw["bounds"].items()}
+    return FitConfig(**kw)
 
 
 def _warm_cache(mesh: Any, cfg: FitConfig) -> Any:

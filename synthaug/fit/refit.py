@@ -44,6 +44,36 @@ from torch.utils.data import ConcatDataset, DataLoader, Dataset
 from synthaug.detectors.lightning_module import PatchDataModule
 
 
+def refit_with_network(net: Any, seed_dir: str | Path, mesh: Any, out: str | Path, cfg: Any = None, *,
+                       first_layer: int = 2, workers: int = 1) -> Path:
+    """Θ of every seed refitted with a copy of ``net`` as the ``cnn`` distance (eq. 6: activations of layers
+    ``first_layer``..N), written to ``out``: the d_CNN refit, one home for :class:`CNNDistanceRefit` and the mining
+    rounds' refit (``synthaug.evaluate.runner``).
+
+    Args:
+        net: the network being trained (a :class:`~synthaug.detectors.cnn.PatchCNN`; copied, frozen, on the CPU).
+        seed_dir: seed-set folder the network's window matches.
+        mesh: mesh path or built-in name.
+        out: capture-parameter file to write.
+        cfg: fit options (a :class:`~synthaug.fit.config.FitConfig`; its ``distance`` is set to ``"cnn"``);
+            None: ``synthaug fit``'s defaults.
+        first_layer: first layer of the distance (the paper: 2).
+        workers: fit processes.
+
+    Returns:
+        ``out``.
+    """
+    import dataclasses
+
+    from synthaug.distances.cnn import CNNDistance
+    from synthaug.fit.config import FitConfig
+    from synthaug.fit.run import fit_seedset
+
+    distance = CNNDistance(copy.deepcopy(net).cpu(), first_layer=first_layer)
+    cfg = dataclasses.replace(cfg if cfg is not None else FitConfig(), distance="cnn", distance_kwargs={})
+    return fit_seedset(seed_dir, mesh, out, cfg, distance=distance, workers=workers)
+
+
 class SyntheticPatches(Dataset):
     """Adapter: ``SyntheticObjectDataset`` items -> ``(patch, float label)`` for the patch trainer."""
 
@@ -180,19 +210,15 @@ class CNNDistanceRefit(L.Callback):
         dm = trainer.datamodule
         if not isinstance(dm, SyntheticPatchDataModule) or dm.synthetic is None:
             raise ValueError("CNNDistanceRefit needs a SyntheticPatchDataModule")
-        from synthaug.distances.cnn import CNNDistance
         from synthaug.fit.config import FitConfig
-        from synthaug.fit.run import fit_seedset
         from synthaug.params import CaptureParams, fitted_object_scales
 
-        net = copy.deepcopy(pl_module.net).cpu()
-        distance = CNNDistance(net, first_layer=self.first_layer)
         out_dir = Path(trainer.log_dir or trainer.default_root_dir) / "refit"
         out = out_dir / f"epoch_{epoch:03d}.json"
         if trainer.is_global_zero:
             cfg = FitConfig(distance="cnn", optimizer=self.optimizer, budget=self.budget, seed=self.seed + epoch,
                             step_deg=dm.cache_options["step_deg"], sprite_size=dm.cache_options["sprite_size"])
-            fit_seedset(dm.seed_dir, dm.mesh, out, cfg, distance=distance)
+            refit_with_network(pl_module.net, dm.seed_dir, dm.mesh, out, cfg, first_layer=self.first_layer)
         trainer.strategy.barrier()
         params, extra, meta = CaptureParams.load_with_extra(out)
         scales = fitted_object_scales(extra)
