@@ -575,6 +575,7 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_dcnn_refit_cells_refit_against_each_rounds_network_and_redraw_the_synthetic_positives(ws, monkeypatch, capsys):
     """The d_CNN refit under the protocol (the paper's refit experiment, issue 16 item 5): a cell of its own key;
     after round 0 each seed's fit is refitted with round 0's CNN as the distance (the fit's own options, its seed
