@@ -44,7 +44,7 @@ from synthaug.detectors.training_sets import (
     synthetic_positives,
 )
 
-__all__ = ["AddedPositives", "FAMILY_EFFECTS_OFF", "TrainingInputError", "VideoSet", "discover_videos", "split_by_video", "train_from_videos", "METADATA_FORMAT"]
+__all__ = ["AddedPositives", "FAMILY_EFFECTS_OFF", "resolve_effects_off", "TrainingInputError", "VideoSet", "discover_videos", "split_by_video", "train_from_videos", "METADATA_FORMAT"]
 
 METADATA_FORMAT = "synthaug.trained_detector"
 METADATA_VERSION = 1
@@ -54,6 +54,18 @@ FAMILY_EFFECTS_OFF: dict[str, tuple[str, ...]] = {"cnn": ("boundary_blur", "moti
 ``effects_off=None``); a family not listed keeps every effect. The CNN: the d_HOG fit's boundary and motion blur make
 the synthetic drones softer than the CNN learns from best; chosen on the validation videos (drones, 100 seeds, 20x,
 5 training seeds: +0.047 [+0.013, +0.081] AP@0.5 over every effect; ``results/synthetic/cnn_figs/README.md``)."""
+
+
+def resolve_effects_off(kind: str, effects_off: str | Sequence[str] | None) -> tuple[str, ...]:
+    """The effects left out of a detector family's synthetic positives, as a tuple: None is the family's own set
+    (:data:`FAMILY_EFFECTS_OFF`), a name is that effect alone, a sequence is those effects together.
+
+    >>> resolve_effects_off("cnn", None), resolve_effects_off("hog", None), resolve_effects_off("hog", "motion_blur")
+    (('boundary_blur', 'motion_blur'), (), ('motion_blur',))
+    """
+    if effects_off is None:
+        return FAMILY_EFFECTS_OFF.get(kind, ())
+    return (effects_off,) if isinstance(effects_off, str) else tuple(effects_off)
 
 
 class TrainingInputError(ValueError):
@@ -646,8 +658,8 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
     mesh = added.mesh or fit_meta.get("mesh") or "quadcopter"
     effects, effects_off = None, added.effects_off
     if effects_off is None:  # the family's, for the synthetic positives only (copy-paste draws no effect)
-        effects_off = tuple(e for e in FAMILY_EFFECTS_OFF.get(kind, ()) if e in theta.effects) if synthetic_ratio > 0 \
-            else ()
+        effects_off = tuple(e for e in resolve_effects_off(kind, None) if e in theta.effects) \
+            if synthetic_ratio > 0 else ()
     if effects_off:
         unknown = sorted(set(effects_off) - set(theta.effects))
         if unknown:

@@ -42,7 +42,7 @@ from synthaug._checks import add_option, int_at_least, nonneg_float, positive_fl
 from synthaug.data.captures import CAPTURE_SAMPLERS
 from synthaug.detectors.train_cli import add_adaboost_options, add_budget_options, budget_options, effect_name
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
-from synthaug.detectors.video_training import FAMILY_EFFECTS_OFF, AddedPositives, train_from_videos
+from synthaug.detectors.video_training import AddedPositives, resolve_effects_off, train_from_videos
 from synthaug.evaluate.cells import CellCache
 from synthaug.evaluate.matching import match_videos
 from synthaug.evaluate.patches import patch_eval_set, score_patch_set
@@ -137,9 +137,8 @@ class Condition:
 
     def __post_init__(self) -> None:
         off = self.effects_off
-        if off is None:
-            off = FAMILY_EFFECTS_OFF.get(self.kind, ()) if self.synthetic_ratio else ()
-        object.__setattr__(self, "effects_off", tuple(off))
+        object.__setattr__(self, "effects_off", () if off is None and not self.synthetic_ratio
+                           else resolve_effects_off(self.kind, off))
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -362,7 +361,7 @@ class ProtocolRunner:
                                  faded_contrast=condition.faded_contrast, shape_variation=condition.shape_variation,
                                  capture_sampling=condition.capture_sampling,
                                  # the family's own set goes as None: training keeps those the fit has
-                                 effects_off=None if condition.effects_off == FAMILY_EFFECTS_OFF.get(condition.kind, ())
+                                 effects_off=None if condition.effects_off == resolve_effects_off(condition.kind, None)
                                  else condition.effects_off,
                                  refit=self._refit(condition, seed) if condition.dcnn_refit else None),
             options=options,
@@ -616,6 +615,15 @@ def _fit_label(distance: str | None, params: str | None, mesh: str | None) -> st
     return f"{distance or Path(str(params)).stem}{'' if mesh is None else f', {Path(mesh).stem}'}"
 
 
+def check_dcnn_refit(detectors: Sequence[str], dcnn_refit: Sequence[bool]) -> None:
+    """Raise ``ValueError`` when a d_CNN refit is asked for a detector without a network (the refit follows a CNN
+    being trained: HOG and AdaBoost have none)."""
+    others = sorted(set(detectors) - {"cnn"})
+    if any(dcnn_refit) and others:
+        raise ValueError(f"the d_CNN refit follows a CNN being trained; detectors {others} have no network "
+                         f"(run them without it)")
+
+
 def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
                          synthetic_ratios: Sequence[float] = (), fit_distance: str | Mapping[str, str] | None = None,
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
@@ -649,8 +657,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``shape_variation``: each synthetic ratio once per value (0: the mesh alone; > 0: shapes varied around it).
     ``capture_sampling``: each synthetic ratio once per way of drawing the capture parameters (``"seed"``: the
     paper's, one seed's fitted row; ``"uniform"``: between the fitted extremes, Fig. 10). ``effects_off``: each
-    synthetic ratio once per entry: None (the detector family's default, :data:`FAMILY_EFFECTS_OFF`), ``()`` (every
-    fitted effect), an effect's name, or several names left out together (Fig. 9). ``dcnn_refit``: each synthetic
+    synthetic ratio once per entry, as :func:`~synthaug.detectors.video_training.resolve_effects_off` reads it: None
+    (the detector family's default), ``()`` (every fitted effect), an effect's name, or several names left out
+    together (Fig. 9). ``dcnn_refit``: each synthetic
     ratio once per value (True: the fit refitted against the CNN after every mining round, :class:`Condition`'s
     ``dcnn_refit``; CNN only).
 
@@ -659,13 +668,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     """
     results: dict[str, dict[str, ProtocolResult]] = {}
     refits = list(dict.fromkeys(bool(v) for v in dcnn_refit))
-    if True in refits and set(detectors) - {"cnn"}:
-        raise ValueError(f"the d_CNN refit follows a CNN being trained; detectors {sorted(set(detectors) - {'cnn'})} "
-                         f"have no network (run them without dcnn_refit)")
+    check_dcnn_refit(detectors, refits)
     for kind in detectors:
-        offs = list(dict.fromkeys(  # one condition per capture set, however it was asked for
-            FAMILY_EFFECTS_OFF.get(kind, ()) if off is None else (off,) if isinstance(off, str) else tuple(off)
-            for off in effects_off))
+        offs = list(dict.fromkeys(resolve_effects_off(kind, off) for off in effects_off))  # one per capture set
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
@@ -868,9 +873,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--mining-frame-scale: LOW must be <= HIGH, got {args.mining_frame_scale[0]:g} "
                      f"{args.mining_frame_scale[1]:g}")
     options = train_options(args)
-    if args.what == "synthetic" and "on" in args.dcnn_refit and set(args.detectors) - {"cnn"}:
-        parser.error(f"--dcnn-refit on: the refit follows a CNN being trained; drop {sorted(set(args.detectors) - {'cnn'})} "
-                     f"from --detectors")
+    if args.what == "synthetic":
+        try:
+            check_dcnn_refit(args.detectors, [v == "on" for v in args.dcnn_refit])
+        except ValueError as e:
+            parser.error(f"--dcnn-refit on: {e}")
     import torch
 
     torch.set_num_threads(args.threads)
