@@ -10,9 +10,10 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 def _share_the_cores_between_xdist_workers() -> None:
     """Under ``pytest -n N`` give each worker its share of the cores (torch, OpenMP, BLAS and the subprocesses tests
-    start). Each worker's torch would otherwise spin as many threads as the machine has cores, N times over: on the
-    2-core CI machine ``tests/test_demo.py tests/test_gap.py -n 2`` took 5 min 29 s (user 8 min 7 s) with the default
-    threads and 4 min 47 s (user 5 min 23 s) with one thread a worker; test_speckle_is_detected[hog] 65 s -> 6 s."""
+    start). Each worker's torch would otherwise spin as many threads as the machine has cores, N times over: on a
+    2-core machine (stop 54) ``tests/test_demo.py tests/test_gap.py -n 2`` took 5 min 29 s (user 8 min 7 s) with the
+    default threads and 4 min 47 s (user 5 min 23 s) with one thread a worker; test_speckle_is_detected[hog] 65 s ->
+    6 s."""
     workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0") or 0)
     if workers <= 1:
         return
