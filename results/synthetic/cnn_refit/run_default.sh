@@ -8,11 +8,5 @@
 set -euo pipefail
 split=$1; seeds=$2; out=${3:-results/synthetic/cnn_refit/default_$split}
 export PYTHONPATH=${PYTHONPATH:-.}
-for s in $seeds; do
-  f=data/runs/fits/drone_100_seed${s}_hog.json
-  [ -f "$f" ] && continue
-  PYOPENGL_PLATFORM=egl OMP_NUM_THREADS=1 /usr/bin/time -f "seed $s: wall %e s, max RSS %M kB" \
-    synthaug fit --seed-set data/runs/ingest_drone_seed${s}/seedsets/drone_100 --mesh quadcopter --distance hog \
-    --seed 0 --workers 1 --no-progress --out "$f"
-done
+results/synthetic/cnn_dcnn/fit.sh "$seeds" hog
 results/synthetic/run_100.sh cnn "$out" "$split" "$seeds" --effects-off default --dcnn-refit off on
