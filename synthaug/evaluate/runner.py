@@ -659,9 +659,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     paper's, one seed's fitted row; ``"uniform"``: between the fitted extremes, Fig. 10). ``effects_off``: each
     synthetic ratio once per entry, as :func:`~synthaug.detectors.video_training.resolve_effects_off` reads it: None
     (the detector family's default), ``()`` (every fitted effect), an effect's name, or several names left out
-    together (Fig. 9). ``dcnn_refit``: each synthetic
-    ratio once per value (True: the fit refitted against the CNN after every mining round, :class:`Condition`'s
-    ``dcnn_refit``; CNN only).
+    together (Fig. 9). ``dcnn_refit``: each synthetic ratio once per value (True: the fit refitted against the CNN
+    after every mining round, :class:`Condition`'s ``dcnn_refit``; CNN only).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
