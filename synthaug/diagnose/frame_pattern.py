@@ -113,7 +113,7 @@ DESTRIPE_PASSES = 6  # the 7-px high-pass keeps 6/7 of a line's gain per pass: 6
 # read of a 2-parameter mask needs them: 12 frames picked a neighbouring grid point in 3 of 5 cases)
 SETTING_FRAMES = 100
 FLOW_SIGMA = 1.0  # frame px: both looks are smoothed by this before the scene's motion between them is fitted
-FLOW_ITERS = 10  # at most this many damped Gauss-Newton steps (stopped once k moves < 1e-5 and t < 1e-3 px)
+FLOW_ITERS = 10  # at most this many damped Gauss-Newton steps a stage (radial_flow: coarse, then fine)
 FLOW_MARGIN = 6  # frame px left out at the frame's edges (a shifted look's border has no partner)
 FLOW_MAX_K = 0.3  # |k| beyond the parameter's range: the motion fit has diverged (no reading)
 FLOW_MAX_DRIFT_PX = 8.0  # a larger motion between the looks is not a drift the fit can follow (no reading)
@@ -520,11 +520,12 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
 
 
 def _division_sample(px: np.ndarray, py: np.ndarray, tx: float, ty: float, k: float,
-                     iters: int = 8) -> tuple[np.ndarray, np.ndarray]:
+                     iters: int = 16) -> tuple[np.ndarray, np.ndarray]:
     """Where the background frame shows what frame point ``p`` (normalised by the half diagonal) shows, for a
     scene moved by ``(tx, ty)`` (same units) between the two looks under the division model's ``k``:
     ``D(U(p) - t)`` with ``U(p) = p / (1 + k|p|²)`` and ``D`` its inverse (fixed point ``q = u (1 + k|q|²)``,
-    a contraction for ``|k| < 0.3`` within the frame)."""
+    a contraction by ``2|k||q|² ≤ 0.3`` a step for ``|k| < 0.3`` within the frame: 16 steps leave ``0.3¹⁶ < 1e-8`` of
+    the error, so :func:`_division_jacobian`, the exact map's derivative, is this sample's)."""
     r2 = px * px + py * py
     ux, uy = px / (1.0 + k * r2) - tx, py / (1.0 + k * r2) - ty
     qx, qy = ux.copy(), uy.copy()
@@ -533,6 +534,48 @@ def _division_sample(px: np.ndarray, py: np.ndarray, tx: float, ty: float, k: fl
             f = 1.0 + k * (qx * qx + qy * qy)
             qx, qy = ux * f, uy * f
     return qx, qy
+
+
+def _division_jacobian(px: np.ndarray, py: np.ndarray, qx: np.ndarray, qy: np.ndarray, tx: float, ty: float,
+                       k: float) -> tuple[np.ndarray, ...]:
+    """The derivatives of :func:`_division_sample`'s ``q`` in ``tx``, ``ty`` and ``k``, by the implicit function
+    theorem at its fixed point ``q = u s`` (``s = 1 + k|q|²``, ``u = U(p) - t``): ``(I - 2k u qᵀ) dq = s du + u |q|²
+    dk`` with ``du/dt = -I`` and ``du/dk = -p |p|² / (1 + k|p|²)²``, solved by Sherman-Morrison.
+
+    Returns:
+        ``(dqx/dtx, dqy/dtx, dqx/dty, dqy/dty, dqx/dk, dqy/dk)``.
+
+    Example:
+        >>> rng = np.random.default_rng(0)
+        >>> px, py = rng.uniform(-0.7, 0.7, (2, 50))
+        >>> th, e = np.array([0.01, -0.02, -0.15]), 1e-6
+        >>> qx, qy = _division_sample(px, py, *th, iters=40)
+        >>> num = []
+        >>> for j in range(3):
+        ...     hi, lo = th.copy(), th.copy()
+        ...     hi[j] += e
+        ...     lo[j] -= e
+        ...     (ax, ay), (bx, by) = _division_sample(px, py, *hi, iters=40), _division_sample(px, py, *lo, iters=40)
+        ...     num += [(ax - bx) / (2 * e), (ay - by) / (2 * e)]
+        >>> ana = _division_jacobian(px, py, qx, qy, *th)
+        >>> max(float(np.abs(a - n).max()) for a, n in zip(ana, num)) < 1e-6
+        True
+    """
+    r2 = px * px + py * py
+    ux, uy = px / (1.0 + k * r2) - tx, py / (1.0 + k * r2) - ty
+    q2 = qx * qx + qy * qy
+    s = 1.0 + k * q2
+    den = 1.0 - 2.0 * k * (qx * ux + qy * uy)
+
+    def solve(vx: np.ndarray, vy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # (I - 2k u qᵀ)⁻¹ v
+        c = 2.0 * k * (qx * vx + qy * vy) / den
+        return vx + c * ux, vy + c * uy
+
+    dtx = solve(-s, np.zeros_like(s))
+    dty = solve(np.zeros_like(s), -s)
+    dk_u = -r2 / (1.0 + k * r2) ** 2  # du/dk = p times this
+    dk = solve(s * px * dk_u + ux * q2, s * py * dk_u + uy * q2)
+    return dtx + dty + dk
 
 
 def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray | None = None,
@@ -549,12 +592,15 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
     brightness change; ``c``, ``c₃``: a radial gain fixed in the frame, a vignetting, is in both looks and so
     differs by ``∇log V · t`` between a point and the one it moved from, ``(p·t)(c + c₃|p|²)`` to the third order;
     without them the reference camera's vignetting of 0.3 read k 0.10-0.17), by Gauss-Newton on both looks
-    smoothed by ``sigma`` px, started from the phase correlation's shift, where the pixels lie ``outside`` the
-    object's crop and inside a 6-px margin.
+    smoothed by ``sigma`` px (the map's derivative exact, :func:`_division_jacobian`), started from the phase
+    correlation's shift, first on a quarter of the pixels, then on all of them, where the pixels lie ``outside``
+    the object's crop and inside a 6-px margin.
 
     Args:
         frame, background: (H, W) or (H, W, C) uint8 or float in [0, 1]: two looks at the same scene.
         outside: (H, W) bool, where the scene may be compared (the object's crop left out); None: everywhere.
+        sigma: the smoothing (px).
+        iters: at most this many steps on the quarter of the pixels, and as many on all of them.
 
     Returns:
         ``k``, its least-squares standard error ``k_se`` (pixels treated as independent: a lower bound), the
@@ -600,55 +646,82 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
     cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
     px, py = (xx - cx) / radius, (yy - cy) / radius
     r2 = px * px + py * py
-    at = lambda img, x, y, order=1: ndimage.map_coordinates(img, [y * radius + cy, x * radius + cx],  # noqa: E731
-                                                            order=order, mode="nearest")
+    # the cubic spline's coefficients once (as map_coordinates would make them at every call: the frame padded by
+    # 12 px of its edge, then filtered), and the gradients' bilinear reads
+    pad = 12
+    coef = ndimage.spline_filter(np.pad(bs, pad, mode="edge"), 3, output=np.float64, mode="nearest")
+    at = lambda img, x, y, order=1, off=0.0: ndimage.map_coordinates(  # noqa: E731
+        img, [y * radius + cy + off, x * radius + cx + off], order=order, mode="nearest", prefilter=False)
     (sx, sy), _ = cv2.phaseCorrelate(bs.astype(np.float64), fs.astype(np.float64))
     if math.hypot(sx, sy) > FLOW_MAX_DRIFT_PX:  # a spurious peak (a bare sky): start from no motion
         sx, sy = 0.0, 0.0
     th = np.array([float(sx), float(sy), 0.0, 0.0, 0.0, 0.0, 0.0])  # t_x, t_y (px), k, gain, offset, static gain
     target = fs[yy, xx]
-    eps = (1e-3, 1e-3, 1e-4)
-    for _ in range(iters):
-        t_x, t_y, k, g, o, c, c3 = th
-        qx, qy = _division_sample(px, py, t_x / radius, t_y / radius, k)
-        if not (np.isfinite(qx).all() and np.isfinite(qy).all()):
-            return nan
-        bq = at(bs, qx, qy, 3)
-        gxq, gyq = at(gx_img, qx, qy), at(gy_img, qx, qy)
-        # a radial gain fixed in the frame (vignetting) differs by ∇log V · t between p and where it moved from:
-        # (p·t) (c + c3 |p|²) for V = 1 - k r² up to the third order
-        pt = px * t_x + py * t_y
-        gain = 1.0 + g + (c + c3 * r2) * pt
-        cols = []
-        for j, e in enumerate(eps):  # the map's derivative in t_x, t_y, k (central differences)
-            hi, lo = th[:3].copy(), th[:3].copy()
-            hi[j] += e
-            lo[j] -= e
-            ax, ay = _division_sample(px, py, hi[0] / radius, hi[1] / radius, hi[2])
-            bx, by = _division_sample(px, py, lo[0] / radius, lo[1] / radius, lo[2])
-            cols.append(gain * radius * (gxq * (ax - bx) + gyq * (ay - by)) / (2 * e))
-        # only points whose scene lies inside the frame: a look rendered from a frame-sized scene repeats its
-        # border beyond it (a barrel lens's corners), a real lens would show more scene there; neither moves as t
-        inside = (np.abs(px / (1.0 + k * r2)) * radius <= cx - FLOW_MARGIN) & \
-                 (np.abs(py / (1.0 + k * r2)) * radius <= cy - FLOW_MARGIN)
-        if inside.sum() < 1000:
-            return nan
-        jac = np.stack(cols + [bq, np.ones_like(bq), bq * pt, bq * pt * r2], 1)[inside]
-        resid = (target - (gain * bq + o))[inside]
-        if not np.isfinite(jac).all():
-            return nan
-        jtj = jac.T @ jac
-        try:
-            step = np.linalg.solve(jtj, jac.T @ resid)
-        except np.linalg.LinAlgError:
-            return nan
-        step[:2] = np.clip(step[:2], -1.0, 1.0)  # damped: at most 1 px and 0.05 in k a step (a far start, clutter)
-        step[2] = float(np.clip(step[2], -0.05, 0.05))
-        th = th + step
-        if abs(th[2]) >= FLOW_MAX_K or not np.isfinite(th).all():
-            return nan
-        if abs(step[2]) < 1e-5 and np.abs(step[:2]).max() < 1e-3:  # converged
-            break
+
+    def gauss_newton(th: np.ndarray, sel: np.ndarray, min_points: int, inside_k: float | None,
+                     tol: tuple[float, float]):
+        """Damped Gauss-Newton steps from ``th`` on the pixels ``sel`` whose scene lies inside the frame under the
+        lens ``inside_k`` (None: the current step's k): the last step's (th, jac, resid, step), or None when the fit
+        cannot go on (a diverged map, too few points, a singular system). Converged: a step under ``tol`` (k, px)."""
+        sx_, sy_, sr2, star = px[sel], py[sel], r2[sel], target[sel]
+        for _ in range(iters):
+            t_x, t_y, k, g, o, c, c3 = th
+            qx, qy = _division_sample(sx_, sy_, t_x / radius, t_y / radius, k)
+            if not (np.isfinite(qx).all() and np.isfinite(qy).all()):
+                return None
+            bq = at(coef, qx, qy, 3, float(pad))
+            gxq, gyq = at(gx_img, qx, qy), at(gy_img, qx, qy)
+            # a radial gain fixed in the frame (vignetting) differs by ∇log V · t between p and where it moved
+            # from: (p·t) (c + c3 |p|²) for V = 1 - k r² up to the third order
+            pt = sx_ * t_x + sy_ * t_y
+            gain = 1.0 + g + (c + c3 * sr2) * pt
+            # the map's derivative in t_x, t_y (px) and k
+            d = _division_jacobian(sx_, sy_, qx, qy, t_x / radius, t_y / radius, k)
+            cols = [gain * (gxq * d[0] + gyq * d[1]), gain * (gxq * d[2] + gyq * d[3]),
+                    gain * radius * (gxq * d[4] + gyq * d[5])]
+            # only points whose scene lies inside the frame: a look rendered from a frame-sized scene repeats its
+            # border beyond it (a barrel lens's corners), a real lens would show more scene there; neither moves
+            # as t
+            ki = k if inside_k is None else inside_k
+            inside = (np.abs(sx_ / (1.0 + ki * sr2)) * radius <= cx - FLOW_MARGIN) & \
+                     (np.abs(sy_ / (1.0 + ki * sr2)) * radius <= cy - FLOW_MARGIN)
+            if inside.sum() < min_points:
+                return None
+            jac = np.stack(cols + [bq, np.ones_like(bq), bq * pt, bq * pt * sr2], 1)[inside]
+            resid = (star - (gain * bq + o))[inside]
+            if not np.isfinite(jac).all():
+                return None
+            try:
+                step = np.linalg.solve(jac.T @ jac, jac.T @ resid)
+            except np.linalg.LinAlgError:
+                return None
+            step[:2] = np.clip(step[:2], -1.0, 1.0)  # damped: at most 1 px and 0.05 in k a step (a far start)
+            step[2] = float(np.clip(step[2], -0.05, 0.05))
+            th = th + step
+            if abs(th[2]) >= FLOW_MAX_K or not np.isfinite(th).all():
+                return None
+            if abs(step[2]) < tol[0] and np.abs(step[:2]).max() < tol[1]:  # converged
+                break
+        return th, jac, resid, step
+
+    # coarse to fine: the steps from the start on every second pixel of every second row (a quarter of the cost),
+    # then on every pixel from where they ended, with the points inside the frame under the k they ended at: a set
+    # that follows each step's k makes the objective jump as points enter and leave it, and the steps then swing
+    # between two states instead of converging. If the coarse steps failed, the fine ones start afresh.
+    # A scene that moved less than half of MIN_DRIFT_PX on the coarse steps has no k to read: the fine steps are
+    # skipped (k has no hold on a still scene's map, so they would swing to the iteration limit).
+    every = np.ones(len(yy), bool)
+    coarse = gauss_newton(th, (yy % 2 == 0) & (xx % 2 == 0), 250, None, (1e-3, 1e-2))
+    if coarse is None:
+        last = gauss_newton(th, every, 1000, None, (1e-5, 1e-3))
+    elif math.hypot(coarse[0][0], coarse[0][1]) < 0.5 * MIN_DRIFT_PX:
+        last = coarse
+    else:
+        last = gauss_newton(coarse[0], every, 1000, float(coarse[0][2]), (1e-5, 1e-3))
+    if last is None:
+        return nan
+    th, jac, resid, step = last
+    jtj = jac.T @ jac
     dof = max(len(resid) - len(th), 1)
     cov = np.linalg.pinv(jtj) * float(np.sum((resid - jac @ step) ** 2)) / dof
     drift = float(math.hypot(th[0], th[1]))
