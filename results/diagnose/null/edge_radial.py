@@ -55,25 +55,32 @@ def case_frames(work: Path, base: int, k: int, hidden: str | None, strength: str
     return seeds
 
 
+def group_cases(group: str, workdir: str | Path):
+    """The cases of a group, ``clean:BASE:N`` or ``EFFECT:STRENGTH:BASE:N``: (k, seed set, its geometry) for k < N,
+    each seed set made once under ``workdir``."""
+    from synthaug.data.seedset import seed_geometry
+
+    parts = group.split(":")
+    if parts[0] == "clean":
+        hidden, strength, base, n = None, "default", int(parts[1]), int(parts[2])
+    else:
+        hidden, strength, base, n = parts[0], parts[1], int(parts[2]), int(parts[3])
+    for k in range(n):
+        seeds = case_frames(Path(workdir) / group.replace(":", "_"), base, k, hidden, strength)
+        yield k, seeds, seed_geometry(seeds)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("groups", nargs="+", help="clean:BASE:N or EFFECT:STRENGTH:BASE:N")
     ap.add_argument("--workdir", default="outputs/edge_radial")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
-    from synthaug.data.seedset import seed_geometry
 
     out = {}
     for group in a.groups:
-        parts = group.split(":")
-        if parts[0] == "clean":
-            hidden, strength, base, n = None, "default", int(parts[1]), int(parts[2])
-        else:
-            hidden, strength, base, n = parts[0], parts[1], int(parts[2]), int(parts[3])
         rows = []
-        for k in range(n):
-            seeds = case_frames(Path(a.workdir) / group.replace(":", "_"), base, k, hidden, strength)
-            geo = seed_geometry(seeds)
+        for k, seeds, geo in group_cases(group, a.workdir):
             p = seeds.patch_size
             per = []
             for i in range(len(seeds)):

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from edge_radial import case_frames  # noqa: E402
+from edge_radial import group_cases  # noqa: E402
 
 from synthaug.diagnose import frame_pattern as new  # noqa: E402
 
@@ -52,20 +52,12 @@ def main() -> int:
     ap.add_argument("--workdir", default="outputs/edge_radial")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
-    from synthaug.data.seedset import seed_geometry
 
     old = module_at(a.old_rev)
     out = {}
     for group in a.groups:
-        parts = group.split(":")
-        if parts[0] == "clean":
-            hidden, strength, base, n = None, "default", int(parts[1]), int(parts[2])
-        else:
-            hidden, strength, base, n = parts[0], parts[1], int(parts[2]), int(parts[3])
         rows = []
-        for k in range(n):
-            seeds = case_frames(Path(a.workdir) / group.replace(":", "_"), base, k, hidden, strength)
-            geo = seed_geometry(seeds)
+        for k, seeds, geo in group_cases(group, a.workdir):
             p = seeds.patch_size
             recs = seeds.records
             groups = [r.get("video") for r in recs] if len(recs) == len(seeds) else [None] * len(seeds)
