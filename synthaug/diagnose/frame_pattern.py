@@ -519,6 +519,14 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
     return a1 / a2 if a2 > 0 else float("nan")
 
 
+def _division_u(px: np.ndarray, py: np.ndarray, tx: float, ty: float, k: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``u = U(p) - t`` of the division model (``U(p) = p / (1 + k|p|²)``) and ``|p|²``: where the fixed point of
+    :func:`_division_sample` starts, and what :func:`_division_jacobian` differentiates."""
+    r2 = px * px + py * py
+    return px / (1.0 + k * r2) - tx, py / (1.0 + k * r2) - ty, r2
+
+
 def _division_sample(px: np.ndarray, py: np.ndarray, tx: float, ty: float, k: float,
                      iters: int = 16) -> tuple[np.ndarray, np.ndarray]:
     """Where the background frame shows what frame point ``p`` (normalised by the half diagonal) shows, for a
@@ -526,8 +534,7 @@ def _division_sample(px: np.ndarray, py: np.ndarray, tx: float, ty: float, k: fl
     ``D(U(p) - t)`` with ``U(p) = p / (1 + k|p|²)`` and ``D`` its inverse (fixed point ``q = u (1 + k|q|²)``,
     a contraction by ``2|k||q|² ≤ 0.3`` a step for ``|k| < 0.3`` within the frame: 16 steps leave ``0.3¹⁶ < 1e-8`` of
     the error, so :func:`_division_jacobian`, the exact map's derivative, is this sample's)."""
-    r2 = px * px + py * py
-    ux, uy = px / (1.0 + k * r2) - tx, py / (1.0 + k * r2) - ty
+    ux, uy, _ = _division_u(px, py, tx, ty, k)
     qx, qy = ux.copy(), uy.copy()
     with np.errstate(over="ignore", invalid="ignore"):  # a diverging iterate (|k| too large) ends NaN, checked
         for _ in range(iters):
@@ -561,8 +568,7 @@ def _division_jacobian(px: np.ndarray, py: np.ndarray, qx: np.ndarray, qy: np.nd
         >>> max(float(np.abs(a - n).max()) for a, n in zip(ana, num)) < 1e-6
         True
     """
-    r2 = px * px + py * py
-    ux, uy = px / (1.0 + k * r2) - tx, py / (1.0 + k * r2) - ty
+    ux, uy, r2 = _division_u(px, py, tx, ty, k)
     q2 = qx * qx + qy * qy
     s = 1.0 + k * q2
     den = 1.0 - 2.0 * k * (qx * ux + qy * uy)
