@@ -5,12 +5,13 @@
 # cell has none, so the option leaves it unchanged). Drones, test split, 100 real seeds, training seeds 0-2, every cell
 # trained on one machine: one chain per training seed (three on the 2 cores), then the three seeds read back together.
 # usage (repository root): results/synthetic/adaboost_baselines/run.sh
-# (Stop 56 ran the real-only cells as seed$s.log; the chains below then read them back from the cell cache.)
+# (Stop 56 trained the real-only cells first (seed$s.log), then ran the chains; their synthetic step was not run.)
 set -euo pipefail
 export PYTHONPATH=${PYTHONPATH:-.}
 D=results/synthetic/adaboost_baselines; R=results/synthetic/run_100.sh
 chain() {  # real only and the two baselines, then the synthetic cell (read-back of real only)
-  $R adaboost $D/seed${1}_baselines test "$1" --ada-transfer --synthetic-ratios --perturb-copies 20 --copy-paste-ratios 20
+  $R adaboost $D/seed${1}_baselines test "$1" --ada-transfer --synthetic-ratios \
+    --perturb-copies 20 --copy-paste-ratios 20
   $R adaboost $D/seed${1}_synthetic test "$1" --ada-transfer
 }
 for s in 0 1 2; do chain $s & done
