@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from synthaug.evaluate.results import ProtocolResult
-from synthaug.evaluate.stats import percentile_interval, resample_counts, resample_indices, seed_mean_samples
+from synthaug.evaluate.stats import bootstrap_statistic, seed_mean_samples
 
 
 def did(results: list[ProtocolResult], iou: float) -> tuple[float, float, float, float]:
@@ -25,13 +25,15 @@ def did(results: list[ProtocolResult], iou: float) -> tuple[float, float, float,
     for r in results:
         if r.protocol.fingerprint() != p.fingerprint() or r.stems != base.stems:
             raise ValueError(f"{r.condition!r} was scored under another protocol or on other videos")
-    v = len(base.stems)
-    counts = np.vstack([np.ones((1, v), dtype=np.int64),
-                        resample_counts(resample_indices(v, p.bootstrap.resamples, p.bootstrap.seed), v)])
-    a, b, c, d = (seed_mean_samples(r.pools(iou), counts) for r in results)
-    x = (b - a) - (d - c)
-    lo, hi = percentile_interval(x[1:], p.bootstrap.ci)
-    return float(x[0]), lo, hi, float(np.mean(x[1:] > 0))
+    pools = [r.pools(iou) for r in results]
+
+    def statistic(counts: np.ndarray) -> float:
+        a, b, c, d = (float(seed_mean_samples(pool, counts[None])[0]) for pool in pools)
+        return (b - a) - (d - c)
+
+    iv = bootstrap_statistic(statistic, len(base.stems), resamples=p.bootstrap.resamples, seed=p.bootstrap.seed,
+                             ci=p.bootstrap.ci)
+    return iv.estimate, iv.low, iv.high, float(np.mean(iv.samples > 0))
 
 
 def main() -> None:
