@@ -5,7 +5,8 @@
 # cell has none, so the option leaves it unchanged). Drones, test split, 100 real seeds, training seeds 0-2, every cell
 # trained on one machine: one chain per training seed (three on the 2 cores), then the three seeds read back together.
 # usage (repository root): results/synthetic/adaboost_baselines/run.sh
-# (Stop 56 trained the real-only cells first (seed$s.log), then ran the chains; their synthetic step was not run.)
+# (Stop 56 trained the real-only cells first (seed$s.log), then ran the chains; their synthetic step was not run.
+# The synthetic cells were trained by run_100.sh, one process per seed (stops 56-57; seed{0,1,2}_synthetic.log).)
 set -euo pipefail
 export PYTHONPATH=${PYTHONPATH:-.}
 D=results/synthetic/adaboost_baselines; R=results/synthetic/run_100.sh
