@@ -246,9 +246,9 @@ def train_adaboost(
         cascade_positives: the soft cascade's thresholds from the first this many ``positives`` only (the real
             ones, when the rest were added), ``cascade_quantile`` and ``cascade_margin`` unchanged. None: every
             positive (a training positive is then never rejected). With the minimum (quantile 0) over every
-            positive, a few added positives that score low set every stage's threshold: the 12-seed + 20x
-            synthetic drone detectors' stage thresholds were 2-60x lower than the real-only ones' and they ran
-            about 2.7x slower (``results/synthetic/adaboost_12/README.md``).
+            positive, a few added positives that score low set every stage's threshold: in the 12-seed + 20x
+            synthetic drone detectors (transfer rule) they were 2-60x lower than after recalibrating on the 12
+            real positives, which ran those detectors 2.5x faster (``results/synthetic/adaboost_12/README.md``).
 
     Returns:
         A trained :class:`AdaBoostDetector`.
