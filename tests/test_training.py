@@ -442,7 +442,7 @@ def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> 
     seen = []
     monkeypatch.setattr(ab, "train_adaboost",
                         lambda pos, neg, n_rounds, candidates, seed, positive_weights=None, energy_floor=0.0,
-                               source_positives=0:
+                               source_positives=0, cascade_positives=None:
                         seen.append(n_rounds) or 1 / 0)
     from synthaug.detectors.toy import toy_patches
 
