@@ -160,6 +160,41 @@ def test_source_positives_boost_as_the_numpy_dynamic_tradaboost_reference() -> N
             train_adaboost(pos, neg, n_rounds=2, candidates=10, source_positives=bad)
 
 
+def test_cascade_positives_set_the_thresholds_from_the_real_positives_only() -> None:
+    """``cascade_positives``: the same stumps, each stage's threshold the minimum partial score of the first k
+    positives minus 0.3 of the accumulated α (numpy reference from the stumps' own features); added positives that
+    look like background no longer loosen the stages, so fewer background windows are scored to the end."""
+    pos, neg = toy_patches(60, 120, seed=2)
+    bad = toy_patches(10, 10, seed=5)[1]  # 10 "added positives" that are background patches
+    both = torch.cat([pos, bad])
+    kw = dict(n_rounds=30, candidates=300, seed=0, source_positives=len(bad))
+    every = train_adaboost(both, neg, **kw)
+    real = train_adaboost(both, neg, cascade_positives=len(pos), **kw)
+    assert real.learners.rects.tolist() == every.learners.rects.tolist()
+    torch.testing.assert_close(real.alphas, every.alphas)
+    wl = real.learners
+    f = edge_orientation_energy(pos.double(), wl.rects, wl.orientations, wl.n_bins, wl.eps, wl.floor).numpy()
+    h = (f - wl.thresholds.double().numpy()) * wl.polarity.double().numpy() > 0
+    alphas = wl.weights.double().numpy()
+    partial = np.cumsum((2 * h - 1) * alphas, axis=1)
+    ends = np.arange(real.stage_size, len(alphas) + real.stage_size, real.stage_size).clip(max=len(alphas)) - 1
+    ref = partial[:, ends].min(0) - 0.3 * np.cumsum(alphas)[ends]
+    np.testing.assert_allclose(real.rejection[:-1].numpy(), ref[:-1], atol=1e-6)
+    assert real.rejection[-1] == -math.inf
+    assert (every.rejection <= real.rejection + 1e-9).all()  # the minimum over more positives
+    assert (every.rejection[:-1] < real.rejection[:-1] - 1e-6).any()  # the background "positives" set some stages
+    frame, _ = toy_frame(240, 320, n_objects=4, seed=7)
+    real.cascade = False
+    full = real.score_map(frame)  # the same stumps: the same full scores for both
+    real.cascade = True
+    kept_real = ((real.score_map(frame) - full).abs() < 1e-5).float().mean()
+    kept_every = ((every.score_map(frame) - full).abs() < 1e-5).float().mean()
+    assert kept_real < kept_every
+    for bad_k in (0, 71, 2.5, True):
+        with pytest.raises(ValueError, match="cascade_positives"):
+            train_adaboost(both, neg, n_rounds=2, candidates=10, cascade_positives=bad_k)
+
+
 def test_source_positives_that_look_like_background_cost_less_with_the_transfer_rule() -> None:
     """Added "positives" that are background patches pull plain AdaBoost's stumps off the objects; the transfer rule
     measures α on the real samples and lets those patches lose weight (held-out ROC-AUC from scipy's U statistic)."""

@@ -430,7 +430,7 @@ def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(caps
 
     base = ident(box_model="ridge")
     later = ("mining_select", "mining_patience", "box_model", "hog_kmeans_restarts", "cnn_finetune_epochs",
-             "mining_frame_scale", "ada_energy_floor", "ada_transfer")
+             "mining_frame_scale", "ada_energy_floor", "ada_transfer", "ada_cascade")
     assert base["options"] == {k: v for k, v in dataclasses.asdict(TrainOptions(ada_rounds=100)).items() if k not in later}
     assert ident(mining_select="fp", mining_patience=0, box_model="ridge") == base
     if R.TRAINING_VERSION == 6:  # the key computed before the three options existed (same protocol, paths, condition)
@@ -516,6 +516,12 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
     assert cnn_key(on) == cnn_key(default)
     assert R.train_options(R.build_parser().parse_args(["synthetic", "--ada-transfer", "--out", "x"])).ada_transfer
     assert not R.train_options(R.build_parser().parse_args(["synthetic", "--out", "x"])).ada_transfer
+    # AdaBoost's real-positive cascade: the same (added positives only; the flag reaches the options)
+    real = dataclasses.replace(default, ada_cascade="real")
+    assert ada_key(real, ada) == ada_key(default, ada) and ada_key(real, ada_syn) != ada_key(default, ada_syn)
+    assert R.train_options(R.build_parser().parse_args(["synthetic", "--ada-cascade", "real", "--out", "x"])
+                           ).ada_cascade == "real"
+    assert R.train_options(R.build_parser().parse_args(["synthetic", "--out", "x"])).ada_cascade == "all"
     for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"], ["--mining-stride", "0"], ["--cnn-finetune-epochs", "-1"]):
         with pytest.raises(SystemExit) as e:
             R.build_parser().parse_args(["learning-curve", *bad, "--out", "x"])

@@ -352,14 +352,14 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
                                                                         kind: str) -> None:
     """--synthetic-share for the CNN (its loss's sample weights) and AdaBoost (its positives' starting weights): the 8
     real seeds hold 1 - share of the positive class's weight. AdaBoost with --ada-transfer too: the 24 added
-    positives are its source positives."""
+    positives are its source positives; with --ada-cascade real, the 8 real ones set its cascade."""
     import synthaug.detectors.adaboost as ada
     import synthaug.detectors.lightning_module as lm
     from synthaug.detectors.video_training import AddedPositives, _check_options
 
     _check_options(kind, AddedPositives(perturb_copies=1, synthetic_share=0.5), frame_step=1, all_frames=False,
                    seedset=None, seed_count=8)  # accepted
-    seen, sources = [], []
+    seen, sources, cascades = [], [], []
     module, name, short = ((lm, "fit_patch_detector", {"epochs": 1}) if kind == "cnn" else
                            (ada, "train_adaboost", {"n_rounds": 3, "candidates": 50}))
     real_fit = getattr(module, name)
@@ -367,21 +367,25 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
     def spy(positives, negatives, **kw):
         seen.append((positives.shape[0], kw.get("positive_weights")))
         sources.append(kw.get("source_positives"))
+        cascades.append(kw.get("cascade_positives"))
         return real_fit(positives, negatives, **{**kw, **short})
 
     monkeypatch.setattr(module, name, spy)
     out = ws["root"] / "runs" / f"{kind}_share.pt"
     seedset = trained["meta"]["positives"]["seedset"]
+    flags = ["--ada-transfer", "--ada-cascade", "real"] if kind == "adaboost" else []
     assert _train(ws, out, "--detector", kind, "--seedset", seedset, "--perturb-copies", "3", "--synthetic-share", "0.25",
-                  "--mining-rounds", "0", *(["--ada-transfer"] if kind == "adaboost" else [])) == 0
+                  "--mining-rounds", "0", *flags) == 0
     (n, w), *finetune = seen
     assert sources[0] == (24 if kind == "adaboost" else None)
+    assert cascades[0] == (8 if kind == "adaboost" else None)
     assert n == 32 and w.shape == (32,)
     # the CNN then fine-tunes on the 8 real positives alone, unweighted (TrainOptions.cnn_finetune_epochs)
     assert finetune == ([(8, None)] if kind == "cnn" else [])
     assert float(w[:8].sum()) == pytest.approx(0.75 * 32) and float(w[8:].sum()) == pytest.approx(0.25 * 32)
     meta = json.loads(out.with_suffix(".json").read_text())
     assert meta["positives"]["synthetic_share"] == 0.25 and meta["options"]["ada_transfer"] == (kind == "adaboost")
+    assert meta["options"]["ada_cascade"] == ("real" if kind == "adaboost" else "all")
 
 
 @pytest.mark.parametrize(

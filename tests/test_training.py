@@ -310,7 +310,8 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
     from dataclasses import asdict
 
     old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items()
-           if k not in ("mining_select", "mining_patience", "mining_frame_scale", "ada_energy_floor", "ada_transfer")}
+           if k not in ("mining_select", "mining_patience", "mining_frame_scale", "ada_energy_floor", "ada_transfer",
+                        "ada_cascade")}
     not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
     only_hog = {k: v for k, v in old.items() if k != "cnn_finetune_epochs"}  # the CNN's fine-tuning: the CNN's keys
     # the keys of before the family defaults; no kind keeps every family-only field (AdaBoost's floor at its default)
@@ -441,7 +442,7 @@ def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> 
     seen = []
     monkeypatch.setattr(ab, "train_adaboost",
                         lambda pos, neg, n_rounds, candidates, seed, positive_weights=None, energy_floor=0.0,
-                               source_positives=0:
+                               source_positives=0, cascade_positives=None:
                         seen.append(n_rounds) or 1 / 0)
     from synthaug.detectors.toy import toy_patches
 
@@ -676,6 +677,38 @@ def test_ada_transfer_makes_the_added_positives_adaboosts_source(monkeypatch: py
     assert "ada_transfer" not in TrainOptions(ada_transfer=True).key_fields("hog")
     with pytest.raises(ValueError, match="ada_transfer"):
         TrainOptions(ada_transfer=1)
+
+
+def test_ada_cascade_real_calibrates_adaboosts_cascade_on_the_real_positives(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``TrainOptions.ada_cascade = "real"``: ``train_adaboost`` gets the real count as its ``cascade_positives``
+    when positives were added (none without a real count, with only real positives or at ``"all"``); AdaBoost's keys
+    carry it when set, no other family's; an unknown value is refused."""
+    import synthaug.detectors.adaboost as ada
+    from synthaug.detectors.toy import toy_patches
+
+    seen: list[int | None] = []
+    real_train = ada.train_adaboost
+
+    def spy(*a, **k):
+        seen.append(k.get("cascade_positives"))
+        return real_train(*a, **k)
+
+    monkeypatch.setattr(ada, "train_adaboost", spy)
+    pos, neg = toy_patches(30, 40, seed=2)
+    small = TrainOptions(ada_rounds=6, ada_candidates=60)
+    on = replace(small, ada_cascade="real")
+    det = train_detector("adaboost", pos, neg, 0, options=on, real_positives=20)
+    train_detector("adaboost", pos, neg, 0, options=on)                      # no real count: all real
+    train_detector("adaboost", pos, neg, 0, options=on, real_positives=30)   # nothing added
+    train_detector("adaboost", pos, neg, 0, options=small, real_positives=20)  # every positive
+    assert seen == [20, None, None, None]
+    ends = torch.tensor(det._stage_ends()) - 1
+    assert (det.partial_scores(pos[:20])[:, ends[:-1]] >= det.rejection[:-1]).all()  # no real positive rejected
+    assert TrainOptions(ada_cascade="real").key_fields("adaboost")["ada_cascade"] == "real"
+    assert "ada_cascade" not in TrainOptions().key_fields("adaboost")  # the cells before it
+    assert "ada_cascade" not in TrainOptions(ada_cascade="real").key_fields("cnn")
+    with pytest.raises(ValueError, match="ada_cascade"):
+        TrainOptions(ada_cascade="target")
 
 
 def test_refresh_positives_redraws_the_added_positives_between_rounds() -> None:

@@ -95,7 +95,7 @@ def add_adaboost_options(parser: argparse.ArgumentParser, *, keyed: bool = False
     ``keyed``: say in the help when an option becomes part of a runner cell's key.
     """
     from synthaug._checks import nonneg_float
-    from synthaug.detectors.training import TrainOptions
+    from synthaug.detectors.training import ADA_CASCADE, TrainOptions
 
     parser.add_argument("--ada-energy-floor", type=nonneg_float, default=TrainOptions.ada_energy_floor,
                         help="AdaBoost: energy floor of the stumps' normalisation, in units of the training negatives' "
@@ -106,6 +106,11 @@ def add_adaboost_options(parser: argparse.ArgumentParser, *, keyed: bool = False
                              "the source distribution: their misses lose weight, alpha is measured on the real positives "
                              "and the negatives (used only with added positives" +
                              ("; part of AdaBoost's cell keys when set)" if keyed else ")"))
+    parser.add_argument("--ada-cascade", choices=ADA_CASCADE, default=TrainOptions.ada_cascade,
+                        help="AdaBoost: the positives whose partial scores set the soft cascade's thresholds: all "
+                             "(every training positive) or real (the real ones only, when positives are added; a few "
+                             "added positives that score low otherwise loosen every stage" +
+                             ("; part of AdaBoost's cell keys when real)" if keyed else ")"))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -244,7 +249,8 @@ def main(args: argparse.Namespace) -> int:
                                mining_select=args.mining_select, mining_patience=args.mining_patience,
                                val_stride=args.val_frame_stride, box_model=args.box_model, scales=None if args.scales is None else tuple(args.scales),
                                mining_frame_scale=tuple(args.mining_frame_scale),
-                               ada_energy_floor=args.ada_energy_floor, ada_transfer=args.ada_transfer)
+                               ada_energy_floor=args.ada_energy_floor, ada_transfer=args.ada_transfer,
+                               ada_cascade=args.ada_cascade)
     except ValueError as e:
         return _err(str(e))
 

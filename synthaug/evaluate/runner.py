@@ -260,9 +260,10 @@ class ProtocolRunner:
             path = Path(condition.params.format(seed=seed))
             cond["params_sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()[:16] if path.is_file() else None
         options = self.options.key_fields(condition.kind)
-        if not condition.adds_positives():  # the CNN's fine-tuning on the real positives and AdaBoost's transfer
-            options.pop("cnn_finetune_epochs", None)  # rule act on added positives only: without them, the same
-            options.pop("ada_transfer", None)  # training and the same cell
+        if not condition.adds_positives():  # the CNN's fine-tuning on the real positives, AdaBoost's transfer rule
+            options.pop("cnn_finetune_epochs", None)  # and its real-positive cascade act on added positives only:
+            options.pop("ada_transfer", None)  # without them, the same training and the same cell
+            options.pop("ada_cascade", None)
         return {"what": "protocol_cell", "protocol": self.protocol.fingerprint(), "class": self.class_name,
                 "condition": cond, "seed": int(seed), "options": options,
                 "scales": None if self.scales is None else list(self.scales), "scored_scales": list(self.scales_scored()),
@@ -862,7 +863,7 @@ def train_options(args: argparse.Namespace) -> TrainOptions:
                                cnn_shift=args.cnn_shift, mining_select=args.mining_select,
                                mining_patience=args.mining_patience, box_model=args.box_model,
                                mining_frame_scale=tuple(args.mining_frame_scale), ada_energy_floor=args.ada_energy_floor,
-                               ada_transfer=args.ada_transfer)
+                               ada_transfer=args.ada_transfer, ada_cascade=args.ada_cascade)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
