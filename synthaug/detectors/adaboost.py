@@ -247,8 +247,9 @@ def train_adaboost(
             ones, when the rest were added), ``cascade_quantile`` and ``cascade_margin`` unchanged. None: every
             positive (a training positive is then never rejected). With the minimum (quantile 0) over every
             positive, a few added positives that score low set every stage's threshold: in the 12-seed + 20x
-            synthetic drone detectors (transfer rule) they were 2-60x lower than after recalibrating on the 12
-            real positives, which ran those detectors 2.5x faster (``results/synthetic/adaboost_12/README.md``).
+            synthetic drone detectors (transfer rule) the first five were 1.5-5.5x lower than after
+            recalibrating on the 12 real positives, which ran those detectors 2.5x faster
+            (``results/synthetic/adaboost_12/README.md``).
 
     Returns:
         A trained :class:`AdaBoostDetector`.
