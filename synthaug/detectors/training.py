@@ -135,7 +135,8 @@ class TrainOptions:
             end, at detection and in the mining. Measured as a proxy (the stored 12-seed + 20x synthetic drone
             detectors, transfer rule, recalibrated after training; test split, 3 seeds,
             ``results/synthetic/adaboost_12/README.md``): 2.5x the detection speed, AP@0.5 +0.032 [+0.014, +0.049]
-            (two seeds lower, one higher). Not yet the default: no detector has been trained with it.
+            (two seeds lower, one higher); at 100 seeds ± 0.001 (``results/synthetic/adaboost_baselines/``). Not
+            yet the default: no detector has been trained with it.
         cnn_epochs: passes over the training patches (each mirrored or not;
             ``PatchDetectorModule`` under ``lightning.Trainer``).
         cnn_batch_size: mini-batch size.
