@@ -42,12 +42,16 @@ WORK = Path("data/runs")
 ADDED = {"synthetic": "synthetic_ratio", "perturbed": "perturb_copies", "copy-paste": "copy_paste_ratio"}
 
 
-def stored_cells(seed: int, seed_count: int, added: str) -> tuple[Path, dict]:
+def load_docs(folder: Path) -> list[tuple[Path, dict]]:
+    """Every JSON document of a cell-cache folder, read once."""
+    return [(f, json.loads(f.read_text())) for f in sorted(folder.glob("*.json"))]
+
+
+def stored_cells(cells: list[tuple[Path, dict]], seed: int, seed_count: int, added: str) -> tuple[Path, dict]:
     """The stored drone AdaBoost test cell of ``seed``: ``seed_count`` real seeds + 20x ``added`` positives, by
     count, transfer rule, no other option (the cells of ``run.sh`` and of ``../adaboost_baselines/``)."""
     hits = []
-    for f in sorted((WORK / "cells").glob("*.json")):
-        doc = json.loads(f.read_text())
+    for f, doc in cells:
         idn = doc.get("identity", {})
         c = idn.get("condition", {})
         others = [k for k in ADDED.values() if k != ADDED[added] and c.get(k)]
@@ -90,13 +94,13 @@ def main() -> None:
     paths = DataPaths(work_dir=str(WORK))  # the runner's default folders and split, as run.sh used them
     runner = ProtocolRunner(proto, "drone", paths, CellCache(WORK / "cells", read_only=True),
                             scale_check=False, patches=False)
+    cells, detectors = load_docs(WORK / "cells"), load_docs(WORK / "cells" / "detectors")
     loose_parts, tight_parts, rows = [], [], []
     for seed in a.seeds:
-        cell_path, cell = stored_cells(seed, a.seed_count, a.added)
+        cell_path, cell = stored_cells(cells, seed, a.seed_count, a.added)
         stored = ProtocolResult.from_json(cell["result"]["scales"]["1.0"])
         # the cell's detector: the detector store's entry with the cell's training metadata
-        det_doc = next(json.loads(f.read_text()) for f in sorted((WORK / "cells" / "detectors").glob("*.json"))
-                       if json.loads(f.read_text()).get("result", {}).get("meta") == cell["result"]["train"])
+        det_doc = next(doc for _, doc in detectors if doc.get("result", {}).get("meta") == cell["result"]["train"])
         det_file = WORK / "cells" / "detectors" / det_doc["result"]["file"]
         loose = load_detector(det_file)
         pos = real_positives(SeedSet.load(cell["result"]["train"]["positives"]["seedset"]))
