@@ -516,12 +516,14 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
     assert cnn_key(on) == cnn_key(default)
     assert R.train_options(R.build_parser().parse_args(["synthetic", "--ada-transfer", "--out", "x"])).ada_transfer
     assert not R.train_options(R.build_parser().parse_args(["synthetic", "--out", "x"])).ada_transfer
-    # AdaBoost's real-positive cascade: the same (added positives only; the flag reaches the options)
-    real = dataclasses.replace(default, ada_cascade="real")
-    assert ada_key(real, ada) == ada_key(default, ada) and ada_key(real, ada_syn) != ada_key(default, ada_syn)
+    # AdaBoost's real-positive cascade (the default): the same (added positives only; the flag reaches the options)
+    old = dataclasses.replace(default, ada_cascade="all")
+    assert ada_key(old, ada) == ada_key(default, ada) and ada_key(old, ada_syn) != ada_key(default, ada_syn)
     assert R.train_options(R.build_parser().parse_args(["synthetic", "--ada-cascade", "real", "--out", "x"])
                            ).ada_cascade == "real"
-    assert R.train_options(R.build_parser().parse_args(["synthetic", "--out", "x"])).ada_cascade == "all"
+    assert R.train_options(R.build_parser().parse_args(["synthetic", "--ada-cascade", "all", "--out", "x"])
+                           ).ada_cascade == "all"
+    assert R.train_options(R.build_parser().parse_args(["synthetic", "--out", "x"])).ada_cascade == "real"  # default
     for bad in (["--ada-rounds", "0"], ["--ada-candidates", "-3"], ["--mining-stride", "0"], ["--cnn-finetune-epochs", "-1"]):
         with pytest.raises(SystemExit) as e:
             R.build_parser().parse_args(["learning-curve", *bad, "--out", "x"])

@@ -352,7 +352,8 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
                                                                         kind: str) -> None:
     """--synthetic-share for the CNN (its loss's sample weights) and AdaBoost (its positives' starting weights): the 8
     real seeds hold 1 - share of the positive class's weight. AdaBoost with --ada-transfer too: the 24 added
-    positives are its source positives; with --ada-cascade real, the 8 real ones set its cascade."""
+    positives are its source positives; the 8 real ones set its cascade (--ada-cascade real, the default; the CNN is
+    given --ada-cascade all, which reaches its metadata and nothing else)."""
     import synthaug.detectors.adaboost as ada
     import synthaug.detectors.lightning_module as lm
     from synthaug.detectors.video_training import AddedPositives, _check_options
@@ -373,7 +374,7 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
     monkeypatch.setattr(module, name, spy)
     out = ws["root"] / "runs" / f"{kind}_share.pt"
     seedset = trained["meta"]["positives"]["seedset"]
-    flags = ["--ada-transfer", "--ada-cascade", "real"] if kind == "adaboost" else []
+    flags = ["--ada-transfer"] if kind == "adaboost" else ["--ada-cascade", "all"]
     assert _train(ws, out, "--detector", kind, "--seedset", seedset, "--perturb-copies", "3", "--synthetic-share", "0.25",
                   "--mining-rounds", "0", *flags) == 0
     (n, w), *finetune = seen

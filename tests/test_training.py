@@ -314,16 +314,20 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
                         "ada_cascade")}
     not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
     only_hog = {k: v for k, v in old.items() if k != "cnn_finetune_epochs"}  # the CNN's fine-tuning: the CNN's keys
-    # the keys of before the family defaults; no kind keeps every family-only field (AdaBoost's floor at its default)
-    for kind, base in (("hog", only_hog), ("cnn", not_hog), (None, {**old, "ada_energy_floor": 1.0})):
+    # the keys of before the family defaults; no kind keeps every family-only field (AdaBoost's floor and cascade at
+    # their defaults)
+    for kind, base in (("hog", only_hog), ("cnn", not_hog),
+                       (None, {**old, "ada_energy_floor": 1.0, "ada_cascade": "real"})):
         assert TrainOptions().key_fields(kind) == base
         assert TrainOptions(mining_select="ap").key_fields(kind) == {**base, "mining_select": "ap"}
         assert TrainOptions(mining_patience=1).key_fields(kind) == {**base, "mining_patience": 1}
     ada = TrainOptions().key_fields("adaboost")
     assert (ada["ada_rounds"], ada["mining_select"], ada["mining_patience"]) == (300, "ap", 1)
-    assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100, ada_energy_floor=0).key_fields("adaboost") \
+    assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100, ada_energy_floor=0,
+                        ada_cascade="all").key_fields("adaboost") \
         == {k: v for k, v in not_hog.items() if k != "cnn_finetune_epochs"}
-    assert ada["ada_energy_floor"] == 1.0  # the floor changed AdaBoost's training: its default cells have new keys
+    # the floor and the real-positive cascade changed AdaBoost's training: its default cells have new keys
+    assert (ada["ada_energy_floor"], ada["ada_cascade"]) == (1.0, "real")
 
 
 def test_hog_kmeans_restarts_key_and_training(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -695,7 +699,7 @@ def test_ada_cascade_real_calibrates_adaboosts_cascade_on_the_real_positives(mon
 
     monkeypatch.setattr(ada, "train_adaboost", spy)
     pos, neg = toy_patches(30, 40, seed=2)
-    small = TrainOptions(ada_rounds=6, ada_candidates=60)
+    small = TrainOptions(ada_rounds=6, ada_candidates=60, ada_cascade="all")
     on = replace(small, ada_cascade="real")
     det = train_detector("adaboost", pos, neg, 0, options=on, real_positives=20)
     train_detector("adaboost", pos, neg, 0, options=on)                      # no real count: all real
@@ -705,7 +709,8 @@ def test_ada_cascade_real_calibrates_adaboosts_cascade_on_the_real_positives(mon
     ends = torch.tensor(det._stage_ends()) - 1
     assert (det.partial_scores(pos[:20])[:, ends[:-1]] >= det.rejection[:-1]).all()  # no real positive rejected
     assert TrainOptions(ada_cascade="real").key_fields("adaboost")["ada_cascade"] == "real"
-    assert "ada_cascade" not in TrainOptions().key_fields("adaboost")  # the cells before it
+    assert "ada_cascade" not in TrainOptions(ada_cascade="all").key_fields("adaboost")  # the cells before it
+    assert TrainOptions().ada_cascade == "real" and TrainOptions().key_fields("adaboost")["ada_cascade"] == "real"
     assert "ada_cascade" not in TrainOptions(ada_cascade="real").key_fields("cnn")
     with pytest.raises(ValueError, match="ada_cascade"):
         TrainOptions(ada_cascade="target")

@@ -7,10 +7,13 @@
 #   (writes OUT/ and OUT.log)
 # --effects-off none: every fitted effect, as these cells were run before the CNN's default left its blurs out
 # (stop 52); pass --effects-off default (or any other value: the last one given wins) for the family's default.
+# --ada-cascade all: AdaBoost's soft cascade from every training positive, as these cells were run before the
+# real-positive cascade became the default (stop 60); the last value given wins.
 set -euo pipefail
 det=$1; out=$2; split=$3; seeds=$4; shift 4
 PYOPENGL_PLATFORM=egl OMP_NUM_THREADS=1 /usr/bin/time -f "wall %e s, max RSS %M kB" \
   python -m synthaug.evaluate.runner synthetic --protocol configs/protocol/halmstad_v2.json --class drone \
   --detectors "$det" --seed-counts 100 --synthetic-ratios 20 --params 'data/runs/fits/drone_100_seed{seed}_hog.json' \
-  --no-scale-check --no-patches --eval-split "$split" --training-seeds $seeds --threads 1 --effects-off none "$@" \
+  --no-scale-check --no-patches --eval-split "$split" --training-seeds $seeds --threads 1 --effects-off none \
+  --ada-cascade all "$@" \
   --out "$out" > "$out.log" 2>&1

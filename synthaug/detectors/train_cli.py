@@ -107,10 +107,10 @@ def add_adaboost_options(parser: argparse.ArgumentParser, *, keyed: bool = False
                              "and the negatives (used only with added positives" +
                              ("; part of AdaBoost's cell keys when set)" if keyed else ")"))
     parser.add_argument("--ada-cascade", choices=ADA_CASCADE, default=TrainOptions.ada_cascade,
-                        help="AdaBoost: the positives whose partial scores set the soft cascade's thresholds: all "
-                             "(every training positive) or real (the real ones only, when positives are added; a few "
-                             "added positives that score low otherwise loosen every stage" +
-                             ("; part of AdaBoost's cell keys when real)" if keyed else ")"))
+                        help="AdaBoost: the positives whose partial scores set the soft cascade's thresholds: real "
+                             "(the default: the real ones only, when positives are added; a few added positives that "
+                             "score low otherwise loosen every stage) or all (every training positive, the training "
+                             "before stop 60" + ("; part of AdaBoost's cell keys when real)" if keyed else ")"))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
