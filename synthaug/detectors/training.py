@@ -135,9 +135,10 @@ class TrainOptions:
             end, at detection and in the mining. ``"real"`` is the default since stop 60 (halmstad drones,
             protocol v2 test split, 12 real seeds + 20x synthetic, 3 training seeds, trained with each cascade and
             paired, ``results/synthetic/adaboost_12/README.md``): with the transfer rule AP@0.5 0.321 -> 0.357,
-            +0.036 [+0.005, +0.067], 10/14 videos, and about 2.5x the detection speed; at 100 seeds the stored
-            detectors recalibrated move by 0.001 or less (``results/synthetic/adaboost_baselines/``). A few added
-            positives that score low otherwise loosen every stage (thresholds 2-60x looser at 12 seeds).
+            +0.036 [+0.005, +0.067], 10/14 videos; the stored detectors recalibrated ran 2.5x faster side by
+            side (stop 59); at 100 seeds their AP moved by 0.001 or less
+            (``results/synthetic/adaboost_baselines/``). A few added positives that score low otherwise loosen
+            every stage (thresholds 2-60x looser at 12 seeds).
         cnn_epochs: passes over the training patches (each mirrored or not;
             ``PatchDetectorModule`` under ``lightning.Trainer``).
         cnn_batch_size: mini-batch size.
