@@ -583,6 +583,40 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err
 
 
+def test_synthetic_share_default_is_the_familys_and_keeps_the_cells_keys(monkeypatch, capsys):
+    """``--synthetic-share`` unset: each family's own share, resolved into the condition. AdaBoost's (0.25) cell is
+    the cell of ``--synthetic-share 0.25`` (same key and name), ``count`` keeps the key AdaBoost's cells by count had
+    before the default (no share in it); HOG's default is by count (its former key); a real-only cell has no share."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    for share in (None, 0.25, "count"):
+        R.synthetic_comparison(None, detectors=["adaboost", "hog"], seed_count=12, synthetic_ratios=[20],
+                               params="f{seed}.json", perturb_copies=[5], synthetic_share=share)
+    default, explicit, count = (made[i * 6:(i + 1) * 6] for i in range(3))
+    assert [(c.kind, c.synthetic_share) for c in default] == [
+        ("adaboost", None), ("adaboost", 0.25), ("adaboost", 0.25), ("hog", None), ("hog", None), ("hog", None)]
+    assert [c.identity() for c in default] == [c.identity() for c in explicit[:3]] + [c.identity() for c in count[3:]]
+    assert [c.name for c in default[:3]] == [c.name for c in explicit[:3]]
+    assert default[1].name == "adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25)"
+    assert default[2].name == "adaboost / 12 seeds + 5x perturbed, share 0.25"
+    assert explicit[4].identity()["synthetic_share"] == 0.25 and explicit[4].name.endswith("share 0.25)")
+    before = R.Condition("x", "adaboost", seed_count=12, params="f{seed}.json", synthetic_ratio=20.0,
+                         synthetic_share="count")
+    assert count[1].identity() == before.identity() and "synthetic_share" not in before.identity()
+    assert count[1].name == "adaboost / 12 seeds + 20x synthetic (f{seed})"
+    assert R.Condition("x", "adaboost", synthetic_share=0.25).synthetic_share is None  # nothing added: no share
+    # the command line: a number or "count"; anything else is a usage error naming the option
+    parse = R.build_parser().parse_args
+    assert parse(["synthetic", "--out", "x"]).synthetic_share is None
+    assert parse(["synthetic", "--synthetic-share", "count", "--out", "x"]).synthetic_share == "count"
+    assert parse(["synthetic", "--synthetic-share", "0.1", "--out", "x"]).synthetic_share == 0.1
+    with pytest.raises(SystemExit) as e:
+        parse(["synthetic", "--synthetic-share", "half", "--out", "x"])
+    assert e.value.code == 2 and "--synthetic-share" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="synthetic_share"):
+        R.Condition("x", "adaboost", synthetic_ratio=20.0, synthetic_share="half")
+
+
 @pytest.mark.slow
 def test_dcnn_refit_cells_refit_against_each_rounds_network_and_redraw_the_synthetic_positives(ws, monkeypatch, capsys):
     """The d_CNN refit under the protocol (the paper's refit experiment, issue 16 item 5): a cell of its own key;

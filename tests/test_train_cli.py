@@ -389,6 +389,50 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
     assert meta["options"]["ada_cascade"] == ("real" if kind == "adaboost" else "all")
 
 
+@pytest.mark.parametrize("kind, share, real_weight", [("adaboost", None, 0.75), ("adaboost", "count", None),
+                                                      ("hog", None, None), ("hog", "count", None)])
+def test_synthetic_share_default_is_the_familys(ws: dict[str, Path], trained: dict[str, Any],
+                                                monkeypatch: pytest.MonkeyPatch, kind: str, share: str | None,
+                                                real_weight: float | None) -> None:
+    """Without --synthetic-share each family trains with its own share (FAMILY_SYNTHETIC_SHARE): AdaBoost's real
+    positives hold 3/4 of the positive weight (the metadata says 0.25), HOG weighs every positive the same (no
+    weights, no share in the metadata); --synthetic-share count weighs every positive the same in both."""
+    import synthaug.detectors.adaboost as ada
+
+    seen = []
+    module, name, short = ((ada, "train_adaboost", {"n_rounds": 3, "candidates": 50}) if kind == "adaboost" else
+                           (HOGDetector, "fit", {}))
+    real_fit = getattr(module, name)
+
+    def spy(positives, negatives, **kw):
+        seen.append((positives.shape[0], kw.get("positive_weights")))
+        return real_fit(positives, negatives, **{**kw, **short})
+
+    monkeypatch.setattr(module, name, staticmethod(spy) if kind == "hog" else spy)
+    out = ws["root"] / "runs" / f"{kind}_share_{share}.pt"
+    seedset = trained["meta"]["positives"]["seedset"]
+    flags = [] if share is None else ["--synthetic-share", share]
+    assert _train(ws, out, "--detector", kind, "--seedset", seedset, "--perturb-copies", "3", "--mining-rounds", "0",
+                  *flags) == 0
+    (n, w), = seen
+    assert n == 32
+    positives = json.loads(out.with_suffix(".json").read_text())["positives"]
+    if real_weight is None:
+        assert w is None and "synthetic_share" not in positives
+    else:
+        assert float(w[:8].sum()) == pytest.approx(real_weight * 32) and float(w[8:].sum()) == pytest.approx(8.0)
+        assert positives["synthetic_share"] == pytest.approx(1 - real_weight)
+
+
+def test_synthetic_share_is_a_number_or_count(capsys: pytest.CaptureFixture[str]) -> None:
+    from synthaug.detectors.train_cli import synthetic_share_arg
+
+    assert synthetic_share_arg("count") == "count" and synthetic_share_arg("0.25") == 0.25
+    with pytest.raises(SystemExit) as e:
+        cli_main(["train", "--synthetic-share", "half", "--out", "x.pt"])
+    assert e.value.code == 2 and "argument --synthetic-share: must be a number, got 'half'" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "case, option",
     [
@@ -405,6 +449,7 @@ def test_synthetic_share_reaches_the_cnn_loss_and_adaboost_start_weights(ws: dic
         ("copy_paste_without_params", "--copy-paste-ratio"),
         ("share_out_of_range", "--synthetic-share"),
         ("share_without_added", "--synthetic-share"),
+        ("share_count_without_added", "--synthetic-share"),
         ("negative_patience", "--mining-patience"),
         ("frame_scale_reversed", "--mining-frame-scale"),
         ("negative_downscaled", "--downscaled-copies"),
@@ -454,6 +499,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--perturb-copies", "1", "--synthetic-share", "1.0"]
     elif case == "share_without_added":
         extra += ["--synthetic-share", "0.5"]
+    elif case == "share_count_without_added":
+        extra += ["--synthetic-share", "count"]
     elif case == "negative_patience":
         extra += ["--mining-patience", "-1"]
     elif case == "frame_scale_reversed":

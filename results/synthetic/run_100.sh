@@ -9,11 +9,13 @@
 # (stop 52); pass --effects-off default (or any other value: the last one given wins) for the family's default.
 # --ada-cascade all: AdaBoost's soft cascade from every training positive, as these cells were run before the
 # real-positive cascade became the default (stop 60); the last value given wins.
+# --synthetic-share count: every positive weighs the same, as these cells were run before AdaBoost's default share
+# of 0.25 (stop 61); --synthetic-share 0.25 (or any other value given after it) wins.
 set -euo pipefail
 det=$1; out=$2; split=$3; seeds=$4; shift 4
 PYOPENGL_PLATFORM=egl OMP_NUM_THREADS=1 /usr/bin/time -f "wall %e s, max RSS %M kB" \
   python -m synthaug.evaluate.runner synthetic --protocol configs/protocol/halmstad_v2.json --class drone \
   --detectors "$det" --seed-counts 100 --synthetic-ratios 20 --params 'data/runs/fits/drone_100_seed{seed}_hog.json' \
   --no-scale-check --no-patches --eval-split "$split" --training-seeds $seeds --threads 1 --effects-off none \
-  --ada-cascade all "$@" \
+  --ada-cascade all --synthetic-share count "$@" \
   --out "$out" > "$out.log" 2>&1

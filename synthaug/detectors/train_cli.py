@@ -75,6 +75,15 @@ def effect_name(name: str) -> str:
     return name
 
 
+def synthetic_share_arg(text: str) -> float | str:
+    """An argparse type: ``--synthetic-share``, a number (the added positives' share, checked when training) or
+    ``count`` (every positive weighs the same; :data:`~synthaug.detectors.video_training.BY_COUNT`)."""
+    from synthaug._checks import finite_float
+    from synthaug.detectors.video_training import BY_COUNT
+
+    return BY_COUNT if text == BY_COUNT else finite_float(text)
+
+
 def _effects_off(values: list[str] | None) -> tuple[str, ...] | None:
     """``--effects-off`` as :class:`~synthaug.detectors.video_training.AddedPositives` takes it (None: the family's)."""
     from synthaug.detectors.video_training import TrainingInputError
@@ -171,10 +180,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--copy-paste-ratio", type=float, default=0.0,
                         help="copy-paste patches per real seed with --params: the seeds' objects cut out with their fitted "
                              "silhouettes, pasted on other seeds' backgrounds (a user's baseline)")
-    parser.add_argument("--synthetic-share", type=float, default=None,
-                        help="the share of the positive class's training weight held by the added positives (synthetic, "
-                             "copy-paste, perturbed, downscaled, faded), the rest by the real ones (HOG: the SVM's sample cost; "
-                             "CNN: the loss's sample weight; AdaBoost: the positives' starting weights; default: every positive weighs the same)")
+    parser.add_argument("--synthetic-share", type=synthetic_share_arg, default=None, metavar="SHARE",
+                        help="the share of the positive class's training weight held by the added positives "
+                             "(synthetic, copy-paste, perturbed, downscaled, faded), the rest by the real ones (HOG: the "
+                             "SVM's sample cost; CNN: the loss's sample weight; AdaBoost: the positives' starting "
+                             "weights), or 'count': every positive weighs the same; default: the family's (AdaBoost "
+                             "0.25, HOG and the CNN by count)")
     parser.add_argument("--seed", type=int, default=0, help="training seed: initialisation, negative sampling, the automatic split")
     parser.add_argument("--ingest-seed", type=int, default=0, help="`synthaug ingest --seed` of the seed draw (shards are reused per value)")
     parser.add_argument("--val-fraction", type=float, default=0.2, help="share of the class's videos kept for validation without --split")

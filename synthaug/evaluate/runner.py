@@ -40,9 +40,21 @@ import numpy as np
 
 from synthaug._checks import add_option, int_at_least, nonneg_float, positive_float
 from synthaug.data.captures import CAPTURE_SAMPLERS
-from synthaug.detectors.train_cli import add_adaboost_options, add_budget_options, budget_options, effect_name
+from synthaug.detectors.train_cli import (
+    add_adaboost_options,
+    add_budget_options,
+    budget_options,
+    effect_name,
+    synthetic_share_arg,
+)
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
-from synthaug.detectors.video_training import AddedPositives, resolve_effects_off, train_from_videos
+from synthaug.detectors.video_training import (
+    BY_COUNT,
+    AddedPositives,
+    resolve_effects_off,
+    resolve_synthetic_share,
+    train_from_videos,
+)
 from synthaug.evaluate.cells import CellCache
 from synthaug.evaluate.matching import match_videos
 from synthaug.evaluate.patches import patch_eval_set, score_patch_set
@@ -95,8 +107,10 @@ class Condition:
             each seed's fitted pose).
         copy_paste_ratio: copy-paste patches per real seed (the real objects cut out with the fit's
             silhouettes, pasted on other seeds' backgrounds; a user's baseline).
-        synthetic_share: the added positives' share of the positive class's training weight (None: by
-            count; :func:`~synthaug.detectors.video_training.train_from_videos`).
+        synthetic_share: the added positives' share of the positive class's training weight: a number,
+            ``"count"`` (every positive weighs the same) or None (the default: the family's,
+            :data:`~synthaug.detectors.video_training.FAMILY_SYNTHETIC_SHARE`), resolved here (None once resolved: by
+            count, so cells by count keep their keys, and a family's default share has the key of that share given).
         object_box: None (the paper's framing) or ``"seed"``: synthetic objects framed as ingest frames a labelled
             seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
         shape_variation: 0 (the paper) or the synthetic objects' shape variation around the mesh
@@ -124,7 +138,7 @@ class Condition:
     perturb_copies: int = 0
     pose_sampling: str = "uniform"
     copy_paste_ratio: float = 0.0
-    synthetic_share: float | None = None
+    synthetic_share: float | str | None = None
     downscaled_copies: int = 0
     faded_copies: int = 0
     object_box: str | None = None
@@ -139,6 +153,8 @@ class Condition:
         off = self.effects_off
         object.__setattr__(self, "effects_off", () if off is None and not self.synthetic_ratio
                            else resolve_effects_off(self.kind, off))
+        object.__setattr__(self, "synthetic_share", resolve_synthetic_share(self.kind, self.synthetic_share)
+                           if self.adds_positives() else None)
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -356,7 +372,8 @@ class ProtocolRunner:
             added=AddedPositives(params=self.params_for(condition, seed), mesh=condition.mesh,
                                  synthetic_ratio=condition.synthetic_ratio, perturb_copies=condition.perturb_copies,
                                  pose_sampling=condition.pose_sampling, copy_paste_ratio=condition.copy_paste_ratio,
-                                 synthetic_share=condition.synthetic_share,
+                                 synthetic_share=(condition.synthetic_share if condition.synthetic_share is not None
+                                                  else BY_COUNT if condition.adds_positives() else None),
                                  downscaled_copies=condition.downscaled_copies,
                                  faded_copies=condition.faded_copies, object_box=condition.object_box,
                                  faded_contrast=condition.faded_contrast, shape_variation=condition.shape_variation,
@@ -630,7 +647,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
                          fit_options: Mapping[str, Any] | None = None, pose_sampling: Sequence[str] = ("uniform",),
                          copy_paste_ratios: Sequence[float] = (), seeds: Sequence[int] | None = None,
-                         synthetic_share: float | None = None, downscaled_copies: Sequence[int] = (),
+                         synthetic_share: float | str | None = None, downscaled_copies: Sequence[int] = (),
                          faded_copies: Sequence[int] = (), object_box: Sequence[str | None] = (None,),
                          faded_contrast: tuple[float, float] | None = None,
                          shape_variation: Sequence[float] = (0.0,),
@@ -653,7 +670,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``faded_copies`` likewise, the objects made fainter against their own backgrounds
     (:func:`~synthaug.detectors.training_sets.faded_positives`; ``faded_contrast``: their contrast range, a negative
     one inverting the object's contrast). ``synthetic_share``: the added positives' share of
-    the positive class's weight in every synthetic, perturbed, copy-paste, downscaled and faded condition.
+    the positive class's weight in every synthetic, perturbed, copy-paste, downscaled and faded condition (None: each
+    family's own, named in the condition when it is a share; ``"count"``: every positive weighs the same).
     ``object_box``: each synthetic ratio once per framing (None: the paper's; ``"seed"``: as ingest frames a seed).
     ``shape_variation``: each synthetic ratio once per value (0: the mesh alone; > 0: shapes varied around it).
     ``capture_sampling``: each synthetic ratio once per way of drawing the capture parameters (``"seed"``: the
@@ -674,7 +692,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
-        share = "" if synthetic_share is None else f", share {synthetic_share:g}"
+        resolved = resolve_synthetic_share(kind, synthetic_share)
+        share = "" if resolved is None else f", share {resolved:g}"
         conds = [Condition(base, kind, seed_count=seed_count)]
         fit = _fit_label(dist, params, mesh)
         conds += [Condition(f"{base} + {r:g}x synthetic ({fit}"
@@ -822,8 +841,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--faded-contrast", type=float, nargs=2, metavar=("LOW", "HIGH"), default=None,
                     help="the faded copies' contrast range (default 0.3 0.9); a negative range, e.g. -1 -0.5, inverts "
                          "the object's contrast against its background (part of a cell's key)")
-    sy.add_argument("--synthetic-share", type=float, default=None,
-                    help="the added positives' share of the positive class's training weight (default: by count)")
+    sy.add_argument("--synthetic-share", type=synthetic_share_arg, default=None, metavar="SHARE",
+                    help="the added positives' share of the positive class's training weight, or 'count' (every "
+                         "positive weighs the same); default: the family's (AdaBoost 0.25, HOG and the CNN by count)")
     sy.add_argument("--object-box", nargs="+", choices=["none", "seed", "fit"], default=["none"],
                     help="framing of the synthetic objects, one condition per value: none (the paper's mesh scale), "
                          "seed (as ingest frames a labelled seed) or fit (at the fitted renders' median box size)")

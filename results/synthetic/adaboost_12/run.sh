@@ -7,6 +7,8 @@
 #   ADA_TRANSFER=0 run.sh ...   plain AdaBoost: the synthetic positives without the transfer rule (stop 59)
 # --ada-cascade all: AdaBoost's soft cascade from every training positive, as these cells were run before the
 # real-positive cascade became the default (stop 60); the last value given wins.
+# --synthetic-share count: every positive weighs the same, as these cells were run before AdaBoost's default share
+# of 0.25 (stop 61); --synthetic-share 0.25 (or any other value given after it) wins.
 set -euo pipefail
 split=$1; seeds=$2; out=$3; shift 3
 transfer=(--ada-transfer); if [ "${ADA_TRANSFER:-1}" = 0 ]; then transfer=(); fi
@@ -14,5 +16,5 @@ PYOPENGL_PLATFORM=egl OMP_NUM_THREADS=1 /usr/bin/time -f "wall %e s, max RSS %M 
   python -m synthaug.evaluate.runner synthetic --protocol configs/protocol/halmstad_v2.json --class drone \
   --detectors adaboost --seed-counts 12 --synthetic-ratios 20 --fit-distance hog "${transfer[@]}" \
   --no-scale-check --no-patches --eval-split "$split" --training-seeds $seeds --threads 1 --effects-off none \
-  --ada-cascade all "$@" \
+  --ada-cascade all --synthetic-share count "$@" \
   --out "$out" > "$out.log" 2>&1
