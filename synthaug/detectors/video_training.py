@@ -76,10 +76,10 @@ BY_COUNT = "count"
 FAMILY_SYNTHETIC_SHARE: dict[str, float] = {"adaboost": 0.25}
 """The added positives' share of the positive class's training weight by default, per detector family
 (:class:`AddedPositives`'s ``synthetic_share=None``); a family not listed weighs every positive the same. AdaBoost: the
-real positives hold 3/4 of the starting weight. Measured on the drones, 3 training seeds, AP@0.5 paired against the
-same cells by count: 100 seeds +0.046 [+0.015, +0.070] (``results/synthetic/drone_v2_adaboost_share/``), 12 seeds
-+0.044 [+0.007, +0.083] (``results/synthetic/adaboost_12/``); airplanes, 12 seeds, +0.057 [+0.004, +0.119]
-(``results/synthetic/airplane_v2/``).
+real positives hold 3/4 of the starting weight. Measured with 20x synthetic, 3 training seeds, test AP@0.5 paired
+against the same cells by count: drones, 100 seeds +0.046 [+0.015, +0.070]
+(``results/synthetic/drone_v2_adaboost_share/``); drones, 12 seeds +0.044 [+0.007, +0.083]
+(``results/synthetic/adaboost_12/``); airplanes, 12 seeds +0.057 [+0.004, +0.119] (``results/synthetic/airplane_v2/``).
 Chosen for the synthetic positives; the other added kinds (perturbed, copy-paste, ...) get it too, unmeasured."""
 
 
