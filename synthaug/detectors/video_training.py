@@ -79,8 +79,9 @@ FAMILY_SYNTHETIC_SHARE: dict[str, float] = {"adaboost": 0.25}
 real positives hold 3/4 of the starting weight. Measured with 20x synthetic, 3 training seeds, test AP@0.5 paired
 against the same cells by count: drones, 100 seeds +0.046 [+0.015, +0.070]
 (``results/synthetic/drone_v2_adaboost_share/``); drones, 12 seeds +0.044 [+0.007, +0.083]
-(``results/synthetic/adaboost_12/``); airplanes, 12 seeds +0.057 [+0.004, +0.119] (``results/synthetic/airplane_v2/``).
-Chosen for the synthetic positives; the other added kinds (perturbed, copy-paste, ...) get it too, unmeasured."""
+(``results/synthetic/adaboost_12/``; validation +0.038 [+0.009, +0.066]); airplanes, 12 seeds +0.057 [+0.004, +0.119]
+(``results/synthetic/airplane_v2/``; validation −0.018 [−0.050, +0.012]: not confirmed there). Chosen for the
+synthetic positives; the other added kinds (perturbed, copy-paste, ...) get it too, unmeasured."""
 
 
 def resolve_synthetic_share(kind: str, share: float | str | None) -> float | None:
