@@ -202,8 +202,8 @@ class AddedPositives:
             if isinstance(self.effects_off, str) or not all(isinstance(e, str) for e in self.effects_off):
                 raise ValueError(f"effects_off must be None or a sequence of effect names, got {self.effects_off!r}")
             object.__setattr__(self, "effects_off", tuple(self.effects_off))
-        if isinstance(self.synthetic_share, str) and self.synthetic_share != BY_COUNT:
-            raise ValueError(f"synthetic_share must be a number, {BY_COUNT!r} or None, got {self.synthetic_share!r}")
+        if isinstance(self.synthetic_share, str):
+            resolve_synthetic_share("", self.synthetic_share)  # raises on any string but BY_COUNT
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
