@@ -617,6 +617,23 @@ def test_synthetic_share_default_is_the_familys_and_keeps_the_cells_keys(monkeyp
         R.Condition("x", "adaboost", synthetic_ratio=20.0, synthetic_share="half")
 
 
+def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(monkeypatch):
+    """``--quantize on`` adds an 8-bit condition per synthetic ratio (named so, with ``quantize`` in its key and in the
+    ``AddedPositives`` its training gets); off, the default, keeps every former key and name."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           quantize=(False, True, True))
+    real, plain, eight = made
+    assert "quantize" not in plain.identity() and eight.identity()["quantize"] is True
+    assert {k: v for k, v in eight.identity().items() if k != "quantize"} == plain.identity()
+    assert plain.name == "adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25)"
+    assert eight.name == "adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25, 8-bit)"
+    parse = R.build_parser().parse_args
+    assert parse(["synthetic", "--out", "x"]).quantize == ["off"]
+    assert parse(["synthetic", "--quantize", "off", "on", "--out", "x"]).quantize == ["off", "on"]
+
+
 @pytest.mark.slow
 def test_dcnn_refit_cells_refit_against_each_rounds_network_and_redraw_the_synthetic_positives(ws, monkeypatch, capsys):
     """The d_CNN refit under the protocol (the paper's refit experiment, issue 16 item 5): a cell of its own key;

@@ -581,7 +581,16 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
                   "--mining-rounds", "0") == 0
     assert calls[-1] == (16, "seed", None)
     syn2 = json.loads(out2.with_suffix(".json").read_text())["synthetic"]
-    assert "capture_sampling" not in syn2 and "effects_off" not in syn2
+    assert "capture_sampling" not in syn2 and "effects_off" not in syn2 and "quantize" not in syn2
+    # --quantize reaches the generator and the metadata
+    out3 = ws["root"] / "runs" / "hog_fig9_8bit.pt"
+    quantized = []
+    monkeypatch.setattr(video_training, "synthetic_positives",
+                        lambda *a, quantize=False, **k: quantized.append(quantize) or fake(*a, **k))
+    assert _train(ws, out3, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
+                  "--mining-rounds", "0", "--quantize") == 0
+    assert quantized == [True] and json.loads(out3.with_suffix(".json").read_text())["synthetic"]["quantize"] is True
+    monkeypatch.setattr(video_training, "synthetic_positives", fake)
     # the family's default (effects_off=None): the CNN's synthetic positives leave the fitted blurs out (only those
     # the fit has), HOG and AdaBoost keep every effect, () keeps every effect for the CNN too
     from synthaug.detectors.train_cli import _effects_off

@@ -158,6 +158,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--shape-variation", type=nonneg_float, default=0.0,
                         help="vary the synthetic objects' shape around the mesh (axes stretched, parts such as arms and "
                              "rotors scaled) within +- this fraction, e.g. 0.3; default 0: the mesh alone")
+    parser.add_argument("--quantize", action="store_true",
+                        help="round the synthetic positives to 8-bit levels, as the real frames are stored (default: "
+                             "the renderer's continuous values, the paper's)")
     parser.add_argument("--capture-sampling", choices=list(CAPTURE_SAMPLERS), default="seed",
                         help="how the synthetic positives' capture parameters are drawn: seed (the paper: one seed's "
                              "fitted row), uniform (each between its fitted extremes, the paper's Fig. 10) or kde")
@@ -280,7 +283,8 @@ def main(args: argparse.Namespace) -> int:
                                  capture_sampling=args.capture_sampling, effects_off=_effects_off(args.effects_off),
                                  copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,
-                                 faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast)),
+                                 faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
+                                 quantize=args.quantize),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

@@ -258,6 +258,7 @@ def synthetic_positives(
     pose_sampling: str = "uniform",
     object_box: float | str | None = None,
     shape_variation: float = 0.0,
+    quantize: bool = False,
 ) -> Tensor:
     """``count`` synthetic object patches generated from a capture-parameter fit.
 
@@ -284,9 +285,12 @@ def synthetic_positives(
         shape_variation: 0 (the paper: the mesh alone) or > 0: each patch's object one of
             :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s shapes around the mesh (its
             ``shape_variation``: stretched axes, parts scaled, within ± this fraction).
+        quantize: round every patch to the 256 levels of 8 bits, as a camera delivers its frames and as the real
+            positives and negatives are stored. False (the paper): the renderer's continuous values, so no
+            synthetic patch has the exactly flat areas that real ones have.
 
     Returns:
-        Float patches ``(count, 1, P, P)`` in [0, 1].
+        Float patches ``(count, 1, P, P)`` in [0, 1] (with ``quantize``: multiples of 1/255).
     """
     from synthaug.data.synthetic import SyntheticObjectDataset
 
@@ -305,7 +309,8 @@ def synthetic_positives(
     for start in range(0, count, batch):
         items = ds.__getitems__(list(range(start, min(count, start + batch))))
         out.append(torch.stack([img for img, _ in items]))
-    return torch.cat(out).float().clamp(0, 1)
+    patches = torch.cat(out).float().clamp(0, 1)
+    return patches.mul(255).round().div(255) if quantize else patches
 
 
 def negative_pool(seedset: Any, extra: int = 3000, *, seed: int = 0) -> Tensor:

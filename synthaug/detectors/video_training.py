@@ -169,6 +169,9 @@ class AddedPositives:
             and later are redrawn from the file it returns (the same poses and draws, the same effects left out;
             the copy-paste positives keep ``params``' silhouettes). None: one fit for every round (the paper's
             default). Needs synthetic positives and mining rounds.
+        quantize: round the synthetic positives to 8-bit levels, as the real frames are stored
+            (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``quantize``). False: the renderer's
+            continuous values.
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; :data:`BY_COUNT` (``"count"``): every positive weighs the same, so the added ones
             hold ``added / (real + added)``; None (the default): the detector family's (:data:`FAMILY_SYNTHETIC_SHARE`:
@@ -192,6 +195,7 @@ class AddedPositives:
     faded_copies: int = 0
     faded_contrast: tuple[float, float] | None = None
     refit: Callable[[Path, Path, Any, int], str | Path] | None = None
+    quantize: bool = False
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
@@ -710,7 +714,8 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
         def draw(fit: str | Path) -> Tensor:
             return synthetic_positives(ss, mesh, fit, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
                                        object_box=added.object_box, shape_variation=added.shape_variation,
-                                       capture_sampling=added.capture_sampling, effects=effects)
+                                       capture_sampling=added.capture_sampling, effects=effects,
+                                       quantize=added.quantize)
 
         t0 = time.perf_counter()
         syn = draw(params)
@@ -718,13 +723,15 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
         ts.redraw_synthetic = draw
         ts.positives = torch.cat([ts.positives, syn])
         say(f"synthetic: {n_syn} patches from {params}"
-            f"{', without ' + ' and '.join(effects_off) if effects_off else ''} ({time.perf_counter() - t0:.0f}s)")
+            f"{', without ' + ' and '.join(effects_off) if effects_off else ''}{', 8-bit' if added.quantize else ''}"
+            f" ({time.perf_counter() - t0:.0f}s)")
     info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
                             "pose_sampling": pose_sampling,
                             **({"object_box": added.object_box} if added.object_box is not None else {}),
                             **({"shape_variation": added.shape_variation} if added.shape_variation else {}),
                             **({"capture_sampling": added.capture_sampling} if added.capture_sampling != "seed" else {}),
-                            **({"effects_off": list(effects_off)} if effects_off else {})}
+                            **({"effects_off": list(effects_off)} if effects_off else {}),
+                            **({"quantize": True} if added.quantize else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

@@ -123,6 +123,8 @@ class Condition:
         dcnn_refit: the d_CNN refit (CNN only): after every mining round the fit is refitted with the network just
             trained as its distance (:func:`~synthaug.fit.refit.refit_with_network`, the fit's own options otherwise)
             and the next round's synthetic positives are redrawn from it (``AddedPositives.refit``). False: one fit.
+        quantize: the synthetic positives rounded to 8-bit levels, as the real frames are (``AddedPositives``'
+            ``quantize``). False: the renderer's continuous values.
     """
 
     name: str
@@ -148,6 +150,7 @@ class Condition:
     capture_sampling: str = "seed"
     effects_off: tuple[str, ...] | None = None
     dcnn_refit: bool = False
+    quantize: bool = False
 
     def __post_init__(self) -> None:
         off = self.effects_off
@@ -169,7 +172,7 @@ class Condition:
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         for k, default in (("capture_sampling", "seed"), ("effects_off", ()),  # added later still: the same, with
-                           ("dcnn_refit", False)):
+                           ("dcnn_refit", False), ("quantize", False)):
             if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
@@ -381,7 +384,8 @@ class ProtocolRunner:
                                  # the family's own set goes as None: training keeps those the fit has
                                  effects_off=None if condition.effects_off == resolve_effects_off(condition.kind, None)
                                  else condition.effects_off,
-                                 refit=self._refit(condition, seed) if condition.dcnn_refit else None),
+                                 refit=self._refit(condition, seed) if condition.dcnn_refit else None,
+                                 quantize=condition.quantize),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -654,6 +658,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          capture_sampling: Sequence[str] = ("seed",),
                          effects_off: Sequence[str | Sequence[str] | None] = (None,),
                          dcnn_refit: Sequence[bool] = (False,),
+                         quantize: Sequence[bool] = (False,),
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -679,7 +684,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     synthetic ratio once per entry, as :func:`~synthaug.detectors.video_training.resolve_effects_off` reads it: None
     (the detector family's default), ``()`` (every fitted effect), an effect's name, or several names left out
     together (Fig. 9). ``dcnn_refit``: each synthetic ratio once per value (True: the fit refitted against the CNN
-    after every mining round, :class:`Condition`'s ``dcnn_refit``; CNN only).
+    after every mining round, :class:`Condition`'s ``dcnn_refit``; CNN only). ``quantize``: each synthetic ratio
+    once per value (True: the synthetic positives rounded to 8-bit levels, :class:`Condition`'s ``quantize``).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -702,12 +708,15 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{'' if not sv else f', shapes varied {sv:g}'}"
                             f"{'' if cs == 'seed' else f', capture {cs}'}"
                             f"{'' if not off else ', without ' + ' and '.join(off)}"
-                            f"{', d_CNN refit every round' if rf else ''})", kind, seed_count=seed_count,
+                            f"{', d_CNN refit every round' if rf else ''}"
+                            f"{', 8-bit' if qz else ''})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
-                            shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf)
+                            shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
+                            quantize=qz)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
-                  for cs in capture_sampling for off in offs for rf in refits]
+                  for cs in capture_sampling for off in offs for rf in refits
+                  for qz in dict.fromkeys(bool(v) for v in quantize)]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -862,6 +871,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the d_CNN refit, one condition per value: on refits each seed's fit with the CNN just trained "
                          "as the distance after every mining round and redraws the next round's synthetic positives "
                          "from it (CNN only); off keeps one fit")
+    sy.add_argument("--quantize", nargs="+", choices=["off", "on"], default=["off"],
+                    help="the synthetic positives rounded to 8-bit levels as the real frames are (on) or left with "
+                         "the renderer's continuous values (off, the paper), one condition per value")
     return p
 
 
@@ -928,7 +940,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              capture_sampling=tuple(args.capture_sampling),
                              effects_off=tuple(None if e == "default" else () if e == "none" else tuple(e.split("+"))
                                                for e in args.effects_off),
-                             dcnn_refit=tuple(v == "on" for v in args.dcnn_refit), out=args.out)
+                             dcnn_refit=tuple(v == "on" for v in args.dcnn_refit),
+                             quantize=tuple(v == "on" for v in args.quantize), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
