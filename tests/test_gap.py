@@ -450,6 +450,7 @@ def test_training_samples_are_the_detectors_synthetic_positives(tmp_path, pose_s
         assert not torch.equal(y, x)
         # quantize: the same patches on the 256 levels of 8 bits (the renderer's values are not on them)
         q = synthetic_positives(seeds, "quadcopter", fit, 6, seed=3, quantize=True)
+        torch.testing.assert_close(training_samples(seeds, "quadcopter", fit, 6, seed=3, quantize=True)[0], q)
         assert not torch.equal(x * 255, (x * 255).round())
         torch.testing.assert_close(q * 255, (q * 255).round(), rtol=0, atol=1e-4)
         assert float((q - x).abs().max()) <= 0.5 / 255 + 1e-6

@@ -293,6 +293,7 @@ def synthetic_positives(
         Float patches ``(count, 1, P, P)`` in [0, 1] (with ``quantize``: multiples of 1/255).
     """
     from synthaug.data.synthetic import SyntheticObjectDataset
+    from synthaug.effects.camera_functional import quantize_levels
 
     if count < 0:
         raise ValueError(f"count must be >= 0, got {count}")
@@ -310,7 +311,7 @@ def synthetic_positives(
         items = ds.__getitems__(list(range(start, min(count, start + batch))))
         out.append(torch.stack([img for img, _ in items]))
     patches = torch.cat(out).float().clamp(0, 1)
-    return patches.mul(255).round().div(255) if quantize else patches
+    return quantize_levels(patches) if quantize else patches
 
 
 def negative_pool(seedset: Any, extra: int = 3000, *, seed: int = 0) -> Tensor:

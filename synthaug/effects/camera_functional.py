@@ -58,6 +58,7 @@ __all__ = [
     "lens_distortion",
     "shot_noise",
     "dct_matrix",
+    "quantize_levels",
     "jpeg_table",
     "jpeg_difference_on_frame_grid",
     "jpeg_quantize",
@@ -578,6 +579,25 @@ def jpeg_table(quality: torch.Tensor | float) -> torch.Tensor:
     s = torch.where(q < 50, 5000.0 / q, 200.0 - 2.0 * q)
     base = torch.as_tensor(_JPEG_LUMA)
     return torch.floor((base * s[..., None, None] + 50.0) / 100.0).clamp(1.0, 255.0)
+
+
+def quantize_levels(image: torch.Tensor, bits: int = 8) -> torch.Tensor:
+    """The image on the ``2**bits`` levels a camera stores it with: ``round(x · L) / L``, ``L = 2**bits - 1``.
+
+    Real frames (and every patch cut from them) are 8-bit: flat areas are exactly flat. A render is not, so a
+    detector can learn "no gradient at all here" as a mark of real data. Values are in [0, 1]; the rounding is exact
+    (no gradient passes).
+
+    Example:
+        >>> quantize_levels(torch.tensor([0.0, 0.1, 0.5, 1.0])).mul(255).tolist()
+        [0.0, 26.0, 128.0, 255.0]
+        >>> quantize_levels(torch.tensor([0.3]), bits=1).tolist()
+        [0.0]
+    """
+    if not isinstance(bits, int) or not 1 <= bits <= 16:
+        raise ValueError(f"bits must be an int in [1, 16], got {bits!r}")
+    levels = float(2 ** bits - 1)
+    return image.mul(levels).round().div(levels)
 
 
 def jpeg_quantize(image: torch.Tensor, quality: torch.Tensor | float, *,

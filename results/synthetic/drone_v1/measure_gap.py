@@ -3,6 +3,8 @@ real seed patches in the detectors' features (HOG; the CNN's own d_CNN network),
 
     OMP_NUM_THREADS=1 PYTHONPATH=. python results/synthetic/drone_v1/measure_gap.py   # from the repository root
     # the object-noise fix: d_HOG fits with σ_n measured vs fitted, in HOG features only
+    # AdaBoost's own features (weak-learner responses of each training seed's real-only detector, one per --seeds):
+    #   ... --families hog adaboost --adaboost-detectors D0.pt D1.pt D2.pt --fits hog --no-perturbed --fitted-renders
     OMP_NUM_THREADS=1 PYTHONPATH=. python results/synthetic/drone_v1/measure_gap.py --fits hog hog_measured \
         --families hog --no-perturbed --pose-sampling uniform fitted --fitted-renders --out results/synthetic/drone_v1/gap_factors
 
@@ -24,6 +26,7 @@ import torch
 from synthaug.data.seedset import SeedSet
 from synthaug.diagnose.gap import gap_section, training_samples
 from synthaug.distances.cnn import cnn_distance
+from synthaug.effects.camera_functional import quantize_levels
 from synthaug.effects.perturb import perturb_patches
 from synthaug.params import CaptureParams
 
@@ -34,7 +37,10 @@ OUT = Path("results/synthetic/drone_v1/gap")
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fits", nargs="+", default=["hog", "cnn"], help="fit files data/runs/fits/drone_100_seed{s}_<name>.json")
-    ap.add_argument("--families", nargs="+", default=["hog", "cnn"], choices=["hog", "cnn"])
+    ap.add_argument("--families", nargs="+", default=["hog", "cnn"], choices=["hog", "cnn", "adaboost"])
+    ap.add_argument("--adaboost-detectors", nargs="+", default=None,
+                    help="with --families adaboost: a trained AdaBoost detector (save_detector file) per --seeds "
+                         "entry, in the same order; its weak learners give the features")
     ap.add_argument("--no-perturbed", action="store_true", help="leave out the perturbed real patches")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     ap.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=["uniform", "fitted"],
@@ -47,6 +53,9 @@ def main() -> None:
     ap.add_argument("--effects-off", nargs="+", default=["none"],
                     help="synthetic samples once per value: none (every fitted effect) or effects joined by + left out, "
                          "e.g. boundary_blur+motion_blur (the CNN's default)")
+    ap.add_argument("--quantize", nargs="+", choices=["off", "on"], default=["off"],
+                    help="synthetic samples once per value: on rounds them to 8-bit levels as the real frames are "
+                         "(synthaug train --quantize)")
     ap.add_argument("--fitted-renders", action="store_true",
                     help="also each fit's own renders S(Θ_i, B_i) (the fitted pose itself: no pose sampling)")
     ap.add_argument("--seed-set", default="data/runs/ingest_drone_seed{s}/seedsets/drone_100",
@@ -57,9 +66,12 @@ def main() -> None:
     ap.add_argument("--out", default=str(OUT))
     args = ap.parse_args()
     out = Path(args.out)
+    if "adaboost" in args.families and (args.adaboost_detectors is None
+                                        or len(args.adaboost_detectors) != len(args.seeds)):
+        ap.error("--families adaboost needs --adaboost-detectors, one per --seeds entry")
     torch.set_num_threads(1)
     out.mkdir(parents=True, exist_ok=True)
-    for s in args.seeds:
+    for i_seed, s in enumerate(args.seeds):
         t0 = time.perf_counter()
         ss = SeedSet.load(args.seed_set.format(s=s))
         n = len(ss)
@@ -77,24 +89,31 @@ def main() -> None:
                 for ps in args.pose_sampling:
                     for box in args.object_box:
                         for sv in args.shape_variation:
-                            for off in args.effects_off:
+                            for off, qz in ((o, q) for o in args.effects_off for q in args.quantize):
                                 gone = [] if off == "none" else off.split("+")
                                 name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
                                         + ("" if box == "none" else f"_box_{box}")
                                         + ("" if not sv else "_shapes_" + f"{sv:g}".replace(".", "p"))
-                                        + ("" if not gone else "_without_" + "_".join(gone)))
+                                        + ("" if not gone else "_without_" + "_".join(gone))
+                                        + ("_8bit" if qz == "on" else ""))
                                 effects = None if not gone else [e for e in fit_effects if e not in gone]
                                 syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2, pose_sampling=ps,
                                                              object_box=None if box == "none" else box,
-                                                             shape_variation=sv, effects=effects)
+                                                             shape_variation=sv, effects=effects,
+                                                             quantize=qz == "on")
                 if args.fitted_renders:
                     from synthaug.fit.render_fit import render_fitted
 
-                    syn[f"fitted_renders_{dist}"] = (render_fitted(ss, fit, args.mesh)[1].clamp(0, 1), groups)
+                    fitted = render_fitted(ss, fit, args.mesh)[1].clamp(0, 1)
+                    syn[f"fitted_renders_{dist}"] = (fitted, groups)
+                    if "on" in args.quantize:
+                        syn[f"fitted_renders_{dist}_8bit"] = (quantize_levels(fitted), groups)
         if not args.no_perturbed:
             per = perturb_patches(real, 5, generator=torch.Generator().manual_seed(s + 3))
             syn["perturbed"] = (per, np.tile(groups, 5))
         detectors = {}
+        if "adaboost" in args.families:
+            detectors["adaboost"] = args.adaboost_detectors[i_seed]
         if "cnn" in args.families:  # the CNN family in the features of a network trained on this seed set's real patches
             neg = torch.as_tensor(np.asarray(ss.negatives)).float().div(255).unsqueeze(1)
             detectors["cnn"] = cnn_distance(positives=real, negatives=neg, seed=s).net

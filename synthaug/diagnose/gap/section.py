@@ -72,14 +72,14 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
                      seed: int = 0, pose_sampling: str = "uniform",
                      object_box: float | str | None = None,
                      shape_variation: float = 0.0, effects: Sequence[str] | None = None,
-                     capture_sampling: str = "seed") -> tuple[Tensor, np.ndarray]:
+                     capture_sampling: str = "seed", quantize: bool = False) -> tuple[Tensor, np.ndarray]:
     """``count`` synthetic training patches of a fit, and the seed each one comes from.
 
     The dataset of :func:`synthaug.detectors.training_sets.synthetic_positives` (same arguments, same patches:
     one seed's fitted parameters and background, a random pose — ``pose_sampling="fitted"``: around the seed's
     fitted pose; ``object_box``: the objects' framing; ``shape_variation``: shapes varied around the mesh;
     ``effects``: the effects drawn, None: every fitted one; ``capture_sampling``: how the capture parameters are drawn;
-    as :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes them), keeping each item's ``seed_index`` so the
+    as :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes them; ``quantize``: rounded to 8-bit levels), keeping each item's ``seed_index`` so the
     two-sample test can hold a seed's real and synthetic patches out together.
 
     Returns:
@@ -97,6 +97,10 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
                                 capture_sampling=capture_sampling)  # type: ignore[arg-type]
     items = ds.__getitems__(list(range(count)))
     patches = torch.stack([img for img, _ in items]).float().clamp(0, 1)
+    if quantize:
+        from synthaug.effects.camera_functional import quantize_levels
+
+        patches = quantize_levels(patches)
     return patches, np.array([int(t["seed_index"]) for _, t in items], dtype=np.int64)
 
 
