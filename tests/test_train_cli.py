@@ -450,6 +450,7 @@ def test_synthetic_share_is_a_number_or_count(capsys: pytest.CaptureFixture[str]
         ("share_out_of_range", "--synthetic-share"),
         ("share_without_added", "--synthetic-share"),
         ("share_count_without_added", "--synthetic-share"),
+        ("quantize_without_synthetic", "--quantize"),
         ("negative_patience", "--mining-patience"),
         ("frame_scale_reversed", "--mining-frame-scale"),
         ("negative_downscaled", "--downscaled-copies"),
@@ -501,6 +502,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--synthetic-share", "0.5"]
     elif case == "share_count_without_added":
         extra += ["--synthetic-share", "count"]
+    elif case == "quantize_without_synthetic":
+        extra += ["--quantize"]
     elif case == "negative_patience":
         extra += ["--mining-patience", "-1"]
     elif case == "frame_scale_reversed":

@@ -506,6 +506,9 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
                 and added.faded_copies <= 0):
             raise TrainingInputError("--synthetic-share", "there are no added positives to weigh: give --synthetic-ratio, "
                                      "--copy-paste-ratio, --perturb-copies, --downscaled-copies or --faded-copies")
+    if added.quantize and synthetic_ratio <= 0:
+        raise TrainingInputError("--quantize", "there are no synthetic positives to round: give --params (and a "
+                                               "--synthetic-ratio above 0)")
     if kind not in DETECTORS:
         raise TrainingInputError("--detector", f"unknown detector {kind!r}; choose from {list(DETECTORS)}")
     if frame_step < 1:
