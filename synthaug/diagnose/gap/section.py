@@ -79,7 +79,8 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
     one seed's fitted parameters and background, a random pose — ``pose_sampling="fitted"``: around the seed's
     fitted pose; ``object_box``: the objects' framing; ``shape_variation``: shapes varied around the mesh;
     ``effects``: the effects drawn, None: every fitted one; ``capture_sampling``: how the capture parameters are drawn;
-    as :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes them; ``quantize``: rounded to 8-bit levels), keeping each item's ``seed_index`` so the
+    as :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes them; ``quantize``: rounded to 8-bit
+    levels), keeping each item's ``seed_index`` so the
     two-sample test can hold a seed's real and synthetic patches out together.
 
     Returns:
