@@ -617,7 +617,7 @@ def test_synthetic_share_default_is_the_familys_and_keeps_the_cells_keys(monkeyp
         R.Condition("x", "adaboost", synthetic_ratio=20.0, synthetic_share="half")
 
 
-def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(monkeypatch):
+def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkeypatch):
     """``--quantize on`` adds an 8-bit condition per synthetic ratio (named so, with ``quantize`` in its key and in the
     ``AddedPositives`` its training gets); off, the default, keeps every former key and name."""
     made = []
@@ -632,6 +632,18 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(monkeypatc
     parse = R.build_parser().parse_args
     assert parse(["synthetic", "--out", "x"]).quantize == ["off"]
     assert parse(["synthetic", "--quantize", "off", "on", "--out", "x"]).quantize == ["off", "on"]
+    # the cell's training gets it: AddedPositives.quantize as the condition says (stopped before any training)
+    seen = []
+
+    def fake_train(*args, added, **kwargs):
+        seen.append(added.quantize)
+        raise RuntimeError("stopped before training")
+
+    monkeypatch.setattr(R, "train_from_videos", fake_train)
+    for c in (plain, eight):
+        with pytest.raises(RuntimeError, match="stopped before training"):
+            make_runner(ws)._train(c, 0)
+    assert seen == [False, True]
 
 
 @pytest.mark.slow

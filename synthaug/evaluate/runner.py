@@ -692,6 +692,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     """
     results: dict[str, dict[str, ProtocolResult]] = {}
     refits = list(dict.fromkeys(bool(v) for v in dcnn_refit))
+    rounding = list(dict.fromkeys(bool(v) for v in quantize))
     check_dcnn_refit(detectors, refits)
     for kind in detectors:
         offs = list(dict.fromkeys(resolve_effects_off(kind, off) for off in effects_off))  # one per capture set
@@ -716,7 +717,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             quantize=qz)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
                   for cs in capture_sampling for off in offs for rf in refits
-                  for qz in dict.fromkeys(bool(v) for v in quantize)]
+                  for qz in rounding]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
