@@ -10,7 +10,7 @@ import pytest
 import torch
 from torch.utils.data import DataLoader, Dataset
 
-from synthaug.data.poses import FittedPose, UniformPose
+from synthaug.data.poses import FittedPose, SeedOffset, UniformPose
 from synthaug.data.procedural import sky_backgrounds
 from synthaug.data.synthetic import SyntheticObjectDataset, collate_detection
 from synthaug.params import CaptureParams
@@ -287,6 +287,51 @@ def test_jittered_pose_is_the_fitted_rotation_turned_in_the_objects_frame():
         a2, b2, c2 = jittered_pose(a, b, c, v)
         assert -np.pi <= a2 <= np.pi and -np.pi / 2 <= b2 <= np.pi / 2 and -np.pi <= c2 <= np.pi
     assert jittered_pose(0.3, -0.2, 1.0, np.zeros(3)) == pytest.approx((0.3, -0.2, 1.0), abs=1e-12)
+
+
+def test_at_seed_pose_sampling_places_each_object_at_its_seeds_fitted_offset(backgrounds, small_cache):
+    """``"uniform_at_seed"`` / ``"fitted_at_seed"``: the rotations of ``"uniform"`` / ``"fitted"`` (the same draws),
+    t_x, t_y each seed's fitted offset; the strings build :class:`SeedOffset` (same bytes); bad uses are refused."""
+    fit = CaptureParams.sample(4, generator=torch.Generator().manual_seed(9))
+    fit.t_x = torch.tensor([0.08, -0.06, 0.0, 0.12])  # offsets of their own, off the uniform ±0.1 draw's grid
+    fit.t_y = torch.tensor([-0.04, 0.1, 0.07, -0.11])
+    for rotation in ("uniform", "fitted"):
+        plain = make(backgrounds, small_cache, params=fit, pose_sampling=rotation, length=30)
+        at = make(backgrounds, small_cache, params=fit, pose_sampling=f"{rotation}_at_seed", length=30)
+        inner = UniformPose() if rotation == "uniform" else FittedPose(fit)
+        by_object = make(backgrounds, small_cache, params=fit, pose_sampling=SeedOffset(inner, fit), length=30)
+        moved = 0
+        for i in range(30):
+            (img_p, tp), (img_a, ta), (img_o, to) = plain[i], at[i], by_object[i]
+            assert int(ta["seed_index"]) == int(tp["seed_index"])
+            if int(ta["labels"]) != 1:
+                continue
+            s = int(ta["seed_index"])
+            np.testing.assert_allclose(ta["theta"][:3].numpy(), tp["theta"][:3].numpy(), atol=1e-6)  # rotation kept
+            assert ta["theta"][3:5].tolist() == pytest.approx([float(fit.t_x[s]), float(fit.t_y[s])], abs=1e-6)
+            assert torch.equal(img_a, img_o) and torch.equal(ta["theta"], to["theta"])
+            moved += int(not torch.equal(img_a, img_p))
+        assert moved > 10  # the offset moves the rendered object
+    # the offsets as an (N, 2) array, and the sampler's draws are the wrapped one's
+    g1, g2 = torch.Generator().manual_seed(4), torch.Generator().manual_seed(4)
+    a = SeedOffset(FittedPose(fit, 10.0), np.stack([fit.t_x.numpy(), fit.t_y.numpy()], 1)).sample(g1, 3, [0.3] * 5)
+    b = FittedPose(fit, 10.0).sample(g2, 3, [0.3] * 5)
+    assert [a[n] for n in ("alpha", "beta", "gamma")] == pytest.approx([b[n] for n in ("alpha", "beta", "gamma")])
+    assert (a["t_x"], a["t_y"]) == pytest.approx((0.12, -0.11))
+    with pytest.raises(ValueError, match="give params"):
+        make(backgrounds, small_cache, pose_sampling="uniform_at_seed")
+    with pytest.raises(ValueError, match="object_box"):
+        make(backgrounds, small_cache, params=fit, pose_sampling="fitted_at_seed", object_box=0.6)
+    with pytest.raises(ValueError, match="3 offsets but there are 4 seeds"):
+        make(backgrounds, small_cache, params=fit, pose_sampling=SeedOffset(UniformPose(), np.zeros((3, 2))))
+    with pytest.raises(ValueError, match="4 offsets but the sampler holds 3 rotations"):
+        SeedOffset(FittedPose(np.zeros((3, 3))), fit)
+    with pytest.raises(ValueError, match=r"\(N, 2\) array"):
+        SeedOffset(UniformPose(), np.zeros((4, 3)))
+    with pytest.raises(ValueError, match="must be finite"):
+        SeedOffset(UniformPose(), np.full((4, 2), np.nan))
+    with pytest.raises(ValueError, match="pose sampler"):
+        SeedOffset("uniform", fit)
 
 
 def test_fitted_pose_sampling_draws_around_each_seeds_fitted_pose(backgrounds, small_cache):

@@ -250,7 +250,8 @@ def test_bad_pose_sampling_is_refused_with_a_clear_message(small_cache):
     def make(**kw):
         return SyntheticObjectDataset("quadcopter", bgs, render=small_cache, length=4, **kw)
 
-    with pytest.raises(ValueError, match=r"pose_sampling must be 'uniform', 'fitted' or a pose sampler.*'kde'"):
+    with pytest.raises(ValueError, match=r"pose_sampling must be one of 'uniform', 'fitted', 'uniform_at_seed', "
+                                         r"'fitted_at_seed' or a pose sampler.*'kde'"):
         make(pose_sampling="kde")
     with pytest.raises(ValueError, match=r"pose_sampling must be .* got int"):
         make(pose_sampling=3)

@@ -646,6 +646,47 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
     assert seen == [False, True]
 
 
+def test_at_seed_pose_sampling_is_a_condition_of_its_own_and_refuses_an_object_box(ws, monkeypatch, capsys):
+    """``--pose-sampling uniform_at_seed fitted_at_seed``: one condition each (named so, ``pose_sampling`` in the key
+    and in the ``AddedPositives`` its training gets); the former names and keys unchanged; with an object box,
+    which centres the object itself, a usage error."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           pose_sampling=("uniform", "fitted", "uniform_at_seed", "fitted_at_seed"))
+    real, uniform, fitted, at, fitted_at = made
+    assert "pose_sampling" not in uniform.identity() and fitted.identity()["pose_sampling"] == "fitted"
+    assert at.identity()["pose_sampling"] == "uniform_at_seed"
+    assert {k: v for k, v in at.identity().items() if k != "pose_sampling"} == uniform.identity()
+    assert uniform.name == "hog / 12 seeds + 20x synthetic (f{seed})"
+    assert fitted.name == "hog / 12 seeds + 20x synthetic (f{seed}, fitted poses)"
+    assert at.name == "hog / 12 seeds + 20x synthetic (f{seed}, at the seeds' offsets)"
+    assert fitted_at.name == "hog / 12 seeds + 20x synthetic (f{seed}, fitted poses at the seeds' offsets)"
+    seen = []
+
+    def fake_train(*args, added, **kwargs):
+        seen.append(added.pose_sampling)
+        raise RuntimeError("stopped before training")
+
+    monkeypatch.setattr(R, "train_from_videos", fake_train)
+    for c in (uniform, at):
+        with pytest.raises(RuntimeError, match="stopped before training"):
+            make_runner(ws)._train(c, 0)
+    assert seen == ["uniform", "uniform_at_seed"]
+    with pytest.raises(ValueError, match="centres it"):
+        R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                               pose_sampling=("uniform_at_seed",), object_box=(None, "seed"))
+    with pytest.raises(SystemExit) as e:
+        R.main(["synthetic", "--pose-sampling", "uniform_at_seed", "--object-box", "none", "fit", "--out", "x"])
+    assert e.value.code == 2 and "--pose-sampling" in capsys.readouterr().err
+    from synthaug.detectors.video_training import AddedPositives
+
+    with pytest.raises(ValueError, match="pose_sampling must be one of"):
+        AddedPositives(pose_sampling="kde")
+    with pytest.raises(ValueError, match="choose one"):
+        AddedPositives(pose_sampling="fitted_at_seed", object_box="fit")
+
+
 @pytest.mark.slow
 def test_dcnn_refit_cells_refit_against_each_rounds_network_and_redraw_the_synthetic_positives(ws, monkeypatch, capsys):
     """The d_CNN refit under the protocol (the paper's refit experiment, issue 16 item 5): a cell of its own key;

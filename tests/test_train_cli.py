@@ -451,6 +451,7 @@ def test_synthetic_share_is_a_number_or_count(capsys: pytest.CaptureFixture[str]
         ("share_without_added", "--synthetic-share"),
         ("share_count_without_added", "--synthetic-share"),
         ("quantize_without_synthetic", "--quantize"),
+        ("at_seed_with_object_box", "--pose-sampling"),
         ("negative_patience", "--mining-patience"),
         ("frame_scale_reversed", "--mining-frame-scale"),
         ("negative_downscaled", "--downscaled-copies"),
@@ -504,6 +505,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--synthetic-share", "count"]
     elif case == "quantize_without_synthetic":
         extra += ["--quantize"]
+    elif case == "at_seed_with_object_box":
+        extra += ["--pose-sampling", "uniform_at_seed", "--object-box", "seed"]
     elif case == "negative_patience":
         extra += ["--mining-patience", "-1"]
     elif case == "frame_scale_reversed":

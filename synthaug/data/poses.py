@@ -10,7 +10,9 @@ A pose sampler is any object with ``sample(generator, seed_index, u) -> {"alpha"
 - ``seed_index``: the seed whose background and capture parameters the item uses.
 
 :class:`UniformPose` is the paper's draw (every view equally likely), :class:`FittedPose` draws around each
-seed's fitted rotation. Both are pure functions of their arguments.
+seed's fitted rotation, and :class:`SeedOffset` puts the object where its seed's object was (the seed's fitted
+t_x, t_y) whatever another sampler draws for the rotation. All are pure functions of their arguments.
+:data:`POSE_SAMPLING` names the choices a string can make (:func:`pose_sampler` builds them).
 
 Example:
     >>> import torch
@@ -33,7 +35,13 @@ from scipy.spatial.transform import Rotation
 from synthaug.params import POSE_NAMES, POSE_SPECS, CaptureParams
 from synthaug.render.pose import rotation_matrix
 
-__all__ = ["PoseSampler", "UniformPose", "FittedPose", "pose_ranges", "jittered_pose"]
+__all__ = ["PoseSampler", "UniformPose", "FittedPose", "SeedOffset", "POSE_SAMPLING", "pose_sampler", "pose_ranges",
+           "jittered_pose"]
+
+POSE_SAMPLING: tuple[str, ...] = ("uniform", "fitted", "uniform_at_seed", "fitted_at_seed")
+"""The pose samplings a string names: the rotation ``uniform`` (:class:`UniformPose`) or ``fitted`` (around each
+seed's fitted rotation, :class:`FittedPose` with its default jitter); ``_at_seed``: the object placed at its seed's
+fitted offset (:class:`SeedOffset`) instead of t_x, t_y drawn uniformly."""
 
 _ROTATION = ("alpha", "beta", "gamma")
 
@@ -111,20 +119,10 @@ class FittedPose:
 
     def __init__(self, rotations: Any, jitter_deg: float = 20.0,
                  ranges: Mapping[str, tuple[float, float]] | None = None) -> None:
-        if isinstance(rotations, (str, os.PathLike)):
-            rotations = CaptureParams.load(rotations)
-        if all(hasattr(rotations, n) for n in _ROTATION):
-            rows = list(zip(*([float(v) for v in getattr(rotations, n)] for n in _ROTATION)))
-        else:
-            a = np.asarray(rotations, dtype=np.float64)
-            if a.ndim != 2 or a.shape[1] != 3:
-                raise ValueError(f"rotations must have alpha/beta/gamma rows or be (N, 3), got shape {a.shape}")
-            rows = [tuple(float(v) for v in r) for r in a]
-        if not all(math.isfinite(v) for r in rows for v in r):
-            raise ValueError("rotations must be finite")
+        rows = _fitted_rows(rotations, _ROTATION)
         if not (math.isfinite(jitter_deg) and jitter_deg >= 0):
             raise ValueError(f"jitter_deg must be finite and >= 0, got {jitter_deg}")
-        self.rotations: list[tuple[float, float, float]] = rows
+        self.rotations: list[tuple[float, ...]] = rows
         self.jitter_deg = float(jitter_deg)
         self._uniform = UniformPose(ranges)
 
@@ -137,3 +135,93 @@ class FittedPose:
 
     def __repr__(self) -> str:
         return f"FittedPose({len(self.rotations)} seeds, jitter_deg={self.jitter_deg})"
+
+
+def _fitted_rows(fit: Any, names: Sequence[str]) -> list[tuple[float, ...]]:
+    """One row of the ``names`` fields per seed from a fit (its file, a CaptureParams) or an (N, len(names)) array."""
+    if isinstance(fit, (str, os.PathLike)):
+        fit = CaptureParams.load(fit)
+    if all(hasattr(fit, n) for n in names):
+        rows = list(zip(*([float(v) for v in getattr(fit, n)] for n in names)))
+    else:
+        a = np.asarray(fit, dtype=np.float64)
+        if a.ndim != 2 or a.shape[1] != len(names):
+            raise ValueError(f"give a fit with {'/'.join(names)} rows or an (N, {len(names)}) array, "
+                             f"got shape {a.shape}")
+        rows = [tuple(float(v) for v in r) for r in a]
+    if not all(math.isfinite(v) for r in rows for v in r):
+        raise ValueError(f"the fitted {'/'.join(names)} must be finite")
+    return rows
+
+
+class SeedOffset:
+    """Another sampler's rotation, with the object placed where its seed's object was: the seed's fitted t_x, t_y.
+
+    The background of a synthetic item is its seed's, with the real object inpainted away. A uniform t_x, t_y
+    moves the rendered object off that inpainted area and shows it; at the fitted offset the object covers it, as
+    the real object did. (Drones, 100 seeds, HOG features: the training positives are told from the real seed
+    patches less often at the seeds' offsets, ``results/synthetic/placement/``.)
+
+    Args:
+        sampler: the pose sampler whose rotation is kept (e.g. :class:`UniformPose`, :class:`FittedPose`).
+        offsets: each seed's offset: anything with ``t_x``, ``t_y`` rows (a fit's
+            :class:`~synthaug.params.CaptureParams`), a fit file or an ``(N, 2)`` array (fractions of the patch side).
+
+    Example:
+        >>> import torch
+        >>> s = SeedOffset(UniformPose(), [[0.05, -0.02], [0.0, 0.1]])
+        >>> p = s.sample(torch.Generator(), 1, [0.5] * 5)
+        >>> round(p["t_x"], 6), round(p["t_y"], 6), round(p["beta"], 6)
+        (0.0, 0.1, 0.0)
+    """
+
+    def __init__(self, sampler: Any, offsets: Any) -> None:
+        if not callable(getattr(sampler, "sample", None)):
+            raise ValueError(f"sampler must be a pose sampler (an object with sample(generator, seed_index, u)), "
+                             f"got {type(sampler).__name__}")
+        self.sampler = sampler
+        self.offsets: list[tuple[float, ...]] = _fitted_rows(offsets, ("t_x", "t_y"))
+        rotations = getattr(sampler, "rotations", None)
+        if rotations is not None and len(rotations) != len(self.offsets):
+            raise ValueError(f"{len(self.offsets)} offsets but the sampler holds {len(rotations)} rotations "
+                             f"(one of each per seed)")
+
+    def __len__(self) -> int:
+        return len(self.offsets)
+
+    def sample(self, generator: torch.Generator, seed_index: int, u: Sequence[float]) -> dict[str, float]:
+        """The wrapped sampler's pose (its draws from ``generator`` unchanged) with t_x, t_y the seed's offset."""
+        pose = dict(self.sampler.sample(generator, seed_index, u))
+        pose["t_x"], pose["t_y"] = self.offsets[seed_index]
+        return pose
+
+    def __repr__(self) -> str:
+        return f"SeedOffset({self.sampler!r}, {len(self.offsets)} seeds)"
+
+
+def pose_sampler(name: str, params: Any = None) -> Any:
+    """The sampler a :data:`POSE_SAMPLING` name stands for; ``params``: the fit (needed by all but ``"uniform"``).
+
+    Example:
+        >>> pose_sampler("uniform_at_seed", [[0.0, 0.0, 0.0, 0.1, -0.1]] * 2).__class__.__name__
+        'SeedOffset'
+    """
+    if name not in POSE_SAMPLING:
+        raise ValueError(f"pose_sampling must be one of {', '.join(map(repr, POSE_SAMPLING))} or a pose sampler "
+                         f"(an object with sample(generator, seed_index, u)), got {name!r}")
+    if name == "uniform":
+        return UniformPose()
+    if params is None:
+        raise ValueError(f"pose_sampling={name!r} draws from each seed's fitted pose: give params (a fit)")
+    if isinstance(params, (str, os.PathLike)):
+        params = CaptureParams.load(params)
+    if not all(hasattr(params, n) for n in POSE_NAMES):  # an (N, 5) array of α, β, γ, t_x, t_y
+        a = np.asarray(params, dtype=np.float64)
+        if a.ndim != 2 or a.shape[1] != len(POSE_NAMES):
+            raise ValueError(f"params must be a fit or an (N, 5) array of {POSE_NAMES}, got shape {a.shape}")
+        rotations: Any = a[:, :3]
+        offsets: Any = a[:, 3:]
+    else:
+        rotations = offsets = params
+    inner = FittedPose(rotations) if name.startswith("fitted") else UniformPose()
+    return SeedOffset(inner, offsets) if name.endswith("_at_seed") else inner

@@ -68,7 +68,7 @@ from synthaug.data.dataset_args import check_arguments, legacy_arguments, render
 from synthaug.data.epochs import EpochSampler, item_generator, item_seed
 from synthaug.data.items import ItemParams
 from synthaug.data.mixing import RealItems, mixed_counts, to_float_image
-from synthaug.data.poses import FittedPose, PoseSampler, UniformPose
+from synthaug.data.poses import POSE_SAMPLING, FittedPose, PoseSampler, SeedOffset, pose_sampler
 from synthaug.effects.pipeline import simulate
 from synthaug.effects.registry import ordered
 from synthaug.params import POSE_NAMES, POSE_SPECS, CaptureParams, fitted_object_scales
@@ -154,7 +154,10 @@ class SyntheticObjectDataset(Dataset):
             (:class:`~synthaug.data.poses.FittedPose`: each item's rotation is its seed's *fitted*
             rotation composed with a random rotation of axis uniform on the sphere and angle
             ~ N(0, 20°) per axis component: the views the real seeds show, and views near them; needs
-            ``params`` from a fit; t_x, t_y are drawn as with ``"uniform"``), or a pose sampler object:
+            ``params`` from a fit; t_x, t_y are drawn as with ``"uniform"``), ``"uniform_at_seed"`` /
+            ``"fitted_at_seed"`` (the same rotations, with the object at its seed's fitted offset t_x, t_y, over
+            the place its background was inpainted: :class:`~synthaug.data.poses.SeedOffset`; needs ``params``),
+            or a pose sampler object:
             ``UniformPose(ranges)`` / ``FittedPose(params, jitter_deg, ranges)`` for other ranges or spread,
             or any object with ``sample(generator, seed_index, u) -> {"alpha", "beta", "gamma", "t_x", "t_y"}``
             (:class:`~synthaug.data.poses.PoseSampler`).
@@ -205,7 +208,7 @@ class SyntheticObjectDataset(Dataset):
         label: int = 1,
         render: Literal["cache", "exact"] | Mapping[str, Any] | Any = "cache",
         capture_sampling: Literal["seed", "kde", "uniform"] | CaptureSampler = "seed",
-        pose_sampling: Literal["uniform", "fitted"] | PoseSampler = "uniform",
+        pose_sampling: Literal["uniform", "fitted", "uniform_at_seed", "fitted_at_seed"] | PoseSampler = "uniform",
         seed_geometry: Mapping[str, Any] | Literal["auto"] | None = "auto",
         shape_variation: float = 0.0,
         shape_variants: int = 8,
@@ -293,26 +296,24 @@ class SyntheticObjectDataset(Dataset):
         self._random_effects = [e for e in ordered(list(self.effects)) if e.is_random]
 
     def _set_up_pose(self, pose_sampling: Any, *, fitted: bool) -> None:
-        """The pose sampler: ``"uniform"`` / ``"fitted"`` built here, or the user's own object."""
+        """The pose sampler: a :data:`~synthaug.data.poses.POSE_SAMPLING` name built here, or the user's own object."""
         if isinstance(pose_sampling, str):
-            if pose_sampling == "uniform":
-                self.pose_sampler: PoseSampler = UniformPose()
-            elif pose_sampling == "fitted":
-                if not fitted:
-                    raise ValueError("pose_sampling='fitted' draws around each seed's fitted pose: give params "
-                                     "(a fit)")
-                self.pose_sampler = FittedPose(self.params)
-            else:
-                raise ValueError(f"pose_sampling must be 'uniform', 'fitted' or a pose sampler (an object with "
-                                 f"sample(generator, seed_index, u)), got {pose_sampling!r}")
+            self.pose_sampler: PoseSampler = pose_sampler(pose_sampling, self.params if fitted else None)
         elif callable(getattr(pose_sampling, "sample", None)):
             self.pose_sampler = pose_sampling
         else:
-            raise ValueError(f"pose_sampling must be 'uniform', 'fitted' or a pose sampler (an object with "
-                             f"sample(generator, seed_index, u)), got {type(pose_sampling).__name__}")
+            raise ValueError(f"pose_sampling must be one of {', '.join(map(repr, POSE_SAMPLING))} or a pose sampler "
+                             f"(an object with sample(generator, seed_index, u)), got {type(pose_sampling).__name__}")
         if isinstance(self.pose_sampler, FittedPose) and len(self.pose_sampler.rotations) != len(self.backgrounds):
             raise ValueError(f"the FittedPose holds {len(self.pose_sampler.rotations)} rotations but there are "
                              f"{len(self.backgrounds)} seeds (one fitted rotation per seed)")
+        if isinstance(self.pose_sampler, SeedOffset):
+            if len(self.pose_sampler) != len(self.backgrounds):
+                raise ValueError(f"the SeedOffset holds {len(self.pose_sampler)} offsets but there are "
+                                 f"{len(self.backgrounds)} seeds (one fitted offset per seed)")
+            if self.mode != "patch" or self.object_box is not None:
+                raise ValueError("a seed's offset (pose_sampling '..._at_seed', SeedOffset) places the object on its "
+                                 "seed's background patch: patch mode without object_box (which sets t_x, t_y itself)")
 
     def _set_up_renderer(self, mesh: Any, render: Any, *, shape_variation: float, shape_variants: int) -> None:
         """The view cache (given, or built now with the options ``render`` maps) or the exact renderer (its GL

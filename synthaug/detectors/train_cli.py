@@ -125,6 +125,7 @@ def add_adaboost_options(parser: argparse.ArgumentParser, *, keyed: bool = False
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug._checks import add_option, dataclass_defaults, nonneg_float, positive_float
     from synthaug.data.captures import CAPTURE_SAMPLERS
+    from synthaug.data.poses import POSE_SAMPLING
     from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
@@ -149,8 +150,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mesh", help="mesh of the synthetic object (default: the fit's mesh, else the built-in quadcopter)")
     parser.add_argument("--synthetic-ratio", type=float, default=None,
                         help="synthetic patches per real seed with --params (default 10 when --params is given, else 0)")
-    parser.add_argument("--pose-sampling", choices=["uniform", "fitted"], default="uniform",
-                        help="poses of the synthetic positives: uniform (the paper) or around each seed's fitted pose")
+    parser.add_argument("--pose-sampling", choices=list(POSE_SAMPLING), default="uniform",
+                        help="poses of the synthetic positives: uniform (the paper) or around each seed's fitted "
+                             "pose (fitted); *_at_seed: the same rotations with the object at its seed's fitted offset")
     parser.add_argument("--object-box", choices=["seed", "fit"], default=None,
                         help="frame each synthetic object as ingest frames a labelled seed, its box centred and its "
                              "longest side the seed set's object_fraction of the patch (seed) or the median size of the "
@@ -248,6 +250,9 @@ def main(args: argparse.Namespace) -> int:
         return _err(f"--mining-frame-scale: LOW must be <= HIGH, got {args.mining_frame_scale[0]:g} {args.mining_frame_scale[1]:g}")
     if args.synthetic_ratio is not None and args.params is None:
         return _err("--synthetic-ratio: synthetic positives need a fit: give --params FIT.json")
+    if args.pose_sampling.endswith("_at_seed") and args.object_box is not None:
+        return _err(f"--pose-sampling {args.pose_sampling}: places each object at its seed's offset, and --object-box "
+                    f"{args.object_box} centres it: give one of them")
     ratio = args.synthetic_ratio if args.synthetic_ratio is not None else (10.0 if args.params is not None else 0.0)
 
     import torch

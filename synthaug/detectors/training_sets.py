@@ -277,7 +277,8 @@ def synthetic_positives(
         seed_geometry: each seed's place in its frame, for position-aware camera effects
             (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`; default ``"auto"``: the seed
             set's); None: the patch is the frame.
-        pose_sampling: ``"uniform"`` (the paper) or ``"fitted"`` (around each seed's fitted pose; see
+        pose_sampling: ``"uniform"`` (the paper), ``"fitted"`` (around each seed's fitted pose), or either with
+            ``"_at_seed"``: the object at its seed's fitted offset (:data:`~synthaug.data.poses.POSE_SAMPLING`; see
             :class:`~synthaug.data.synthetic.SyntheticObjectDataset`).
         object_box: None (the paper) or each object framed as ingest frames a labelled seed: its coverage box
             centred, its longest side this fraction of the patch (``"seed"``: the seed set's ``object_fraction``;

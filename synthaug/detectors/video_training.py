@@ -138,8 +138,9 @@ class AddedPositives:
         mesh: mesh of the synthetic object (default: the fit's, else the built-in quadcopter).
         synthetic_ratio: synthetic patches per real seed (the paper's generator,
             :func:`~synthaug.detectors.training_sets.synthetic_positives`).
-        pose_sampling: poses of the synthetic positives: ``"uniform"`` (the paper) or ``"fitted"`` (around each
-            seed's fitted pose).
+        pose_sampling: poses of the synthetic positives: ``"uniform"`` (the paper), ``"fitted"`` (around each
+            seed's fitted pose), or either with ``"_at_seed"``: the object at its seed's fitted offset
+            (:data:`~synthaug.data.poses.POSE_SAMPLING`).
         object_box: None (the paper) or ``"seed"`` / a fraction: each synthetic object framed as ingest frames a
             labelled seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
         shape_variation: 0 (the paper) or > 0: the synthetic objects' shapes vary around the mesh within ± this
@@ -199,9 +200,15 @@ class AddedPositives:
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
+        from synthaug.data.poses import POSE_SAMPLING
 
         if self.capture_sampling not in CAPTURE_SAMPLERS:
             raise ValueError(f"capture_sampling must be one of {list(CAPTURE_SAMPLERS)}, got {self.capture_sampling!r}")
+        if self.pose_sampling not in POSE_SAMPLING:
+            raise ValueError(f"pose_sampling must be one of {list(POSE_SAMPLING)}, got {self.pose_sampling!r}")
+        if self.pose_sampling.endswith("_at_seed") and self.object_box is not None:
+            raise ValueError(f"pose_sampling {self.pose_sampling!r} places each object at its seed's offset, "
+                             f"object_box {self.object_box!r} centres it: choose one")
         if self.effects_off is not None:
             if isinstance(self.effects_off, str) or not all(isinstance(e, str) for e in self.effects_off):
                 raise ValueError(f"effects_off must be None or a sequence of effect names, got {self.effects_off!r}")

@@ -40,6 +40,7 @@ import numpy as np
 
 from synthaug._checks import add_option, int_at_least, nonneg_float, positive_float
 from synthaug.data.captures import CAPTURE_SAMPLERS
+from synthaug.data.poses import POSE_SAMPLING
 from synthaug.detectors.train_cli import (
     add_adaboost_options,
     add_budget_options,
@@ -77,6 +78,11 @@ before the mining rounds, so their validation false-positive count matches at th
 NMS after the box regression)."""
 
 
+# how a condition's name says its pose sampling (the former ", fitted poses" kept; "uniform": nothing)
+_POSE_NAMES = {"uniform": "", "fitted": ", fitted poses", "uniform_at_seed": ", at the seeds' offsets",
+               "fitted_at_seed": ", fitted poses at the seeds' offsets"}
+
+
 @dataclass(frozen=True)
 class Condition:
     """One training condition.
@@ -104,7 +110,7 @@ class Condition:
             (:func:`~synthaug.detectors.training_sets.faded_positives`).
         faded_contrast: their contrast range (None: the default; a negative range inverts the object's contrast).
         pose_sampling: poses of the synthetic positives (``"uniform"``: the paper; ``"fitted"``: around
-            each seed's fitted pose).
+            each seed's fitted pose; either with ``"_at_seed"``: the object at its seed's fitted offset).
         copy_paste_ratio: copy-paste patches per real seed (the real objects cut out with the fit's
             silhouettes, pasted on other seeds' backgrounds; a user's baseline).
         synthetic_share: the added positives' share of the positive class's training weight: a number,
@@ -646,6 +652,16 @@ def check_dcnn_refit(detectors: Sequence[str], dcnn_refit: Sequence[bool]) -> No
                          f"(run them without it)")
 
 
+def check_placement(pose_sampling: Sequence[str], object_box: Sequence[str | None]) -> None:
+    """Raise ``ValueError`` when a pose sampling that places each object at its seed's offset (``"*_at_seed"``) is
+    asked together with an object box (which centres the object itself): every pair of them would be a condition."""
+    at_seed = [ps for ps in pose_sampling if ps.endswith("_at_seed")]
+    boxes = [ob for ob in object_box if ob is not None]
+    if at_seed and boxes:
+        raise ValueError(f"pose sampling {at_seed} places each object at its seed's offset and object box {boxes} "
+                         f"centres it: run them in separate comparisons")
+
+
 def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
                          synthetic_ratios: Sequence[float] = (), fit_distance: str | Mapping[str, str] | None = None,
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
@@ -668,7 +684,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     of *each training seed's own* seed set: ``params`` (a path that may hold ``{seed}``) or, when
     it is missing, a fit made on the fly with ``fit_distance`` (a name, or detector -> name) and
     ``fit_options`` (other :class:`~synthaug.fit.fitting.FitConfig` fields); each ratio once per
-    ``pose_sampling`` (``"uniform"``: the paper's poses; ``"fitted"``: around each seed's fitted pose).
+    ``pose_sampling`` (``"uniform"``: the paper's poses; ``"fitted"``: around each seed's fitted pose; either with
+    ``"_at_seed"``: the object at its seed's fitted offset, :data:`~synthaug.data.poses.POSE_SAMPLING`).
     ``copy_paste_ratios``: the copy-paste baseline (the seeds' objects cut out with the same fit's
     silhouettes, pasted on other seeds' backgrounds), one condition per ratio. ``downscaled_copies``: the real seeds
     shown smaller (:func:`~synthaug.detectors.training_sets.downscaled_positives`), one condition per count;
@@ -694,6 +711,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     refits = list(dict.fromkeys(bool(v) for v in dcnn_refit))
     rounding = list(dict.fromkeys(bool(v) for v in quantize))
     check_dcnn_refit(detectors, refits)
+    check_placement(pose_sampling, object_box)
     for kind in detectors:
         offs = list(dict.fromkeys(resolve_effects_off(kind, off) for off in effects_off))  # one per capture set
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
@@ -704,7 +722,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         conds = [Condition(base, kind, seed_count=seed_count)]
         fit = _fit_label(dist, params, mesh)
         conds += [Condition(f"{base} + {r:g}x synthetic ({fit}"
-                            f"{'' if ps == 'uniform' else f', {ps} poses'}{share}"
+                            f"{_POSE_NAMES.get(ps, f', {ps} poses')}{share}"
                             f"{'' if ob is None else f', framed as the seeds ({ob})'}"
                             f"{'' if not sv else f', shapes varied {sv:g}'}"
                             f"{'' if cs == 'seed' else f', capture {cs}'}"
@@ -837,8 +855,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="fit missing --params files with this distance (default: each detector's own: hog, wl_learned, cnn)")
     sy.add_argument("--mesh", default=None, help="mesh of the synthetic object (default: the fit's)")
     sy.add_argument("--perturb-copies", type=int, nargs="*", default=[], help="perturbed copies per real positive")
-    sy.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=["uniform", "fitted"],
-                    help="poses of the synthetic positives: uniform (the paper), fitted (around each seed's fitted pose)")
+    sy.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=list(POSE_SAMPLING),
+                    help="poses of the synthetic positives: uniform (the paper), fitted (around each seed's fitted "
+                         "pose); *_at_seed: the same rotations with the object at its seed's fitted offset")
     sy.add_argument("--copy-paste-ratios", type=float, nargs="*", default=[],
                     help="copy-paste baseline: patches per real seed, the seeds' objects cut out with the fit's "
                          "silhouettes and pasted on other seeds' backgrounds")
@@ -911,6 +930,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             check_dcnn_refit(args.detectors, [v == "on" for v in args.dcnn_refit])
         except ValueError as e:
             parser.error(f"--dcnn-refit on: {e}")
+        try:
+            check_placement(args.pose_sampling, [None if b == "none" else b for b in args.object_box])
+        except ValueError as e:
+            parser.error(f"--pose-sampling: {e}")
     import torch
 
     torch.set_num_threads(args.threads)

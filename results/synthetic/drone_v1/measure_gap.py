@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from synthaug.data.poses import POSE_SAMPLING, FittedPose, SeedOffset
 from synthaug.data.seedset import SeedSet
 from synthaug.diagnose.gap import gap_section, training_samples
 from synthaug.distances.cnn import cnn_distance
@@ -43,8 +44,11 @@ def main() -> None:
                          "entry, in the same order; its weak learners give the features")
     ap.add_argument("--no-perturbed", action="store_true", help="leave out the perturbed real patches")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
-    ap.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=["uniform", "fitted"],
+    ap.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=list(POSE_SAMPLING),
                     help="poses of the synthetic samples (each fit once per choice)")
+    ap.add_argument("--pose-jitter", nargs="+", type=float, default=[20.0],
+                    help="with --pose-sampling fitted*: the spread of the rotation around each fitted pose, degrees "
+                         "(FittedPose's jitter_deg), one comparison each; 20: the library's default")
     ap.add_argument("--object-box", nargs="+", default=["none"], choices=["none", "seed", "fit"],
                     help="framing of the synthetic objects (SyntheticObjectDataset's object_box), one comparison each")
     ap.add_argument("--shape-variation", type=float, nargs="+", default=[0.0],
@@ -86,18 +90,26 @@ def main() -> None:
                                  - set(fit_effects))
                 if unknown:
                     ap.error(f"--effects-off: {unknown} not among the effects of {fit} ({list(fit_effects)})")
-                for ps in args.pose_sampling:
+                poses = [(ps, j) for ps in args.pose_sampling
+                         for j in (args.pose_jitter if ps.startswith("fitted") else [20.0])]
+                for ps, jit in poses:
+                    sampler: object = ps
+                    if jit != 20.0:  # FittedPose's default spread is what the name stands for
+                        sampler = FittedPose(fit, jit)
+                        sampler = SeedOffset(sampler, fit) if ps.endswith("_at_seed") else sampler
                     for box in args.object_box:
                         for sv in args.shape_variation:
                             for off, qz in ((o, q) for o in args.effects_off for q in args.quantize):
                                 gone = [] if off == "none" else off.split("+")
                                 name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
+                                        + ("" if jit == 20.0 else f"_jitter_{jit:g}")
                                         + ("" if box == "none" else f"_box_{box}")
                                         + ("" if not sv else "_shapes_" + f"{sv:g}".replace(".", "p"))
                                         + ("" if not gone else "_without_" + "_".join(gone))
                                         + ("_8bit" if qz == "on" else ""))
                                 effects = None if not gone else [e for e in fit_effects if e not in gone]
-                                syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2, pose_sampling=ps,
+                                syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2,
+                                                             pose_sampling=sampler,  # type: ignore[arg-type]
                                                              object_box=None if box == "none" else box,
                                                              shape_variation=sv, effects=effects,
                                                              quantize=qz == "on")
