@@ -11,6 +11,9 @@
 # real-positive cascade became the default (stop 60); the last value given wins.
 # --synthetic-share count: every positive weighs the same, as these cells were run before AdaBoost's default share
 # of 0.25 (stop 61); --synthetic-share 0.25 (or any other value given after it) wins.
+# The fits' mesh is whatever made data/runs/fits/drone_100_seed{s}_hog.json: Table 1's HOG and CNN rows used fits the
+# runner made (the built-in quadcopter); the AdaBoost rows of stops 61-63 used fits made with quadcopter.glb
+# (../adaboost_100_share/README.md). The mesh alone moves HOG by +0.049 (../mesh_factor/): pass --params to choose.
 set -euo pipefail
 det=$1; out=$2; split=$3; seeds=$4; shift 4
 PYOPENGL_PLATFORM=egl OMP_NUM_THREADS=1 /usr/bin/time -f "wall %e s, max RSS %M kB" \
