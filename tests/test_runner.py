@@ -617,6 +617,21 @@ def test_synthetic_share_default_is_the_familys_and_keeps_the_cells_keys(monkeyp
         R.Condition("x", "adaboost", synthetic_ratio=20.0, synthetic_share="half")
 
 
+def _added_positives(ws, monkeypatch, *conditions):
+    """The ``AddedPositives`` each condition's training gets from the runner (seed 0; stopped before any training)."""
+    seen = []
+
+    def fake_train(*args, added, **kwargs):
+        seen.append(added)
+        raise RuntimeError("stopped before training")
+
+    monkeypatch.setattr(R, "train_from_videos", fake_train)
+    for c in conditions:
+        with pytest.raises(RuntimeError, match="stopped before training"):
+            make_runner(ws)._train(c, 0)
+    return seen
+
+
 def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkeypatch):
     """``--quantize on`` adds an 8-bit condition per synthetic ratio (named so, with ``quantize`` in its key and in the
     ``AddedPositives`` its training gets); off, the default, keeps every former key and name."""
@@ -633,17 +648,7 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
     assert parse(["synthetic", "--out", "x"]).quantize == ["off"]
     assert parse(["synthetic", "--quantize", "off", "on", "--out", "x"]).quantize == ["off", "on"]
     # the cell's training gets it: AddedPositives.quantize as the condition says (stopped before any training)
-    seen = []
-
-    def fake_train(*args, added, **kwargs):
-        seen.append(added.quantize)
-        raise RuntimeError("stopped before training")
-
-    monkeypatch.setattr(R, "train_from_videos", fake_train)
-    for c in (plain, eight):
-        with pytest.raises(RuntimeError, match="stopped before training"):
-            make_runner(ws)._train(c, 0)
-    assert seen == [False, True]
+    assert [a.quantize for a in _added_positives(ws, monkeypatch, plain, eight)] == [False, True]
 
 
 def test_at_seed_pose_sampling_is_a_condition_of_its_own_and_refuses_an_object_box(ws, monkeypatch, capsys):
@@ -662,17 +667,7 @@ def test_at_seed_pose_sampling_is_a_condition_of_its_own_and_refuses_an_object_b
     assert fitted.name == "hog / 12 seeds + 20x synthetic (f{seed}, fitted poses)"
     assert at.name == "hog / 12 seeds + 20x synthetic (f{seed}, at the seeds' offsets)"
     assert fitted_at.name == "hog / 12 seeds + 20x synthetic (f{seed}, fitted poses at the seeds' offsets)"
-    seen = []
-
-    def fake_train(*args, added, **kwargs):
-        seen.append(added.pose_sampling)
-        raise RuntimeError("stopped before training")
-
-    monkeypatch.setattr(R, "train_from_videos", fake_train)
-    for c in (uniform, at):
-        with pytest.raises(RuntimeError, match="stopped before training"):
-            make_runner(ws)._train(c, 0)
-    assert seen == ["uniform", "uniform_at_seed"]
+    assert [a.pose_sampling for a in _added_positives(ws, monkeypatch, uniform, at)] == ["uniform", "uniform_at_seed"]
     with pytest.raises(ValueError, match="centres it"):
         R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                                pose_sampling=("uniform_at_seed",), object_box=(None, "seed"))

@@ -214,15 +214,6 @@ def pose_sampler(name: str, params: Any = None) -> Any:
         return UniformPose()
     if params is None:
         raise ValueError(f"pose_sampling={name!r} draws from each seed's fitted pose: give params (a fit)")
-    if isinstance(params, (str, os.PathLike)):
-        params = CaptureParams.load(params)
-    if not all(hasattr(params, n) for n in POSE_NAMES):  # an (N, 5) array of α, β, γ, t_x, t_y
-        a = np.asarray(params, dtype=np.float64)
-        if a.ndim != 2 or a.shape[1] != len(POSE_NAMES):
-            raise ValueError(f"params must be a fit or an (N, 5) array of {POSE_NAMES}, got shape {a.shape}")
-        rotations: Any = a[:, :3]
-        offsets: Any = a[:, 3:]
-    else:
-        rotations = offsets = params
-    inner = FittedPose(rotations) if name.startswith("fitted") else UniformPose()
-    return SeedOffset(inner, offsets) if name.endswith("_at_seed") else inner
+    rows = np.asarray(_fitted_rows(params, POSE_NAMES))  # α, β, γ, t_x, t_y per seed
+    inner = FittedPose(rows[:, :3]) if name.startswith("fitted") else UniformPose()
+    return SeedOffset(inner, rows[:, 3:]) if name.endswith("_at_seed") else inner

@@ -250,9 +250,12 @@ def main(args: argparse.Namespace) -> int:
         return _err(f"--mining-frame-scale: LOW must be <= HIGH, got {args.mining_frame_scale[0]:g} {args.mining_frame_scale[1]:g}")
     if args.synthetic_ratio is not None and args.params is None:
         return _err("--synthetic-ratio: synthetic positives need a fit: give --params FIT.json")
-    if args.pose_sampling.endswith("_at_seed") and args.object_box is not None:
-        return _err(f"--pose-sampling {args.pose_sampling}: places each object at its seed's offset, and --object-box "
-                    f"{args.object_box} centres it: give one of them")
+    from synthaug.detectors.video_training import check_placement
+
+    try:
+        check_placement([args.pose_sampling], [args.object_box])
+    except ValueError as e:
+        return _err(f"--pose-sampling: {e}")
     ratio = args.synthetic_ratio if args.synthetic_ratio is not None else (10.0 if args.params is not None else 0.0)
 
     import torch

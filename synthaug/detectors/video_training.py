@@ -45,8 +45,8 @@ from synthaug.detectors.training_sets import (
 )
 
 __all__ = ["AddedPositives", "FAMILY_EFFECTS_OFF", "resolve_effects_off", "FAMILY_SYNTHETIC_SHARE", "BY_COUNT",
-           "resolve_synthetic_share", "TrainingInputError", "VideoSet", "discover_videos", "split_by_video",
-           "train_from_videos", "METADATA_FORMAT"]
+           "resolve_synthetic_share", "check_placement", "TrainingInputError", "VideoSet", "discover_videos",
+           "split_by_video", "train_from_videos", "METADATA_FORMAT"]
 
 METADATA_FORMAT = "synthaug.trained_detector"
 METADATA_VERSION = 1
@@ -125,6 +125,16 @@ class VideoSet:
     labels_dir: Path
     classes: dict[str, str]
     missing_video: list[str] = field(default_factory=list)
+
+
+def check_placement(pose_sampling: Sequence[str], object_box: Sequence[Any]) -> None:
+    """Raise ``ValueError`` when a pose sampling that places each object at its seed's offset (``"*_at_seed"``) is
+    asked together with an object box, which centres the object itself (every pair of them would be trained)."""
+    at_seed = [ps for ps in pose_sampling if ps.endswith("_at_seed")]
+    boxes = [ob for ob in object_box if ob is not None]
+    if at_seed and boxes:
+        raise ValueError(f"pose sampling {at_seed} places each object at its seed's offset and object box {boxes} "
+                         f"centres it: choose one")
 
 
 @dataclass(frozen=True)
@@ -206,9 +216,7 @@ class AddedPositives:
             raise ValueError(f"capture_sampling must be one of {list(CAPTURE_SAMPLERS)}, got {self.capture_sampling!r}")
         if self.pose_sampling not in POSE_SAMPLING:
             raise ValueError(f"pose_sampling must be one of {list(POSE_SAMPLING)}, got {self.pose_sampling!r}")
-        if self.pose_sampling.endswith("_at_seed") and self.object_box is not None:
-            raise ValueError(f"pose_sampling {self.pose_sampling!r} places each object at its seed's offset, "
-                             f"object_box {self.object_box!r} centres it: choose one")
+        check_placement([self.pose_sampling], [self.object_box])
         if self.effects_off is not None:
             if isinstance(self.effects_off, str) or not all(isinstance(e, str) for e in self.effects_off):
                 raise ValueError(f"effects_off must be None or a sequence of effect names, got {self.effects_off!r}")

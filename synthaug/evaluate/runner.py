@@ -52,6 +52,7 @@ from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import (
     BY_COUNT,
     AddedPositives,
+    check_placement,
     resolve_effects_off,
     resolve_synthetic_share,
     train_from_videos,
@@ -650,16 +651,6 @@ def check_dcnn_refit(detectors: Sequence[str], dcnn_refit: Sequence[bool]) -> No
     if any(dcnn_refit) and others:
         raise ValueError(f"the d_CNN refit follows a CNN being trained; detectors {others} have no network "
                          f"(run them without it)")
-
-
-def check_placement(pose_sampling: Sequence[str], object_box: Sequence[str | None]) -> None:
-    """Raise ``ValueError`` when a pose sampling that places each object at its seed's offset (``"*_at_seed"``) is
-    asked together with an object box (which centres the object itself): every pair of them would be a condition."""
-    at_seed = [ps for ps in pose_sampling if ps.endswith("_at_seed")]
-    boxes = [ob for ob in object_box if ob is not None]
-    if at_seed and boxes:
-        raise ValueError(f"pose sampling {at_seed} places each object at its seed's offset and object box {boxes} "
-                         f"centres it: run them in separate comparisons")
 
 
 def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
