@@ -31,7 +31,8 @@ ROOT = Path(__file__).resolve().parents[1]  # results/synthetic
 
 @dataclass(frozen=True)
 class Factor:
-    """One measured swap. ``gap``: ((file, key), (file, key)) of item 1's gap JSONs (``gap_seed{0,1,2}.json`` in the
+    """One measured swap. ``base`` / ``variant``: a stored result, or several of one condition (e.g. one per training
+    seed), combined. ``gap``: ((file, key), (file, key)) of item 1's gap JSONs (``gap_seed{0,1,2}.json`` in the
     folder ``file``), base then variant; None where the swap was not scored that way."""
 
     cls: str
@@ -39,8 +40,8 @@ class Factor:
     category: str
     change: str
     split: str
-    base: str
-    variant: str
+    base: str | tuple[str, ...]
+    variant: str | tuple[str, ...]
     source: str
     gap: tuple[tuple[str, str], tuple[str, str]] | None = None
     note: str = field(default="")
@@ -55,6 +56,14 @@ _A = "adaboost_100_seeds_20x_synthetic_drone_100_seed_seed_hog_share_0.25"
 _P = "hog_100_seeds_20x_synthetic_hog_twin_prop_airplane"
 _PC = "cnn_100_seeds_20x_synthetic_hog_twin_prop_airplane"
 _PA = "adaboost_100_seeds_20x_synthetic_hog_twin_prop_airplane"
+
+
+def _seeds(template: str, seeds: tuple[int, ...] = (0, 1, 2, 3, 4)) -> tuple[str, ...]:
+    return tuple(template.format(s=s) for s in seeds)
+
+
+_GLB5 = _seeds("mesh_factor/hog_glb_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json")  # stop 64's fits
+_BI5 = _seeds("mesh_factor/hog_builtin_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin.json")
 _FITTED_ROT = "rotation: uniform -> around each seed's fitted rotation (20°)"
 _AT_SEED_GAP = (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_uniform_at_seed_poses"))
 
@@ -78,9 +87,14 @@ FACTORS: tuple[Factor, ...] = (
            _H, "drone_v2_ensemble/hog_100_fitted_poses/hog_100_seeds_20x_synthetic_hog_fitted_poses.json",
            "drone_v2_ensemble/", (("drone_box/gap", "synthetic_hog"), ("drone_box/gap", "synthetic_hog_fitted_poses"))),
     Factor("drone", "hog", "silhouette (mesh)", "mesh of the fits: built-in quadcopter -> quadcopter.glb", "test",
-           "mesh_factor/hog_100_builtin/hog_100_seeds_20x_synthetic_hog.json",
-           "placement/hog_100/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json", "mesh_factor/",
+           _BI5, _GLB5, "mesh_factor/",
            (("mesh_factor/gap_builtin", "synthetic_hog_builtin"), ("placement/gap", "synthetic_hog"))),
+    Factor("drone", "hog", "appearance (object noise level)", "σ_n of the built-in fits -> of the .glb fits, seed by "
+           "seed (built-in mesh)", "test", _BI5, _seeds("mesh_factor/hog_builtin_gnoise_seed{s}/"
+           "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_gnoise.json"), "mesh_factor/"),
+    Factor("drone", "hog", "appearance (object noise level)", "σ_n of the .glb fits -> of the built-in fits, seed by "
+           "seed (.glb mesh)", "test", _GLB5, _seeds("mesh_factor/hog_glb_bnoise_seed{s}/"
+           "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_glb_bnoise.json"), "mesh_factor/"),
     Factor("drone", "hog", "silhouette (shape variation)", "shape: the mesh alone -> varied ±30 % (8 shapes)", "test",
            "drone_v2_ensemble/hog_100_baselines/hog_100_seeds_20x_synthetic_hog.json",
            "shape_variation/hog_test/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_shapes_varied_0.3.json",
@@ -137,8 +151,11 @@ FACTORS: tuple[Factor, ...] = (
            f"table2/cnn_hog/{_CS}.json", "table2/cnn_cnn/cnn_100_seeds_20x_synthetic_drone_100_seed_seed_cnn.json",
            "table2/"),
     Factor("drone", "cnn", "silhouette (mesh)", "mesh of the fits: built-in quadcopter -> quadcopter.glb (blurs "
-           "left out)", "test", f"mesh_factor/cnn_100_builtin/cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog_"
-           f"builtin_{_NB}.json", f"placement/cnn_100/{_CS}_{_NB}.json", "mesh_factor/",
+           "left out; seeds 0-2 stop 63's fits, 3-4 stop 64's)", "test",
+           (f"mesh_factor/cnn_100_builtin/{_CS}_builtin_{_NB}.json",
+            *_seeds(f"mesh_factor/cnn_builtin_seed{{s}}/{_CS}_builtin_{_NB}.json", (3, 4))),
+           (f"placement/cnn_100/{_CS}_{_NB}.json", *_seeds(f"mesh_factor/cnn_glb_seed{{s}}/{_CS}_{_NB}.json", (3, 4))),
+           "mesh_factor/",
            (("mesh_factor/gap_builtin", "synthetic_hog_builtin"), ("placement/gap", "synthetic_hog"))),
     Factor("drone", "cnn", "placement", "t_x, t_y: uniform -> each seed's fitted offset (.glb fits, blurs left out)",
            "test", f"placement/cnn_100/{_CS}_{_NB}.json", f"placement/cnn_100/{_CS}_at_the_seeds_offsets_{_NB}.json",
@@ -230,8 +247,9 @@ FACTORS: tuple[Factor, ...] = (
 )
 
 
-def _load(path: str) -> ProtocolResult:
-    return ProtocolResult.load(ROOT / path)
+def _load(paths: str | tuple[str, ...]) -> ProtocolResult:
+    parts = (paths,) if isinstance(paths, str) else paths
+    return ProtocolResult.combine([ProtocolResult.load(ROOT / p) for p in parts])
 
 
 def _gap_accuracy(folder: str, key: str) -> float:
