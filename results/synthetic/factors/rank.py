@@ -289,18 +289,18 @@ def measure(f: Factor) -> Row:
     if base.split != f.split:
         raise ValueError(f"{f.change}: the files hold split {base.split!r}, the manifest says {f.split!r}")
     seeds = tuple(s for s in base.seed_ids if s in set(var.seed_ids))
-    b = base.protocol.bootstrap
-    kw = dict(resamples=b.resamples, seed=b.seed, ci=b.ci, stems=base.stems)
+    boot = base.protocol.bootstrap
+    kw = dict(resamples=boot.resamples, seed=boot.seed, ci=boot.ci, stems=base.stems)
     d = {iou: paired_difference(base.pools(iou), var.pools(iou), **kw) for iou in (0.5, 0.3)}
-    mean = lambda r: float(np.mean([r.per_seed_ap(0.5)[s] for s in seeds]))  # noqa: E731
     w = d[0.5].wins
     gap = None if f.gap is None else (_gap_accuracy(*f.gap[0]), _gap_accuracy(*f.gap[1]))
     tri = lambda x: (x.difference.estimate, x.difference.low, x.difference.high)  # noqa: E731
     wins = f"{w.improved}/{w.improved + w.worse + w.tied}"
-    a, b = (np.array([r.per_seed_ap(0.5)[s] for s in seeds]) for r in (base, var))
-    ci = ttest_rel(b, a).confidence_interval(0.95)
-    return Row(f, seeds, mean(base), mean(var), tri(d[0.5]), tri(d[0.3]), wins, gap,
-               (float(np.mean(b - a)), float(ci.low), float(ci.high)))
+    per_seed = [r.per_seed_ap(0.5) for r in (base, var)]  # every seed's AP, computed once per result
+    ap_base, ap_var = (np.array([p[s] for s in seeds]) for p in per_seed)
+    ci = ttest_rel(ap_var, ap_base).confidence_interval(0.95)
+    return Row(f, seeds, float(ap_base.mean()), float(ap_var.mean()), tri(d[0.5]), tri(d[0.3]), wins, gap,
+               (float(np.mean(ap_var - ap_base)), float(ci.low), float(ci.high)))
 
 
 def _d(x: tuple[float, float, float]) -> str:
@@ -320,7 +320,7 @@ def table(rows: list[Row]) -> str:
                     "Δ AP@0.5 [95 % CI] | over seeds [t CI] | Δ AP@0.3 [CI] | videos up | "
                     "HOG two-sample, base -> variant | source |",
                     "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-            rank = {"test": 0, "val": 0}
+            rank: dict[str, int] = {}
             for r in sel:
                 rank[r.factor.split] = rank.get(r.factor.split, 0) + 1
                 gap = "–" if r.gap is None else f"{r.gap[0]:.3f} -> {r.gap[1]:.3f} ({r.gap[1] - r.gap[0]:+.3f})"

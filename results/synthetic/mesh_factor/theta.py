@@ -10,21 +10,23 @@ fitted twice).
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
 from scipy.stats import wilcoxon
 
+from synthaug.params import CaptureParams, fitted_object_scales
+
 FIELDS = ("t_x", "t_y", "sigma_s", "sigma_u", "sigma_v", "alpha_m", "sigma_n", "w_d")
 
 
 def columns(path: str | Path) -> dict[str, np.ndarray]:
-    """Per-seed values of each field, the fit's distance and its object scale."""
-    rows = json.loads(Path(path).read_text())["rows"]
-    out = {k: np.array([np.ravel(r["theta"][k])[0] for r in rows], float) for k in FIELDS}
-    out["distance"] = np.array([r["extra"]["distance"] for r in rows], float)
-    out["object_scale"] = np.array([r["extra"]["object_scale"] for r in rows], float)
+    """Per-seed values of each field (first channel), the fit's distance and its object scale."""
+    params, extra, _ = CaptureParams.load_with_extra(path)
+    values = params.as_dict()
+    out = {k: values[k].reshape(len(params), -1)[:, 0].double().numpy() for k in FIELDS}
+    out["distance"] = np.array([e["distance"] for e in extra], float)
+    out["object_scale"] = fitted_object_scales(extra).double().numpy()
     return out
 
 

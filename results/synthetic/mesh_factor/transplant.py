@@ -27,6 +27,8 @@ def transplant(fit: dict, donor: dict, field: str) -> dict:
                          f"{donor['metadata'].get('seeds')!r}")
     if field not in rows[0]["theta"]:
         raise ValueError(f"no field {field!r} in the fit (fields: {sorted(rows[0]['theta'])})")
+    # the JSON is copied, not read into CaptureParams and saved: that holds float32, which would round every other
+    # field of the fit and so change more than the one parameter
     out = json.loads(json.dumps(fit))
     for r, d in zip(out["rows"], drows):
         r["theta"][field] = d["theta"][field]
