@@ -412,6 +412,11 @@ def test_summary_and_report_table() -> None:
     assert "(baseline)" in lines[2] and "2 ⚠" in lines[4] and "(on 2 common seeds)" in lines[4]
     assert "common seeds" not in lines[3]
     assert s.paired.difference.format(3, signed=True) in lines[3] and s.paired.wins.format() in lines[3]
+    # the Δ's interval with the training seeds resampled too: same estimate, its own column, in the JSON
+    cs = s.paired_seeds.difference
+    assert s.paired_seeds.resampled == "seeds and videos" and cs.estimate == pytest.approx(s.paired.difference.estimate)
+    assert "Δ CI, seeds resampled too" in lines[0] and f"[{cs.low:+.3f}, {cs.high:+.3f}]" in lines[3]
+    assert s.to_json()["paired_seeds"]["resampled"] == "seeds and videos" and sums["real 100"].paired_seeds is None
     assert f"`{p.fingerprint()}`" in table and "⚠ fewer than the protocol's 3 training seeds" in table
     # same protocol required; baseline must exist
     with pytest.raises(ValueError, match="different protocols"):

@@ -14,6 +14,8 @@ from synthaug.evaluate.stats import (
     percentile_interval,
     resample_counts,
     resample_indices,
+    resample_seed_counts,
+    seed_mean_samples,
     video_wins,
 )
 
@@ -132,6 +134,102 @@ def test_percentile_interval_skips_undefined_resamples() -> None:
     assert all(np.isnan(percentile_interval(np.full(3, np.nan), 0.95)))
     with pytest.raises(ValueError, match="ci"):
         percentile_interval(s, 1.0)
+
+
+# --------------------------------------------------------------------------- seeds resampled too (pigeonhole)
+class _TablePool:
+    """A duck-typed pool whose metric is the count-weighted mean of one value per video (a linear statistic)."""
+
+    def __init__(self, values: np.ndarray) -> None:
+        self.values = np.asarray(values, dtype=np.float64)
+        self.n_videos = self.values.size
+
+    def metric(self, name: str, counts: np.ndarray | None = None) -> float:
+        c = np.ones(self.n_videos) if counts is None else np.asarray(counts, dtype=np.float64)
+        return float(c @ self.values / c.sum())
+
+    def per_video(self, name: str = "ap") -> np.ndarray:
+        return self.values.copy()
+
+
+def _table(y: np.ndarray) -> dict[int, _TablePool]:
+    return {i: _TablePool(row) for i, row in enumerate(y)}
+
+
+def test_seed_resampling_has_the_exact_pigeonhole_variance() -> None:
+    """Mean of an S x V table, rows and columns resampled independently: the bootstrap variance is
+    E[T^2] - T^2 with T = w' Y z / (S V), E[w w'] = J + I - J/S and E[z z'] = J + I - J/V (multinomial)."""
+    rng = np.random.default_rng(0)
+    s_, v_ = 5, 9
+    y = rng.normal(0, 1, (s_, 1)) + rng.normal(0, 0.5, (1, v_)) + rng.normal(0, 0.3, (s_, v_))
+    a = np.ones((s_, s_)) + np.eye(s_) - 1.0 / s_
+    b = np.ones((v_, v_)) + np.eye(v_) - 1.0 / v_
+    exact = np.sum(a * (y @ b @ y.T)) / (s_ * v_) ** 2 - y.mean() ** 2
+    crossed = bootstrap_seed_mean(_table(y), resamples=20000, seed=3, resample_seeds=True)
+    videos = bootstrap_seed_mean(_table(y), resamples=20000, seed=3)
+    exact_videos = np.sum(np.ones((s_, s_)) * (y @ b @ y.T)) / (s_ * v_) ** 2 - y.mean() ** 2
+    assert crossed.estimate == pytest.approx(y.mean()) and np.mean(crossed.samples) == pytest.approx(y.mean(), abs=0.03)
+    assert np.var(crossed.samples) == pytest.approx(exact, rel=0.05)
+    assert np.var(videos.samples) == pytest.approx(exact_videos, rel=0.05)
+    assert exact > 2 * exact_videos  # here the seeds carry most of the spread, which the video bootstrap misses
+
+
+def test_seed_resampling_matches_scipy_when_only_seeds_differ() -> None:
+    """Values constant over videos: the statistic is the mean of the drawn seeds' values, scipy's own bootstrap
+    of the seed values with the same Generator (default_rng([seed, 1]))."""
+    from scipy.stats import bootstrap
+
+    vals = np.random.default_rng(4).gamma(2.0, 1.0, size=7)
+    iv = bootstrap_seed_mean(_table(np.repeat(vals[:, None], 6, axis=1)), resamples=999, seed=11, resample_seeds=True)
+    ref = bootstrap((vals,), np.mean, n_resamples=999, method="percentile", rng=np.random.default_rng([11, 1]),
+                    vectorized=True)
+    np.testing.assert_allclose(iv.samples, ref.bootstrap_distribution, rtol=0, atol=1e-12)
+    assert iv.low == pytest.approx(ref.confidence_interval.low) and iv.high == pytest.approx(ref.confidence_interval.high)
+    counts = resample_seed_counts(7, 999, 11)
+    assert counts.shape == (999, 7) and np.all(counts.sum(1) == 7)
+    assert np.array_equal(counts, resample_seed_counts(7, 999, 11))
+    assert not np.array_equal(counts, resample_seed_counts(7, 999, 12))
+
+
+def test_seed_resampling_changes_nothing_when_the_seeds_agree() -> None:
+    """Identical detectors under every seed id: the crossed bootstrap is the protocol's video bootstrap."""
+    pools = {s: _pool(1) for s in range(4)}
+    a = bootstrap_seed_mean(pools, resamples=300, seed=2)
+    b = bootstrap_seed_mean(pools, resamples=300, seed=2, resample_seeds=True)
+    np.testing.assert_allclose(b.samples, a.samples, rtol=0, atol=1e-12, equal_nan=True)
+    assert (a.low, a.high, a.n_valid) == (pytest.approx(b.low), pytest.approx(b.high), b.n_valid)
+
+
+def test_paired_seed_resampling_keeps_pairs_and_counts_training_randomness() -> None:
+    """Condition = baseline + a per-seed shift on every video: over videos the difference is a constant (zero
+    width); with the seeds resampled it is the bootstrap of the shifts (a drawn seed brings its pair)."""
+    from scipy.stats import bootstrap
+
+    rng = np.random.default_rng(8)
+    y = rng.normal(0.5, 0.1, (6, 10))
+    shift = rng.normal(0.02, 0.03, 6)
+    base, cond = _table(y), _table(y + shift[:, None])
+    over_videos = paired_difference(base, cond, resamples=999, seed=5)
+    crossed = paired_difference(base, cond, resamples=999, seed=5, resample_seeds=True)
+    assert over_videos.difference.high - over_videos.difference.low == pytest.approx(0.0, abs=1e-12)
+    assert crossed.difference.estimate == pytest.approx(shift.mean())
+    ref = bootstrap((shift,), np.mean, n_resamples=999, method="percentile", rng=np.random.default_rng([5, 1]),
+                    vectorized=True)
+    np.testing.assert_allclose(crossed.difference.samples, ref.bootstrap_distribution, rtol=0, atol=1e-12)
+    assert (over_videos.resampled, crossed.resampled) == ("videos", "seeds and videos")
+    assert crossed.to_json()["resampled"] == "seeds and videos"
+
+
+def test_seed_resampling_is_undefined_only_where_an_undefined_seed_is_drawn() -> None:
+    y = np.random.default_rng(1).random((4, 5))
+    y[2] = np.nan
+    iv = bootstrap_seed_mean(_table(y), resamples=200, seed=0, resample_seeds=True)
+    drawn = resample_seed_counts(4, 200, 0)[:, 2] > 0
+    assert np.array_equal(np.isnan(iv.samples), drawn) and iv.n_valid == int(np.sum(~drawn)) > 0
+    with pytest.raises(ValueError, match="n_seeds"):
+        resample_seed_counts(0, 10, 0)
+    with pytest.raises(ValueError, match="seed_counts"):
+        seed_mean_samples(_table(y), np.ones((3, 5), np.int64), seed_counts=np.ones((3, 2), np.int64))
 
 
 # --------------------------------------------------------------------------- paired difference

@@ -31,6 +31,24 @@ Resamples whose pool holds no ground-truth object (possible when few test videos
 have objects) have no AP: they are dropped from the percentile (``n_valid``
 says how many were kept).
 
+**Training randomness** (``resample_seeds=True``): the video bootstrap holds
+every training seed's detector fixed, so its interval says how much the test
+videos move a score, not how much another training run would (another seed
+set, fit or synthetic draw: issue 16 measured single HOG cells moving 0.06 AP
+with a refit). Resampling the seeds as well is the **pigeonhole bootstrap** of a
+crossed seeds x videos design (Owen 2007, *Ann. Appl. Stat.* 1(1)): in resample
+``b`` the ``V`` videos are drawn as above and, independently, ``S`` seed ids
+with replacement from the ``S`` seeds (:func:`resample_seed_counts`); the
+statistic is the mean over the drawn seeds (with multiplicity) of each seed's
+pooled metric on the drawn videos. The video draws are the protocol's own, so
+the per-seed APs are the memoised ones: the second interval costs nothing more.
+For a mean of a seeds x videos table its variance is the exact expression of
+``tests/test_stats.py`` (row and column variances plus their interaction, which
+it counts more than once: mildly conservative, Owen's result). With few seeds
+the seed part is coarse: ``S`` seeds give only ``C(2S-1, S)`` distinct seed
+multisets (10 for 3 seeds) and the bootstrap's seed variance is ``(S-1)/S`` of
+the sample's; read it with ≥ 5 seeds.
+
 **Share of videos improved** (:func:`video_wins`): for each test video its own
 AP (mean over the seeds) under both conditions; a video *improved* when the AP
 rose by more than ``tol`` (1e-9), got *worse* when it fell by more, else *tied*.
@@ -79,6 +97,7 @@ __all__ = [
     "VideoWins",
     "resample_indices",
     "resample_counts",
+    "resample_seed_counts",
     "percentile_interval",
     "bootstrap_statistic",
     "seed_mean_samples",
@@ -283,6 +302,24 @@ def resample_counts(indices: np.ndarray, n_videos: int) -> np.ndarray:
     return counts
 
 
+def resample_seed_counts(n_seeds: int, resamples: int, seed: int) -> np.ndarray:
+    """``(B, S)`` times each training seed is drawn in each resample (the seed part of ``resample_seeds``).
+
+    ``np.random.default_rng([seed, 1]).integers(0, S, size=(B, S))``, counted: a stream of its own, so the
+    video draws (:func:`resample_indices` with ``seed``) stay the protocol's.
+
+    Example:
+        >>> resample_seed_counts(3, 2, seed=0).sum(1).tolist()
+        [3, 3]
+    """
+    if n_seeds < 1:
+        raise ValueError(f"n_seeds must be >= 1, got {n_seeds}")
+    if resamples < 1:
+        raise ValueError(f"resamples must be >= 1, got {resamples}")
+    idx = np.random.default_rng([seed, 1]).integers(0, n_seeds, size=(resamples, n_seeds))
+    return resample_counts(idx, n_seeds)
+
+
 def percentile_interval(samples: np.ndarray, ci: float) -> tuple[float, float]:
     """``(low, high)`` = the ``(1-ci)/2`` and ``(1+ci)/2`` quantiles of the defined samples (NaN if none)."""
     if not 0.0 < ci < 1.0:
@@ -343,10 +380,34 @@ def _check_pools(pools: Mapping[Hashable, PooledRanking]) -> int:
     return ns.pop()
 
 
-def seed_mean_samples(pools: Mapping[Hashable, PooledRanking], counts: np.ndarray, metric: Metric = "ap") -> np.ndarray:
-    """``(B,)``: for each resample (row of ``counts``) the mean over seeds of the pooled metric."""
+def seed_mean_samples(pools: Mapping[Hashable, PooledRanking], counts: np.ndarray, metric: Metric = "ap",
+                      seed_counts: np.ndarray | None = None) -> np.ndarray:
+    """``(B,)``: for each resample (row of ``counts``) the mean over seeds of the pooled metric.
+
+    With ``seed_counts`` (``(B, S)``, :func:`resample_seed_counts`; columns in the order of ``pools``) the
+    mean of resample ``b`` weighs seed ``s`` by ``seed_counts[b, s]``; NaN when a drawn seed's metric is.
+    """
     _check_pools(pools)
-    return np.array([_seed_mean(pools, metric, c) for c in np.asarray(counts)], dtype=np.float64)
+    counts = np.asarray(counts)
+    if seed_counts is None:
+        return np.array([_seed_mean(pools, metric, c) for c in counts], dtype=np.float64)
+    w = np.asarray(seed_counts)
+    if w.shape != (counts.shape[0], len(pools)):
+        raise ValueError(f"seed_counts must have shape ({counts.shape[0]}, {len(pools)}), got {w.shape}")
+    m = np.array([[p.metric(metric, c) for p in pools.values()] for c in counts], dtype=np.float64).reshape(w.shape)
+    drawn = w > 0
+    out = np.sum(np.where(drawn, m, 0.0) * w, axis=1) / np.sum(w, axis=1)
+    out[np.any(drawn & np.isnan(m), axis=1)] = np.nan
+    return out
+
+
+def _samples(pools: Mapping[Hashable, PooledRanking], metric: Metric, resamples: int, seed: int,
+             resample_seeds: bool) -> np.ndarray:
+    """The bootstrap statistic of every resample: videos (the protocol's draws), and seeds when asked."""
+    v = _check_pools(pools)
+    counts = resample_counts(resample_indices(v, resamples, seed), v)
+    w = resample_seed_counts(len(pools), resamples, seed) if resample_seeds else None
+    return seed_mean_samples(pools, counts, metric, w)
 
 
 def bootstrap_seed_mean(
@@ -356,6 +417,7 @@ def bootstrap_seed_mean(
     resamples: int = 2000,
     seed: int = 0,
     ci: float = 0.95,
+    resample_seeds: bool = False,
 ) -> Interval:
     """Mean over training seeds of the pooled metric, with its bootstrap-over-videos interval.
 
@@ -364,13 +426,13 @@ def bootstrap_seed_mean(
             (the same videos, in the same order, for every seed).
         metric: ``"ap"`` or ``"roc_auc"``.
         resamples, seed, ci: the protocol's bootstrap settings.
+        resample_seeds: also resample the training seeds (the pigeonhole bootstrap of the module's
+            docstring): the interval then counts training randomness too.
 
     Returns:
         The :class:`Interval`; every seed is scored on the same video resample.
     """
-    v = _check_pools(pools)
-    counts = resample_counts(resample_indices(v, resamples, seed), v)
-    samples = seed_mean_samples(pools, counts, metric)
+    samples = _samples(pools, metric, resamples, seed, resample_seeds)
     lo, hi = percentile_interval(samples, ci)
     return Interval(_seed_mean(pools, metric, None), lo, hi, float(ci), int(resamples),
                     int(np.sum(~np.isnan(samples))), samples)
@@ -446,14 +508,17 @@ class PairedDifference:
             with the percentile interval of the per-resample difference.
         seeds: the seed ids used (those both conditions have).
         wins: per-video improvement counts (:func:`video_wins`, on the same seeds).
+        resampled: ``"videos"`` (the protocol's bootstrap) or ``"seeds and videos"`` (``resample_seeds``).
     """
 
     difference: Interval
     seeds: list[Hashable]
     wins: VideoWins
+    resampled: str = "videos"
 
     def to_json(self) -> dict[str, Any]:
-        return {"difference": self.difference.to_json(), "seeds": [str(s) for s in self.seeds], "wins": self.wins.to_json()}
+        return {"difference": self.difference.to_json(), "seeds": [str(s) for s in self.seeds],
+                "wins": self.wins.to_json(), "resampled": self.resampled}
 
 
 def paired_difference(
@@ -466,12 +531,16 @@ def paired_difference(
     ci: float = 0.95,
     stems: Sequence[str] | None = None,
     require_same_seeds: bool = False,
+    resample_seeds: bool = False,
 ) -> PairedDifference:
     """Paired difference ``condition - baseline`` of the mean-over-seeds metric, bootstrap over videos.
 
     Seeds are paired by id: only the seeds both conditions have are used (with
     ``require_same_seeds`` any difference in the seed sets is an error). Both
     are scored on the same resamples (:func:`resample_indices` with ``seed``).
+    With ``resample_seeds`` the seed ids are resampled too, the same draw for
+    both conditions (a drawn id brings its pair): the interval counts training
+    randomness (module docstring).
 
     Raises:
         ValueError: no common seed, or different numbers of videos.
@@ -486,9 +555,9 @@ def paired_difference(
     v = _check_pools(a)
     if _check_pools(b) != v:
         raise ValueError("baseline and condition must be scored on the same videos")
-    counts = resample_counts(resample_indices(v, resamples, seed), v)
-    diff = seed_mean_samples(b, counts, metric) - seed_mean_samples(a, counts, metric)
+    diff = _samples(b, metric, resamples, seed, resample_seeds) - _samples(a, metric, resamples, seed, resample_seeds)
     lo, hi = percentile_interval(diff, ci)
     est = _seed_mean(b, metric, None) - _seed_mean(a, metric, None)
     iv = Interval(est, lo, hi, float(ci), int(resamples), int(np.sum(~np.isnan(diff))), diff)
-    return PairedDifference(iv, common, video_wins(a, b, metric=metric, stems=stems))
+    return PairedDifference(iv, common, video_wins(a, b, metric=metric, stems=stems),
+                            "seeds and videos" if resample_seeds else "videos")

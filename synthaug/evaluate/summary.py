@@ -4,7 +4,7 @@
 (:class:`ConditionSummary`: APs with video-bootstrap intervals, AP per size bucket, patch
 AP / ROC-AUC, the paired difference to a baseline) and :func:`report_table` renders
 ``condition | seeds | AP@0.5 [95 % CI] | AP@0.3 [CI] | Δ vs baseline [CI]
-| videos improved | AP per size bucket | patch AP / ROC-AUC``.
+| videos improved | Δ's CI with the seeds resampled too | AP per size bucket | patch AP / ROC-AUC``.
 
 Example:
     >>> _f(0.12345), _f(float("nan")), _f(None, 1)
@@ -35,6 +35,8 @@ class ConditionSummary:
         buckets: size-bucket label -> mean-over-seeds AP at the main IoU (NaN: no object in it).
         bucket_objects: size-bucket label -> labelled objects in it.
         paired: difference to the baseline at the main IoU (None for the baseline or incomparable results).
+        paired_seeds: the same difference with the training seeds resampled as well as the videos
+            (:func:`~synthaug.evaluate.stats.paired_difference` with ``resample_seeds``): training randomness counted.
         paired_note: why there is no paired difference, when there is none.
         patch_ap, patch_auc: patch-classification AP and ROC-AUC with intervals (None without patches).
         n_patches: ``{"positive": n, "negative": n}``.
@@ -51,6 +53,7 @@ class ConditionSummary:
     bucket_objects: dict[str, int]
     paired: PairedDifference | None = None
     paired_note: str = ""
+    paired_seeds: PairedDifference | None = None
     patch_ap: Interval | None = None
     patch_auc: Interval | None = None
     n_patches: dict[str, int] = field(default_factory=dict)
@@ -63,6 +66,7 @@ class ConditionSummary:
             "buckets": {k: (None if math.isnan(v) else v) for k, v in self.buckets.items()},
             "bucket_objects": self.bucket_objects,
             "paired": None if self.paired is None else self.paired.to_json(), "paired_note": self.paired_note,
+            "paired_seeds": None if self.paired_seeds is None else self.paired_seeds.to_json(),
             "patch_ap": None if self.patch_ap is None else self.patch_ap.to_json(),
             "patch_auc": None if self.patch_auc is None else self.patch_auc.to_json(),
             "n_patches": self.n_patches,
@@ -82,7 +86,7 @@ def summarize(result: ProtocolResult, baseline: ProtocolResult | None = None) ->
             ap[t] = bootstrap_seed_mean(result.pools(t), **kw)
     buckets = {b.label: result.mean_ap(p.main_iou, b) for b in p.size_buckets}
     bucket_objects = {b.label: result.n_objects(b) for b in p.size_buckets}
-    paired, note = None, ""
+    paired, paired_seeds, note = None, None, ""
     if baseline is not None and baseline is not result:
         if baseline.protocol.fingerprint() != p.fingerprint():
             note = "other protocol"
@@ -94,6 +98,7 @@ def summarize(result: ProtocolResult, baseline: ProtocolResult | None = None) ->
                 note = "no common seed"
             else:
                 paired = paired_difference(base_pools, pools_main, stems=result.stems, **kw)
+                paired_seeds = paired_difference(base_pools, pools_main, stems=result.stems, resample_seeds=True, **kw)
     patch_ap = patch_auc = None
     n_patches: dict[str, int] = {}
     pp = result.patch_pools()
@@ -104,7 +109,8 @@ def summarize(result: ProtocolResult, baseline: ProtocolResult | None = None) ->
         npos = int(sum(x.labels.sum() for x in first))
         n_patches = {"positive": npos, "negative": int(sum(x.labels.size for x in first)) - npos}
     return ConditionSummary(result.condition, result.split, result.scale, list(pools_main or pp), result.meets_min_seeds,
-                            len(result.stems or result.patch_stems), ap, buckets, bucket_objects, paired, note, patch_ap, patch_auc, n_patches)
+                            len(result.stems or result.patch_stems), ap, buckets, bucket_objects, paired, note,
+                            paired_seeds, patch_ap, patch_auc, n_patches)
 
 
 def summarize_conditions(results: Mapping[str, ProtocolResult], baseline: str | None = None) -> dict[str, ConditionSummary]:
@@ -129,8 +135,12 @@ def summarize_conditions(results: Mapping[str, ProtocolResult], baseline: str | 
     return out
 
 
+def _nan(x: float | None) -> bool:
+    return x is None or (isinstance(x, float) and math.isnan(x))
+
+
 def _f(x: float | None, digits: int = 3) -> str:
-    return "–" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}f}"
+    return "–" if _nan(x) else f"{x:.{digits}f}"
 
 
 def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = None, *, digits: int = 3,
@@ -138,7 +148,8 @@ def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = N
     """A markdown table of conditions measured with one protocol.
 
     Columns: condition | seeds | AP@<main IoU> [CI] | AP at the other IoUs [CI] | Δ AP vs
-    ``baseline`` [CI] | videos improved | AP per size bucket | patch AP [CI] | patch ROC-AUC [CI]
+    ``baseline`` [CI] | videos improved | the Δ's CI with the training seeds resampled too | AP per size bucket
+    | patch AP [CI] | patch ROC-AUC [CI]
     (patch columns only when some result has patches). A seed count below the protocol's
     minimum is marked ``⚠``. Below the table: the protocol, bootstrap settings, objects per bucket
     and how "videos improved" is counted.
@@ -157,7 +168,7 @@ def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = N
     ci_pct = f"{100 * p.bootstrap.ci:g} %"
     header = ["condition", "seeds", f"AP@{p.main_iou:g} [{ci_pct} CI]"] + [f"AP@{t:g} [CI]" for t in others]
     if baseline is not None:
-        header += [f"Δ AP@{p.main_iou:g} vs {baseline} [CI]", "videos improved"]
+        header += [f"Δ AP@{p.main_iou:g} vs {baseline} [CI]", "videos improved", "Δ CI, seeds resampled too"]
     header += [f"AP@{p.main_iou:g} {b.label}" for b in p.size_buckets]
     if has_patch:
         header += ["patch AP [CI]", "patch ROC-AUC [CI]"]
@@ -168,14 +179,16 @@ def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = N
         row = [label, seeds] + [s.ap[t].format(digits) if t in s.ap else "–" for t in p.iou_thresholds]
         if baseline is not None:
             if name == baseline:
-                row += ["(baseline)", ""]
+                row += ["(baseline)", "", ""]
             elif s.paired is None:
-                row += [f"n/a ({s.paired_note})" if s.paired_note else "–", "–"]
+                row += [f"n/a ({s.paired_note})" if s.paired_note else "–", "–", "–"]
             else:
                 d = s.paired.difference.format(digits, signed=True)
                 if len(s.paired.seeds) != len(sums[baseline].seeds) or len(s.paired.seeds) != len(s.seeds):
                     d += f" (on {len(s.paired.seeds)} common seeds)"
-                row += [d, s.paired.wins.format()]
+                cs = s.paired_seeds.difference
+                crossed = "–" if _nan(cs.low) else f"[{cs.low:+.{digits}f}, {cs.high:+.{digits}f}]"
+                row += [d, s.paired.wins.format(), crossed]
         row += [_f(s.buckets[b.label], digits) for b in p.size_buckets]
         if has_patch:
             row += ["–" if s.patch_ap is None else s.patch_ap.format(digits),
@@ -205,6 +218,9 @@ def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = N
     if baseline is not None:
         lines.append("Videos improved: videos whose own AP (mean over seeds) rose, out of the videos with a labelled "
                      "object (videos without one have no AP and are left out).")
+        lines.append("Δ CI, seeds resampled too: the same resamples of the videos with the training seeds resampled "
+                     "as well (pairs kept), so that the interval counts training randomness (another seed set, fit "
+                     "or draw), which the video bootstrap holds fixed; coarse under 5 seeds.")
     if any(not s.meets_min_seeds for s in sums.values()):
         lines.append(f"⚠ fewer than the protocol's {p.min_training_seeds} training seeds.")
     return "\n".join(lines) + "\n"

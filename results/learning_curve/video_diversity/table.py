@@ -2,7 +2,9 @@
 
 Each row is a stored ``ProtocolResult`` (runner JSON; files of one condition are combined), the first the paired
 baseline. Columns: the positives and the videos they come from, AP@0.5 and AP@0.3 with their 95 % CIs (bootstrap
-over test videos, seeds inside), and the paired difference to the baseline at both IoUs (same seeds, same resamples).
+over test videos, seeds inside), and the paired difference to the baseline at both IoUs (same seeds, same resamples),
+then the AP@0.5 difference's interval with the training seeds resampled too (``paired_difference(resample_seeds=True)``:
+training randomness counted; coarse under 5 seeds).
 
     PYTHONPATH=. python results/learning_curve/video_diversity/table.py BASELINE.json OTHER.json [...] [--out MD]
     # FILE=LABEL names a row (e.g. one condition trained with other options)
@@ -42,8 +44,9 @@ def main() -> None:
     p = base.protocol
     kw = dict(resamples=p.bootstrap.resamples, seed=p.bootstrap.seed, ci=p.bootstrap.ci)
     lines = ["| condition | seeds | positives (mean) | positive videos | AP@0.5 [95 % CI] | AP@0.3 [CI] | "
-             f"Δ AP@0.5 vs {base_name} [CI] | Δ AP@0.3 [CI] | videos improved (0.5) |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             f"Δ AP@0.5 vs {base_name} [CI] | Δ AP@0.3 [CI] | videos improved (0.5) | "
+             "Δ AP@0.5 CI, seeds resampled too |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for name, r in res.items():
         assert r.protocol.fingerprint() == p.fingerprint() and r.stems == base.stems, name
         pos = [sr.meta.get("positives") for sr in r.seeds.values() if sr.meta.get("positives")]
@@ -51,15 +54,18 @@ def main() -> None:
         cells = [name, str(len(r.seeds)), f"{np.mean(pos):.0f}" if pos else "–", "all" if k is None else str(k),
                  _iv(bootstrap_seed_mean(r.pools(0.5), **kw)), _iv(bootstrap_seed_mean(r.pools(0.3), **kw))]
         if r is base:
-            cells += ["(baseline)", "", ""]
+            cells += ["(baseline)", "", "", ""]
         else:
             d5 = paired_difference(base.pools(0.5), r.pools(0.5), stems=r.stems, **kw)
             d3 = paired_difference(base.pools(0.3), r.pools(0.3), stems=r.stems, **kw)
-            cells += [_d(d5.difference), _d(d3.difference), f"{d5.wins.improved}/{d5.wins.improved + d5.wins.worse + d5.wins.tied}"]
+            ds = paired_difference(base.pools(0.5), r.pools(0.5), stems=r.stems, resample_seeds=True, **kw).difference
+            cells += [_d(d5.difference), _d(d3.difference),
+                      f"{d5.wins.improved}/{d5.wins.improved + d5.wins.worse + d5.wins.tied}",
+                      f"[{ds.low:+.3f}, {ds.high:+.3f}]"]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", f"Protocol `{p.name}` (fingerprint `{p.fingerprint()}`), split `{base.split}`, {len(base.stems)} test "
               f"videos; {p.bootstrap.resamples} bootstrap resamples of the videos (seed {p.bootstrap.seed}); Δ paired "
-              "by training seed and resample."]
+              "by training seed and resample; the last column resamples the training seeds as well (pairs kept)."]
     text = "\n".join(lines)
     print(text)
     if a.out:
