@@ -10,7 +10,8 @@ Each argument may list files of one condition separated by commas (e.g. one run 
 95 % CI and per seed, the paired tables against ``--few`` and ``--many`` (the runner's ``report_table``), and per
 added condition the closed share (AP(added) − AP(few)) / (AP(many) − AP(few)) with its percentile interval over the
 protocol's video resamples (the same resamples for every condition), and the linear statistic behind "closes ≥ 50 %":
-AP(added) − (AP(few) + AP(many)) / 2 (≥ 0 exactly when the share is ≥ 0.5 and the gap > 0).
+AP(added) − (AP(few) + AP(many)) / 2 (≥ 0 exactly when the share is ≥ 0.5 and the gap > 0); when every condition holds
+the same training seeds, the same again with the seeds resampled too (training randomness counted).
 """
 from __future__ import annotations
 
@@ -21,7 +22,13 @@ from pathlib import Path
 import numpy as np
 
 from synthaug.evaluate.results import ProtocolResult
-from synthaug.evaluate.stats import percentile_interval, resample_counts, resample_indices, seed_mean_samples
+from synthaug.evaluate.stats import (
+    percentile_interval,
+    resample_counts,
+    resample_indices,
+    resample_seed_counts,
+    seed_mean_samples,
+)
 from synthaug.evaluate.summary import report_table
 
 
@@ -29,15 +36,27 @@ def fmt(x: float, signed: bool = False) -> str:
     return "nan" if not np.isfinite(x) else (f"{x:+.3f}" if signed else f"{x:.3f}")
 
 
-def resampled(res: Mapping[str, ProtocolResult]) -> tuple[dict[str, np.ndarray], dict[str, float]]:
-    """Per condition: the mean-over-seeds AP@main IoU on each of the protocol's video resamples, and on the videos."""
+def resampled(res: Mapping[str, ProtocolResult], resample_seeds: bool = False
+              ) -> tuple[dict[str, np.ndarray], dict[str, float]]:
+    """Per condition: the mean-over-seeds AP@main IoU on each of the protocol's video resamples, and on the videos.
+
+    With ``resample_seeds`` the training seeds are resampled too (one draw of seed ids for every condition, so a drawn
+    id brings all its conditions): every condition must hold the same seeds.
+    """
     first = next(iter(res.values()))
     p, stems = first.protocol, first.stems
     for k, r in res.items():
         assert r.stems == stems, f"{k}: other videos"
         assert r.protocol.fingerprint() == p.fingerprint(), f"{k}: other protocol"
     counts = resample_counts(resample_indices(len(stems), p.bootstrap.resamples, p.bootstrap.seed), len(stems))
-    return ({k: seed_mean_samples(r.pools(p.main_iou), counts) for k, r in res.items()},
+    seeds = sorted(first.pools(p.main_iou))
+    w = None
+    if resample_seeds:
+        assert all(sorted(r.pools(p.main_iou)) == seeds for r in res.values()), "conditions hold other seeds"
+        w = resample_seed_counts(len(seeds), p.bootstrap.resamples, p.bootstrap.seed)
+    pools = {k: r.pools(p.main_iou) for k, r in res.items()}
+    ordered = {k: (dict(sorted(v.items())) if resample_seeds else v) for k, v in pools.items()}
+    return ({k: seed_mean_samples(v, counts, seed_counts=w) for k, v in ordered.items()},
             {k: r.mean_ap(p.main_iou) for k, r in res.items()})
 
 
@@ -92,7 +111,13 @@ def main() -> None:
     lines += ["", f"## Paired against {labels['few']}", "", report_table(by_label, baseline=labels["few"]), "",
               f"## Paired against {labels['many']}", "", report_table(by_label, baseline=labels["many"]), "",
               "## Gap closed", ""]
-    lines += gap_lines(samples, est, "few", "many", [k for k in res if k.startswith("added")], labels, p.bootstrap.ci)
+    added = [k for k in res if k.startswith("added")]
+    lines += gap_lines(samples, est, "few", "many", added, labels, p.bootstrap.ci)
+    if len({tuple(sorted(r.seed_ids)) for r in res.values()}) == 1 and len(res["few"].seed_ids) > 1:
+        lines += ["", "## Gap closed, the training seeds resampled too", "",
+                  "The same statistics with the training seeds resampled as well as the videos (one draw of seed ids "
+                  "for every condition; `resample_seed_counts`): training randomness counted; coarse under 5 seeds.", ""]
+        lines += gap_lines(resampled(res, resample_seeds=True)[0], est, "few", "many", added, labels, p.bootstrap.ci)
     text = "\n".join(lines) + "\n"
     print(text)
     if a.out:
