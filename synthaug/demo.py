@@ -215,6 +215,8 @@ def _run(args: argparse.Namespace) -> int:
     _write_report(out, args, counts, table, verdict, timings, len(seeds), split, diagnosis)
     summary = {"out": str(out), **{n: round(summaries[n].ap[0.5].estimate, 4) for n in names},
                "difference": summaries[names[1]].paired.difference.to_json() if summaries[names[1]].paired else None,
+               "difference_seeds_resampled": (summaries[names[1]].paired_seeds.difference.to_json()
+                                              if summaries[names[1]].paired_seeds else None),
                "reference_difference": (summaries[names[2]].paired.difference.to_json()
                                         if summaries[names[2]].paired else None),
                "verdict": verdict}
@@ -320,6 +322,11 @@ def _comparison(results: dict[str, Any], names: tuple[str, ...]) -> tuple[str, s
     else:
         verdict = (f"No significant change in AP@0.5: {ci} ({unit}); the interval includes 0, so this run does "
                    "not show a gain from synthetic data.")
+    crossed = summaries[names[1]].paired_seeds
+    if crossed is not None and n > 1:
+        c = crossed.difference
+        verdict += (f" Counting training randomness as well (the training seeds resampled with the videos): "
+                    f"[{c.low:+.3f}, {c.high:+.3f}]{'' if n >= 5 else f', coarse with {n} seeds'}.")
     ref = summaries[names[2]].paired if len(names) > 2 else None
     if ref is not None:
         r = ref.difference

@@ -45,6 +45,10 @@ def test_demo_runs_end_to_end(demo):
     assert summary["verdict"] in report and "Δ AP@0.5 vs real seeds only" in report
     word = "raised" if d["low"] > 0 else "LOWERED" if d["high"] < 0 else "No significant change"
     assert word in summary["verdict"]
+    # and its interval with the training seeds resampled too (training randomness counted), said beside it
+    c = summary["difference_seeds_resampled"]
+    assert c["estimate"] == pytest.approx(d["estimate"]) and c["low"] <= c["high"]
+    assert f"[{c['low']:+.3f}, {c['high']:+.3f}], coarse with 3 seeds" in summary["verdict"]
     # beside it, twice the real seeds (does this detector gain from more positives here at all?), paired the same way
     r = summary["reference_difference"]
     assert r["low"] <= r["estimate"] <= r["high"] and "Twice the real seeds" in summary["verdict"]

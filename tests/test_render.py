@@ -182,3 +182,18 @@ def test_renders_a_shared_mesh(shared_data):
         cov, nrm = r.layers([0.0], [math.pi / 2], [0.0], [0.0], [0.0], size=40)
     assert 30 < float(cov.sum()) < 0.9 * 1600
     assert float((nrm.norm(dim=1)[cov[:, 0] > 0.99] - 1).abs().max()) < 0.02
+
+
+def test_a_worker_that_dies_at_start_says_why(tmp_path, monkeypatch):
+    """The worker's exit code and its own log reach the error (else a crash at start reads only "closed its output")."""
+    import synthaug.render.server as server
+    from synthaug.render.server import RenderError
+
+    fake = tmp_path / "python"
+    fake.write_text("#!/bin/sh\necho 'libEGL warning: no usable device (a stand-in GL stack)' >&2\nexit 3\n")
+    fake.chmod(0o755)
+    monkeypatch.setattr(server.sys, "executable", str(fake))
+    r = Renderer("quadcopter", platform="egl")
+    with pytest.raises(RenderError, match=r"(?s)exit code 3.*no usable device"):
+        r.layers([0.0], [0.0], [0.0], [0.0], [0.0], size=8)
+    assert r._proc is None  # nothing left running

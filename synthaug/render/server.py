@@ -101,9 +101,19 @@ class Renderer:
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._log, env=env, close_fds=True,
         )
         self._pid = os.getpid()
-        write_frame(self._proc.stdin, {"op": "init", "vertices": np.asarray(self.mesh.vertices, np.float32),
-                                       "faces": np.asarray(self.mesh.faces, np.int32)})
-        reply = read_frame_fd(self._proc.stdout.fileno(), self.timeout)
+        try:
+            write_frame(self._proc.stdin, {"op": "init", "vertices": np.asarray(self.mesh.vertices, np.float32),
+                                           "faces": np.asarray(self.mesh.faces, np.int32)})
+            reply = read_frame_fd(self._proc.stdout.fileno(), self.timeout)
+        except (BrokenPipeError, EOFError, TimeoutError) as e:
+            # the worker died or hung while starting: say how, with its own log (else the cause is lost)
+            try:
+                code = self._proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                code = None
+            tail = self._log_tail()
+            self._kill()
+            raise RenderError(f"{e} (exit code {code})" + (f"; its log:\n{tail}" if tail.strip() else "")) from None
         if reply[0] != "ok":
             self._kill()
             raise RenderError(reply[1])
