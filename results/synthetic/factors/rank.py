@@ -73,6 +73,9 @@ def _seeds(template: str, seeds: tuple[int, ...] = (0, 1, 2, 3, 4)) -> tuple[str
 
 _GLB5 = _seeds("mesh_factor/hog_glb_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json")  # stop 64's fits
 _BI5 = _seeds("mesh_factor/hog_builtin_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin.json")
+_TEN = tuple(range(10))
+_GLB10 = _seeds("mesh_factor/hog_glb_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json", _TEN)  # stop 65
+_BI10 = _seeds("mesh_factor/hog_builtin_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin.json", _TEN)
 _FITTED_ROT = "rotation: uniform -> around each seed's fitted rotation (20°)"
 _AT_SEED_GAP = (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_uniform_at_seed_poses"))
 
@@ -96,7 +99,7 @@ FACTORS: tuple[Factor, ...] = (
            _H, "drone_v2_ensemble/hog_100_fitted_poses/hog_100_seeds_20x_synthetic_hog_fitted_poses.json",
            "drone_v2_ensemble/", (("drone_box/gap", "synthetic_hog"), ("drone_box/gap", "synthetic_hog_fitted_poses"))),
     Factor("drone", "hog", "silhouette (mesh)", "mesh of the fits: built-in quadcopter -> quadcopter.glb", "test",
-           _BI5, _GLB5, "mesh_factor/",
+           _BI10, _GLB10, "mesh_factor/",
            (("mesh_factor/gap_builtin", "synthetic_hog_builtin"), ("placement/gap", "synthetic_hog"))),
     Factor("drone", "hog", "appearance (object noise level)", "σ_n of the built-in fits -> of the .glb fits, seed by "
            "seed (built-in mesh)", "test", _BI5, _seeds("mesh_factor/hog_builtin_gnoise_seed{s}/"
