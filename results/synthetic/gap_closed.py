@@ -61,7 +61,8 @@ def resampled(res: Mapping[str, ProtocolResult], resample_seeds: bool = False
 
 
 def gap_lines(samples: Mapping[str, np.ndarray], est: Mapping[str, float], few: str, many: str,
-              added: list[str], labels: Mapping[str, str], ci: float) -> list[str]:
+              added: list[str], labels: Mapping[str, str], ci: float,
+              resamples: str = "the same video resamples") -> list[str]:
     """The closed share and the midpoint statistic of each ``added`` condition, as markdown bullets."""
     sa, sc = samples[few], samples[many]
     gap = sc - sa
@@ -79,7 +80,8 @@ def gap_lines(samples: Mapping[str, np.ndarray], est: Mapping[str, float], few: 
             f"- {labels[cond]}: gap AP(100) - AP(12) = {fmt(est[many] - est[few], True)} [{fmt(glo, True)}, {fmt(ghi, True)}] "
             f"({int(np.sum(gap <= 0))} of {len(gap)} resamples with no positive gap, left out of the share's interval)",
             f"  - closed share (AP(x) - AP(12)) / (AP(100) - AP(12)) = **{share_est:.2f}** [{slo:.2f}, {shi:.2f}] "
-            f"(percentile interval over the same video resamples; P(share >= 0.5) = {np.mean(share[~np.isnan(share)] >= 0.5):.2f} of the "
+            f"(percentile interval over {resamples}; "
+            f"P(share >= 0.5) = {np.mean(share[~np.isnan(share)] >= 0.5):.2f} of the "
             f"resamples with a positive gap)",
             f"  - AP(x) - (AP(12) + AP(100)) / 2 = {fmt(mid_est, True)} [{fmt(mlo, True)}, {fmt(mhi, True)}] "
             f"(>= 0 <=> the target's 50 % is met)",
@@ -117,7 +119,8 @@ def main() -> None:
         lines += ["", "## Gap closed, the training seeds resampled too", "",
                   "The same statistics with the training seeds resampled as well as the videos (one draw of seed ids "
                   "for every condition; `resample_seed_counts`): training randomness counted; coarse under 5 seeds.", ""]
-        lines += gap_lines(resampled(res, resample_seeds=True)[0], est, "few", "many", added, labels, p.bootstrap.ci)
+        lines += gap_lines(resampled(res, resample_seeds=True)[0], est, "few", "many", added, labels, p.bootstrap.ci,
+                           "the same resamples of videos and training seeds")
     text = "\n".join(lines) + "\n"
     print(text)
     if a.out:
