@@ -42,9 +42,11 @@ with replacement from the ``S`` seeds (:func:`resample_seed_counts`); the
 statistic is the mean over the drawn seeds (with multiplicity) of each seed's
 pooled metric on the drawn videos. The video draws are the protocol's own, so
 the per-seed APs are the memoised ones: the second interval costs nothing more.
-For a mean of a seeds x videos table its variance is the exact expression of
-``tests/test_stats.py`` (row and column variances plus their interaction, which
-it counts more than once: mildly conservative, Owen's result). With few seeds
+For the mean of a seeds x videos table ``Y`` its bootstrap variance is exactly
+``sum(A * (Y @ B @ Y.T)) / (S V)**2 - mean(Y)**2`` with ``A = J + I - J/S`` and
+``B = J + I - J/V`` (``J`` all ones; the multinomial moments, checked in the
+tests): the seeds' and the videos' variances plus their interaction, which it
+counts more than once (mildly conservative, Owen's result). With few seeds
 the seed part is coarse: ``S`` seeds give only ``C(2S-1, S)`` distinct seed
 multisets (10 for 3 seeds) and the bootstrap's seed variance is ``(S-1)/S`` of
 the sample's; read it with ≥ 5 seeds.
