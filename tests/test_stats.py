@@ -184,7 +184,8 @@ def test_seed_resampling_matches_scipy_when_only_seeds_differ() -> None:
     ref = bootstrap((vals,), np.mean, n_resamples=999, method="percentile", rng=np.random.default_rng([11, 1]),
                     vectorized=True)
     np.testing.assert_allclose(iv.samples, ref.bootstrap_distribution, rtol=0, atol=1e-12)
-    assert iv.low == pytest.approx(ref.confidence_interval.low) and iv.high == pytest.approx(ref.confidence_interval.high)
+    assert iv.low == pytest.approx(ref.confidence_interval.low)
+    assert iv.high == pytest.approx(ref.confidence_interval.high)
     counts = resample_seed_counts(7, 999, 11)
     assert counts.shape == (999, 7) and np.all(counts.sum(1) == 7)
     assert np.array_equal(counts, resample_seed_counts(7, 999, 11))

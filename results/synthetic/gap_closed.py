@@ -10,8 +10,8 @@ Each argument may list files of one condition separated by commas (e.g. one run 
 95 % CI and per seed, the paired tables against ``--few`` and ``--many`` (the runner's ``report_table``), and per
 added condition the closed share (AP(added) − AP(few)) / (AP(many) − AP(few)) with its percentile interval over the
 protocol's video resamples (the same resamples for every condition), and the linear statistic behind "closes ≥ 50 %":
-AP(added) − (AP(few) + AP(many)) / 2 (≥ 0 exactly when the share is ≥ 0.5 and the gap > 0); when every condition holds
-the same training seeds, the same again with the seeds resampled too (training randomness counted).
+AP(added) − (AP(few) + AP(many)) / 2 (≥ 0 exactly when the share is ≥ 0.5 and the gap > 0); when every condition
+holds the same training seeds, the same again with the seeds resampled too (training randomness counted).
 """
 from __future__ import annotations
 
@@ -118,7 +118,8 @@ def main() -> None:
     if len({tuple(sorted(r.seed_ids)) for r in res.values()}) == 1 and len(res["few"].seed_ids) > 1:
         lines += ["", "## Gap closed, the training seeds resampled too", "",
                   "The same statistics with the training seeds resampled as well as the videos (one draw of seed ids "
-                  "for every condition; `resample_seed_counts`): training randomness counted; coarse under 5 seeds.", ""]
+                  "for every condition; `resample_seed_counts`): training randomness counted; coarse under 5 "
+                  "seeds.", ""]
         lines += gap_lines(resampled(res, resample_seeds=True)[0], est, "few", "many", added, labels, p.bootstrap.ci,
                            "the same resamples of videos and training seeds")
     text = "\n".join(lines) + "\n"
