@@ -135,12 +135,8 @@ def summarize_conditions(results: Mapping[str, ProtocolResult], baseline: str | 
     return out
 
 
-def _nan(x: float | None) -> bool:
-    return x is None or (isinstance(x, float) and math.isnan(x))
-
-
 def _f(x: float | None, digits: int = 3) -> str:
-    return "–" if _nan(x) else f"{x:.{digits}f}"
+    return "–" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}f}"
 
 
 def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = None, *, digits: int = 3,
@@ -187,7 +183,7 @@ def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = N
                 if len(s.paired.seeds) != len(sums[baseline].seeds) or len(s.paired.seeds) != len(s.seeds):
                     d += f" (on {len(s.paired.seeds)} common seeds)"
                 cs = s.paired_seeds.difference
-                crossed = "–" if _nan(cs.low) else f"[{cs.low:+.{digits}f}, {cs.high:+.{digits}f}]"
+                crossed = "–" if math.isnan(cs.low) else f"[{cs.low:+.{digits}f}, {cs.high:+.{digits}f}]"
                 row += [d, s.paired.wins.format(), crossed]
         row += [_f(s.buckets[b.label], digits) for b in p.size_buckets]
         if has_patch:
