@@ -22,13 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from synthaug.evaluate.results import ProtocolResult
-from synthaug.evaluate.stats import (
-    percentile_interval,
-    resample_counts,
-    resample_indices,
-    resample_seed_counts,
-    seed_mean_samples,
-)
+from synthaug.evaluate.stats import bootstrap_seed_mean, percentile_interval
 from synthaug.evaluate.summary import report_table
 
 
@@ -48,15 +42,13 @@ def resampled(res: Mapping[str, ProtocolResult], resample_seeds: bool = False
     for k, r in res.items():
         assert r.stems == stems, f"{k}: other videos"
         assert r.protocol.fingerprint() == p.fingerprint(), f"{k}: other protocol"
-    counts = resample_counts(resample_indices(len(stems), p.bootstrap.resamples, p.bootstrap.seed), len(stems))
-    seeds = sorted(first.pools(p.main_iou))
-    w = None
-    if resample_seeds:
-        assert all(sorted(r.pools(p.main_iou)) == seeds for r in res.values()), "conditions hold other seeds"
-        w = resample_seed_counts(len(seeds), p.bootstrap.resamples, p.bootstrap.seed)
     pools = {k: r.pools(p.main_iou) for k, r in res.items()}
-    ordered = {k: (dict(sorted(v.items())) if resample_seeds else v) for k, v in pools.items()}
-    return ({k: seed_mean_samples(v, counts, seed_counts=w) for k, v in ordered.items()},
+    if resample_seeds:  # the same seed ids in the same order, so that one draw picks the same seeds everywhere
+        seeds = sorted(pools[next(iter(pools))])
+        assert all(sorted(v) == seeds for v in pools.values()), "conditions hold other seeds"
+        pools = {k: {s: v[s] for s in seeds} for k, v in pools.items()}
+    kw = dict(resamples=p.bootstrap.resamples, seed=p.bootstrap.seed, ci=p.bootstrap.ci, resample_seeds=resample_seeds)
+    return ({k: bootstrap_seed_mean(v, **kw).samples for k, v in pools.items()},
             {k: r.mean_ap(p.main_iou) for k, r in res.items()})
 
 

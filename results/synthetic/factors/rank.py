@@ -71,11 +71,10 @@ def _seeds(template: str, seeds: tuple[int, ...] = (0, 1, 2, 3, 4)) -> tuple[str
     return tuple(template.format(s=s) for s in seeds)
 
 
-_GLB5 = _seeds("mesh_factor/hog_glb_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json")  # stop 64's fits
-_BI5 = _seeds("mesh_factor/hog_builtin_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin.json")
-_TEN = tuple(range(10))
-_GLB10 = _seeds("mesh_factor/hog_glb_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json", _TEN)  # stop 65
-_BI10 = _seeds("mesh_factor/hog_builtin_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin.json", _TEN)
+_GLB = "mesh_factor/hog_glb_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json"  # this machine's fits
+_BI = "mesh_factor/hog_builtin_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin.json"
+_GLB5, _BI5 = _seeds(_GLB), _seeds(_BI)  # seeds 0-4 (stop 64)
+_GLB10, _BI10 = _seeds(_GLB, tuple(range(10))), _seeds(_BI, tuple(range(10)))  # seeds 0-9 (stop 65)
 _FITTED_ROT = "rotation: uniform -> around each seed's fitted rotation (20°)"
 _AT_SEED_GAP = (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_uniform_at_seed_poses"))
 
