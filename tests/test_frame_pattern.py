@@ -387,6 +387,120 @@ def test_sharpening_frame_channel_needs_the_test_against_the_centre_and_the_clea
     assert "sharpening" in screening.FRAME_CANDIDATES
 
 
+def _radial_blend(scene: np.ndarray, sharp_sigma: float, soft_sigma: float) -> np.ndarray:
+    """``scene`` blurred by ``soft_sigma`` at the frame's centre and by ``sharp_sigma`` at its corners, blended by
+    r² (1 at the corners, as :func:`edge_radial` measures it): edges that steepen toward the corners."""
+    from scipy import ndimage
+
+    h, w = scene.shape
+    yy, xx = np.mgrid[0:h, 0:w]
+    r2 = ((xx - (w - 1) / 2) ** 2 + (yy - (h - 1) / 2) ** 2) / (0.25 * (w * w + h * h))
+    return r2 * ndimage.gaussian_filter(scene, sharp_sigma) + (1 - r2) * ndimage.gaussian_filter(scene, soft_sigma)
+
+
+def test_edge_radial_is_the_least_squares_trend_of_the_edges_steps_with_r2():
+    # the same edges edge_ratio reads; the fit A(2) = (a + b r²) A(4) checked against scipy's least squares, and the
+    # frame summary carries it beside the ratio of the same edges
+    from scipy import linalg, ndimage
+
+    from synthaug.diagnose.frame_pattern import edge_radial, edge_ratio, edge_steps, frame_summary
+
+    rng = np.random.default_rng(11)
+    scene = ndimage.zoom(0.4 + 0.2 * rng.random((24, 32)), 8, order=0)
+    f = _radial_blend(scene, 0.8, 2.0) + 0.003 * rng.standard_normal(scene.shape)
+    b = _radial_blend(scene, 0.8, 2.0) + 0.003 * rng.standard_normal(scene.shape)
+    st = edge_steps(f, b)
+    (h, w), y, x = st["shape"], st["y"], st["x"]
+    r2 = ((x - (w - 1) / 2) ** 2 + (y - (h - 1) / 2) ** 2) / (0.25 * (w * w + h * h))
+    coef, *_ = linalg.lstsq(np.stack([st["a2"], st["a2"] * r2], 1), st["a1"])
+    assert edge_radial(st) == pytest.approx(coef[1], rel=1e-9) and coef[1] > 0.05
+    out = frame_summary(f, background=b)
+    assert out["edge_radial"] == pytest.approx(coef[1], rel=1e-9)
+    assert out["edge_ratio"] == pytest.approx(edge_ratio(f, b), rel=1e-12)
+    assert np.isnan(frame_summary(f)["edge_radial"]) and np.isnan(edge_radial(None))  # no second look: no reading
+
+
+def test_edge_radial_sees_a_trend_toward_the_corners_not_a_sharpening_of_every_edge():
+    # an unsharp mask (amount 1 and 1.5) steepens every edge alike and leaves the trend where a plain frame has it;
+    # a frame whose edges steepen toward the corners reads far above both
+    from scipy import ndimage
+
+    from synthaug.diagnose.frame_pattern import edge_radial, edge_steps
+
+    rng = np.random.default_rng(2)
+
+    def trend(op):
+        v = []
+        for _ in range(6):
+            img = op(ndimage.gaussian_filter(ndimage.zoom(0.4 + 0.2 * rng.random((24, 32)), 8, order=0), 1.5))
+            v.append(edge_radial(edge_steps(img + 0.005 * rng.standard_normal(img.shape),
+                                            img + 0.005 * rng.standard_normal(img.shape))))
+        return float(np.mean(v))
+
+    usm = lambda a: (lambda s: s + a * (s - ndimage.gaussian_filter(s, 1.0)))  # noqa: E731
+    plain, sharp1, sharp15 = trend(lambda s: s), trend(usm(1.0)), trend(usm(1.5))
+    radial = trend(lambda s: _radial_blend(s, 0.3, 1.5))
+    assert abs(plain) < 0.02 and abs(sharp1 - plain) < 0.03 and abs(sharp15 - plain) < 0.03, (plain, sharp1, sharp15)
+    assert radial > plain + 0.08, (radial, plain)
+
+
+def test_sharp_edges_carries_the_scenes_mean_radial_trend():
+    from synthaug.diagnose.frame_pattern import scene_clusters, sharp_edges
+
+    rng = np.random.default_rng(6)
+    frames, groups = [], []
+    for v in range(6):
+        tex = rng.standard_normal((12, 16))
+        for j in range(3 + v % 2):
+            frames.append({"edge_ratio": 0.65 + 0.01 * rng.standard_normal(), "edge_radial": 0.01 * v + 0.002 * j, "repeat": 0.9, "shape": (48, 64),
+                           "texture": tex + 0.1 * rng.standard_normal(tex.shape)})
+            groups.append(f"v{v}")
+    out = sharp_edges(frames, groups, centre=0.63)
+    lab = scene_clusters(frames, groups)
+    means = [np.mean([f["edge_radial"] for f, c in zip(frames, lab) if c == k]) for k in range(lab.max() + 1)]
+    assert out["radial"] == pytest.approx(np.mean(means))
+    # frames without a reading (summaries of before the trend was read) leave it NaN, the ratio's test as it was
+    old = [{k: v for k, v in f.items() if k != "edge_radial"} for f in frames]
+    assert np.isnan(sharp_edges(old, groups, centre=0.63)["radial"])
+    assert sharp_edges(old, groups, centre=0.63)["p"] == out["p"]
+
+
+def test_sharpening_frame_channel_is_not_named_when_the_edges_steepen_toward_the_corners(monkeypatch):
+    # lens k1 +0.1 on the reference camera raises the frames' edge ratio past sharpening's floor where its scene did
+    # not move (power table, lens +0.1 case 4); its edges steepen toward the corners, which no clean frame and no
+    # sharpening does: above the clean floor of that trend the frame channel does not name sharpening, and says why
+    from synthaug.diagnose import screening
+    from synthaug.diagnose.frame_pattern import EDGE_RADIAL_FLOOR
+    from synthaug.diagnose.report import write_markdown
+
+    monkeypatch.setattr(screening, "gain_floor", lambda effect, channel: 0.66 if (effect, channel) == (
+        "sharpening", "frame") else None)
+    ev = {"sharpening": {"ratio": 0.70, "t": 9.0, "p": 1e-5, "centre": 0.63, "scenes": 40, "frames": 60,
+                         "radial": EDGE_RADIAL_FLOOR - 0.01}}
+    ch = screening.frame_channel("sharpening", ev, 40, 0.01)
+    assert ch["significant"] and not ch["radial_veto"] and ch["radial_floor"] == EDGE_RADIAL_FLOOR
+    steep = {"sharpening": {**ev["sharpening"], "radial": EDGE_RADIAL_FLOOR + 0.01}}
+    vetoed = screening.frame_channel("sharpening", steep, 40, 0.01)
+    assert not vetoed["significant"] and vetoed["radial_veto"] and vetoed["gain"] == 0.70
+    # edges blurrier toward the corners lower the ratio rather than raise it: no veto that way; no reading: none
+    for r in (-0.2, float("nan")):
+        assert screening.frame_channel("sharpening", {"sharpening": {**ev["sharpening"], "radial": r}}, 40,
+                                       0.01)["significant"]
+    assert screening.frame_channel("sharpening", {"sharpening": {**ev["sharpening"], "radial": float("nan")}}, 40,
+                                   0.01)["radial"] is None  # the report's JSON holds no NaN
+    assert screening.frame_channel("sharpening", {"sharpening": {k: v for k, v in ev["sharpening"].items()
+                                                                 if k != "radial"}}, 40, 0.01)["significant"]
+    base = {"inputs": {"seeds": "s", "n_seeds": 60, "mesh": "m", "fit": "f", "distance": "hog", "k_folds": 5,
+                       "alpha": 0.01}, "findings": [], "residuals": {}, "parameter_dependence": [],
+            "realism": {"accuracy_base": 0.5}, "seconds": 1.0}
+    row = {"effect": "sharpening", "significant": False, "channel": "frame", "score": 4.0, "gain_feature": 0.0,
+           "gain_pixel": 0.0}
+    md = write_markdown({**base, "screened": [{**row, "channels": [vetoed]}]})
+    assert f"Sharpening is not named from the frames: their edges steepen toward the corners (edge sharpness " \
+           f"trend {EDGE_RADIAL_FLOOR + 0.01:+.3f}" in md
+    assert "not named from the frames" not in write_markdown({**base, "screened": [{**row, "channels": [ch]}]})
+
+
 def test_unsharp_inverse_undoes_the_models_unsharp_mask():
     # the model's own unsharp mask (synthaug.effects.camera_functional, reflect border) undone by the division by
     # its transfer function, in the interior (the two borders differ within a few sigma of the edge)

@@ -69,7 +69,11 @@ Without an independent look (an ingested video whose
 background frame is the frame itself off the object) the ratio is not measured. A scene's own edges (poles,
 clouds) set its level, so it is tested over scenes as the fall-off is (:func:`sharp_edges`), against the mean
 that clean frames give it (the calibrated centre): unlike a fall-off or a block grid, edge sharpness has no
-physical zero.
+physical zero. A sharpening steepens every edge alike, wherever it lies in the frame; a lens changes the image's
+local scale with the distance from the centre, and with it the edges' sharpness (the reference camera's pincushion
+raised the mean ratio past sharpening's floor). So each frame also reads the ratio's trend toward the corners
+(:func:`edge_radial`), and edges that steepen toward the corners beyond :data:`EDGE_RADIAL_FLOOR` do not name
+sharpening.
 
 **A lens's radial distortion** is fixed in the frame as well, but it moves nothing a single frame shows: it bends the
 scene's motion. Between a frame and its background frame the scene moves a little (the camera drifts, the scene
@@ -92,7 +96,7 @@ import numpy as np
 
 __all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_summary", "scene_clusters", "radial_falloff",
            "block_grid", "jpeg_quality", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK",
-           "edge_ratio", "edge_steps", "sharp_edges", "destripe", "unsharp_inverse", "sharpening_setting", "EDGE_OFFSETS",
+           "edge_ratio", "edge_steps", "edge_radial", "EDGE_RADIAL_FLOOR", "sharp_edges", "destripe", "unsharp_inverse", "sharpening_setting", "EDGE_OFFSETS",
            "EDGE_QUANTILE", "EDGE_MIN_CONTRAST", "SETTING_FRAMES",
            "radial_flow", "lens_flow", "MIN_DRIFT_PX"]
 
@@ -107,6 +111,14 @@ EDGE_OFFSETS = (2, 4)  # frame px: edge_ratio is the mean step across an edge at
 EDGE_QUANTILE = 0.97  # the edges: gradient maxima among the frame's strongest 3 % gradients ...
 EDGE_MIN_CONTRAST = 8.0 / 255.0  # ... whose step between 4 px either side reaches this on the background frame
 MIN_EDGES = 20  # fewer edges in a frame: no ratio
+EDGE_RADIAL_FLOOR = 0.045526
+"""The frames' edge-sharpness trend toward the corners (:func:`edge_radial`, mean over scenes) above which edges
+that are sharper than clean frames' are not a sharpening (which steepens every edge alike) but something that
+changes with the distance from the centre, as a lens does (:func:`~synthaug.diagnose.screening.frame_channel`). It is
+the calibration's floor rule (:mod:`synthaug.diagnose.calibration`: ``max(max(μ, 0) + zσ, max)``, z one-sided) on the
+44 clean calibration cases (μ 0.0062, σ 0.0128, max 0.0329; z 3.0781), measured by
+``results/diagnose/null/edge_radial_scenes.py`` (``edge_radial_scenes.json``, its ``clean`` block). It only
+withholds a finding, so it is not one of the calibrated tests the family-wise z counts."""
 SAME_LOOK = 0.9  # share of equal pixels above which a background frame is the frame itself (no second look)
 DESTRIPE_PASSES = 6  # the 7-px high-pass keeps 6/7 of a line's gain per pass: 6 passes leave (1/7)^6 of it
 # at most this many frames keep their two looks, to read a sharpening's setting (sharpening_setting; its 1-parameter
@@ -512,11 +524,43 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
         >>> edge_ratio(look(sharp), look(sharp)) > edge_ratio(look(scene), look(scene)) + 0.1
         True
     """
-    steps = edge_steps(frame, background, outside=outside, offsets=offsets)
+    return _steps_ratio(edge_steps(frame, background, outside=outside, offsets=offsets))
+
+
+def _steps_ratio(steps: dict[str, Any] | None) -> float:
+    """:func:`edge_ratio` of the edges :func:`edge_steps` found."""
     if steps is None:
         return float("nan")
     a1, a2 = float(np.sum(steps["a1"])), float(np.sum(steps["a2"]))
     return a1 / a2 if a2 > 0 else float("nan")
+
+
+def edge_radial(steps: dict[str, Any] | None) -> float:
+    """How the edges' sharpness changes from the frame's centre to its corners: ``b`` of the least-squares fit
+    ``A(o1) = (a + b r²) A(o2)`` over the edges of :func:`edge_steps` (``r²`` the squared distance from the
+    frame's centre over the half diagonal's, 1 at the corners).
+
+    A camera's sharpening steepens every edge alike (``b`` ≈ 0); a lens changes the image's local scale with
+    ``r²``, and with it the edges' sharpness, in a direction that depends on the scene and on where the lens sits
+    among the camera's steps. On the reference camera k₁ +0.1 raises the frames' mean edge ratio and leaves the
+    corners' edges steeper (``b`` +0.035 to +0.066 over scenes; clean cases at most :data:`EDGE_RADIAL_FLOOR`;
+    ``results/diagnose/README.md``, stops 45 and 66). NaN where ``steps`` is None.
+
+    Example:
+        >>> y, x = np.array([47.5, 0.0, 95.0, 47.5]), np.array([63.5, 0.0, 127.0, 20.0])
+        >>> r2 = ((x - 63.5) ** 2 + (y - 47.5) ** 2) / (0.25 * (128 ** 2 + 96 ** 2))
+        >>> a2 = np.array([1.0, 2.0, 1.5, 0.5])
+        >>> steps = {"y": y, "x": x, "a1": (0.6 + 0.05 * r2) * a2, "a2": a2, "shape": (96, 128)}
+        >>> round(edge_radial(steps), 6), bool(np.isnan(edge_radial(None)))
+        (0.05, True)
+    """
+    if steps is None:
+        return float("nan")
+    (h, w), y, x = steps["shape"], np.asarray(steps["y"], np.float64), np.asarray(steps["x"], np.float64)
+    r2 = ((x - (w - 1) / 2) ** 2 + (y - (h - 1) / 2) ** 2) / (0.25 * (w * w + h * h))
+    a2 = np.asarray(steps["a2"], np.float64)
+    (_, b), *_ = np.linalg.lstsq(np.stack([a2, a2 * r2], 1), np.asarray(steps["a1"], np.float64), rcond=None)
+    return float(b)
 
 
 def _division_u(px: np.ndarray, py: np.ndarray, tx: float, ty: float, k: float
@@ -756,6 +800,7 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         darker toward the corners; NaN with fewer than 16 usable blocks), ``texture`` (float32 (H/step, W/step):
         the band-passed block log image), ``repeat`` (its correlation with the background's texture; NaN without
         one), ``edge_ratio`` (:func:`edge_ratio` against the background frame; NaN without an independent one),
+        ``edge_radial`` (:func:`edge_radial` of the same edges; NaN likewise),
         ``looks`` (with ``keep_looks``, else None), ``flow_k`` and ``flow_drift`` (:func:`radial_flow` against the
         background frame: the lens's k and the scene's shift between the looks; NaN without an independent one or
         too small a shift) and ``shape`` (H, W).
@@ -781,19 +826,20 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
     blockiness = _blockiness(lin, outside, CODEC_BLOCK)
     dct = _block_dct(lin * 255.0, outside & unclipped)
     tex = _texture(log, step)
-    repeat, edges, looks = float("nan"), float("nan"), None
+    repeat, edges, radial, looks = float("nan"), float("nan"), float("nan"), None
     flow = {"k": float("nan"), "drift": float("nan")}
     if background is not None:
         blog, _ = _gray_log(background)
         if blog.shape == log.shape:
             repeat = _corr(tex, _texture(blog, step))
             fg, bg = _gray(frame), _gray(background)  # once: the ratio and the kept looks read the same gray frames
-            edges = edge_ratio(fg, bg, outside=outside)
+            steps = edge_steps(fg, bg, outside=outside)
+            edges, radial = _steps_ratio(steps), edge_radial(steps)
             if keep_looks and math.isfinite(edges):
                 looks = (fg.astype(np.float32), bg.astype(np.float32), outside)
             flow = radial_flow(fg, bg, outside=outside)
     return {"log_slope": slope, "blockiness": blockiness, "dct": dct, "texture": tex, "repeat": repeat,
-            "edge_ratio": edges, "looks": looks, "flow_k": flow["k"], "flow_drift": flow["drift"],
+            "edge_ratio": edges, "edge_radial": radial, "looks": looks, "flow_k": flow["k"], "flow_drift": flow["drift"],
             "shape": (int(h), int(w))}
 
 
@@ -958,7 +1004,9 @@ def sharp_edges(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *, c
 
     Returns:
         None with fewer than 3 scenes that have a ratio; else ``ratio`` (the mean over scenes), ``t``, ``p``
-        (one-sided: sharper than ``centre``), ``centre``, ``scenes``, ``frames``.
+        (one-sided: sharper than ``centre``), ``centre``, ``scenes``, ``frames``, and ``radial``: the mean over
+        scenes of the frames' :func:`edge_radial` (NaN where fewer than 3 scenes have one), how the sharpness
+        changes toward the corners (a lens's signature, not a sharpening's).
 
     Example:
         >>> rng = np.random.default_rng(0)
@@ -971,9 +1019,10 @@ def sharp_edges(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *, c
     r = _over_scenes(summaries, groups, "edge_ratio", same, 0.0 if centre is None else centre)
     if r is None:
         return None
+    rad = _over_scenes(summaries, groups, "edge_radial", same, two_sided=True)
     return {"ratio": r["mean"], "t": r["t"] if centre is not None else float("nan"),
             "p": r["p"] if centre is not None else 1.0, "centre": centre, "scenes": r["scenes"],
-            "frames": r["frames"]}
+            "frames": r["frames"], "radial": float("nan") if rad is None else rad["mean"]}
 
 
 def lens_flow(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,

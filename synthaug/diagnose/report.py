@@ -656,6 +656,13 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
         lines.append(f"| {r['effect']} | {'yes' if r['significant'] else ''} | {r['channel']} | {z:.1f} | "
                      f"{100 * (r['gain_feature'] or 0):.2f} % | {100 * (r['gain_pixel'] or 0):.2f} % | "
                      + (f"{100 * gc:.2f} % |" if gc is not None else "|"))
+    for r in report["screened"]:
+        ch = next((c for c in r.get("channels") or [] if c.get("radial_veto")), None)
+        if ch is not None:
+            lines += ["", f"{r['effect'].capitalize()} is not named from the frames: their edges steepen toward the "
+                      f"corners (edge sharpness trend {ch['radial']:+.3f} per unit r² over scenes, clean frames ≤ "
+                      f"{ch['radial_floor']:.3f}), a change of the image's scale with the distance from the centre "
+                      "as a lens gives, where a sharpening steepens every edge alike."]
     col = report.get("colour") or {}
     if col and not col.get("screened"):
         skipped = [r["effect"] for r in report["screened"] if r.get("colour_skipped")]

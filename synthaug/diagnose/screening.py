@@ -533,7 +533,11 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
     step made 2 px from its centre; its test is against the clean mean, not 0), for lens distortion ``|k|`` of the
     division model that the scene's motion between the frame and its background frame reads (its test two-sided).
     Significant when the test over scenes rejects at α (Bonferroni) and the statistic exceeds its
-    calibrated clean floor."""
+    calibrated clean floor; sharpening's, in addition, only while its edges do not sharpen toward the corners
+    beyond what clean frames show (``radial``, :func:`~synthaug.diagnose.frame_pattern.edge_radial` over scenes,
+    against :data:`~synthaug.diagnose.frame_pattern.EDGE_RADIAL_FLOOR`, None without a reading; ``radial_veto``
+    says it withheld the finding): a sharpening
+    steepens every edge alike, a lens changes their sharpness with the distance from the centre."""
     e = None if ev is None or effect not in FRAME_CANDIDATES else ev.get(effect)
     if e is None:
         return None
@@ -551,8 +555,14 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
     elif effect == "lens_distortion":
         out["k1"] = e["k"]
     else:
-        out["centre"] = e["centre"]
-        out["setting"] = e.get("setting")
+        from synthaug.diagnose.frame_pattern import EDGE_RADIAL_FLOOR
+
+        # edges sharper toward the corners than clean frames' ever are: a lens's change of scale, not a sharpening
+        radial = e.get("radial", float("nan"))
+        veto = bool(math.isfinite(radial) and radial > EDGE_RADIAL_FLOOR)
+        out.update(centre=e["centre"], setting=e.get("setting"), radial=radial if math.isfinite(radial) else None,
+                   radial_floor=EDGE_RADIAL_FLOOR,
+                   radial_veto=veto, significant=out["significant"] and not veto)
     return out
 
 

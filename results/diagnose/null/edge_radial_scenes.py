@@ -1,0 +1,81 @@
+"""Issue 20, stop 66: the frames' edge-sharpness trend toward the corners as the diagnosis reads it
+(:func:`synthaug.diagnose.frame_pattern.sharp_edges`' ``radial``: each frame's :func:`~synthaug.diagnose.frame_pattern.
+edge_radial` from :func:`~synthaug.diagnose.frame_pattern.frame_summary`, averaged over scenes), on the calibration's
+clean cases and the power table's cases (the same seeds, nuisances and hidden settings as
+``benchmarks/bench_diagnose_null.py``; only the seed sets are made, the frame statistics do not read the fit), and the
+floor the calibration's rule gives it on the clean cases: ``max(max(mu, 0) + z sigma, max)`` with the calibration's
+one-sided z (:mod:`synthaug.diagnose.null_floors`).
+
+Usage::
+
+    PYTHONPATH=. python results/diagnose/null/edge_radial_scenes.py --out results/diagnose/null/edge_radial_scenes.json \\
+        clean:2000:24 clean:4000:20 lens_distortion:alt:8000:5 sharpening:default:8000:5 sharpening:alt:8000:5
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from edge_radial import group_cases  # noqa: E402  (the same case maker as stop 45's script)
+
+
+def case_row(seeds, geo) -> dict:
+    from synthaug.diagnose.frame_pattern import frame_summary, sharp_edges
+
+    p = seeds.patch_size
+    summaries = []
+    for i in range(len(seeds)):
+        f, bg = np.asarray(seeds.frame(i)), np.asarray(seeds.background_frame(i))
+        summaries.append(frame_summary(f, background=bg, exclude=(float(geo["origin"][i, 0]),
+                                                                  float(geo["origin"][i, 1]),
+                                                                  p * float(geo["frame_scale"][i]))))
+    groups = [r.get("video") for r in seeds.records]
+    sh = sharp_edges(summaries, groups, centre=None)
+    return {"ratio": None if sh is None else sh["ratio"], "radial": None if sh is None else sh["radial"],
+            "scenes": None if sh is None else sh["scenes"]}
+
+
+def floor(values: list[float], z: float) -> float:
+    v = np.asarray(values, np.float64)
+    return float(max(max(v.mean(), 0.0) + z * v.std(ddof=1), v.max()))
+
+
+def main() -> int:
+    from synthaug.diagnose import null_floors
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("groups", nargs="+", help="clean:BASE:N or EFFECT:STRENGTH:BASE:N")
+    ap.add_argument("--workdir", default="outputs/edge_radial")
+    ap.add_argument("--out", default=None)
+    a = ap.parse_args()
+    t0 = time.perf_counter()
+    out: dict = {"groups": {}}
+    for group in a.groups:
+        rows = []
+        for k, seeds, geo in group_cases(group, a.workdir):
+            rows.append({"k": k, **case_row(seeds, geo)})
+            print(group, rows[-1], flush=True)
+        out["groups"][group] = rows
+    clean = [r["radial"] for g, rows in out["groups"].items() if g.startswith("clean") for r in rows
+             if r["radial"] is not None and np.isfinite(r["radial"])]
+    if len(clean) >= 3:
+        z = float(null_floors.SOURCE["z_one_sided"])
+        out["clean"] = {"cases": len(clean), "mean": float(np.mean(clean)), "sd": float(np.std(clean, ddof=1)),
+                        "max": float(np.max(clean)), "z_one_sided": z, "floor": floor(clean, z)}
+        print("clean", out["clean"], flush=True)
+    out["seconds"] = round(time.perf_counter() - t0, 1)
+    if a.out:
+        Path(a.out).write_text(json.dumps(out, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
