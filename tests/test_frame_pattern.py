@@ -452,7 +452,8 @@ def test_sharp_edges_carries_the_scenes_mean_radial_trend():
     for v in range(6):
         tex = rng.standard_normal((12, 16))
         for j in range(3 + v % 2):
-            frames.append({"edge_ratio": 0.65 + 0.01 * rng.standard_normal(), "edge_radial": 0.01 * v + 0.002 * j, "repeat": 0.9, "shape": (48, 64),
+            frames.append({"edge_ratio": 0.65 + 0.01 * rng.standard_normal(), "edge_radial": 0.01 * v + 0.002 * j,
+                           "repeat": 0.9, "shape": (48, 64),
                            "texture": tex + 0.1 * rng.standard_normal(tex.shape)})
             groups.append(f"v{v}")
     out = sharp_edges(frames, groups, centre=0.63)

@@ -96,7 +96,8 @@ import numpy as np
 
 __all__ = ["line_profiles", "fixed_line_pattern", "HIGH_PASS", "frame_summary", "scene_clusters", "radial_falloff",
            "block_grid", "jpeg_quality", "falloff_k", "SAME_SCENE", "FALLOFF_BLOCK", "CODEC_BLOCK",
-           "edge_ratio", "edge_steps", "edge_radial", "EDGE_RADIAL_FLOOR", "sharp_edges", "destripe", "unsharp_inverse", "sharpening_setting", "EDGE_OFFSETS",
+           "edge_ratio", "edge_steps", "edge_radial", "EDGE_RADIAL_FLOOR", "sharp_edges", "destripe", "unsharp_inverse",
+           "sharpening_setting", "EDGE_OFFSETS",
            "EDGE_QUANTILE", "EDGE_MIN_CONTRAST", "SETTING_FRAMES",
            "radial_flow", "lens_flow", "MIN_DRIFT_PX"]
 
@@ -839,7 +840,8 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
                 looks = (fg.astype(np.float32), bg.astype(np.float32), outside)
             flow = radial_flow(fg, bg, outside=outside)
     return {"log_slope": slope, "blockiness": blockiness, "dct": dct, "texture": tex, "repeat": repeat,
-            "edge_ratio": edges, "edge_radial": radial, "looks": looks, "flow_k": flow["k"], "flow_drift": flow["drift"],
+            "edge_ratio": edges, "edge_radial": radial, "looks": looks, "flow_k": flow["k"],
+            "flow_drift": flow["drift"],
             "shape": (int(h), int(w))}
 
 

@@ -8,8 +8,9 @@ one-sided z (:mod:`synthaug.diagnose.null_floors`).
 
 Usage::
 
-    PYTHONPATH=. python results/diagnose/null/edge_radial_scenes.py --out results/diagnose/null/edge_radial_scenes.json \\
-        clean:2000:24 clean:4000:20 lens_distortion:alt:8000:5 sharpening:default:8000:5 sharpening:alt:8000:5
+    PYTHONPATH=. python results/diagnose/null/edge_radial_scenes.py \\
+        --out results/diagnose/null/edge_radial_scenes.json lens_distortion:alt:8000:5 clean:2000:24 \\
+        clean:4000:20 sharpening:default:8000:5 sharpening:alt:8000:5
 """
 
 from __future__ import annotations
