@@ -60,6 +60,7 @@ from pathlib import Path
 from typing import Any, Iterator, Sequence
 
 __all__ = ["HAND_FLOORS", "HAND_MIN_GAIN", "structure_significant", "gain_floor", "gain_centre", "rule_text",
+           "one_sided_floor",
            "describe", "derive_floors", "write_floors_module", "FAMILY_RATE", "hand_set"]
 
 # The floors set by hand before the calibration (and the fallback for statistics without a null).
@@ -172,6 +173,23 @@ def describe() -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------ derivation (the benchmark's side)
+def one_sided_floor(values: Sequence[float], z: float) -> float:
+    """The rule's floor of a one-sided statistic from its clean values: ``max(max(μ, 0) + zσ, max, 0)`` (μ, σ their
+    mean and standard deviation, ddof 1).
+
+    Example:
+        >>> round(one_sided_floor([-0.01, 0.01, 0.03], 2.0), 6)  # mean 0.01, sd 0.02
+        0.05
+        >>> round(one_sided_floor([-0.3, -0.1], 0.5), 4)  # mean below 0: 0 + 0.5 sd
+        0.0707
+    """
+    import numpy as np
+
+    v = np.asarray(values, np.float64)
+    mu, sd = float(v.mean()), float(v.std(ddof=1))
+    return max(max(mu, 0.0) + z * sd, float(v.max()), 0.0)
+
+
 def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMILY_RATE,
                   min_cases: int = 10) -> dict[str, Any]:
     """Null ranges and floors from clean cases' statistics (``bench_diagnose_null.case_statistics`` rows).
@@ -225,7 +243,7 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
             structure[key.split(":", 1)[1]] = [min(min(mu, 0.0) - z2 * sd, float(v.min())),
                                                max(max(mu, 0.0) + z2 * sd, float(v.max()))]
         else:
-            screen[key.split(":", 1)[1]] = max(max(mu, 0.0) + z1 * sd, float(v.max()), 0.0)
+            screen[key.split(":", 1)[1]] = one_sided_floor(v, z1)
             centre[key.split(":", 1)[1]] = mu
     return {"STRUCTURE": structure, "SCREEN": screen, "CENTRE": centre, "z_two_sided": z2, "z_one_sided": z1,
             "n_statistics": n_stats, "n_two_sided": n_two}

@@ -70,12 +70,18 @@ def group_cases(group: str, workdir: str | Path):
         yield k, seeds, seed_geometry(seeds)
 
 
-def main() -> int:
+def groups_parser() -> argparse.ArgumentParser:
+    """The command line of this script and of ``edge_radial_scenes.py``: the groups of cases, their work folder and
+    the JSON out."""
     ap = argparse.ArgumentParser()
     ap.add_argument("groups", nargs="+", help="clean:BASE:N or EFFECT:STRENGTH:BASE:N")
     ap.add_argument("--workdir", default="outputs/edge_radial")
     ap.add_argument("--out", default=None)
-    a = ap.parse_args()
+    return ap
+
+
+def main() -> int:
+    a = groups_parser().parse_args()
 
     out = {}
     for group in a.groups:

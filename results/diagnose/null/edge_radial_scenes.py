@@ -15,7 +15,6 @@ Usage::
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -25,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from edge_radial import group_cases  # noqa: E402  (the same case maker as stop 45's script)
+from edge_radial import group_cases, groups_parser  # noqa: E402  (the same case maker as stop 45's script)
 
 
 def case_row(seeds, geo) -> dict:
@@ -44,19 +43,11 @@ def case_row(seeds, geo) -> dict:
             "scenes": None if sh is None else sh["scenes"]}
 
 
-def floor(values: list[float], z: float) -> float:
-    v = np.asarray(values, np.float64)
-    return float(max(max(v.mean(), 0.0) + z * v.std(ddof=1), v.max()))
-
-
 def main() -> int:
     from synthaug.diagnose import null_floors
+    from synthaug.diagnose.calibration import one_sided_floor
 
-    ap = argparse.ArgumentParser()
-    ap.add_argument("groups", nargs="+", help="clean:BASE:N or EFFECT:STRENGTH:BASE:N")
-    ap.add_argument("--workdir", default="outputs/edge_radial")
-    ap.add_argument("--out", default=None)
-    a = ap.parse_args()
+    a = groups_parser().parse_args()
     t0 = time.perf_counter()
     out: dict = {"groups": {}}
     for group in a.groups:
@@ -70,7 +61,7 @@ def main() -> int:
     if len(clean) >= 3:
         z = float(null_floors.SOURCE["z_one_sided"])
         out["clean"] = {"cases": len(clean), "mean": float(np.mean(clean)), "sd": float(np.std(clean, ddof=1)),
-                        "max": float(np.max(clean)), "z_one_sided": z, "floor": floor(clean, z)}
+                        "max": float(np.max(clean)), "z_one_sided": z, "floor": one_sided_floor(clean, z)}
         print("clean", out["clean"], flush=True)
     out["seconds"] = round(time.perf_counter() - t0, 1)
     if a.out:
