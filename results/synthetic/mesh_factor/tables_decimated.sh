@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# Stop 66: HOG + 20x from fits of quadcopter.glb decimated to the built-in's 888 faces (run_decimated.sh), paired
-# against the quadcopter.glb fits and the built-in fits of the same seeds (stored cells; trains nothing).
-# usage (repository root): results/synthetic/mesh_factor/tables_decimated.sh "0 1 2 3 4"
+# Stop 66: HOG + 20x from fits of quadcopter.glb decimated to the built-in quadcopter's 888 faces (run_decimated.sh;
+# and, where every seed given has it, the decimated mesh with its footprint made square, tag glbsq), paired against
+# the quadcopter.glb fits and the built-in fits of the same seeds (stored cells); the CNN's decimated cells (seeds
+# 0-4, cnn_glbdec/) against its .glb and built-in cells. Trains nothing.
+# usage (repository root): results/synthetic/mesh_factor/tables_decimated.sh "0 1 2 3 4 5 6 7 8 9" ["0 1 2 3 4"]
+#   (the second list: the seeds with a glbsq cell)
 set -euo pipefail
-D=results/synthetic/mesh_factor; T=results/learning_curve/video_diversity/table.py
+R=results/synthetic; D=$R/mesh_factor; T=results/learning_curve/video_diversity/table.py
 G=hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog
 GL=(); DE=(); BI=(); RO=()
 for s in $1; do
@@ -14,3 +17,22 @@ for s in $1; do
 done
 PYTHONPATH=. python $T "${GL[@]}" "${DE[@]}" "${BI[@]}" "${RO[@]}" --out $D/hog_decimated_vs_glb.md
 PYTHONPATH=. python $T "${BI[@]}" "${DE[@]}" --out $D/hog_decimated_vs_builtin.md
+# the decimated mesh with a square footprint, on the seeds that have it, against the decimated and built-in cells
+if [ -n "${2:-}" ]; then
+  SQ=(); DE2=(); BI2=()
+  for s in $2; do
+    SQ+=("$D/hog_glbsq_seed$s/${G}_glbsq.json=+20x, decimated, footprint square")
+    DE2+=("$D/hog_glbdec_seed$s/${G}_glbdec.json=+20x, quadcopter.glb decimated to 888 faces")
+    BI2+=("$D/hog_builtin_seed$s/${G}_builtin.json=+20x, built-in fits")
+  done
+  PYTHONPATH=. python $T "${DE2[@]}" "${SQ[@]}" "${BI2[@]}" --out $D/hog_square_vs_decimated.md
+fi
+# the CNN (blurs left out, its default), seeds 0-4
+NB=without_boundary_blur_and_motion_blur; C=cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog
+if [ -f "$D/cnn_glbdec/${C}_glbdec_$NB.json" ]; then
+  CG=(); for f in $R/placement/cnn_100 $D/cnn_glb_seed3 $D/cnn_glb_seed4; do CG+=("$f/${C}_$NB.json=+20x, quadcopter.glb fits"); done
+  CB=(); for f in $D/cnn_100_builtin $D/cnn_builtin_seed3 $D/cnn_builtin_seed4; do
+    CB+=("$f/${C}_builtin_$NB.json=+20x, built-in fits"); done
+  PYTHONPATH=. python $T "${CG[@]}" "$D/cnn_glbdec/${C}_glbdec_$NB.json=+20x, quadcopter.glb decimated to 888 faces" \
+    "${CB[@]}" "$R/cnn_figs/no_blurs/cnn_100_seeds.json=real only" --out $D/cnn_decimated_vs_glb.md
+fi
