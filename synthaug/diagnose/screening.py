@@ -536,8 +536,8 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
     calibrated clean floor; sharpening's, in addition, only while its edges do not sharpen toward the corners
     beyond what clean frames show (``radial``, :func:`~synthaug.diagnose.frame_pattern.edge_radial` over scenes,
     against :data:`~synthaug.diagnose.frame_pattern.EDGE_RADIAL_FLOOR`, None without a reading; ``radial_veto``
-    says it withheld the finding): a sharpening
-    steepens every edge alike, a lens changes their sharpness with the distance from the centre."""
+    says it withheld the finding): a sharpening steepens every edge alike, a lens changes their sharpness with the
+    distance from the centre."""
     e = None if ev is None or effect not in FRAME_CANDIDATES else ev.get(effect)
     if e is None:
         return None
@@ -561,8 +561,7 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
         radial = e.get("radial", float("nan"))
         veto = bool(math.isfinite(radial) and radial > EDGE_RADIAL_FLOOR)
         out.update(centre=e["centre"], setting=e.get("setting"), radial=radial if math.isfinite(radial) else None,
-                   radial_floor=EDGE_RADIAL_FLOOR,
-                   radial_veto=veto, significant=out["significant"] and not veto)
+                   radial_floor=EDGE_RADIAL_FLOOR, radial_veto=veto, significant=out["significant"] and not veto)
     return out
 
 
