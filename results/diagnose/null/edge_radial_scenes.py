@@ -28,15 +28,12 @@ from edge_radial import group_cases, groups_parser  # noqa: E402  (the same case
 
 
 def case_row(seeds, geo) -> dict:
-    from synthaug.diagnose.frame_pattern import frame_summary, sharp_edges
+    """The case's frame summaries exactly as the diagnosis makes them (``diagnosis_data._frame_summaries``) and
+    :func:`~synthaug.diagnose.frame_pattern.sharp_edges` over them with the diagnosis's groups (the seeds' videos)."""
+    from synthaug.diagnose.diagnosis_data import _frame_summaries, _read_frames
+    from synthaug.diagnose.frame_pattern import sharp_edges
 
-    p = seeds.patch_size
-    summaries = []
-    for i in range(len(seeds)):
-        f, bg = np.asarray(seeds.frame(i)), np.asarray(seeds.background_frame(i))
-        summaries.append(frame_summary(f, background=bg, exclude=(float(geo["origin"][i, 0]),
-                                                                  float(geo["origin"][i, 1]),
-                                                                  p * float(geo["frame_scale"][i]))))
+    summaries = _frame_summaries(seeds, _read_frames(seeds), geo, seeds.patch_size)
     groups = [r.get("video") for r in seeds.records]
     sh = sharp_edges(summaries, groups, centre=None)
     return {"ratio": None if sh is None else sh["ratio"], "radial": None if sh is None else sh["radial"],
