@@ -2,7 +2,7 @@
 
 Writes ``quadcopter.glb`` decimated to the built-in quadcopter's face count (quadric error metric, trimesh's
 ``simplify_quadric_decimation``, backed by ``fast-simplification``; not a dependency of the library: ``pip install
-fast-simplification`` for this script). The decimated mesh keeps the shared mesh's proportions (arms, rotors, legs where
+-e ".[mesh]"`` for this script). The decimated mesh keeps the shared mesh's proportions (arms, rotors, legs where
 they are) and loses its detail; the built-in quadcopter differs in both. It is written under ``data/`` (generated,
 not committed: nothing from ``../shared`` goes into the repository).
 
