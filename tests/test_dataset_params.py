@@ -390,3 +390,56 @@ def test_object_box_fit_frames_objects_at_the_size_of_the_fitted_renders(small_c
     assert np.all(np.abs(centres - 20.0) <= 1.5)
     with pytest.raises(ValueError, match="give params from a fit with per-seed scales"):
         SyntheticObjectDataset("quadcopter", bgs, fit, render=small_cache, length=4, object_box="fit")
+
+
+def test_background_sampling_other_puts_each_object_on_another_seeds_background(small_cache):
+    """``background_sampling="other"``: each synthetic item's background is another seed's (never its own), drawn
+    uniformly over the others (chi-square against scipy), and that background is the one rendered (negatives are
+    the bare background patch, so the pixels say whose it is); every other draw is the paper's own ("seed")."""
+    from scipy import stats
+
+    n = 4
+    bgs = [np.full((48, 48), 0.1 + 0.2 * i, np.float32) for i in range(n)]  # seed i's background: level 0.1 + 0.2 i
+    fit = CaptureParams.sample(n, generator=torch.Generator().manual_seed(3))
+
+    def make(**kw):
+        return SyntheticObjectDataset("quadcopter", bgs, fit, render=small_cache, length=600, patch_size=40, seed=5,
+                                      **kw)
+
+    own, other = make(), make(background_sampling="other")
+    pairs = np.array([(p.seed_index, p.background) for p in (other.make_params(i) for i in range(600))])
+    assert np.all(pairs[:, 0] != pairs[:, 1]) and pairs[:, 1].min() >= 0 and pairs[:, 1].max() < n
+    for s in range(n):  # given the seed, its background is uniform over the three others
+        counts = np.bincount(pairs[pairs[:, 0] == s, 1], minlength=n)
+        assert counts[s] == 0 and stats.chisquare(np.delete(counts, s)).pvalue > 1e-3, counts
+    for i in range(40):  # the background is the only draw it adds: seed, pose, crop, capture and fields as "seed"
+        a, b = own.make_params(i), other.make_params(i)
+        assert a.background_index is None and a.background == a.seed_index
+        assert dataclasses.replace(b, background_index=None) == a
+    negatives = [i for i in range(60) if other.make_params(i).negative]
+    assert len(negatives) >= 10
+    for i in negatives:  # a negative is the background patch itself: the other seed's level, not its own
+        p = other.make_params(i)
+        np.testing.assert_allclose(other[i][0].numpy(), 0.1 + 0.2 * p.background, atol=1e-6)
+        np.testing.assert_allclose(own[i][0].numpy(), 0.1 + 0.2 * p.seed_index, atol=1e-6)
+    positives = [i for i in range(60) if not other.make_params(i).negative][:8]
+    for i in positives:  # a positive keeps its seed's capture row (theta) over the other background
+        img, target = other[i]
+        p = other.make_params(i)
+        assert int(target["seed_index"]) == p.seed_index
+        torch.testing.assert_close(target["theta"], own[i][1]["theta"])
+        corner = float(img[0, 0, 0])
+        assert corner == pytest.approx(0.1 + 0.2 * p.background, abs=0.02)  # the patch's corner is background
+    # a replayed item is the same bytes, and a changed background renders that change alone
+    p = other.make_params(positives[0])
+    assert torch.equal(other.render(p)[0], other[positives[0]][0])
+    with pytest.raises(ValueError, match="background_index 9 out of range"):
+        other.render(dataclasses.replace(p, background_index=9))
+
+
+def test_bad_background_sampling_is_refused_with_a_clear_message(small_cache):
+    bgs = sky_backgrounds(2, (64, 72), seed=1)
+    with pytest.raises(ValueError, match="background_sampling must be one of"):
+        SyntheticObjectDataset("quadcopter", bgs, render=small_cache, length=4, background_sampling="random")
+    with pytest.raises(ValueError, match="at least 2 backgrounds"):
+        SyntheticObjectDataset("quadcopter", bgs[:1], render=small_cache, length=4, background_sampling="other")

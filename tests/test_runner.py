@@ -651,6 +651,29 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
     assert [a.quantize for a in _added_positives(ws, monkeypatch, plain, eight)] == [False, True]
 
 
+def test_background_sampling_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkeypatch, capsys):
+    """``--background-sampling other`` adds a condition per synthetic ratio whose objects sit on other seeds'
+    backgrounds (named so, ``background_sampling`` in its key and in the ``AddedPositives`` its training gets); the
+    paper's, the default, keeps every former key and name; a value repeated makes one condition."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           background_sampling=("seed", "other", "other"))
+    real, own, other = made
+    assert "background_sampling" not in own.identity() and other.identity()["background_sampling"] == "other"
+    assert {k: v for k, v in other.identity().items() if k != "background_sampling"} == own.identity()
+    assert own.name == "hog / 12 seeds + 20x synthetic (f{seed})"
+    assert other.name == "hog / 12 seeds + 20x synthetic (f{seed}, backgrounds of other seeds)"
+    parse = R.build_parser().parse_args
+    assert parse(["synthetic", "--out", "x"]).background_sampling == ["seed"]
+    assert parse(["synthetic", "--background-sampling", "seed", "other", "--out", "x"]).background_sampling == [
+        "seed", "other"]
+    with pytest.raises(SystemExit) as e:
+        parse(["synthetic", "--background-sampling", "random", "--out", "x"])
+    assert e.value.code == 2 and "--background-sampling" in capsys.readouterr().err
+    assert [a.background_sampling for a in _added_positives(ws, monkeypatch, own, other)] == ["seed", "other"]
+
+
 def test_at_seed_pose_sampling_is_a_condition_of_its_own_and_refuses_an_object_box(ws, monkeypatch, capsys):
     """``--pose-sampling uniform_at_seed fitted_at_seed``: one condition each (named so, ``pose_sampling`` in the key
     and in the ``AddedPositives`` its training gets); the former names and keys unchanged; with an object box,

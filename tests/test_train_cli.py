@@ -463,6 +463,7 @@ def test_synthetic_share_is_a_number_or_count(capsys: pytest.CaptureFixture[str]
         ("no_positive_videos", "--positive-videos"),
         ("more_positive_videos_than_training_videos", "--positive-videos"),
         ("capture_sampling_without_synthetic", "--capture-sampling"),
+        ("background_sampling_without_synthetic", "--background-sampling"),
         ("effects_off_without_synthetic", "--effects-off"),
         ("effect_off_not_in_the_fit", "--effects-off"),
     ],
@@ -529,6 +530,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--positive-videos", "999"]
     elif case == "capture_sampling_without_synthetic":
         extra += ["--capture-sampling", "uniform"]
+    elif case == "background_sampling_without_synthetic":
+        extra += ["--background-sampling", "other"]
     elif case == "effects_off_without_synthetic":
         extra += ["--effects-off", "motion_blur"]
     elif case == "effect_off_not_in_the_fit":  # rotor_blur is a registered effect, but not one the paper's fit holds

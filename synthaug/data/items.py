@@ -40,6 +40,8 @@ class ItemParams:
         fields: the random effects' noise fields, ``{field name: (1, C, crop, crop) tensor}`` (not JSON: everything
             else is, ``dataclasses.asdict(p)`` without ``fields``).
         variant: which of the dataset's shapes the object has (``shape_variation``: 0 is the mesh itself).
+        background_index: the seed whose background the object is composited on, where that is not
+            ``seed_index``'s own (``background_sampling="other"``); None: the item's own seed's (the paper).
     """
 
     index: int
@@ -53,6 +55,12 @@ class ItemParams:
     capture: tuple[float, ...] | None = None
     fields: Mapping[str, torch.Tensor] = field(default_factory=dict)
     variant: int = 0
+    background_index: int | None = None
+
+    @property
+    def background(self) -> int:
+        """The seed whose background the item uses: ``background_index``, else its own seed's."""
+        return self.seed_index if self.background_index is None else self.background_index
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, ItemParams):

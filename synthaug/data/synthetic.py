@@ -148,7 +148,7 @@ class SyntheticObjectDataset(Dataset):
             :class:`~synthaug.data.captures.KDECapture`,
             :class:`~synthaug.data.captures.UniformCapture`; or a capture sampler of
             your own (:class:`~synthaug.data.captures.CaptureSampler`). The
-            background always comes from one seed.
+            background always comes from one seed (see ``background_sampling``).
         pose_sampling: ``"uniform"`` (default, :class:`~synthaug.data.poses.UniformPose`: α, β, γ
             uniform over their sampling ranges, every view equally likely), ``"fitted"``
             (:class:`~synthaug.data.poses.FittedPose`: each item's rotation is its seed's *fitted*
@@ -176,6 +176,10 @@ class SyntheticObjectDataset(Dataset):
             around a coarse model. The fitted capture parameters and object scale are used as they are.
         shape_variants: how many shapes ``shape_variation`` makes (>= 2; the first is the mesh itself); each is
             rendered into its own view cache once.
+        background_sampling: ``"seed"`` (the paper: each object on its own seed's background, the one its capture
+            parameters were fitted on) or ``"other"`` (each on the background of another seed, drawn uniformly; the
+            capture parameters stay the item's seed's: the background factor of the synthetic distribution, issue
+            16). The background's place in its frame then serves the position-aware effects. Needs 2 seeds.
         transforms: a callable ``(image, target) -> (image, target)`` applied to
             every item, real and synthetic alike, as torchvision datasets take
             one (e.g. ``transforms.v2.Compose([...])``: frame-mode boxes are
@@ -212,6 +216,7 @@ class SyntheticObjectDataset(Dataset):
         seed_geometry: Mapping[str, Any] | Literal["auto"] | None = "auto",
         shape_variation: float = 0.0,
         shape_variants: int = 8,
+        background_sampling: Literal["seed", "other"] = "seed",
         transforms: Any = None,
         **deprecated: Any,
     ) -> None:
@@ -238,6 +243,7 @@ class SyntheticObjectDataset(Dataset):
         self.backend = backend  # "cache" / "exact" (the name render is the method)
         self._set_up_capture(backgrounds, params, effects=effects, object_scale=object_scale,
                              capture_sampling=capture_sampling, seed_geometry=seed_geometry)
+        self.background_sampling = _check_background_sampling(background_sampling, len(self.backgrounds))
         # after the capture set-up: "fitted" reads the fit's rotations (given, never the sampled rows)
         self._set_up_pose(pose_sampling, fitted=params is not None)
         # real items first, then the synthetic ones (synthaug.data.mixing says why the layout lives here)
@@ -469,7 +475,6 @@ class SyntheticObjectDataset(Dataset):
         u = torch.rand(10, generator=g, dtype=torch.float64).tolist()
         n_seeds = len(self.backgrounds)
         seed_index = min(int(u[0] * n_seeds), n_seeds - 1)
-        h, w = self.backgrounds[seed_index].shape[-2:]
         crop = self._crop()
         fields: dict[str, torch.Tensor] = {}
         for eff in self._random_effects:
@@ -478,13 +483,18 @@ class SyntheticObjectDataset(Dataset):
         pose = self.pose_sampler.sample(g, seed_index, u[2:7])
         shapes = self.n_shapes  # drawn last, and only with shape_variation: no other draw moves
         variant = min(int(torch.rand(1, generator=g, dtype=torch.float64).item() * shapes), shapes - 1) if shapes > 1 else 0
+        background = None  # drawn after everything else, and only with background_sampling="other"
+        if self.background_sampling == "other":  # uniform over the other seeds
+            j = min(int(torch.rand(1, generator=g, dtype=torch.float64).item() * (n_seeds - 1)), n_seeds - 2)
+            background = j + int(j >= seed_index)
+        h, w = self.backgrounds[seed_index if background is None else background].shape[-2:]
         lo, hi = self.object_size
         return ItemParams(
             index=index, epoch=epoch, real=False, seed_index=seed_index, negative=u[1] < self.negative_fraction,
             pose=pose,
             crop_xy=(min(int(u[7] * (w - crop + 1)), w - crop), min(int(u[8] * (h - crop + 1)), h - crop)),
             object_px=lo + (hi - lo) * u[9] if self.mode == "frame" else None,
-            capture=capture, fields=fields, variant=variant)
+            capture=capture, fields=fields, variant=variant, background_index=background)
 
     @overload
     def render(self, params: ItemParams) -> tuple[Any, dict[str, Any]]: ...
@@ -508,6 +518,9 @@ class SyntheticObjectDataset(Dataset):
                 raise ValueError(f"real item {p.index} out of range: this dataset has {self.n_real} real items")
             if not p.real and not 0 <= p.seed_index < len(self.backgrounds):
                 raise ValueError(f"seed_index {p.seed_index} out of range: this dataset has "
+                                 f"{len(self.backgrounds)} seeds")
+            if not p.real and not 0 <= p.background < len(self.backgrounds):
+                raise ValueError(f"background_index {p.background_index} out of range: this dataset has "
                                  f"{len(self.backgrounds)} seeds")
             if not p.real and not 0 <= p.variant < self.n_shapes:
                 raise ValueError(f"variant {p.variant} out of range: this dataset has {self.n_shapes} shape(s)")
@@ -578,24 +591,25 @@ class SyntheticObjectDataset(Dataset):
         theta = theta_rows.replace(**pose) if self._pose_in_range(pose) else CaptureParams(
             {**theta_rows.as_dict(), **pose}, channels=self.channels, effects=self.params.effects, validate=False)
         bgs = torch.stack([
-            self.backgrounds[p.seed_index][:, p.crop_xy[1]:p.crop_xy[1] + crop,
+            self.backgrounds[p.background][:, p.crop_xy[1]:p.crop_xy[1] + crop,
                                               p.crop_xy[0]:p.crop_xy[0] + crop]
             for p in batch
         ])
+        places = torch.tensor([p.background for p in batch])  # the seeds whose frames the pixels come from
         fields = {k: torch.cat([p.fields[k] for p in batch]) for k in batch[0].fields}
         frame_size = origin = None
         extras: dict[str, torch.Tensor] = {}
         if self.mode == "patch" and self.seed_geometry is not None:  # the seed's place in its frame
             geo = self.seed_geometry
-            fsc = geo["frame_scale"][seeds]
+            fsc = geo["frame_scale"][places]
             crop_xy = torch.tensor([p.crop_xy for p in batch], dtype=torch.float32)
-            origin = geo["origin"][seeds] + crop_xy * fsc[:, None]
-            frame_size = geo["frame_size"][seeds]
+            origin = geo["origin"][places] + crop_xy * fsc[:, None]
+            frame_size = geo["frame_size"][places]
             extras["frame_scale"] = fsc
         if self.mode == "frame":
             origin = torch.tensor([p.crop_xy for p in batch], dtype=torch.float32)
-            frame_size = torch.tensor([[self.backgrounds[p.seed_index].shape[-1],
-                                        self.backgrounds[p.seed_index].shape[-2]] for p in batch],
+            frame_size = torch.tensor([[self.backgrounds[p.background].shape[-1],
+                                        self.backgrounds[p.background].shape[-2]] for p in batch],
                                       dtype=torch.float32)
         # Rendered in chunks of ~2**18 pixels: a chunk's layers stay in a core's cache through the effects'
         # many elementwise passes (a 256-patch batch at once spills to memory; ~20 % slower, issue 19). Every
@@ -700,9 +714,9 @@ class SyntheticObjectDataset(Dataset):
         one shared block, written once, instead of one copy into a new shared
         segment per frame (which cost more than rendering them: issue 19).
         """
-        shapes = {tuple(self.backgrounds[p.seed_index].shape) for p in batch}
+        shapes = {tuple(self.backgrounds[p.background].shape) for p in batch}
         if len(shapes) != 1:  # backgrounds of different sizes: one tensor per frame
-            return [self.backgrounds[p.seed_index].clone() for p in batch]
+            return [self.backgrounds[p.background].clone() for p in batch]
         shape = (len(batch), *shapes.pop())
         if torch.utils.data.get_worker_info() is not None:
             storage = torch.UntypedStorage._new_shared(math.prod(shape) * 4)
@@ -710,7 +724,7 @@ class SyntheticObjectDataset(Dataset):
         else:
             frames = torch.empty(shape, dtype=torch.float32)
         for k, p in enumerate(batch):
-            frames[k].copy_(self.backgrounds[p.seed_index])
+            frames[k].copy_(self.backgrounds[p.background])
         return list(frames.unbind(0))
 
     def _pose_in_range(self, pose: dict[str, torch.Tensor]) -> bool:
@@ -722,6 +736,20 @@ class SyntheticObjectDataset(Dataset):
 
 
 _CHUNK_PIXELS = 64 * 64 * 64  # pixels rendered together (see SyntheticObjectDataset._synthetic_items)
+
+
+#: how a synthetic item's background is chosen (:class:`SyntheticObjectDataset`'s ``background_sampling``)
+BACKGROUND_SAMPLING = ("seed", "other")
+
+
+def _check_background_sampling(background_sampling: Any, n_seeds: int) -> str:
+    """``background_sampling`` checked against the seeds there are ("other" needs two)."""
+    if background_sampling not in BACKGROUND_SAMPLING:
+        raise ValueError(f"background_sampling must be one of {list(BACKGROUND_SAMPLING)}, got {background_sampling!r}")
+    if background_sampling == "other" and n_seeds < 2:
+        raise ValueError(f"background_sampling='other' puts each object on another seed's background: it needs at "
+                         f"least 2 backgrounds, got {n_seeds}")
+    return str(background_sampling)
 
 
 def _check_object_box(object_box: Any, backgrounds: Any, mode: str) -> float | str | None:

@@ -163,6 +163,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quantize", action="store_true",
                         help="round the synthetic positives to 8-bit levels, as the real frames are stored (default: "
                              "the renderer's continuous values, the paper's)")
+    parser.add_argument("--background-sampling", choices=["seed", "other"], default="seed",
+                        help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
+                             "or other (each on another seed's background, its capture parameters still its own)")
     parser.add_argument("--capture-sampling", choices=list(CAPTURE_SAMPLERS), default="seed",
                         help="how the synthetic positives' capture parameters are drawn: seed (the paper: one seed's "
                              "fitted row), uniform (each between its fitted extremes, the paper's Fig. 10) or kde")
@@ -292,7 +295,7 @@ def main(args: argparse.Namespace) -> int:
                                  copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,
                                  faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
-                                 quantize=args.quantize),
+                                 quantize=args.quantize, background_sampling=args.background_sampling),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

@@ -259,6 +259,7 @@ def synthetic_positives(
     object_box: float | str | None = None,
     shape_variation: float = 0.0,
     quantize: bool = False,
+    background_sampling: str = "seed",
 ) -> Tensor:
     """``count`` synthetic object patches generated from a capture-parameter fit.
 
@@ -289,6 +290,8 @@ def synthetic_positives(
         quantize: round every patch to the 256 levels of 8 bits, as a camera delivers its frames and as the real
             positives and negatives are stored. False (the paper): the renderer's continuous values, so no
             synthetic patch has the exactly flat areas that real ones have.
+        background_sampling: ``"seed"`` (the paper: each object on its own seed's background) or ``"other"`` (on
+            another seed's; :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``background_sampling``).
 
     Returns:
         Float patches ``(count, 1, P, P)`` in [0, 1] (with ``quantize``: multiples of 1/255).
@@ -305,7 +308,7 @@ def synthetic_positives(
         mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
         effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
         seed_geometry=seed_geometry, pose_sampling=pose_sampling, object_box=object_box,  # type: ignore[arg-type]
-        shape_variation=shape_variation,
+        shape_variation=shape_variation, background_sampling=background_sampling,  # type: ignore[arg-type]
     )
     out = []
     for start in range(0, count, batch):

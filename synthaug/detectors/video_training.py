@@ -183,6 +183,9 @@ class AddedPositives:
         quantize: round the synthetic positives to 8-bit levels, as the real frames are stored
             (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``quantize``). False: the renderer's
             continuous values.
+        background_sampling: ``"seed"`` (the paper: each synthetic object on its own seed's background) or
+            ``"other"`` (on another seed's, the capture parameters still its own seed's;
+            :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``background_sampling``).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; :data:`BY_COUNT` (``"count"``): every positive weighs the same, so the added ones
             hold ``added / (real + added)``; None (the default): the detector family's (:data:`FAMILY_SYNTHETIC_SHARE`:
@@ -207,10 +210,16 @@ class AddedPositives:
     faded_contrast: tuple[float, float] | None = None
     refit: Callable[[Path, Path, Any, int], str | Path] | None = None
     quantize: bool = False
+    background_sampling: str = "seed"
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
         from synthaug.data.poses import POSE_SAMPLING
+        from synthaug.data.synthetic import BACKGROUND_SAMPLING
+
+        if self.background_sampling not in BACKGROUND_SAMPLING:
+            raise ValueError(f"background_sampling must be one of {list(BACKGROUND_SAMPLING)}, got "
+                             f"{self.background_sampling!r}")
 
         if self.capture_sampling not in CAPTURE_SAMPLERS:
             raise ValueError(f"capture_sampling must be one of {list(CAPTURE_SAMPLERS)}, got {self.capture_sampling!r}")
@@ -533,6 +542,7 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
     if synthetic_ratio > 0 and params is None:
         raise TrainingInputError("--synthetic-ratio", "synthetic positives need a fit: give --params FIT.json")
     for option, changed in (("--capture-sampling", added.capture_sampling != "seed"),
+                            ("--background-sampling", added.background_sampling != "seed"),
                             ("--effects-off", bool(added.effects_off)), ("--dcnn-refit", added.refit is not None)):
         if changed and synthetic_ratio <= 0:
             raise TrainingInputError(option, "it changes the synthetic positives, and there are none: give "
@@ -733,7 +743,7 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
             return synthetic_positives(ss, mesh, fit, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
                                        object_box=added.object_box, shape_variation=added.shape_variation,
                                        capture_sampling=added.capture_sampling, effects=effects,
-                                       quantize=added.quantize)
+                                       quantize=added.quantize, background_sampling=added.background_sampling)
 
         t0 = time.perf_counter()
         syn = draw(params)
@@ -749,7 +759,9 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                             **({"shape_variation": added.shape_variation} if added.shape_variation else {}),
                             **({"capture_sampling": added.capture_sampling} if added.capture_sampling != "seed" else {}),
                             **({"effects_off": list(effects_off)} if effects_off else {}),
-                            **({"quantize": True} if added.quantize else {})}
+                            **({"quantize": True} if added.quantize else {}),
+                            **({"background_sampling": added.background_sampling}
+                               if added.background_sampling != "seed" else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

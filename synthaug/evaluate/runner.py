@@ -132,6 +132,8 @@ class Condition:
             and the next round's synthetic positives are redrawn from it (``AddedPositives.refit``). False: one fit.
         quantize: the synthetic positives rounded to 8-bit levels, as the real frames are (``AddedPositives``'
             ``quantize``). False: the renderer's continuous values.
+        background_sampling: ``"seed"`` (the paper: each synthetic object on its own seed's background) or
+            ``"other"`` (on another seed's; ``AddedPositives``' ``background_sampling``).
     """
 
     name: str
@@ -158,6 +160,7 @@ class Condition:
     effects_off: tuple[str, ...] | None = None
     dcnn_refit: bool = False
     quantize: bool = False
+    background_sampling: str = "seed"
 
     def __post_init__(self) -> None:
         off = self.effects_off
@@ -179,7 +182,7 @@ class Condition:
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         for k, default in (("capture_sampling", "seed"), ("effects_off", ()),  # added later still: the same, with
-                           ("dcnn_refit", False), ("quantize", False)):
+                           ("dcnn_refit", False), ("quantize", False), ("background_sampling", "seed")):
             if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
@@ -392,7 +395,7 @@ class ProtocolRunner:
                                  effects_off=None if condition.effects_off == resolve_effects_off(condition.kind, None)
                                  else condition.effects_off,
                                  refit=self._refit(condition, seed) if condition.dcnn_refit else None,
-                                 quantize=condition.quantize),
+                                 quantize=condition.quantize, background_sampling=condition.background_sampling),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -666,6 +669,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          effects_off: Sequence[str | Sequence[str] | None] = (None,),
                          dcnn_refit: Sequence[bool] = (False,),
                          quantize: Sequence[bool] = (False,),
+                         background_sampling: Sequence[str] = ("seed",),
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -694,6 +698,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     together (Fig. 9). ``dcnn_refit``: each synthetic ratio once per value (True: the fit refitted against the CNN
     after every mining round, :class:`Condition`'s ``dcnn_refit``; CNN only). ``quantize``: each synthetic ratio
     once per value (True: the synthetic positives rounded to 8-bit levels, :class:`Condition`'s ``quantize``).
+    ``background_sampling``: each synthetic ratio once per value (``"seed"``: the paper, each object on its own
+    seed's background; ``"other"``: on another seed's, :class:`Condition`'s ``background_sampling``).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -719,14 +725,15 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{'' if cs == 'seed' else f', capture {cs}'}"
                             f"{'' if not off else ', without ' + ' and '.join(off)}"
                             f"{', d_CNN refit every round' if rf else ''}"
-                            f"{', 8-bit' if qz else ''})", kind, seed_count=seed_count,
+                            f"{', 8-bit' if qz else ''}"
+                            f"{'' if bs == 'seed' else ', backgrounds of other seeds'})", kind, seed_count=seed_count,
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
-                            quantize=qz)
+                            quantize=qz, background_sampling=bs)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
                   for cs in capture_sampling for off in offs for rf in refits
-                  for qz in rounding]
+                  for qz in rounding for bs in dict.fromkeys(background_sampling)]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -885,6 +892,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--quantize", nargs="+", choices=["off", "on"], default=["off"],
                     help="the synthetic positives rounded to 8-bit levels as the real frames are (on) or left with "
                          "the renderer's continuous values (off, the paper), one condition per value")
+    sy.add_argument("--background-sampling", nargs="+", choices=["seed", "other"], default=["seed"],
+                    help="the synthetic objects' backgrounds, one condition per value: seed (the paper: each on its "
+                         "own seed's background) or other (each on another seed's, its capture parameters its own)")
     return p
 
 
@@ -956,7 +966,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              effects_off=tuple(None if e == "default" else () if e == "none" else tuple(e.split("+"))
                                                for e in args.effects_off),
                              dcnn_refit=tuple(v == "on" for v in args.dcnn_refit),
-                             quantize=tuple(v == "on" for v in args.quantize), out=args.out)
+                             quantize=tuple(v == "on" for v in args.quantize),
+                             background_sampling=tuple(args.background_sampling), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 

@@ -72,7 +72,8 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
                      seed: int = 0, pose_sampling: str = "uniform",
                      object_box: float | str | None = None,
                      shape_variation: float = 0.0, effects: Sequence[str] | None = None,
-                     capture_sampling: str = "seed", quantize: bool = False) -> tuple[Tensor, np.ndarray]:
+                     capture_sampling: str = "seed", quantize: bool = False,
+                     background_sampling: str = "seed") -> tuple[Tensor, np.ndarray]:
     """``count`` synthetic training patches of a fit, and the seed each one comes from.
 
     The dataset of :func:`synthaug.detectors.training_sets.synthetic_positives` (same arguments, same patches:
@@ -80,7 +81,7 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
     fitted pose; ``object_box``: the objects' framing; ``shape_variation``: shapes varied around the mesh;
     ``effects``: the effects drawn, None: every fitted one; ``capture_sampling``: how the capture parameters are drawn;
     as :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes them; ``quantize``: rounded to 8-bit
-    levels), keeping each item's ``seed_index`` so the
+    levels; ``background_sampling``: each object on its own seed's background or another's), keeping each item's ``seed_index`` so the
     two-sample test can hold a seed's real and synthetic patches out together.
 
     Returns:
@@ -95,7 +96,8 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
                                 negative_fraction=0.0, seed=seed, seed_geometry="auto", pose_sampling=pose_sampling,
                                 object_box=object_box, shape_variation=shape_variation,
                                 effects=None if effects is None else list(effects),
-                                capture_sampling=capture_sampling)  # type: ignore[arg-type]
+                                capture_sampling=capture_sampling,  # type: ignore[arg-type]
+                                background_sampling=background_sampling)  # type: ignore[arg-type]
     items = ds.__getitems__(list(range(count)))
     patches = torch.stack([img for img, _ in items]).float().clamp(0, 1)
     if quantize:
