@@ -284,7 +284,9 @@ def pool_floors(a: argparse.Namespace) -> int:
         rows += r
         n_cases += d["cases"]
         seeds.add(d["seeds"])
-        sources.append(f"{d['command']} [{d['fit']} fit, {d['cases']} cases]")
+        refresh = d.get("frame_refresh")  # frame_recalibrate.py's copy: its frame statistics remade without a refit
+        sources.append(f"{d['command']} [{d['fit']} fit, {d['cases']} cases"
+                       + (f"; frame statistics remade by {refresh['by']}" if refresh else "") + "]")
     command = " ".join(["python"] + sys.argv) + " <- " + " + ".join(sources)
     calibration.write_floors_module(a.write_floors, rows, command=command, n_cases=n_cases, n_seeds=max(seeds))
     print(json.dumps({"wrote": a.write_floors, "cases": n_cases, "from": a.floors_from}))

@@ -4,13 +4,22 @@ The rule that uses them: :mod:`synthaug.diagnose.calibration`.
 """
 
 SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
-            'results/diagnose/null/calibration_set_hand.json results/diagnose/null/full_fit_calibrated.json '
-            '--write-floors synthaug/diagnose/null_floors.py <- python benchmarks/bench_diagnose_null.py '
-            '--cases 24 --rules hand --out results/diagnose/null/calibration_set_hand.json [converged fit, '
-            '24 cases] + python benchmarks/bench_diagnose_null.py --cases 20 --base-seed 4000 --fit full '
-            '--budget 800 --step-deg 10 --sprite-size 64 --workdir outputs/bench_diagnose_null_full --out '
-            'results/diagnose/null/full_fit_calibrated.json [full fit, 20 cases]',
- 'date': '2026-11-28',
+            'results/diagnose/null/frame_refresh/calibration_set_hand.json '
+            'results/diagnose/null/frame_refresh/full_fit_calibrated.json --write-floors '
+            'synthaug/diagnose/null_floors.py <- python benchmarks/bench_diagnose_null.py --cases 24 --rules '
+            'hand --out results/diagnose/null/calibration_set_hand.json [converged fit, 24 cases; frame '
+            'statistics remade by python results/diagnose/null/frame_recalibrate.py --calibration '
+            'clean:2000:24=results/diagnose/null/calibration_set_hand.json '
+            'clean:4000:20:full=results/diagnose/null/full_fit_calibrated.json --write-dir '
+            'results/diagnose/null/frame_refresh --out results/diagnose/null/frame_recalibrate.json] + '
+            'python benchmarks/bench_diagnose_null.py --cases 20 --base-seed 4000 --fit full --budget 800 '
+            '--step-deg 10 --sprite-size 64 --workdir outputs/bench_diagnose_null_full --out '
+            'results/diagnose/null/full_fit_calibrated.json [full fit, 20 cases; frame statistics remade by '
+            'python results/diagnose/null/frame_recalibrate.py --calibration '
+            'clean:2000:24=results/diagnose/null/calibration_set_hand.json '
+            'clean:4000:20:full=results/diagnose/null/full_fit_calibrated.json --write-dir '
+            'results/diagnose/null/frame_refresh --out results/diagnose/null/frame_recalibrate.json]',
+ 'date': '2026-12-01',
  'family_rate': 0.05,
  'n_cases': 44,
  'n_seeds': 60,
@@ -53,7 +62,7 @@ SCREEN = {'compression:distance:feature': 0.031781,
  'haze:distance:pixel': 0.01511,
  'lens_distortion:distance:feature': 0.008726,
  'lens_distortion:distance:pixel': 0.010808,
- 'lens_distortion:frame': 0.024569,
+ 'lens_distortion:frame': 0.026454,
  'rolling_shutter:distance:feature': 0.032085,
  'rolling_shutter:distance:pixel': 0.046691,
  'rotor_blur:distance:feature': 0.049188,
@@ -90,7 +99,7 @@ CENTRE = {'compression:distance:feature': -0.038248,
  'haze:distance:pixel': -0.010743,
  'lens_distortion:distance:feature': -0.00858,
  'lens_distortion:distance:pixel': -0.007101,
- 'lens_distortion:frame': 0.005568,
+ 'lens_distortion:frame': 0.00573,
  'rolling_shutter:distance:feature': -0.032792,
  'rolling_shutter:distance:pixel': -0.037513,
  'rotor_blur:distance:feature': -0.019857,

@@ -35,7 +35,8 @@ def frame_fit(r2: np.ndarray, a1: np.ndarray, a2: np.ndarray) -> tuple[float, fl
     return float(a1.sum() / a2.sum()), float(a), float(b)
 
 
-def case_frames(work: Path, base: int, k: int, hidden: str | None, strength: str):
+def case_frames(work: Path, base: int, k: int, hidden: str | None, strength: str, *, step_deg: float = 20.0,
+                sprite_size: int = 48):
     from benchmarks.bench_diagnose_null import hidden_settings
     from synthaug.data.seedset import SeedSet
     from synthaug.diagnose.nuisances import Nuisances
@@ -48,25 +49,31 @@ def case_frames(work: Path, base: int, k: int, hidden: str | None, strength: str
             shutil.rmtree(seeds_dir)
         nz = Nuisances.draw(np.random.default_rng([base, k]))
         make_measured_seedset(seeds_dir, n_seeds=60, hidden=hidden_settings(hidden, strength) if hidden else None,
-                              nuisances=nz, frame_size=(192, 256), object_px=(20.0, 32.0), view_step_deg=20.0,
-                              sprite_size=48, seed=base + k, paper_ranges={"w_d": (0.3, 0.45)})
+                              nuisances=nz, frame_size=(192, 256), object_px=(20.0, 32.0), view_step_deg=step_deg,
+                              sprite_size=sprite_size, seed=base + k, paper_ranges={"w_d": (0.3, 0.45)})
         done.write_text("1")
     seeds = SeedSet.load(seeds_dir)
     return seeds
 
 
 def group_cases(group: str, workdir: str | Path):
-    """The cases of a group, ``clean:BASE:N`` or ``EFFECT:STRENGTH:BASE:N``: (k, seed set, its geometry) for k < N,
-    each seed set made once under ``workdir``."""
+    """The cases of a group, ``clean:BASE:N`` or ``EFFECT:STRENGTH:BASE:N``, either with ``:full`` appended for the
+    seed sets of ``bench_diagnose_null.py --fit full --step-deg 10 --sprite-size 64`` (its sprites and views follow
+    the fit's; without it, the converged fit's 48 px and 20 degrees): (k, seed set, its geometry) for k < N, each seed
+    set made once under ``workdir``."""
     from synthaug.data.seedset import seed_geometry
 
     parts = group.split(":")
+    full = parts[-1] == "full"
+    parts = parts[:-1] if full else parts
+    step, sprite = (10.0, 64) if full else (20.0, 48)
     if parts[0] == "clean":
         hidden, strength, base, n = None, "default", int(parts[1]), int(parts[2])
     else:
         hidden, strength, base, n = parts[0], parts[1], int(parts[2]), int(parts[3])
     for k in range(n):
-        seeds = case_frames(Path(workdir) / group.replace(":", "_"), base, k, hidden, strength)
+        seeds = case_frames(Path(workdir) / group.replace(":", "_"), base, k, hidden, strength, step_deg=step,
+                            sprite_size=sprite)
         yield k, seeds, seed_geometry(seeds)
 
 
@@ -74,7 +81,7 @@ def groups_parser() -> argparse.ArgumentParser:
     """The command line of this script and of ``edge_radial_scenes.py``: the groups of cases, their work folder and
     the JSON out."""
     ap = argparse.ArgumentParser()
-    ap.add_argument("groups", nargs="+", help="clean:BASE:N or EFFECT:STRENGTH:BASE:N")
+    ap.add_argument("groups", nargs="+", help="clean:BASE:N or EFFECT:STRENGTH:BASE:N, optionally with :full")
     ap.add_argument("--workdir", default="outputs/edge_radial")
     ap.add_argument("--out", default=None)
     return ap
