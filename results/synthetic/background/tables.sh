@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Stop 67: the background factor's tables (trains nothing; repository root). HOG, drones, 100 seeds (training seeds 0-4
+# hog_a, 5-9 hog_b, every cell from this machine's built-in fits); HOG at 12 seeds (seeds 5-9, hog_12_b, the 12-seed
+# fits of ../ten_seeds/hog_12_seeds5_9 read back) with its share of the 12 -> 100 gap; the CNN (seeds cnn_* given).
+# usage: results/synthetic/background/tables.sh ["CNN OUT FOLDERS"]
+set -euo pipefail
+R=results/synthetic; D=$R/background; T=results/learning_curve/video_diversity/table.py
+S=hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin; O=_backgrounds_of_other_seeds
+rows=(); for f in $D/hog_a $D/hog_b; do rows+=("$f/hog_100_seeds.json=real only"); done
+for f in $D/hog_a $D/hog_b; do rows+=("$f/$S.json=+20x synthetic, own backgrounds"); done
+for f in $D/hog_a $D/hog_b; do rows+=("$f/$S$O.json=+20x synthetic, other seeds' backgrounds"); done
+PYTHONPATH=. python $T "${rows[@]}" --out $D/hog_100_vs_real.md
+PYTHONPATH=. python $T "${rows[@]:2}" --out $D/hog_100_other_vs_own.md
+# 12 seeds: 12 real and + 20x own backgrounds are ../ten_seeds/hog_12_seeds5_9's cells (the same fits); 100 real
+# ../mesh_factor/hog_real_seed{5..9}
+H=$R/ten_seeds/hog_12_seeds5_9; B=$D/hog_12_b
+PYTHONPATH=. python $T "$H/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
+  "$B/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" "$H/hog_12_seeds.json=12 real only" \
+  --out $D/hog_12_other_vs_own.md
+many=""; for s in 5 6 7 8 9; do many+="${many:+,}$R/mesh_factor/hog_real_seed$s/hog_100_seeds.json"; done
+for tag in own other; do
+  add=$H/hog_12_seeds_20x_synthetic_hog.json; [ $tag = other ] && add=$B/hog_12_seeds_20x_synthetic_hog$O.json
+  PYTHONPATH=. python $R/gap_closed.py --few "$H/hog_12_seeds.json" --added "$add" --many "$many" \
+    --title "HOG, drones, seeds 5-9, 12 seeds + 20x synthetic ($tag backgrounds) against 12 and 100 real (stop 67)" \
+    --out $D/hog_12_gap_$tag.md > /dev/null
+done
+# the CNN, blurs left out (its default), 100 seeds, built-in fits
+if [ $# -ge 1 ]; then
+  C=cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_without_boundary_blur_and_motion_blur
+  rows=(); for f in $1; do rows+=("$f/cnn_100_seeds.json=real only"); done
+  for f in $1; do rows+=("$f/$C.json=+20x synthetic, own backgrounds"); done
+  for f in $1; do rows+=("$f/$C$O.json=+20x synthetic, other seeds' backgrounds"); done
+  PYTHONPATH=. python $T "${rows[@]}" --out $D/cnn_100_vs_real.md
+  PYTHONPATH=. python $T "${rows[@]:${#rows[@]}/3}" --out $D/cnn_100_other_vs_own.md
+fi
