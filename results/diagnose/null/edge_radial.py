@@ -77,6 +77,16 @@ def group_cases(group: str, workdir: str | Path):
         yield k, seeds, seed_geometry(seeds)
 
 
+def write_out(out: dict, path: str | None, t0: float) -> int:
+    """The scripts' last step: the wall time since ``t0`` into ``out``, ``out`` as JSON at ``path`` (if given)."""
+    import time
+
+    out["seconds"] = round(time.perf_counter() - t0, 1)
+    if path:
+        Path(path).write_text(json.dumps(out, indent=1))
+    return 0
+
+
 def groups_parser() -> argparse.ArgumentParser:
     """The command line of this script and of ``edge_radial_scenes.py``: the groups of cases, their work folder and
     the JSON out."""

@@ -18,7 +18,6 @@ made them; stop 66 made them at the converged fit's, which moved the floor from 
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from pathlib import Path
@@ -27,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from edge_radial import group_cases, groups_parser  # noqa: E402  (the same case maker as stop 45's script)
+from edge_radial import group_cases, groups_parser, write_out  # noqa: E402  (stop 45's case maker)
 
 
 def case_row(seeds, geo) -> dict:
@@ -63,10 +62,7 @@ def main() -> int:
         out["clean"] = {"cases": len(clean), "mean": float(np.mean(clean)), "sd": float(np.std(clean, ddof=1)),
                         "max": float(np.max(clean)), "z_one_sided": z, "floor": one_sided_floor(clean, z)}
         print("clean", out["clean"], flush=True)
-    out["seconds"] = round(time.perf_counter() - t0, 1)
-    if a.out:
-        Path(a.out).write_text(json.dumps(out, indent=1))
-    return 0
+    return write_out(out, a.out, t0)
 
 
 if __name__ == "__main__":

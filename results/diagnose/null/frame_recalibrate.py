@@ -41,8 +41,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[3]))
 
-from benchmarks.bench_diagnose_null import summarise  # noqa: E402  (the null distributions as the bench writes them)
-from edge_radial import group_cases  # noqa: E402  (the calibration's cases: seeds, nuisances, sizes)
+from benchmarks.bench_diagnose_null import summarise  # noqa: E402  (null distributions as the bench writes them)
+from edge_radial import group_cases, write_out  # noqa: E402  (the calibration's cases and sizes)
 
 
 class _FrameData:
@@ -147,10 +147,7 @@ def main() -> int:
                                                                                             for n in r})},
             "remade": summarise(rows)}
         print(group, out["fresh"][group]["named"], flush=True)
-    out["seconds"] = round(time.perf_counter() - t0, 1)
-    if a.out:
-        Path(a.out).write_text(json.dumps(out, indent=1))
-    return 0
+    return write_out(out, a.out, t0)
 
 
 if __name__ == "__main__":

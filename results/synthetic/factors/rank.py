@@ -67,7 +67,7 @@ _PC = "cnn_100_seeds_20x_synthetic_hog_twin_prop_airplane"
 _PA = "adaboost_100_seeds_20x_synthetic_hog_twin_prop_airplane"
 
 
-def _seeds(template: str, seeds: tuple[int, ...] = (0, 1, 2, 3, 4)) -> tuple[str, ...]:
+def _seeds(template: str, seeds: tuple[int | str, ...] = (0, 1, 2, 3, 4)) -> tuple[str, ...]:
     return tuple(template.format(s=s) for s in seeds)
 
 
@@ -75,6 +75,7 @@ _GLB = "mesh_factor/hog_glb_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_s
 _BI = "mesh_factor/hog_builtin_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin.json"
 _GLB5, _BI5 = _seeds(_GLB), _seeds(_BI)  # seeds 0-4 (stop 64)
 _GLB10, _BI10 = _seeds(_GLB, tuple(range(10))), _seeds(_BI, tuple(range(10)))  # seeds 0-9 (stop 65)
+_BGS = "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin"  # stop 67: seeds 0-4 in hog_a, 5-9 in hog_b
 _FITTED_ROT = "rotation: uniform -> around each seed's fitted rotation (20°)"
 _AT_SEED_GAP = (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_uniform_at_seed_poses"))
 
@@ -100,6 +101,11 @@ FACTORS: tuple[Factor, ...] = (
     Factor("drone", "hog", "silhouette (mesh)", "mesh of the fits: built-in quadcopter -> quadcopter.glb", "test",
            _BI10, _GLB10, "mesh_factor/",
            (("mesh_factor/gap_builtin", "synthetic_hog_builtin"), ("placement/gap", "synthetic_hog"))),
+    Factor("drone", "hog", "background", "each object on its own seed's background -> on another seed's (built-in "
+           "fits)", "test", _seeds(f"background/hog_{{s}}/{_BGS}.json", ("a", "b")),
+           _seeds(f"background/hog_{{s}}/{_BGS}_backgrounds_of_other_seeds.json", ("a", "b")), "background/",
+           (("background/gap", "synthetic_hog_builtin"),
+            ("background/gap", "synthetic_hog_builtin_other_backgrounds"))),
     Factor("drone", "hog", "appearance (object noise level)", "σ_n of the built-in fits -> of the .glb fits, seed by "
            "seed (built-in mesh)", "test", _BI5, _seeds("mesh_factor/hog_builtin_gnoise_seed{s}/"
            "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_gnoise.json"), "mesh_factor/"),
@@ -161,6 +167,10 @@ FACTORS: tuple[Factor, ...] = (
     Factor("drone", "cnn", "fit distance (Table 2)", "d_HOG -> d_CNN fits", "test",
            f"table2/cnn_hog/{_CS}.json", "table2/cnn_cnn/cnn_100_seeds_20x_synthetic_drone_100_seed_seed_cnn.json",
            "table2/"),
+    Factor("drone", "cnn", "background", "each object on its own seed's background -> on another seed's (built-in "
+           "fits, blurs left out)", "test", _seeds(f"background/cnn_{{s}}/{_CS}_builtin_{_NB}.json", ("a", "b")),
+           _seeds(f"background/cnn_{{s}}/{_CS}_builtin_{_NB}_backgrounds_of_other_seeds.json", ("a", "b")),
+           "background/"),
     Factor("drone", "cnn", "silhouette (mesh)", "mesh of the fits: built-in quadcopter -> quadcopter.glb (blurs "
            "left out; seeds 0-2 stop 63's fits, 3-4 stop 64's)", "test",
            (f"mesh_factor/cnn_100_builtin/{_CS}_builtin_{_NB}.json",

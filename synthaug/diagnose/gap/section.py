@@ -81,8 +81,9 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
     fitted pose; ``object_box``: the objects' framing; ``shape_variation``: shapes varied around the mesh;
     ``effects``: the effects drawn, None: every fitted one; ``capture_sampling``: how the capture parameters are drawn;
     as :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes them; ``quantize``: rounded to 8-bit
-    levels; ``background_sampling``: each object on its own seed's background or another's), keeping each item's ``seed_index`` so the
-    two-sample test can hold a seed's real and synthetic patches out together.
+    levels; ``background_sampling``: each object on its own seed's background or another's), keeping each item's
+    ``seed_index`` (the seed of its capture parameters) so the two-sample test can hold a seed's real and synthetic
+    patches out together.
 
     Returns:
         ``(patches (count, 1, P, P) float in [0, 1], seed_index (count,) int64)``.
