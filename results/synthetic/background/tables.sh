@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Stop 67: the background factor's tables (trains nothing; repository root). HOG, drones, 100 seeds (training seeds 0-4
-# hog_a, 5-9 hog_b, every cell from this machine's built-in fits); HOG at 12 seeds (seeds 5-9, hog_12_b, the 12-seed
+# hog_a, 5-9 hog_b, every cell from this machine's built-in fits), and on the validation videos (seeds 0-4); HOG at 12 seeds (seeds 5-9, hog_12_b, the 12-seed
 # fits of ../ten_seeds/hog_12_seeds5_9 read back) with its share of the 12 -> 100 gap; the CNN (seeds cnn_* given).
 # usage: results/synthetic/background/tables.sh ["CNN OUT FOLDERS"]
 set -euo pipefail
@@ -11,6 +11,12 @@ for f in $D/hog_a $D/hog_b; do rows+=("$f/$S.json=+20x synthetic, own background
 for f in $D/hog_a $D/hog_b; do rows+=("$f/$S$O.json=+20x synthetic, other seeds' backgrounds"); done
 PYTHONPATH=. python $T "${rows[@]}" --out $D/hog_100_vs_real.md
 PYTHONPATH=. python $T "${rows[@]:2}" --out $D/hog_100_other_vs_own.md
+# the same on the validation videos (seeds 0-2 hog_val_a, 3-4 hog_val_b; the own-background cells read back)
+rows=(); for f in $D/hog_val_a $D/hog_val_b; do rows+=("$f/hog_100_seeds.json=real only"); done
+for f in $D/hog_val_a $D/hog_val_b; do rows+=("$f/$S.json=+20x synthetic, own backgrounds"); done
+for f in $D/hog_val_a $D/hog_val_b; do rows+=("$f/$S$O.json=+20x synthetic, other seeds' backgrounds"); done
+PYTHONPATH=. python $T "${rows[@]}" --out $D/hog_100_val_vs_real.md
+PYTHONPATH=. python $T "${rows[@]:2}" --out $D/hog_100_val_other_vs_own.md
 # 12 seeds: 12 real and + 20x own backgrounds are ../ten_seeds/hog_12_seeds5_9's cells (the same fits); 100 real
 # ../mesh_factor/hog_real_seed{5..9}
 H=$R/ten_seeds/hog_12_seeds5_9; B=$D/hog_12_b
