@@ -75,7 +75,7 @@ _GLB = "mesh_factor/hog_glb_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_s
 _BI = "mesh_factor/hog_builtin_seed{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin.json"
 _GLB5, _BI5 = _seeds(_GLB), _seeds(_BI)  # seeds 0-4 (stop 64)
 _GLB10, _BI10 = _seeds(_GLB, tuple(range(10))), _seeds(_BI, tuple(range(10)))  # seeds 0-9 (stop 65)
-_BGS = "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin"  # stop 67: seeds 0-4 in hog_a, 5-9 in hog_b
+_BGS = "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin"  # stop 67: test seeds 0-4 hog_a, 5-9 hog_b
 _FITTED_ROT = "rotation: uniform -> around each seed's fitted rotation (20°)"
 _AT_SEED_GAP = (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_uniform_at_seed_poses"))
 
@@ -106,6 +106,9 @@ FACTORS: tuple[Factor, ...] = (
            _seeds(f"background/hog_{{s}}/{_BGS}_backgrounds_of_other_seeds.json", ("a", "b")), "background/",
            (("background/gap", "synthetic_hog_builtin"),
             ("background/gap", "synthetic_hog_builtin_other_backgrounds"))),
+    Factor("drone", "hog", "background", "each object on its own seed's background -> on another seed's (built-in "
+           "fits)", "val", _seeds(f"background/hog_val_{{s}}/{_BGS}.json", ("a", "b")),
+           _seeds(f"background/hog_val_{{s}}/{_BGS}_backgrounds_of_other_seeds.json", ("a", "b")), "background/"),
     Factor("drone", "hog", "appearance (object noise level)", "σ_n of the built-in fits -> of the .glb fits, seed by "
            "seed (built-in mesh)", "test", _BI5, _seeds("mesh_factor/hog_builtin_gnoise_seed{s}/"
            "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_gnoise.json"), "mesh_factor/"),
