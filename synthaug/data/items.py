@@ -13,7 +13,12 @@ from dataclasses import dataclass, field
 
 import torch
 
-__all__ = ["ItemParams"]
+__all__ = ["ItemParams", "BACKGROUND_SAMPLING"]
+
+
+#: how a synthetic item's background is chosen (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s
+#: ``background_sampling``): its own seed's (the paper) or another seed's
+BACKGROUND_SAMPLING = ("seed", "other")
 
 
 @dataclass(frozen=True, eq=False)

@@ -66,7 +66,7 @@ from torchvision import tv_tensors
 from synthaug.data.captures import CAPTURE_SAMPLERS, CaptureSampler
 from synthaug.data.dataset_args import check_arguments, legacy_arguments, render_backend
 from synthaug.data.epochs import EpochSampler, item_generator, item_seed
-from synthaug.data.items import ItemParams
+from synthaug.data.items import BACKGROUND_SAMPLING, ItemParams
 from synthaug.data.mixing import RealItems, mixed_counts, to_float_image
 from synthaug.data.poses import POSE_SAMPLING, FittedPose, PoseSampler, SeedOffset, pose_sampler
 from synthaug.effects.pipeline import simulate
@@ -456,7 +456,8 @@ class SyntheticObjectDataset(Dataset):
         A pure function of (seed, epoch, index): the item's generator draws ten uniforms (seed, negative, five
         for the pose, the crop corner, the object size), then the random effects' fields, then the capture
         parameters (the capture sampler: "kde" / "uniform" draw, "seed" does not), and the pose sampler comes last (so that one that
-        draws more, as "fitted", moves no other draw).
+        draws more, as "fitted", moves no other draw); after it only the shape (with ``shape_variation``) and the
+        other seed's background (with ``background_sampling="other"``), each drawn only when asked for.
 
         Example:
             >>> p = ds.make_params(3)  # doctest: +SKIP
@@ -599,7 +600,7 @@ class SyntheticObjectDataset(Dataset):
         fields = {k: torch.cat([p.fields[k] for p in batch]) for k in batch[0].fields}
         frame_size = origin = None
         extras: dict[str, torch.Tensor] = {}
-        if self.mode == "patch" and self.seed_geometry is not None:  # the seed's place in its frame
+        if self.mode == "patch" and self.seed_geometry is not None:  # the background's place in its seed's frame
             geo = self.seed_geometry
             fsc = geo["frame_scale"][places]
             crop_xy = torch.tensor([p.crop_xy for p in batch], dtype=torch.float32)
@@ -736,10 +737,6 @@ class SyntheticObjectDataset(Dataset):
 
 
 _CHUNK_PIXELS = 64 * 64 * 64  # pixels rendered together (see SyntheticObjectDataset._synthetic_items)
-
-
-#: how a synthetic item's background is chosen (:class:`SyntheticObjectDataset`'s ``background_sampling``)
-BACKGROUND_SAMPLING = ("seed", "other")
 
 
 def _check_background_sampling(background_sampling: Any, n_seeds: int) -> str:

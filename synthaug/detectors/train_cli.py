@@ -125,6 +125,7 @@ def add_adaboost_options(parser: argparse.ArgumentParser, *, keyed: bool = False
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug._checks import add_option, dataclass_defaults, nonneg_float, positive_float
     from synthaug.data.captures import CAPTURE_SAMPLERS
+    from synthaug.data.items import BACKGROUND_SAMPLING
     from synthaug.data.poses import POSE_SAMPLING
     from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 
@@ -163,7 +164,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quantize", action="store_true",
                         help="round the synthetic positives to 8-bit levels, as the real frames are stored (default: "
                              "the renderer's continuous values, the paper's)")
-    parser.add_argument("--background-sampling", choices=["seed", "other"], default="seed",
+    parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default="seed",
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own)")
     parser.add_argument("--capture-sampling", choices=list(CAPTURE_SAMPLERS), default="seed",

@@ -215,7 +215,7 @@ class AddedPositives:
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
         from synthaug.data.poses import POSE_SAMPLING
-        from synthaug.data.synthetic import BACKGROUND_SAMPLING
+        from synthaug.data.items import BACKGROUND_SAMPLING
 
         if self.background_sampling not in BACKGROUND_SAMPLING:
             raise ValueError(f"background_sampling must be one of {list(BACKGROUND_SAMPLING)}, got "

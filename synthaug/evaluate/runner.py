@@ -40,6 +40,7 @@ import numpy as np
 
 from synthaug._checks import add_option, int_at_least, nonneg_float, positive_float
 from synthaug.data.captures import CAPTURE_SAMPLERS
+from synthaug.data.items import BACKGROUND_SAMPLING
 from synthaug.data.poses import POSE_SAMPLING
 from synthaug.detectors.train_cli import (
     add_adaboost_options,
@@ -892,7 +893,7 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--quantize", nargs="+", choices=["off", "on"], default=["off"],
                     help="the synthetic positives rounded to 8-bit levels as the real frames are (on) or left with "
                          "the renderer's continuous values (off, the paper), one condition per value")
-    sy.add_argument("--background-sampling", nargs="+", choices=["seed", "other"], default=["seed"],
+    sy.add_argument("--background-sampling", nargs="+", choices=list(BACKGROUND_SAMPLING), default=["seed"],
                     help="the synthetic objects' backgrounds, one condition per value: seed (the paper: each on its "
                          "own seed's background) or other (each on another seed's, its capture parameters its own)")
     return p
