@@ -32,6 +32,25 @@ from pathlib import Path
 from typing import Any
 
 
+CONVERGED_VIEWS = (20.0, 48)  # (view step in degrees, sprite px) of a case's seed set for the tests' converged fit
+FULL_FIT_VIEWS = (10.0, 64)  # ... and, by default (--step-deg, --sprite-size), for synthaug fit's full fit
+
+
+def case_seedset(dest: Path, k: int, *, base_seed: int, n_seeds: int, nuisances: Any, hidden: str | None = None,
+                 strength: str = "default", colour: bool = False,
+                 views: tuple[float, int] = CONVERGED_VIEWS) -> None:
+    """Case ``k``'s measured seed set at ``dest``: the reference camera's frames (192x256, objects 20-32 px) of
+    ``n_seeds`` seeds drawn from ``base_seed + k``, with ``nuisances`` and the hidden effect's setting; its views and
+    sprites at ``views``, those of the fit the case is made for. The one home of a case's seed set: the scripts that
+    read cases' frames without a fit (``results/diagnose/null/edge_radial.py``) make them here too."""
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+
+    make_measured_seedset(dest, n_seeds=n_seeds, hidden=hidden_settings(hidden, strength) if hidden else None,
+                          nuisances=nuisances, colour=colour, frame_size=(192, 256), object_px=(20.0, 32.0),
+                          view_step_deg=views[0], sprite_size=views[1], seed=base_seed + k,
+                          paper_ranges={"w_d": (0.3, 0.45)})
+
+
 def wilson(k: int, n: int) -> tuple[float, float]:
     """Wilson score 95 % interval of k / n (the library's :func:`synthaug.diagnose.gap.binomial_ci`)."""
     from synthaug.diagnose.gap import binomial_ci
@@ -59,7 +78,6 @@ def make_case(work: Path, k: int, a: argparse.Namespace) -> tuple[Path, Path, di
     import numpy as np
 
     from synthaug.diagnose.nuisances import Nuisances
-    from synthaug.diagnose.reference_camera import make_measured_seedset
 
     case = work / f"case_{k:03d}"
     seeds, fit = case / "seeds", case / "fit.json"
@@ -72,12 +90,8 @@ def make_case(work: Path, k: int, a: argparse.Namespace) -> tuple[Path, Path, di
     if stamp.exists() and json.loads(stamp.read_text()).get("key") == key and fit.exists():
         return seeds, fit, json.loads(stamp.read_text()), 0.0
     t = time.perf_counter()
-    step, sprite = (20.0, 48) if a.fit == "converged" else (a.step_deg, a.sprite_size)
-    make_measured_seedset(seeds, n_seeds=a.seeds, hidden=hidden_settings(a.hidden, a.strength) if a.hidden else None,
-                          nuisances=nz, colour=a.colour,
-                          frame_size=(192, 256),
-                          object_px=(20.0, 32.0), view_step_deg=step, sprite_size=sprite, seed=a.base_seed + k,
-                          paper_ranges={"w_d": (0.3, 0.45)})
+    case_seedset(seeds, k, base_seed=a.base_seed, n_seeds=a.seeds, nuisances=nz, hidden=a.hidden, strength=a.strength,
+                 colour=a.colour, views=CONVERGED_VIEWS if a.fit == "converged" else (a.step_deg, a.sprite_size))
     if a.fit == "converged":
         sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
         from test_diagnose import converged_fit  # the diagnosis tests' fit (per-seed CMA-ES from the truth)
@@ -161,8 +175,8 @@ def main() -> int:
     ap.add_argument("--base-seed", type=int, default=2000)
     ap.add_argument("--fit", choices=("converged", "full"), default="converged")
     ap.add_argument("--budget", type=int, default=800)
-    ap.add_argument("--step-deg", type=float, default=10.0)
-    ap.add_argument("--sprite-size", type=int, default=64)
+    ap.add_argument("--step-deg", type=float, default=FULL_FIT_VIEWS[0])
+    ap.add_argument("--sprite-size", type=int, default=FULL_FIT_VIEWS[1])
     ap.add_argument("--no-nuisances", action="store_true", help="the fit's own model (the old reference camera)")
     ap.add_argument("--strength", choices=["default", "alt"], default="default",
                     help="with --hidden: the realistic default setting, or a second realistic strength (each setting "

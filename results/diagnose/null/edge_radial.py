@@ -35,12 +35,12 @@ def frame_fit(r2: np.ndarray, a1: np.ndarray, a2: np.ndarray) -> tuple[float, fl
     return float(a1.sum() / a2.sum()), float(a), float(b)
 
 
-def case_frames(work: Path, base: int, k: int, hidden: str | None, strength: str, *, step_deg: float = 20.0,
-                sprite_size: int = 48):
-    from benchmarks.bench_diagnose_null import hidden_settings
+def case_frames(work: Path, base: int, k: int, hidden: str | None, strength: str, *, full: bool = False):
+    """Case ``k``'s seed set as ``bench_diagnose_null.py`` makes it (``case_seedset``; ``full``: for its full fit at
+    the default views), made once under ``work``."""
+    from benchmarks.bench_diagnose_null import CONVERGED_VIEWS, FULL_FIT_VIEWS, case_seedset
     from synthaug.data.seedset import SeedSet
     from synthaug.diagnose.nuisances import Nuisances
-    from synthaug.diagnose.reference_camera import make_measured_seedset
 
     seeds_dir = work / f"case_{k:03d}"
     done = seeds_dir / "done"
@@ -48,9 +48,8 @@ def case_frames(work: Path, base: int, k: int, hidden: str | None, strength: str
         if seeds_dir.exists():
             shutil.rmtree(seeds_dir)
         nz = Nuisances.draw(np.random.default_rng([base, k]))
-        make_measured_seedset(seeds_dir, n_seeds=60, hidden=hidden_settings(hidden, strength) if hidden else None,
-                              nuisances=nz, frame_size=(192, 256), object_px=(20.0, 32.0), view_step_deg=step_deg,
-                              sprite_size=sprite_size, seed=base + k, paper_ranges={"w_d": (0.3, 0.45)})
+        case_seedset(seeds_dir, k, base_seed=base, n_seeds=60, nuisances=nz, hidden=hidden, strength=strength,
+                     views=FULL_FIT_VIEWS if full else CONVERGED_VIEWS)
         done.write_text("1")
     seeds = SeedSet.load(seeds_dir)
     return seeds
@@ -66,14 +65,12 @@ def group_cases(group: str, workdir: str | Path):
     parts = group.split(":")
     full = parts[-1] == "full"
     parts = parts[:-1] if full else parts
-    step, sprite = (10.0, 64) if full else (20.0, 48)
     if parts[0] == "clean":
         hidden, strength, base, n = None, "default", int(parts[1]), int(parts[2])
     else:
         hidden, strength, base, n = parts[0], parts[1], int(parts[2]), int(parts[3])
     for k in range(n):
-        seeds = case_frames(Path(workdir) / group.replace(":", "_"), base, k, hidden, strength, step_deg=step,
-                            sprite_size=sprite)
+        seeds = case_frames(Path(workdir) / group.replace(":", "_"), base, k, hidden, strength, full=full)
         yield k, seeds, seed_geometry(seeds)
 
 

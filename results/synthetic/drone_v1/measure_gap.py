@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from synthaug.data.items import BACKGROUND_SAMPLING
 from synthaug.data.poses import POSE_SAMPLING, FittedPose, SeedOffset
 from synthaug.data.seedset import SeedSet
 from synthaug.diagnose.gap import gap_section, training_samples
@@ -60,7 +61,7 @@ def main() -> None:
     ap.add_argument("--quantize", nargs="+", choices=["off", "on"], default=["off"],
                     help="synthetic samples once per value: on rounds them to 8-bit levels as the real frames are "
                          "(synthaug train --quantize)")
-    ap.add_argument("--background-sampling", nargs="+", choices=["seed", "other"], default=["seed"],
+    ap.add_argument("--background-sampling", nargs="+", choices=list(BACKGROUND_SAMPLING), default=["seed"],
                     help="synthetic samples once per value: other puts each object on another seed's background "
                          "(synthaug train --background-sampling); the held-out groups stay the capture seeds")
     ap.add_argument("--fitted-renders", action="store_true",
