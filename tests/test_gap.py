@@ -438,7 +438,21 @@ def test_training_samples_are_the_detectors_synthetic_positives(tmp_path, pose_s
     x, idx = training_samples(seeds, "quadcopter", fit, 6, seed=3, pose_sampling=pose_sampling, object_box=object_box)
     ref = synthetic_positives(seeds, "quadcopter", fit, 6, seed=3, pose_sampling=pose_sampling, object_box=object_box)
     torch.testing.assert_close(x, ref)
-    assert idx.shape == (6,) and set(idx.tolist()) <= set(range(n))
+    assert idx.shape == (6,) and idx.dtype == np.int64 and set(idx.tolist()) <= set(range(n))
+    # the seed indices are the dataset's own items', whatever the batching
+    from synthaug.data.synthetic import SyntheticObjectDataset
+
+    ds = SyntheticObjectDataset("quadcopter", seeds, params=str(fit), length=6, patch_size=40, negative_fraction=0.0,
+                                seed=3, pose_sampling=pose_sampling, object_box=object_box)
+    assert idx.tolist() == [int(ds[i][1]["seed_index"]) for i in range(6)]
+    xb, ib = synthetic_positives(seeds, "quadcopter", fit, 6, seed=3, pose_sampling=pose_sampling,
+                                 object_box=object_box, batch=4, return_seed_index=True)
+    torch.testing.assert_close(xb, x)
+    np.testing.assert_array_equal(ib, idx)
+    empty, ie = synthetic_positives(seeds, "quadcopter", fit, 0, return_seed_index=True)
+    assert empty.shape == (0, 1, 40, 40) and ie.shape == (0,)
+    with pytest.raises(TypeError, match="return_seed_index"):
+        training_samples(seeds, "quadcopter", fit, 6, return_seed_index=False)
     if pose_sampling == "fitted" or object_box is not None:  # not the paper's uniform draw at the mesh's scale
         other, _ = training_samples(seeds, "quadcopter", fit, 6, seed=3)
         assert not torch.equal(x, other)

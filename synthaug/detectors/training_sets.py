@@ -260,7 +260,8 @@ def synthetic_positives(
     shape_variation: float = 0.0,
     quantize: bool = False,
     background_sampling: str = "seed",
-) -> Tensor:
+    return_seed_index: bool = False,
+) -> Tensor | tuple[Tensor, np.ndarray]:
     """``count`` synthetic object patches generated from a capture-parameter fit.
 
     Each patch keeps one seed's fitted capture parameters and background and
@@ -292,9 +293,13 @@ def synthetic_positives(
             synthetic patch has the exactly flat areas that real ones have.
         background_sampling: ``"seed"`` (the paper: each object on its own seed's background) or ``"other"`` (on
             another seed's; :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``background_sampling``).
+        return_seed_index: also return each patch's ``seed_index`` (the seed whose capture parameters it was
+            drawn with), so that a seed's real and synthetic patches can be held out together
+            (:func:`synthaug.diagnose.gap.training_samples`).
 
     Returns:
-        Float patches ``(count, 1, P, P)`` in [0, 1] (with ``quantize``: multiples of 1/255).
+        Float patches ``(count, 1, P, P)`` in [0, 1] (with ``quantize``: multiples of 1/255); with
+        ``return_seed_index``, ``(patches, seed_index (count,) int64)``.
     """
     from synthaug.data.synthetic import SyntheticObjectDataset
     from synthaug.effects.camera_functional import quantize_levels
@@ -303,19 +308,23 @@ def synthetic_positives(
         raise ValueError(f"count must be >= 0, got {count}")
     p = int(seedset.patches.shape[-1])
     if count == 0:
-        return torch.zeros(0, 1, p, p)
+        empty = torch.zeros(0, 1, p, p)
+        return (empty, np.zeros(0, np.int64)) if return_seed_index else empty
     ds = SyntheticObjectDataset(
         mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
         effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
         seed_geometry=seed_geometry, pose_sampling=pose_sampling, object_box=object_box,  # type: ignore[arg-type]
         shape_variation=shape_variation, background_sampling=background_sampling,  # type: ignore[arg-type]
     )
-    out = []
+    out, seed_index = [], []
     for start in range(0, count, batch):
         items = ds.__getitems__(list(range(start, min(count, start + batch))))
         out.append(torch.stack([img for img, _ in items]))
+        seed_index += [int(t["seed_index"]) for _, t in items]
     patches = torch.cat(out).float().clamp(0, 1)
-    return quantize_levels(patches) if quantize else patches
+    if quantize:
+        patches = quantize_levels(patches)
+    return (patches, np.array(seed_index, dtype=np.int64)) if return_seed_index else patches
 
 
 def negative_pool(seedset: Any, extra: int = 3000, *, seed: int = 0) -> Tensor:

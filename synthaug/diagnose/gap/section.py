@@ -10,7 +10,6 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-import torch
 from torch import Tensor
 
 from synthaug.diagnose.gap.features import FAMILIES
@@ -68,44 +67,27 @@ def gap_section(
     return out
 
 
-def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count: int, *,
-                     seed: int = 0, pose_sampling: str = "uniform",
-                     object_box: float | str | None = None,
-                     shape_variation: float = 0.0, effects: Sequence[str] | None = None,
-                     capture_sampling: str = "seed", quantize: bool = False,
-                     background_sampling: str = "seed") -> tuple[Tensor, np.ndarray]:
+def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count: int, *, seed: int = 0,
+                     **options: Any) -> tuple[Tensor, np.ndarray]:
     """``count`` synthetic training patches of a fit, and the seed each one comes from.
 
-    The dataset of :func:`synthaug.detectors.training_sets.synthetic_positives` (same arguments, same patches:
-    one seed's fitted parameters and background, a random pose — ``pose_sampling="fitted"``: around the seed's
-    fitted pose; ``object_box``: the objects' framing; ``shape_variation``: shapes varied around the mesh;
-    ``effects``: the effects drawn, None: every fitted one; ``capture_sampling``: how the capture parameters are drawn;
-    as :class:`~synthaug.data.synthetic.SyntheticObjectDataset` takes them; ``quantize``: rounded to 8-bit
-    levels; ``background_sampling``: each object on its own seed's background or another's), keeping each item's
-    ``seed_index`` (the seed of its capture parameters) so the two-sample test can hold a seed's real and synthetic
-    patches out together.
+    :func:`synthaug.detectors.training_sets.synthetic_positives` itself (same arguments, same patches: one seed's
+    fitted parameters and background, a random pose), keeping each item's ``seed_index`` (the seed of its capture
+    parameters) so the two-sample test can hold a seed's real and synthetic patches out together. ``options`` are
+    its keywords (``pose_sampling``, ``object_box``, ``shape_variation``, ``effects``, ``capture_sampling``,
+    ``quantize``, ``background_sampling``...), so every way of drawing the training positives is measured here
+    too without being listed twice.
 
     Returns:
         ``(patches (count, 1, P, P) float in [0, 1], seed_index (count,) int64)``.
     """
-    from synthaug.data.synthetic import SyntheticObjectDataset
+    from synthaug.detectors.training_sets import synthetic_positives
 
     if not isinstance(count, int) or count < 1:
         raise ValueError(f"count must be an int >= 1, got {count!r}")
-    p = int(seedset.patches.shape[-1])
-    ds = SyntheticObjectDataset(mesh, seedset, params=str(fit_file), length=count, patch_size=p,
-                                negative_fraction=0.0, seed=seed, seed_geometry="auto", pose_sampling=pose_sampling,
-                                object_box=object_box, shape_variation=shape_variation,
-                                effects=None if effects is None else list(effects),
-                                capture_sampling=capture_sampling,  # type: ignore[arg-type]
-                                background_sampling=background_sampling)  # type: ignore[arg-type]
-    items = ds.__getitems__(list(range(count)))
-    patches = torch.stack([img for img, _ in items]).float().clamp(0, 1)
-    if quantize:
-        from synthaug.effects.camera_functional import quantize_levels
-
-        patches = quantize_levels(patches)
-    return patches, np.array([int(t["seed_index"]) for _, t in items], dtype=np.int64)
+    if "return_seed_index" in options:
+        raise TypeError("training_samples always returns the seed indices; do not pass return_seed_index")
+    return synthetic_positives(seedset, mesh, fit_file, count, seed=seed, return_seed_index=True, **options)
 
 
 def gap_markdown(section: Mapping[str, Any]) -> list[str]:
