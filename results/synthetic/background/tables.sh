@@ -30,6 +30,23 @@ for tag in own other; do
     --title "HOG, drones, seeds 5-9, 12 seeds + 20x synthetic ($tag backgrounds) against 12 and 100 real (stop 67)" \
     --out $D/hog_12_gap_$tag.md > /dev/null
 done
+# stop 68: 12 seeds on training seeds 0-9. Seeds 0-4: ../hog_12_share/bg12 (12 real, own and other backgrounds, from
+# fits made again on this machine); seeds 5-9 as above; 100 real: seeds 0-4 ../drone_v2_ensemble/hog_100 (stop 46)
+B12=$R/hog_12_share/bg12
+PYTHONPATH=. python $T "$B12/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
+  "$H/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
+  "$B12/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" \
+  "$B/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" \
+  "$B12/hog_12_seeds.json=12 real only" "$H/hog_12_seeds.json=12 real only" --out $D/hog_12_10seeds_other_vs_own.md
+many=$R/drone_v2_ensemble/hog_100/hog_100_seeds.json
+for s in 5 6 7 8 9; do many+=",$R/mesh_factor/hog_real_seed$s/hog_100_seeds.json"; done
+for tag in own other; do
+  add=$B12/hog_12_seeds_20x_synthetic_hog.json,$H/hog_12_seeds_20x_synthetic_hog.json
+  [ $tag = other ] && add=$B12/hog_12_seeds_20x_synthetic_hog$O.json,$B/hog_12_seeds_20x_synthetic_hog$O.json
+  PYTHONPATH=. python $R/gap_closed.py --few "$B12/hog_12_seeds.json,$H/hog_12_seeds.json" --added "$add" \
+    --many "$many" --out $D/hog_12_10seeds_gap_$tag.md > /dev/null \
+    --title "HOG, drones, seeds 0-9, 12 seeds + 20x synthetic ($tag backgrounds) against 12 and 100 real (stop 68)"
+done
 # the CNN, blurs left out (its default), 100 seeds, built-in fits
 if [ $# -ge 1 ]; then
   C=cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_without_boundary_blur_and_motion_blur
