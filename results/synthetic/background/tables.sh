@@ -17,6 +17,13 @@ for f in $D/hog_val_a $D/hog_val_b; do rows+=("$f/$S.json=+20x synthetic, own ba
 for f in $D/hog_val_a $D/hog_val_b; do rows+=("$f/$S$O.json=+20x synthetic, other seeds' backgrounds"); done
 PYTHONPATH=. python $T "${rows[@]}" --out $D/hog_100_val_vs_real.md
 PYTHONPATH=. python $T "${rows[@]:2}" --out $D/hog_100_val_other_vs_own.md
+# stop 68: the validation videos on 10 training seeds (5-7 hog_val_c, 8-9 hog_val_d; every detector read back)
+V=(hog_val_a hog_val_b hog_val_c hog_val_d)
+rows=(); for f in "${V[@]}"; do rows+=("$D/$f/hog_100_seeds.json=real only"); done
+for f in "${V[@]}"; do rows+=("$D/$f/$S.json=+20x synthetic, own backgrounds"); done
+for f in "${V[@]}"; do rows+=("$D/$f/$S$O.json=+20x synthetic, other seeds' backgrounds"); done
+PYTHONPATH=. python $T "${rows[@]}" --out $D/hog_100_val10_vs_real.md
+PYTHONPATH=. python $T "${rows[@]:4}" --out $D/hog_100_val10_other_vs_own.md
 # 12 seeds: 12 real and + 20x own backgrounds are ../ten_seeds/hog_12_seeds5_9's cells (the same fits); 100 real
 # ../mesh_factor/hog_real_seed{5..9}
 H=$R/ten_seeds/hog_12_seeds5_9; B=$D/hog_12_b
