@@ -54,6 +54,18 @@ for tag in own other; do
     --many "$many" --out $D/hog_12_10seeds_gap_$tag.md > /dev/null \
     --title "HOG, drones, seeds 0-9, 12 seeds + 20x synthetic ($tag backgrounds) against 12 and 100 real (stop 68)"
 done
+# the same 12-seed detectors on the validation videos (read back; seeds 0-4 bg12_val, 5-9 bg12_val_b)
+V0=$R/hog_12_share/bg12_val; V1=$R/hog_12_share/bg12_val_b
+PYTHONPATH=. python $T "$V0/hog_12_seeds.json=12 real only" "$V1/hog_12_seeds.json=12 real only" \
+  "$V0/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
+  "$V1/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
+  "$V0/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" \
+  "$V1/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" --out $D/hog_12_val10_vs_real.md
+PYTHONPATH=. python $T "$V0/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
+  "$V1/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
+  "$V0/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" \
+  "$V1/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" \
+  --out $D/hog_12_val10_other_vs_own.md
 # the CNN, blurs left out (its default), 100 seeds, built-in fits
 if [ $# -ge 1 ]; then
   C=cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_without_boundary_blur_and_motion_blur
