@@ -107,8 +107,21 @@ FACTORS: tuple[Factor, ...] = (
            (("background/gap", "synthetic_hog_builtin"),
             ("background/gap", "synthetic_hog_builtin_other_backgrounds"))),
     Factor("drone", "hog", "background", "each object on its own seed's background -> on another seed's (built-in "
-           "fits)", "val", _seeds(f"background/hog_val_{{s}}/{_BGS}.json", ("a", "b")),
-           _seeds(f"background/hog_val_{{s}}/{_BGS}_backgrounds_of_other_seeds.json", ("a", "b")), "background/"),
+           "fits)", "val", _seeds(f"background/hog_val_{{s}}/{_BGS}.json", ("a", "b", "c", "d")),
+           _seeds(f"background/hog_val_{{s}}/{_BGS}_backgrounds_of_other_seeds.json", ("a", "b", "c", "d")),
+           "background/"),
+    Factor("drone", "hog", "background", "each object on its own seed's background -> on another seed's (12 real "
+           "seeds; seeds 0-4 refitted at stop 68)", "test",
+           ("hog_12_share/bg12/hog_12_seeds_20x_synthetic_hog.json",
+            "ten_seeds/hog_12_seeds5_9/hog_12_seeds_20x_synthetic_hog.json"),
+           ("hog_12_share/bg12/hog_12_seeds_20x_synthetic_hog_backgrounds_of_other_seeds.json",
+            "background/hog_12_b/hog_12_seeds_20x_synthetic_hog_backgrounds_of_other_seeds.json"), "background/"),
+    Factor("drone", "hog", "background", "each object on its own seed's background -> on another seed's (12 real "
+           "seeds)", "val", _seeds("hog_12_share/{s}/hog_12_seeds_20x_synthetic_hog.json", ("bg12_val", "bg12_val_b")),
+           _seeds("hog_12_share/{s}/hog_12_seeds_20x_synthetic_hog_backgrounds_of_other_seeds.json",
+                  ("bg12_val", "bg12_val_b")), "background/"),
+    Factor("drone", "hog", "capture effects (Fig. 9)", "both blurs: fitted -> left out (built-in fits)", "val",
+           f"hog_blurs/val/{_BGS}.json", f"hog_blurs/val/{_BGS}_{_NB}.json", "hog_blurs/"),
     Factor("drone", "hog", "appearance (object noise level)", "σ_n of the built-in fits -> of the .glb fits, seed by "
            "seed (built-in mesh)", "test", _BI5, _seeds("mesh_factor/hog_builtin_gnoise_seed{s}/"
            "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_gnoise.json"), "mesh_factor/"),
