@@ -120,6 +120,10 @@ FACTORS: tuple[Factor, ...] = (
            "seeds)", "val", _seeds("hog_12_share/{s}/hog_12_seeds_20x_synthetic_hog.json", ("bg12_val", "bg12_val_b")),
            _seeds("hog_12_share/{s}/hog_12_seeds_20x_synthetic_hog_backgrounds_of_other_seeds.json",
                   ("bg12_val", "bg12_val_b")), "background/"),
+    Factor("drone", "hog", "silhouette (mesh)", "mesh of the fits: built-in quadcopter -> quadcopter.glb", "val",
+           _seeds(f"background/hog_val_{{s}}/{_BGS}.json", ("a", "b", "c", "d")),
+           _seeds("mesh_factor/hog_glb_val_{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json", ("a", "b")),
+           "mesh_factor/"),
     Factor("drone", "hog", "capture effects (Fig. 9)", "both blurs: fitted -> left out (built-in fits)", "val",
            f"hog_blurs/val/{_BGS}.json", f"hog_blurs/val/{_BGS}_{_NB}.json", "hog_blurs/"),
     Factor("drone", "hog", "appearance (object noise level)", "σ_n of the built-in fits -> of the .glb fits, seed by "
