@@ -74,4 +74,10 @@ if [ $# -ge 1 ]; then
   for f in $1; do rows+=("$f/$C$O.json=+20x synthetic, other seeds' backgrounds"); done
   PYTHONPATH=. python $T "${rows[@]}" --out $D/cnn_100_vs_real.md
   PYTHONPATH=. python $T "${rows[@]:${#rows[@]}/3}" --out $D/cnn_100_other_vs_own.md
+  # stop 68: the same detectors on the validation videos (seeds 5-7 cnn_val_a, 8-9 cnn_val_b; read back)
+  rows=(); for f in cnn_val_a cnn_val_b; do rows+=("$D/$f/cnn_100_seeds.json=real only"); done
+  for f in cnn_val_a cnn_val_b; do rows+=("$D/$f/$C.json=+20x synthetic, own backgrounds"); done
+  for f in cnn_val_a cnn_val_b; do rows+=("$D/$f/$C$O.json=+20x synthetic, other seeds' backgrounds"); done
+  PYTHONPATH=. python $T "${rows[@]}" --out $D/cnn_100_val_vs_real.md
+  PYTHONPATH=. python $T "${rows[@]:2}" --out $D/cnn_100_val_other_vs_own.md
 fi
