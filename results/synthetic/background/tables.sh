@@ -1,34 +1,33 @@
 #!/usr/bin/env bash
 # Stop 67: the background factor's tables (trains nothing; repository root). HOG, drones, 100 seeds (training seeds 0-4
-# hog_a, 5-9 hog_b, every cell from this machine's built-in fits), and on the validation videos (seeds 0-4); HOG at 12 seeds (seeds 5-9, hog_12_b, the 12-seed
-# fits of ../ten_seeds/hog_12_seeds5_9 read back) with its share of the 12 -> 100 gap; the CNN (seeds cnn_* given).
+# hog_a, 5-9 hog_b, every cell from this machine's built-in fits), and on the validation videos; HOG at 12 seeds
+# (seeds 5-9, hog_12_b, the 12-seed fits of ../ten_seeds/hog_12_seeds5_9 read back; stop 68: seeds 0-4 too) with its
+# share of the 12 -> 100 gap; the CNN (seeds cnn_* given).
 # usage: results/synthetic/background/tables.sh ["CNN OUT FOLDERS"]
 set -euo pipefail
 R=results/synthetic; D=$R/background; T=results/learning_curve/video_diversity/table.py
 S=hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin; O=_backgrounds_of_other_seeds
-rows=(); for f in $D/hog_a $D/hog_b; do rows+=("$f/hog_100_seeds.json=real only"); done
-for f in $D/hog_a $D/hog_b; do rows+=("$f/$S.json=+20x synthetic, own backgrounds"); done
-for f in $D/hog_a $D/hog_b; do rows+=("$f/$S$O.json=+20x synthetic, other seeds' backgrounds"); done
-PYTHONPATH=. python $T "${rows[@]}" --out $D/hog_100_vs_real.md
-PYTHONPATH=. python $T "${rows[@]:2}" --out $D/hog_100_other_vs_own.md
-# the same on the validation videos (seeds 0-2 hog_val_a, 3-4 hog_val_b; the own-background cells read back)
-rows=(); for f in $D/hog_val_a $D/hog_val_b; do rows+=("$f/hog_100_seeds.json=real only"); done
-for f in $D/hog_val_a $D/hog_val_b; do rows+=("$f/$S.json=+20x synthetic, own backgrounds"); done
-for f in $D/hog_val_a $D/hog_val_b; do rows+=("$f/$S$O.json=+20x synthetic, other seeds' backgrounds"); done
-PYTHONPATH=. python $T "${rows[@]}" --out $D/hog_100_val_vs_real.md
-PYTHONPATH=. python $T "${rows[@]:2}" --out $D/hog_100_val_other_vs_own.md
-# stop 68: the validation videos on 10 training seeds (5-7 hog_val_c, 8-9 hog_val_d; every detector read back)
-V=(hog_val_a hog_val_b hog_val_c hog_val_d)
-rows=(); for f in "${V[@]}"; do rows+=("$D/$f/hog_100_seeds.json=real only"); done
-for f in "${V[@]}"; do rows+=("$D/$f/$S.json=+20x synthetic, own backgrounds"); done
-for f in "${V[@]}"; do rows+=("$D/$f/$S$O.json=+20x synthetic, other seeds' backgrounds"); done
-PYTHONPATH=. python $T "${rows[@]}" --out $D/hog_100_val10_vs_real.md
-PYTHONPATH=. python $T "${rows[@]:4}" --out $D/hog_100_val10_other_vs_own.md
+# three_way "FOLDERS" REAL_FILE SYNTHETIC_STEM REAL_LABEL OUT: the real-only, own- and other-background results of
+# every folder, tabled against real only (OUT_vs_real.md) and other against own (OUT_other_vs_own.md)
+three_way() {
+  local folders=($1) f; local rows=()
+  for f in "${folders[@]}"; do rows+=("$f/$2=$4"); done
+  for f in "${folders[@]}"; do rows+=("$f/$3.json=+20x synthetic, own backgrounds"); done
+  for f in "${folders[@]}"; do rows+=("$f/$3$O.json=+20x synthetic, other seeds' backgrounds"); done
+  PYTHONPATH=. python $T "${rows[@]}" --out "${5}_vs_real.md"
+  PYTHONPATH=. python $T "${rows[@]:${#folders[@]}}" --out "${5}_other_vs_own.md"
+}
+three_way "$D/hog_a $D/hog_b" hog_100_seeds.json $S "real only" $D/hog_100
+# the same on the validation videos: seeds 0-2 hog_val_a, 3-4 hog_val_b (stop 67); 5-7 hog_val_c, 8-9 hog_val_d
+# (stop 68, every detector read back)
+three_way "$D/hog_val_a $D/hog_val_b" hog_100_seeds.json $S "real only" $D/hog_100_val
+three_way "$D/hog_val_a $D/hog_val_b $D/hog_val_c $D/hog_val_d" hog_100_seeds.json $S "real only" $D/hog_100_val10
 # 12 seeds: 12 real and + 20x own backgrounds are ../ten_seeds/hog_12_seeds5_9's cells (the same fits); 100 real
 # ../mesh_factor/hog_real_seed{5..9}
 H=$R/ten_seeds/hog_12_seeds5_9; B=$D/hog_12_b
 PYTHONPATH=. python $T "$H/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
-  "$B/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" "$H/hog_12_seeds.json=12 real only" \
+  "$B/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" \
+  "$H/hog_12_seeds.json=12 real only" \
   --out $D/hog_12_other_vs_own.md
 many=""; for s in 5 6 7 8 9; do many+="${many:+,}$R/mesh_factor/hog_real_seed$s/hog_100_seeds.json"; done
 for tag in own other; do
@@ -56,28 +55,11 @@ for tag in own other; do
 done
 # the same 12-seed detectors on the validation videos (read back; seeds 0-4 bg12_val, 5-9 bg12_val_b)
 V0=$R/hog_12_share/bg12_val; V1=$R/hog_12_share/bg12_val_b
-PYTHONPATH=. python $T "$V0/hog_12_seeds.json=12 real only" "$V1/hog_12_seeds.json=12 real only" \
-  "$V0/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
-  "$V1/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
-  "$V0/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" \
-  "$V1/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" --out $D/hog_12_val10_vs_real.md
-PYTHONPATH=. python $T "$V0/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
-  "$V1/hog_12_seeds_20x_synthetic_hog.json=+20x synthetic, own backgrounds" \
-  "$V0/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" \
-  "$V1/hog_12_seeds_20x_synthetic_hog$O.json=+20x synthetic, other seeds' backgrounds" \
-  --out $D/hog_12_val10_other_vs_own.md
+three_way "$V0 $V1" hog_12_seeds.json hog_12_seeds_20x_synthetic_hog "12 real only" $D/hog_12_val10
 # the CNN, blurs left out (its default), 100 seeds, built-in fits
 if [ $# -ge 1 ]; then
   C=cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_without_boundary_blur_and_motion_blur
-  rows=(); for f in $1; do rows+=("$f/cnn_100_seeds.json=real only"); done
-  for f in $1; do rows+=("$f/$C.json=+20x synthetic, own backgrounds"); done
-  for f in $1; do rows+=("$f/$C$O.json=+20x synthetic, other seeds' backgrounds"); done
-  PYTHONPATH=. python $T "${rows[@]}" --out $D/cnn_100_vs_real.md
-  PYTHONPATH=. python $T "${rows[@]:${#rows[@]}/3}" --out $D/cnn_100_other_vs_own.md
+  three_way "$1" cnn_100_seeds.json $C "real only" $D/cnn_100
   # stop 68: the same detectors on the validation videos (seeds 5-7 cnn_val_a, 8-9 cnn_val_b; read back)
-  rows=(); for f in cnn_val_a cnn_val_b; do rows+=("$D/$f/cnn_100_seeds.json=real only"); done
-  for f in cnn_val_a cnn_val_b; do rows+=("$D/$f/$C.json=+20x synthetic, own backgrounds"); done
-  for f in cnn_val_a cnn_val_b; do rows+=("$D/$f/$C$O.json=+20x synthetic, other seeds' backgrounds"); done
-  PYTHONPATH=. python $T "${rows[@]}" --out $D/cnn_100_val_vs_real.md
-  PYTHONPATH=. python $T "${rows[@]:2}" --out $D/cnn_100_val_other_vs_own.md
+  three_way "$D/cnn_val_a $D/cnn_val_b" cnn_100_seeds.json $C "real only" $D/cnn_100_val
 fi

@@ -76,6 +76,7 @@ _BI = "mesh_factor/hog_builtin_seed{s}/hog_100_seeds_20x_synthetic_drone_100_see
 _GLB5, _BI5 = _seeds(_GLB), _seeds(_BI)  # seeds 0-4 (stop 64)
 _GLB10, _BI10 = _seeds(_GLB, tuple(range(10))), _seeds(_BI, tuple(range(10)))  # seeds 0-9 (stop 65)
 _BGS = "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin"  # stop 67: test seeds 0-4 hog_a, 5-9 hog_b
+_BGV = _seeds(f"background/hog_val_{{s}}/{_BGS}.json", ("a", "b", "c", "d"))  # the same on validation, seeds 0-9
 _FITTED_ROT = "rotation: uniform -> around each seed's fitted rotation (20°)"
 _AT_SEED_GAP = (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_uniform_at_seed_poses"))
 
@@ -107,7 +108,7 @@ FACTORS: tuple[Factor, ...] = (
            (("background/gap", "synthetic_hog_builtin"),
             ("background/gap", "synthetic_hog_builtin_other_backgrounds"))),
     Factor("drone", "hog", "background", "each object on its own seed's background -> on another seed's (built-in "
-           "fits)", "val", _seeds(f"background/hog_val_{{s}}/{_BGS}.json", ("a", "b", "c", "d")),
+           "fits)", "val", _BGV,
            _seeds(f"background/hog_val_{{s}}/{_BGS}_backgrounds_of_other_seeds.json", ("a", "b", "c", "d")),
            "background/"),
     Factor("drone", "hog", "background", "each object on its own seed's background -> on another seed's (12 real "
@@ -121,7 +122,7 @@ FACTORS: tuple[Factor, ...] = (
            _seeds("hog_12_share/{s}/hog_12_seeds_20x_synthetic_hog_backgrounds_of_other_seeds.json",
                   ("bg12_val", "bg12_val_b")), "background/"),
     Factor("drone", "hog", "silhouette (mesh)", "mesh of the fits: built-in quadcopter -> quadcopter.glb", "val",
-           _seeds(f"background/hog_val_{{s}}/{_BGS}.json", ("a", "b", "c", "d")),
+           _BGV,
            _seeds("mesh_factor/hog_glb_val_{s}/hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json", ("a", "b")),
            "mesh_factor/"),
     Factor("drone", "hog", "capture effects (Fig. 9)", "both blurs: fitted -> left out (built-in fits)", "val",

@@ -85,8 +85,7 @@ def training_samples(seedset: Any, mesh: Any, fit_file: str | os.PathLike, count
 
     if not isinstance(count, int) or count < 1:
         raise ValueError(f"count must be an int >= 1, got {count!r}")
-    if "return_seed_index" in options:
-        raise TypeError("training_samples always returns the seed indices; do not pass return_seed_index")
+    # passing return_seed_index too is Python's own TypeError ("multiple values for keyword argument")
     return synthetic_positives(seedset, mesh, fit_file, count, seed=seed, return_seed_index=True, **options)
 
 
