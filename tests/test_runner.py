@@ -550,11 +550,13 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
     # left out, and the CNN with every effect ((), "none") keeps the key its cells had before the default
     made.clear()
     R.synthetic_comparison(None, detectors=["cnn", "hog"], seed_count=100, synthetic_ratios=[20],
-                           params="f{seed}.json", effects_off=(None, (), ("boundary_blur", "motion_blur")))
+                           params="f{seed}.json", effects_off=(None, (), ("boundary_blur", "motion_blur")),
+                           background_sampling=("seed",))  # the CNN's former cells: their own seeds' backgrounds
     fam = [c for c in made if c.synthetic_ratio]
     blurs = ("boundary_blur", "motion_blur")
     assert [(c.kind, c.effects_off) for c in fam] == [("cnn", blurs), ("cnn", ()), ("hog", ()), ("hog", blurs)]
-    cnn_default = R.Condition("x", "cnn", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0)
+    cnn_default = R.Condition("x", "cnn", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0,
+                              background_sampling="seed")
     assert cnn_default.identity() == fam[0].identity() and cnn_default.effects_off == ("boundary_blur", "motion_blur")
     assert "effects_off" not in fam[1].identity() and "effects_off" not in R.Condition("x", "cnn").identity()
     assert fam[1].name == "cnn / 100 seeds + 20x synthetic (f{seed})"
@@ -665,13 +667,48 @@ def test_background_sampling_is_a_condition_of_its_own_and_keeps_the_former_keys
     assert own.name == "hog / 12 seeds + 20x synthetic (f{seed})"
     assert other.name == "hog / 12 seeds + 20x synthetic (f{seed}, backgrounds of other seeds)"
     parse = R.build_parser().parse_args
-    assert parse(["synthetic", "--out", "x"]).background_sampling == ["seed"]
+    assert parse(["synthetic", "--out", "x"]).background_sampling == ["default"]
     assert parse(["synthetic", "--background-sampling", "seed", "other", "--out", "x"]).background_sampling == [
         "seed", "other"]
     with pytest.raises(SystemExit) as e:
         parse(["synthetic", "--background-sampling", "random", "--out", "x"])
     assert e.value.code == 2 and "--background-sampling" in capsys.readouterr().err
     assert [a.background_sampling for a in _added_positives(ws, monkeypatch, own, other)] == ["seed", "other"]
+
+
+def test_background_sampling_default_is_the_familys_and_resolved_into_the_key(ws, monkeypatch):
+    """None (``--background-sampling default``): each family's own, resolved into the condition as the effects are,
+    so a CNN's default cell is the cell of other seeds' backgrounds (its stored cells read back) and HOG's default
+    keeps the paper's key; the CNN with ``seed`` keeps the key its cells had before the default; real-only cells and a
+    one-seed set keep their own backgrounds; a value repeated or equal to the default makes one condition."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["cnn", "hog"], seed_count=100, synthetic_ratios=[20],
+                           params="f{seed}.json", background_sampling=(None, "seed", "other"))
+    syn = [c for c in made if c.synthetic_ratio]
+    assert [(c.kind, c.background_sampling) for c in syn] == [("cnn", "other"), ("cnn", "seed"), ("hog", "seed"),
+                                                                ("hog", "other")]
+    blurs = ", without boundary_blur and motion_blur"
+    assert syn[0].name == f"cnn / 100 seeds + 20x synthetic (f{{seed}}{blurs}, backgrounds of other seeds)"
+    assert syn[1].name == f"cnn / 100 seeds + 20x synthetic (f{{seed}}{blurs})"
+    cnn_default = R.Condition("x", "cnn", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0)
+    cnn_other = R.Condition("x", "cnn", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0,
+                            background_sampling="other")
+    assert cnn_default.identity() == cnn_other.identity() == syn[0].identity()
+    assert cnn_default.identity()["background_sampling"] == "other"
+    assert "background_sampling" not in syn[1].identity() and "background_sampling" not in syn[2].identity()
+    assert R.Condition("x", "hog", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0).identity() == \
+        syn[2].identity()
+    assert "background_sampling" not in R.Condition("x", "cnn").identity()  # real only: nothing drawn
+    assert R.Condition("x", "cnn", seed_count=1, params="f.json", synthetic_ratio=20.0).background_sampling == "seed"
+    made.clear()
+    R.synthetic_comparison(None, detectors=["cnn"], seed_count=100, synthetic_ratios=[20], params="f{seed}.json",
+                           background_sampling=(None, "other"))
+    assert [c.background_sampling for c in made if c.synthetic_ratio] == ["other"]
+    # the cell's training gets the resolved value
+    assert [a.background_sampling for a in _added_positives(ws, monkeypatch, syn[0], syn[1])] == ["other", "seed"]
+    args = R.build_parser().parse_args(["synthetic", "--background-sampling", "default", "seed", "--out", "x"])
+    assert args.background_sampling == ["default", "seed"]
 
 
 def test_at_seed_pose_sampling_is_a_condition_of_its_own_and_refuses_an_object_box(ws, monkeypatch, capsys):
@@ -717,8 +754,11 @@ def test_dcnn_refit_cells_refit_against_each_rounds_network_and_redraw_the_synth
     drawn = []
     real_draw = VT.synthetic_positives
 
+    grounds = []
+
     def spy(ss, mesh, fit, n, **kw):
         drawn.append((str(fit), n, kw["seed"]))
+        grounds.append(kw["background_sampling"])
         return real_draw(ss, mesh, fit, n, **kw)
 
     monkeypatch.setattr(VT, "synthetic_positives", spy)
@@ -728,8 +768,9 @@ def test_dcnn_refit_cells_refit_against_each_rounds_network_and_redraw_the_synth
     res = R.synthetic_comparison(runner, detectors=["cnn"], seed_count=6, synthetic_ratios=[2], fit_distance="eucl",
                                  fit_options=fit_opts, effects_off=((),), dcnn_refit=(True,), seeds=[0, 1],
                                  out=ws["root"] / "refit")
-    refit = "cnn / 6 seeds + 2x synthetic (eucl, d_CNN refit every round)"
+    refit = "cnn / 6 seeds + 2x synthetic (eucl, d_CNN refit every round, backgrounds of other seeds)"
     assert list(res["cnn"]) == ["cnn / 6 seeds", refit]
+    assert set(grounds) == {"other"}  # the CNN's backgrounds, kept when the refitted file redraws
     cond = R.Condition(refit, "cnn", seed_count=6, synthetic_ratio=2.0, fit_distance="eucl",
                        fit_options=tuple(sorted(fit_opts.items())), effects_off=(), dcnn_refit=True)
     assert cond.identity()["dcnn_refit"] is True and "dcnn_refit" not in dataclasses.replace(cond, dcnn_refit=False).identity()

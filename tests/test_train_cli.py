@@ -646,3 +646,64 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
         parser.parse_args(["--detector", "hog", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o",
                            "--effects-off", "speckle"])
     assert e.value.code == 2 and "unknown effect 'speckle'" in capsys.readouterr().err
+
+
+def test_the_cnn_family_puts_its_synthetic_objects_on_other_seeds_backgrounds(ws: dict[str, Path],
+                                                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    """``background_sampling=None`` is the family's: the CNN's synthetic objects sit on other seeds' backgrounds
+    (recorded in the metadata), HOG's and AdaBoost's on their own seed's (no key, the former metadata); a value given
+    wins for every family; a one-seed set falls back to its own background unless ``"other"`` is asked for, which is
+    refused naming the option; without synthetic positives nothing is recorded."""
+    import argparse
+
+    import synthaug.detectors.video_training as video_training
+    from synthaug.detectors.train_cli import add_arguments
+    from synthaug.detectors.video_training import (
+        FAMILY_BACKGROUND_SAMPLING,
+        AddedPositives,
+        TrainingInputError,
+        _add_from_fit,
+        resolve_background_sampling,
+    )
+    from synthaug.params import CaptureParams
+
+    drawn: list[str] = []
+
+    def fake(seedset: Any, mesh: Any, fit_file: Any, count: int, *, seed: int = 0, background_sampling: str = "seed",
+             **_: Any) -> torch.Tensor:
+        drawn.append(background_sampling)
+        return torch.zeros(count, 1, 40, 40)
+
+    monkeypatch.setattr(video_training, "synthetic_positives", fake)
+    assert FAMILY_BACKGROUND_SAMPLING == {"cnn": "other"}
+    fits = {}
+    for n in (8, 1):
+        fits[n] = ws["root"] / f"fit{n}_backgrounds.json"
+        CaptureParams.sample(n, generator=torch.Generator().manual_seed(n)).save(fits[n])
+
+    class _SeedSet(list):
+        path = ws["root"]
+
+    def add(kind: str, n: int, **added: Any) -> dict[str, Any]:
+        ts = SimpleNamespace(seedset=_SeedSet(range(n)), positives=torch.zeros(n, 1, 40, 40), info={})
+        info = _add_from_fit(ts, AddedPositives(params=fits[n], **added), kind, seed=0, say=lambda m: None)
+        assert info is not None
+        return info
+
+    for kind, given, n, expected in (("cnn", None, 8, "other"), ("hog", None, 8, "seed"), ("adaboost", None, 8, "seed"),
+                                     ("cnn", "seed", 8, "seed"), ("hog", "other", 8, "other"), ("cnn", None, 1, "seed")):
+        info = add(kind, n, synthetic_ratio=1.0, background_sampling=given)
+        assert drawn[-1] == expected, (kind, given, n)
+        assert info.get("background_sampling") == (None if expected == "seed" else expected), (kind, given, n)
+        assert resolve_background_sampling(kind, given, n) == expected
+    count = len(drawn)
+    with pytest.raises(TrainingInputError, match="--background-sampling: other .* has 1 seed"):
+        add("hog", 1, synthetic_ratio=1.0, background_sampling="other")
+    assert "background_sampling" not in add("cnn", 8, copy_paste_ratio=0.0) and len(drawn) == count
+    with pytest.raises(ValueError, match="background_sampling must be one of"):
+        AddedPositives(background_sampling="random")
+    parser = argparse.ArgumentParser(prog="synthaug train")
+    add_arguments(parser)
+    base = ["--detector", "cnn", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o"]
+    assert parser.parse_args(base).background_sampling is None
+    assert parser.parse_args([*base, "--background-sampling", "seed"]).background_sampling == "seed"

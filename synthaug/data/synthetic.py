@@ -180,6 +180,8 @@ class SyntheticObjectDataset(Dataset):
             parameters were fitted on) or ``"other"`` (each on the background of another seed, drawn uniformly; the
             capture parameters stay the item's seed's: the background factor of the synthetic distribution, issue
             16). The background's place in its frame then serves the position-aware effects. Needs 2 seeds.
+            ``synthaug train``'s default for the CNN (measured better on the drone videos,
+            :data:`~synthaug.detectors.video_training.FAMILY_BACKGROUND_SAMPLING`); this dataset keeps the paper's.
         transforms: a callable ``(image, target) -> (image, target)`` applied to
             every item, real and synthetic alike, as torchvision datasets take
             one (e.g. ``transforms.v2.Compose([...])``: frame-mode boxes are

@@ -164,9 +164,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quantize", action="store_true",
                         help="round the synthetic positives to 8-bit levels, as the real frames are stored (default: "
                              "the renderer's continuous values, the paper's)")
-    parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default="seed",
+    parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
-                             "or other (each on another seed's background, its capture parameters still its own)")
+                             "or other (each on another seed's background, its capture parameters still its own); "
+                             "default: the detector family's (other for the CNN, seed for HOG and AdaBoost)")
     parser.add_argument("--capture-sampling", choices=list(CAPTURE_SAMPLERS), default="seed",
                         help="how the synthetic positives' capture parameters are drawn: seed (the paper: one seed's "
                              "fitted row), uniform (each between its fitted extremes, the paper's Fig. 10) or kde")

@@ -54,6 +54,7 @@ from synthaug.detectors.video_training import (
     BY_COUNT,
     AddedPositives,
     check_placement,
+    resolve_background_sampling,
     resolve_effects_off,
     resolve_synthetic_share,
     train_from_videos,
@@ -134,7 +135,9 @@ class Condition:
         quantize: the synthetic positives rounded to 8-bit levels, as the real frames are (``AddedPositives``'
             ``quantize``). False: the renderer's continuous values.
         background_sampling: ``"seed"`` (the paper: each synthetic object on its own seed's background) or
-            ``"other"`` (on another seed's; ``AddedPositives``' ``background_sampling``).
+            ``"other"`` (on another seed's; ``AddedPositives``' ``background_sampling``); None (the default): the
+            family's (:data:`~synthaug.detectors.video_training.FAMILY_BACKGROUND_SAMPLING`), resolved here as the
+            effects are.
     """
 
     name: str
@@ -161,12 +164,15 @@ class Condition:
     effects_off: tuple[str, ...] | None = None
     dcnn_refit: bool = False
     quantize: bool = False
-    background_sampling: str = "seed"
+    background_sampling: str | None = None
 
     def __post_init__(self) -> None:
         off = self.effects_off
         object.__setattr__(self, "effects_off", () if off is None and not self.synthetic_ratio
                            else resolve_effects_off(self.kind, off))
+        bs = self.background_sampling
+        object.__setattr__(self, "background_sampling", "seed" if bs is None and not self.synthetic_ratio else
+                           resolve_background_sampling(self.kind, bs, None if self.all_frames else self.seed_count))
         object.__setattr__(self, "synthetic_share", resolve_synthetic_share(self.kind, self.synthetic_share)
                            if self.adds_positives() else None)
 
@@ -670,7 +676,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          effects_off: Sequence[str | Sequence[str] | None] = (None,),
                          dcnn_refit: Sequence[bool] = (False,),
                          quantize: Sequence[bool] = (False,),
-                         background_sampling: Sequence[str] = ("seed",),
+                         background_sampling: Sequence[str | None] = (None,),
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -700,7 +706,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     after every mining round, :class:`Condition`'s ``dcnn_refit``; CNN only). ``quantize``: each synthetic ratio
     once per value (True: the synthetic positives rounded to 8-bit levels, :class:`Condition`'s ``quantize``).
     ``background_sampling``: each synthetic ratio once per value (``"seed"``: the paper, each object on its own
-    seed's background; ``"other"``: on another seed's, :class:`Condition`'s ``background_sampling``).
+    seed's background; ``"other"``: on another seed's; None: the family's, :class:`Condition`'s
+    ``background_sampling``).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -712,6 +719,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     check_placement(pose_sampling, object_box)
     for kind in detectors:
         offs = list(dict.fromkeys(resolve_effects_off(kind, off) for off in effects_off))  # one per capture set
+        grounds = list(dict.fromkeys(resolve_background_sampling(kind, bs, seed_count) for bs in background_sampling))
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
@@ -734,7 +742,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             quantize=qz, background_sampling=bs)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
                   for cs in capture_sampling for off in offs for rf in refits
-                  for qz in rounding for bs in dict.fromkeys(background_sampling)]
+                  for qz in rounding for bs in grounds]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -893,9 +901,10 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--quantize", nargs="+", choices=["off", "on"], default=["off"],
                     help="the synthetic positives rounded to 8-bit levels as the real frames are (on) or left with "
                          "the renderer's continuous values (off, the paper), one condition per value")
-    sy.add_argument("--background-sampling", nargs="+", choices=list(BACKGROUND_SAMPLING), default=["seed"],
+    sy.add_argument("--background-sampling", nargs="+", choices=["default", *BACKGROUND_SAMPLING], default=["default"],
                     help="the synthetic objects' backgrounds, one condition per value: seed (the paper: each on its "
-                         "own seed's background) or other (each on another seed's, its capture parameters its own)")
+                         "own seed's background), other (each on another seed's, its capture parameters its own) or "
+                         "default (the family's: other for the CNN, seed for the others)")
     return p
 
 
@@ -968,7 +977,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                                                for e in args.effects_off),
                              dcnn_refit=tuple(v == "on" for v in args.dcnn_refit),
                              quantize=tuple(v == "on" for v in args.quantize),
-                             background_sampling=tuple(args.background_sampling), out=args.out)
+                             background_sampling=tuple(None if b == "default" else b for b in args.background_sampling),
+                             out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 
