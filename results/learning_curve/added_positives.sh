@@ -9,6 +9,8 @@
 # real-positive cascade became the default (stop 60); the last value given wins.
 # --synthetic-share count: every positive weighs the same, as these cells were run before AdaBoost's default share
 # of 0.25 (stop 61); --synthetic-share 0.25 (or any other value given after it) wins.
+# --background-sampling seed: each synthetic object on its own seed's background, as these cells were run before the
+# CNN's default became other seeds' backgrounds (stop 69); the last value given wins.
 set -euo pipefail
 mode=$1 option=$2 out=$3 split=$4 family=$5 copies=$6
 shift 6
@@ -16,5 +18,6 @@ extra="--no-scale-check --no-patches --eval-split val"
 [ "$split" = test ] && extra="--no-scale-check"
 if [ "$mode" = run ]; then seeds=$1 name="s$1"; shift; else seeds="0 1 2" name=s012 extra="$extra --read-only"; fi
 python -m synthaug.evaluate.runner synthetic --class drone --detectors "$family" --seed-counts 100 \
-  --training-seeds $seeds "$option" "$copies" --threads 1 $extra --ada-cascade all --synthetic-share count "$@" \
+  --training-seeds $seeds "$option" "$copies" --threads 1 $extra --ada-cascade all --synthetic-share count \
+  --background-sampling seed "$@" \
   --out "$out/${family}_${split}_x${copies}_${name}"
