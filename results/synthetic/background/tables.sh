@@ -63,3 +63,11 @@ if [ $# -ge 1 ]; then
   # stop 68: the same detectors on the validation videos (seeds 5-7 cnn_val_a, 8-9 cnn_val_b; read back)
   three_way "$D/cnn_val_a $D/cnn_val_b" cnn_100_seeds.json $C "real only" $D/cnn_100_val
 fi
+# stop 69: the CNN on 10 training seeds. Validation: seeds 0-1 cnn_val04_a, 2-4 cnn_val04_b (trained here, the own
+# backgrounds of seeds 3-4 read back), 5-9 as above; test: seeds 0-4 cnn_test04 (read back), 5-9 cnn_a, cnn_b
+C=cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_without_boundary_blur_and_motion_blur
+three_way "$D/cnn_val04_a $D/cnn_val04_b" cnn_100_seeds.json $C "real only" $D/cnn_100_val04
+three_way "$D/cnn_val04_a $D/cnn_val04_b $D/cnn_val_a $D/cnn_val_b" cnn_100_seeds.json $C "real only" $D/cnn_100_val10
+if [ -d $D/cnn_test04 ]; then
+  three_way "$D/cnn_test04 $D/cnn_a $D/cnn_b" cnn_100_seeds.json $C "real only" $D/cnn_100_10
+fi
