@@ -77,8 +77,8 @@ FAMILY_BACKGROUND_SAMPLING: dict[str, str] = {"cnn": "other"}
 (``"seed"``). The CNN: on another seed's background (``"other"``), its capture parameters still its own seed's. Chosen
 on the validation videos as the CNN's effects were (drones, 100 seeds, 20x, the CNN's own effects, built-in fits,
 paired against own backgrounds; ``results/synthetic/background/README.md``): +0.031 [+0.011, +0.051] AP@0.5 on
-training seeds 5-9, test +0.009 [-0.007, +0.021]. HOG keeps its own: other backgrounds moved it +0.019 on test and
--0.003 on validation (10 seeds each)."""
+training seeds 5-9, confirmed on seeds 0-4 (+0.014 [-0.013, +0.045]): +0.022 [+0.001, +0.045] over the 10. HOG keeps
+its own: other backgrounds moved it +0.019 on test and -0.003 on validation (10 seeds each)."""
 
 
 def resolve_background_sampling(kind: str, background_sampling: str | None, seed_count: int | None = None) -> str:
