@@ -77,6 +77,8 @@ _GLB5, _BI5 = _seeds(_GLB), _seeds(_BI)  # seeds 0-4 (stop 64)
 _GLB10, _BI10 = _seeds(_GLB, tuple(range(10))), _seeds(_BI, tuple(range(10)))  # seeds 0-9 (stop 65)
 _BGS = "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin"  # stop 67: test seeds 0-4 hog_a, 5-9 hog_b
 _BGV = _seeds(f"background/hog_val_{{s}}/{_BGS}.json", ("a", "b", "c", "d"))  # the same on validation, seeds 0-9
+_CBG = ("test04", "a", "b")  # the CNN's background cells, seeds 0-4 (stop 69, read back) and 5-9 (stop 67)
+_CBGV = ("val04_a", "val04_b", "val_a", "val_b")  # the same on validation, seeds 0-1, 2-4 (stop 69), 5-9 (stop 68)
 _FITTED_ROT = "rotation: uniform -> around each seed's fitted rotation (20°)"
 _AT_SEED_GAP = (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_uniform_at_seed_poses"))
 
@@ -189,9 +191,13 @@ FACTORS: tuple[Factor, ...] = (
            f"table2/cnn_hog/{_CS}.json", "table2/cnn_cnn/cnn_100_seeds_20x_synthetic_drone_100_seed_seed_cnn.json",
            "table2/"),
     Factor("drone", "cnn", "background", "each object on its own seed's background -> on another seed's (built-in "
-           "fits, blurs left out)", "test", _seeds(f"background/cnn_{{s}}/{_CS}_builtin_{_NB}.json", ("a", "b")),
-           _seeds(f"background/cnn_{{s}}/{_CS}_builtin_{_NB}_backgrounds_of_other_seeds.json", ("a", "b")),
-           "background/"),
+           "fits, blurs left out; the default since stop 69)", "test",
+           _seeds(f"background/cnn_{{s}}/{_CS}_builtin_{_NB}.json", _CBG),
+           _seeds(f"background/cnn_{{s}}/{_CS}_builtin_{_NB}_backgrounds_of_other_seeds.json", _CBG), "background/"),
+    Factor("drone", "cnn", "background", "each object on its own seed's background -> on another seed's (built-in "
+           "fits, blurs left out; the default since stop 69)", "val",
+           _seeds(f"background/cnn_{{s}}/{_CS}_builtin_{_NB}.json", _CBGV),
+           _seeds(f"background/cnn_{{s}}/{_CS}_builtin_{_NB}_backgrounds_of_other_seeds.json", _CBGV), "background/"),
     Factor("drone", "cnn", "silhouette (mesh)", "mesh of the fits: built-in quadcopter -> quadcopter.glb (blurs "
            "left out; seeds 0-2 stop 63's fits, 3-4 stop 64's)", "test",
            (f"mesh_factor/cnn_100_builtin/{_CS}_builtin_{_NB}.json",
