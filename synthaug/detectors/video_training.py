@@ -774,6 +774,7 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
     if background_sampling == "other" and len(ss) < 2:
         raise TrainingInputError("--background-sampling", f"other puts each synthetic object on another seed's "
                                                           f"background, and the seed set has {len(ss)} seed")
+    where = ", on other seeds' backgrounds" if background_sampling == "other" else ""
     if n_syn:
         def draw(fit: str | Path) -> Tensor:
             return synthetic_positives(ss, mesh, fit, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
@@ -782,15 +783,13 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                                        quantize=added.quantize, background_sampling=background_sampling)
 
         t0 = time.perf_counter()
-        on_other = ", on other seeds' backgrounds"
         syn = draw(params)
         ts.synthetic_slice = (int(ts.positives.shape[0]), int(ts.positives.shape[0]) + n_syn)
         ts.redraw_synthetic = draw
         ts.positives = torch.cat([ts.positives, syn])
         say(f"synthetic: {n_syn} patches from {params}"
             f"{', without ' + ' and '.join(effects_off) if effects_off else ''}{', 8-bit' if added.quantize else ''}"
-            f"{on_other if background_sampling == 'other' else ''}"
-            f" ({time.perf_counter() - t0:.0f}s)")
+            f"{where} ({time.perf_counter() - t0:.0f}s)")
     info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
                             "pose_sampling": pose_sampling,
                             **({"object_box": added.object_box} if added.object_box is not None else {}),

@@ -7,6 +7,7 @@
 set -euo pipefail
 R=results/synthetic; D=$R/background; T=results/learning_curve/video_diversity/table.py
 S=hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin; O=_backgrounds_of_other_seeds
+C=cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_without_boundary_blur_and_motion_blur  # the CNN's
 # three_way "FOLDERS" REAL_FILE SYNTHETIC_STEM REAL_LABEL OUT: the real-only, own- and other-background results of
 # every folder, tabled against real only (OUT_vs_real.md) and other against own (OUT_other_vs_own.md)
 three_way() {
@@ -58,14 +59,12 @@ V0=$R/hog_12_share/bg12_val; V1=$R/hog_12_share/bg12_val_b
 three_way "$V0 $V1" hog_12_seeds.json hog_12_seeds_20x_synthetic_hog "12 real only" $D/hog_12_val10
 # the CNN, blurs left out (its default), 100 seeds, built-in fits
 if [ $# -ge 1 ]; then
-  C=cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_without_boundary_blur_and_motion_blur
   three_way "$1" cnn_100_seeds.json $C "real only" $D/cnn_100
   # stop 68: the same detectors on the validation videos (seeds 5-7 cnn_val_a, 8-9 cnn_val_b; read back)
   three_way "$D/cnn_val_a $D/cnn_val_b" cnn_100_seeds.json $C "real only" $D/cnn_100_val
 fi
 # stop 69: the CNN on 10 training seeds. Validation: seeds 0-1 cnn_val04_a, 2-4 cnn_val04_b (trained here, the own
 # backgrounds of seeds 3-4 read back), 5-9 as above; test: seeds 0-4 cnn_test04 (read back), 5-9 cnn_a, cnn_b
-C=cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_without_boundary_blur_and_motion_blur
 three_way "$D/cnn_val04_a $D/cnn_val04_b" cnn_100_seeds.json $C "real only" $D/cnn_100_val04
 three_way "$D/cnn_val04_a $D/cnn_val04_b $D/cnn_val_a $D/cnn_val_b" cnn_100_seeds.json $C "real only" $D/cnn_100_val10
 if [ -d $D/cnn_test04 ]; then
