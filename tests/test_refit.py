@@ -43,6 +43,51 @@ def test_datamodule_mixes_synthetic_patches(tmp_path):
     assert x.shape == (8, 1, 40, 40) and y.dtype == torch.float32
 
 
+def test_datamodule_gives_the_cnn_familys_synthetic_defaults(tmp_path):
+    """The Lightning path trains the CNN, so its synthetic stream is the one ``synthaug train`` gives the CNN: the
+    fit's blurs left out and each object on another seed's background; each item equals the item of a
+    SyntheticObjectDataset built with those options explicitly, and the paper's stream is one argument away."""
+    from synthaug.data.seedset import SeedSet
+    from synthaug.data.synthetic import SyntheticObjectDataset
+    from synthaug.detectors.video_training import FAMILY_BACKGROUND_SAMPLING, FAMILY_EFFECTS_OFF
+
+    seeds = _seeds(tmp_path)
+    fit = tmp_path / "fit.json"
+    CaptureParams.sample(6, generator=torch.Generator().manual_seed(4)).save(fit)
+    kept = [e for e in CaptureParams.load(fit).effects if e not in FAMILY_EFFECTS_OFF["cnn"]]
+    assert kept and len(kept) < len(CaptureParams.load(fit).effects)
+    options = {"synthetic_per_real": 2, "step_deg": 30, "sprite_size": 48, "val_fraction": 0.0, "seed": 3}
+    ss = SeedSet.load(seeds)
+
+    def stream(**kwargs):
+        return SyntheticObjectDataset("quadcopter", ss, fit, length=12, patch_size=40, negative_fraction=0.0, seed=3,
+                                      render={"step_deg": 30, "sprite_size": 48}, **kwargs)
+
+    def items(ds):
+        return torch.stack([ds[i][0] for i in range(len(ds))])
+
+    for dm_kwargs, ref_kwargs in (({}, {"effects": kept, "background_sampling": FAMILY_BACKGROUND_SAMPLING["cnn"]}),
+                                  ({"effects_off": [], "background_sampling": "seed"}, {})):
+        dm = SyntheticPatchDataModule(str(seeds), params=str(fit), **options, **dm_kwargs)
+        dm.setup("fit")
+        ref = stream(**ref_kwargs)
+        assert dm.synthetic.effects == ref.effects and dm.synthetic.background_sampling == ref.background_sampling
+        torch.testing.assert_close(items(dm.synthetic), items(ref), rtol=0, atol=0)
+    paper, default = (SyntheticPatchDataModule(str(seeds), params=str(fit), **options, **kw)
+                      for kw in ({"effects_off": [], "background_sampling": "seed"}, {}))
+    paper.setup("fit")
+    default.setup("fit")
+    assert not torch.equal(items(paper.synthetic), items(default.synthetic))
+    # sampled Θ (no fit) carries the paper's effects, and the family's blurs are left out of those too
+    sampled = SyntheticPatchDataModule(str(seeds), **options)
+    sampled.setup("fit")
+    assert not set(sampled.synthetic.effects) & set(FAMILY_EFFECTS_OFF["cnn"]) and sampled.synthetic.effects
+    with pytest.raises(ValueError, match="effects_off"):
+        SyntheticPatchDataModule(str(seeds), params=str(fit), effects_off=["vignetting"], **options).setup("fit")
+    with pytest.raises(ValueError, match="background_sampling"):
+        SyntheticPatchDataModule(str(seeds), background_sampling="video", **options)
+
+
 @pytest.mark.slow
 def test_refit_callback_updates_the_synthetic_stream(tmp_path):
     seeds = _seeds(tmp_path)

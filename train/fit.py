@@ -9,8 +9,9 @@ LightningCLI underneath. ``model:`` is always
   (a seed set, generated toy patches, or both) — ``configs/cnn_drone.yaml``;
 - real + synthetic patches: ``synthaug.fit.refit.SyntheticPatchDataModule``
   (the seeds plus a stream rendered from a ``synthaug fit`` file, new poses
-  every epoch through the ``SyntheticEpochs`` callback) —
-  ``configs/cnn_drone_synthetic.yaml``;
+  every epoch through the ``SyntheticEpochs`` callback; the CNN family's
+  synthetic defaults of ``synthaug train``: the fit's blurs left out, each
+  object on another seed's background) — ``configs/cnn_drone_synthetic.yaml``;
 - real + synthetic with Θ refitted against the network while it trains: the
   same data module plus ``synthaug.fit.refit.CNNDistanceRefit`` under
   ``trainer.callbacks`` — ``configs/cnn_drone_refit.yaml``.

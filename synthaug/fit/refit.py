@@ -101,6 +101,12 @@ class SyntheticPatchDataModule(PatchDataModule):
         synthetic_negative_fraction: fraction of the synthetic items that are
             background-only patches (label 0).
         step_deg, sprite_size: view-cache options.
+        effects_off: fitted effects the synthetic stream leaves out; None (the default): the CNN family's
+            (:data:`~synthaug.detectors.video_training.FAMILY_EFFECTS_OFF`, those among ``params``' effects), as
+            ``synthaug train`` gives the CNN; ``[]`` keeps every effect (the paper).
+        background_sampling: ``"seed"`` (the paper: each object on its own seed's background) or ``"other"``;
+            None (the default): the CNN family's
+            (:data:`~synthaug.detectors.video_training.FAMILY_BACKGROUND_SAMPLING`; a one-seed set keeps its own).
         **kwargs: :class:`PatchDataModule` arguments (batch_size, val_fraction...).
     """
 
@@ -119,7 +125,11 @@ class SyntheticPatchDataModule(PatchDataModule):
         num_workers: int = 0,
         flip: bool = True,
         seed: int = 0,
+        effects_off: list[str] | None = None,
+        background_sampling: str | None = None,
     ) -> None:
+        from synthaug.detectors.video_training import resolve_background_sampling
+
         super().__init__(seed_dir=seed_dir, backgrounds_as_negatives=backgrounds_as_negatives,
                          val_fraction=val_fraction, batch_size=batch_size, num_workers=num_workers, flip=flip,
                          seed=seed)
@@ -129,6 +139,9 @@ class SyntheticPatchDataModule(PatchDataModule):
         self.params = params
         self.synthetic_per_real = synthetic_per_real
         self.synthetic_negative_fraction = synthetic_negative_fraction
+        self.effects_off = None if effects_off is None else tuple(effects_off)
+        self.background_sampling = None if background_sampling is None else \
+            resolve_background_sampling("cnn", background_sampling)  # a bad value fails here, not in setup
         self.cache_options = {"step_deg": step_deg, "sprite_size": sprite_size}
         self.synthetic: Any = None
 
@@ -138,13 +151,28 @@ class SyntheticPatchDataModule(PatchDataModule):
         from synthaug.data.seedset import SeedSet
         from synthaug.data.synthetic import SyntheticObjectDataset
 
+        from synthaug.detectors.video_training import resolve_background_sampling, resolve_effects_off
+        from synthaug.params import CaptureParams, resolve_effect_names
+
         super().setup(stage)
         seeds = SeedSet.load(self.seed_dir)
         n_syn = int(round(self.synthetic_per_real * len(seeds)))
-        self.synthetic = SyntheticObjectDataset(self.mesh, seeds, self.params, length=n_syn,
-                                                patch_size=seeds.patch_size,
-                                                negative_fraction=self.synthetic_negative_fraction,
-                                                seed=self.seed, render=self.cache_options)
+        # the effects Θ carries: the fit's, or those CaptureParams.sample draws when there is no fit
+        effects = tuple(CaptureParams.load_with_extra(self.params)[0].effects if self.params is not None
+                        else resolve_effect_names(None))
+        if self.effects_off is None:  # the CNN family's, those among Θ's effects
+            off = tuple(e for e in resolve_effects_off("cnn", None) if e in effects)
+        else:
+            off = self.effects_off
+            unknown = sorted(set(off) - set(effects))
+            if unknown:
+                raise ValueError(f"effects_off {unknown} are not among the effects of {self.params or 'sampled Θ'} "
+                                 f"({list(effects)})")
+        self.synthetic = SyntheticObjectDataset(
+            self.mesh, seeds, self.params, length=n_syn, patch_size=seeds.patch_size,
+            negative_fraction=self.synthetic_negative_fraction, seed=self.seed, render=self.cache_options,
+            effects=[e for e in effects if e not in off] if off else None,
+            background_sampling=resolve_background_sampling("cnn", self.background_sampling, len(seeds)))
         self.train_set = ConcatDataset([*self.train_set.datasets, SyntheticPatches(self.synthetic)])
 
     def train_dataloader(self) -> DataLoader:
