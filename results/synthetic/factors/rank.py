@@ -213,6 +213,16 @@ FACTORS: tuple[Factor, ...] = (
            f"hog_builtin_{_NB}.json", f"mesh_factor/cnn_100_builtin_8bit/cnn_100_seeds_20x_synthetic_drone_100_seed_"
            f"seed_hog_builtin_{_NB}_8_bit.json", "mesh_factor/",
            (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_8bit"))),
+    Factor("drone", "cnn", "appearance (8-bit levels)", "float renders -> rounded to 8 bits (the CNN's defaults: "
+           "built-in fits, blurs left out, other seeds' backgrounds)", "test",
+           _seeds(f"quantize/cnn_test_{{s}}/{_CS}_builtin_{_NB}_backgrounds_of_other_seeds.json", ("a", "b")),
+           _seeds(f"quantize/cnn_test_{{s}}/{_CS}_builtin_{_NB}_8_bit_backgrounds_of_other_seeds.json", ("a", "b")),
+           "quantize/"),
+    Factor("drone", "cnn", "appearance (8-bit levels)", "float renders -> rounded to 8 bits (the CNN's defaults: "
+           "built-in fits, blurs left out, other seeds' backgrounds)", "val",
+           _seeds(f"quantize/cnn_val_{{s}}/{_CS}_builtin_{_NB}_backgrounds_of_other_seeds.json", ("a", "b")),
+           _seeds(f"quantize/cnn_val_{{s}}/{_CS}_builtin_{_NB}_8_bit_backgrounds_of_other_seeds.json", ("a", "b")),
+           "quantize/"),
     Factor("drone", "cnn", "appearance (8-bit levels)", "float renders -> rounded to 8 bits (.glb fits, blurs left "
            "out)", "test", f"placement/cnn_100/{_CS}_{_NB}.json", f"placement/cnn_100/{_CS}_{_NB}_8_bit.json",
            "placement/", (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_8bit"))),
