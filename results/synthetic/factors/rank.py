@@ -296,6 +296,16 @@ FACTORS: tuple[Factor, ...] = (
     Factor("airplane", "cnn", "capture effects (Fig. 9)", "both blurs: fitted -> left out (the default since stop 52)",
            "val", f"airplane_v2/cnn_100_noblurs_val/{_PC}.json", f"airplane_v2/cnn_100_noblurs_val/{_PC}_{_NB}.json",
            "airplane_v2/"),
+    Factor("airplane", "cnn", "background", "each object on its own seed's background -> on another seed's (blurs "
+           "left out; the CNN's default since stop 69)", "test",
+           _seeds(f"airplane_v2/cnn_100_bg{{s}}/{_PC}_{_NB}.json", ("", "_s3", "_s4")),
+           _seeds(f"airplane_v2/cnn_100_bg{{s}}/{_PC}_{_NB}_backgrounds_of_other_seeds.json", ("", "_s3", "_s4")),
+           "airplane_v2/"),
+    Factor("airplane", "cnn", "background", "each object on its own seed's background -> on another seed's (blurs "
+           "left out; the CNN's default since stop 69)", "val",
+           _seeds(f"airplane_v2/cnn_100_bg_val{{s}}/{_PC}_{_NB}.json", ("_a", "_s3", "_s4")),
+           _seeds(f"airplane_v2/cnn_100_bg_val{{s}}/{_PC}_{_NB}_backgrounds_of_other_seeds.json", ("_a", "_s3", "_s4")),
+           "airplane_v2/"),
     Factor("airplane", "cnn", "pose distribution", "rotation: uniform -> around each seed's fitted rotation (20°)",
            "val", f"airplane_v2/cnn_100_val/{_PC}.json", f"airplane_v2/cnn_100_val/{_PC}_fitted_poses.json",
            "airplane_v2/"),
