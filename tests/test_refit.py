@@ -82,6 +82,9 @@ def test_datamodule_gives_the_cnn_familys_synthetic_defaults(tmp_path):
     sampled = SyntheticPatchDataModule(str(seeds), **options)
     sampled.setup("fit")
     assert not set(sampled.synthetic.effects) & set(FAMILY_EFFECTS_OFF["cnn"]) and sampled.synthetic.effects
+    one = SyntheticPatchDataModule(str(seeds), params=str(fit), effects_off="motion_blur", **options)  # a name
+    one.setup("fit")
+    assert one.synthetic.effects == tuple(e for e in CaptureParams.load(fit).effects if e != "motion_blur")
     with pytest.raises(ValueError, match="effects_off"):
         SyntheticPatchDataModule(str(seeds), params=str(fit), effects_off=["vignetting"], **options).setup("fit")
     with pytest.raises(ValueError, match="background_sampling"):

@@ -128,7 +128,7 @@ class SyntheticPatchDataModule(PatchDataModule):
         effects_off: list[str] | None = None,
         background_sampling: str | None = None,
     ) -> None:
-        from synthaug.detectors.video_training import resolve_background_sampling
+        from synthaug.detectors.video_training import resolve_background_sampling, resolve_effects_off
 
         super().__init__(seed_dir=seed_dir, backgrounds_as_negatives=backgrounds_as_negatives,
                          val_fraction=val_fraction, batch_size=batch_size, num_workers=num_workers, flip=flip,
@@ -139,7 +139,7 @@ class SyntheticPatchDataModule(PatchDataModule):
         self.params = params
         self.synthetic_per_real = synthetic_per_real
         self.synthetic_negative_fraction = synthetic_negative_fraction
-        self.effects_off = None if effects_off is None else tuple(effects_off)
+        self.effects_off = None if effects_off is None else resolve_effects_off("cnn", effects_off)
         self.background_sampling = None if background_sampling is None else \
             resolve_background_sampling("cnn", background_sampling)  # a bad value fails here, not in setup
         self.cache_options = {"step_deg": step_deg, "sprite_size": sprite_size}
@@ -150,7 +150,6 @@ class SyntheticPatchDataModule(PatchDataModule):
             return
         from synthaug.data.seedset import SeedSet
         from synthaug.data.synthetic import SyntheticObjectDataset
-
         from synthaug.detectors.video_training import resolve_background_sampling, resolve_effects_off
         from synthaug.params import CaptureParams, resolve_effect_names
 
@@ -158,7 +157,7 @@ class SyntheticPatchDataModule(PatchDataModule):
         seeds = SeedSet.load(self.seed_dir)
         n_syn = int(round(self.synthetic_per_real * len(seeds)))
         # the effects Θ carries: the fit's, or those CaptureParams.sample draws when there is no fit
-        effects = tuple(CaptureParams.load_with_extra(self.params)[0].effects if self.params is not None
+        effects = tuple(CaptureParams.load(self.params).effects if self.params is not None
                         else resolve_effect_names(None))
         if self.effects_off is None:  # the CNN family's, those among Θ's effects
             off = tuple(e for e in resolve_effects_off("cnn", None) if e in effects)
