@@ -59,16 +59,26 @@ the synthetic drones softer than the CNN learns from best; chosen on the validat
 5 training seeds: +0.047 [+0.013, +0.081] AP@0.5 over every effect; ``results/synthetic/cnn_figs/README.md``)."""
 
 
-def resolve_effects_off(kind: str, effects_off: str | Sequence[str] | None) -> tuple[str, ...]:
+def resolve_effects_off(kind: str, effects_off: str | Sequence[str] | None,
+                        available: Sequence[str] | None = None) -> tuple[str, ...]:
     """The effects left out of a detector family's synthetic positives, as a tuple: None is the family's own set
-    (:data:`FAMILY_EFFECTS_OFF`), a name is that effect alone, a sequence is those effects together.
+    (:data:`FAMILY_EFFECTS_OFF`), a name is that effect alone, a sequence is those effects together. Given the
+    effects a fit carries (``available``), the family's set keeps those among them and an effect asked for that is
+    not among them is a ``ValueError``.
 
     >>> resolve_effects_off("cnn", None), resolve_effects_off("hog", None), resolve_effects_off("hog", "motion_blur")
     (('boundary_blur', 'motion_blur'), (), ('motion_blur',))
+    >>> resolve_effects_off("cnn", None, available=("motion_blur", "object_noise"))
+    ('motion_blur',)
     """
     if effects_off is None:
-        return FAMILY_EFFECTS_OFF.get(kind, ())
-    return (effects_off,) if isinstance(effects_off, str) else tuple(effects_off)
+        family = FAMILY_EFFECTS_OFF.get(kind, ())
+        return family if available is None else tuple(e for e in family if e in available)
+    off = (effects_off,) if isinstance(effects_off, str) else tuple(effects_off)
+    unknown = [] if available is None else sorted(set(off) - set(available))
+    if unknown:
+        raise ValueError(f"{unknown} not among the effects ({list(available or ())})")
+    return off
 
 
 FAMILY_BACKGROUND_SAMPLING: dict[str, str] = {"cnn": "other"}
@@ -758,16 +768,13 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                                              f"({ts.info.get('seedset')}): a fit holds one row per seed of the seed set "
                                              f"it was made on")
     mesh = added.mesh or fit_meta.get("mesh") or "quadcopter"
-    effects, effects_off = None, added.effects_off
-    if effects_off is None:  # the family's, for the synthetic positives only (copy-paste draws no effect)
-        effects_off = tuple(e for e in resolve_effects_off(kind, None) if e in theta.effects) \
-            if synthetic_ratio > 0 else ()
-    if effects_off:
-        unknown = sorted(set(effects_off) - set(theta.effects))
-        if unknown:
-            raise TrainingInputError("--effects-off", f"{unknown} not among the effects of {params} "
-                                                      f"({list(theta.effects)})")
-        effects = [e for e in theta.effects if e not in effects_off]
+    # the family's effects off for the synthetic positives only (copy-paste draws no effect)
+    effects_off = () if added.effects_off is None and synthetic_ratio <= 0 else added.effects_off
+    try:
+        effects_off = resolve_effects_off(kind, effects_off, available=theta.effects)
+    except ValueError as e:
+        raise TrainingInputError("--effects-off", f"{params}: {e}") from None
+    effects = [e for e in theta.effects if e not in effects_off] if effects_off else None
     n_syn = int(round(synthetic_ratio * len(ss)))
     background_sampling = resolve_background_sampling(kind, added.background_sampling, len(ss)) \
         if synthetic_ratio > 0 else "seed"  # the family's, for the synthetic positives only

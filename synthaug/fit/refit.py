@@ -159,14 +159,10 @@ class SyntheticPatchDataModule(PatchDataModule):
         # the effects Θ carries: the fit's, or those CaptureParams.sample draws when there is no fit
         effects = tuple(CaptureParams.load(self.params).effects if self.params is not None
                         else resolve_effect_names(None))
-        if self.effects_off is None:  # the CNN family's, those among Θ's effects
-            off = tuple(e for e in resolve_effects_off("cnn", None) if e in effects)
-        else:
-            off = self.effects_off
-            unknown = sorted(set(off) - set(effects))
-            if unknown:
-                raise ValueError(f"effects_off {unknown} are not among the effects of {self.params or 'sampled Θ'} "
-                                 f"({list(effects)})")
+        try:  # None: the CNN family's, those among Θ's effects
+            off = resolve_effects_off("cnn", self.effects_off, available=effects)
+        except ValueError as e:
+            raise ValueError(f"effects_off of {self.params or 'sampled Θ'}: {e}") from None
         self.synthetic = SyntheticObjectDataset(
             self.mesh, seeds, self.params, length=n_syn, patch_size=seeds.patch_size,
             negative_fraction=self.synthetic_negative_fraction, seed=self.seed, render=self.cache_options,
