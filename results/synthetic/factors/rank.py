@@ -279,6 +279,12 @@ FACTORS: tuple[Factor, ...] = (
            "adaboost_blurs/val/adaboost_100_seeds_20x_synthetic_drone_100_seed_seed_hog.json",
            f"adaboost_blurs/val/adaboost_100_seeds_20x_synthetic_drone_100_seed_seed_hog_{_NB}.json",
            "adaboost_blurs/"),
+    Factor("drone", "adaboost", "background", "each object on its own seed's background -> on another seed's "
+           "(stop 64's .glb fits)", "test", f"adaboost_background/test/{_A}.json",
+           f"adaboost_background/test/{_A}_backgrounds_of_other_seeds.json", "adaboost_background/"),
+    Factor("drone", "adaboost", "background", "each object on its own seed's background -> on another seed's "
+           "(stop 64's .glb fits)", "val", f"adaboost_background/val/{_A}.json",
+           f"adaboost_background/val/{_A}_backgrounds_of_other_seeds.json", "adaboost_background/"),
     # ---- airplanes (twin_prop_airplane.glb fits) ----
     Factor("airplane", "hog", "pose distribution", "rotation: uniform -> around each seed's fitted rotation (20°)",
            "test", f"airplane_v2/hog_100_5seeds/{_P}.json", f"airplane_v2/hog_100_5seeds/{_P}_fitted_poses.json",
