@@ -281,7 +281,9 @@ FACTORS: tuple[Factor, ...] = (
            "adaboost_blurs/"),
     Factor("drone", "adaboost", "background", "each object on its own seed's background -> on another seed's "
            "(stop 64's .glb fits)", "test", f"adaboost_background/test/{_A}.json",
-           f"adaboost_background/test/{_A}_backgrounds_of_other_seeds.json", "adaboost_background/"),
+           f"adaboost_background/test/{_A}_backgrounds_of_other_seeds.json", "adaboost_background/",
+           (("adaboost_background/gap", "synthetic_hog"),
+            ("adaboost_background/gap", "synthetic_hog_other_backgrounds"))),
     Factor("drone", "adaboost", "background", "each object on its own seed's background -> on another seed's "
            "(stop 64's .glb fits)", "val", f"adaboost_background/val/{_A}.json",
            f"adaboost_background/val/{_A}_backgrounds_of_other_seeds.json", "adaboost_background/"),
