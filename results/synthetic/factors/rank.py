@@ -62,6 +62,7 @@ _C = "cnn_finetune/test_ft4/cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog.
 _CS = "cnn_100_seeds_20x_synthetic_drone_100_seed_seed_hog"
 _NB = "without_boundary_blur_and_motion_blur"
 _A = "adaboost_100_seeds_20x_synthetic_drone_100_seed_seed_hog_share_0.25"
+_AFP = "adaboost_100_seeds_20x_synthetic_drone_100_seed_seed_hog_fitted_poses_share_0.25.json"
 _P = "hog_100_seeds_20x_synthetic_hog_twin_prop_airplane"
 _PC = "cnn_100_seeds_20x_synthetic_hog_twin_prop_airplane"
 _PA = "adaboost_100_seeds_20x_synthetic_hog_twin_prop_airplane"
@@ -287,6 +288,11 @@ FACTORS: tuple[Factor, ...] = (
     Factor("drone", "adaboost", "background", "each object on its own seed's background -> on another seed's "
            "(stop 64's .glb fits)", "val", f"adaboost_background/val/{_A}.json",
            f"adaboost_background/val/{_A}_backgrounds_of_other_seeds.json", "adaboost_background/"),
+    Factor("drone", "adaboost", "pose distribution", _FITTED_ROT + " (stop 64's .glb fits)", "test",
+           f"adaboost_background/test/{_A}.json", "adaboost_pose/test/" + _AFP, "adaboost_pose/",
+           (("adaboost_pose/gap", "synthetic_hog"), ("adaboost_pose/gap", "synthetic_hog_fitted_poses"))),
+    Factor("drone", "adaboost", "pose distribution", _FITTED_ROT + " (stop 64's .glb fits)", "val",
+           f"adaboost_background/val/{_A}.json", "adaboost_pose/val/" + _AFP, "adaboost_pose/"),
     # ---- airplanes (twin_prop_airplane.glb fits) ----
     Factor("airplane", "hog", "pose distribution", "rotation: uniform -> around each seed's fitted rotation (20°)",
            "test", f"airplane_v2/hog_100_5seeds/{_P}.json", f"airplane_v2/hog_100_5seeds/{_P}_fitted_poses.json",
