@@ -792,3 +792,45 @@ def test_dcnn_refit_cells_refit_against_each_rounds_network_and_redraw_the_synth
     with pytest.raises(SystemExit) as e:
         R.main(["synthetic", "--detectors", "hog", "cnn", "--dcnn-refit", "on", "--out", "x"])
     assert e.value.code == 2 and "--dcnn-refit" in capsys.readouterr().err
+
+
+def test_box_calibration_scores_the_stored_detector_with_its_own_correction(ws, curve, monkeypatch, capsys):
+    """``box_calibration``: a new cell with the stored detector (no training), whose boxes are those of the
+    detector with :func:`calibrate_boxes` fitted on its training videos' frames at that stride."""
+    from synthaug.detectors.base import load_detector
+    from synthaug.detectors.box_calibration import CalibratedBoxRegressor, calibrate_boxes
+    from synthaug.detectors.frames import VideoFrames
+    from synthaug.evaluate.matching import match_videos
+    from synthaug.evaluate.videos import detect_on_eval_set, refine_detections
+
+    def no_training(*a, **k):
+        raise AssertionError("a stored detector was trained again")
+
+    monkeypatch.setattr(R, "train_from_videos", no_training)
+    c = R.Condition("hog / 6 seeds", "hog", seed_count=6)
+    plain = make_runner(ws, scale_check=False, patches=False)
+    cal = make_runner(ws, scale_check=False, patches=False, box_calibration=1)
+    assert cal.identity(c, 0)["box_calibration"] == {"stride": 1, "version": R.BOX_CALIBRATION_VERSION}
+    assert "box_calibration" not in plain.identity(c, 0) and cal.training_identity(c, 0) == plain.training_identity(c, 0)
+    res = cal.run(c, seeds=[0])[1.0]
+    cell = CellCache(Path(ws["paths"].work_dir) / "cells").get(cal.identity(c, 0))
+    assert cell["detector_read_back"] is True and cell["box_calibration"]["pairs"] >= 20
+    det = load_detector(CellCache(Path(ws["paths"].work_dir) / "cells" / "detectors").path(
+        plain.training_identity(c, 0)).with_suffix(".pt"))
+    nms, top = ws["proto"].detection.nms_iou, ws["proto"].detection.max_detections
+    det.box_regressor = calibrate_boxes(det, VideoFrames(ws["paths"].videos_dir, ws["paths"].labels_dir,
+                                                         positive=TRAIN, stride=1),
+                                        scales=(1.0, 0.8), nms_iou=nms, max_detections=top)
+    assert isinstance(det.box_regressor, CalibratedBoxRegressor)
+    assert det.box_regressor.meta["coef"] == cell["box_calibration"]["coef"]
+    es = cal.eval_set(1.0)
+    raw = detect_on_eval_set(det, es, scales=(1.0, 0.8), nms_iou=nms, max_detections=top, refine_boxes=False)
+    ref = match_videos(es.stems, refine_detections(det, es, raw, nms_iou=nms), es.boxes, ws["proto"])
+    assert [v.tp.tolist() for v in res.seeds[0].videos] == [v.tp.tolist() for v in ref]
+    assert [v.det_size.tolist() for v in res.seeds[0].videos] == [v.det_size.tolist() for v in ref]
+    with pytest.raises(ValueError, match="box_calibration"):
+        make_runner(ws, box_calibration=-1)
+    assert R.build_parser().parse_args(["synthetic", "--box-calibration", "15", "--out", "x"]).box_calibration == 15
+    with pytest.raises(SystemExit):
+        R.build_parser().parse_args(["synthetic", "--box-calibration", "-2", "--out", "x"])
+    capsys.readouterr()

@@ -260,7 +260,8 @@ class EnsembleBoxRegressor(DeltaRegressor):
 def regressor_from_state_dict(state: dict[str, Any]) -> Any:
     """A box regressor rebuilt from its ``state_dict()``: :class:`~synthaug.detectors.boxes.BoxRegressor` (ridge;
     also a state without ``"model"``, as files written before the CNN), :class:`CNNBoxRegressor` (``"cnn"``) or
-    :class:`EnsembleBoxRegressor` (``"ensemble"``); a malformed state is a ValueError."""
+    :class:`EnsembleBoxRegressor` (``"ensemble"``) or :class:`~synthaug.detectors.box_calibration.CalibratedBoxRegressor`
+    (``"calibrated"``); a malformed state is a ValueError."""
     if not isinstance(state, dict):
         raise ValueError(f"box regressor state must be a dict, got {type(state).__name__}")
     model = state.get("model", "ridge")
@@ -270,4 +271,8 @@ def regressor_from_state_dict(state: dict[str, Any]) -> Any:
         return CNNBoxRegressor.from_state_dict(state)
     if model == "ensemble":
         return EnsembleBoxRegressor.from_state_dict(state)
-    raise ValueError(f"box regressor state has model {model!r}; expected 'ridge', 'cnn' or 'ensemble'")
+    if model == "calibrated":
+        from synthaug.detectors.box_calibration import CalibratedBoxRegressor
+
+        return CalibratedBoxRegressor.from_state_dict(state)
+    raise ValueError(f"box regressor state has model {model!r}; expected 'ridge', 'cnn', 'ensemble' or 'calibrated'")
