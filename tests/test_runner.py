@@ -798,7 +798,7 @@ def test_box_calibration_scores_the_stored_detector_with_its_own_correction(ws, 
     """``box_calibration``: a new cell with the stored detector (no training), whose boxes are those of the
     detector with :func:`calibrate_boxes` fitted on its training videos' frames at that stride."""
     from synthaug.detectors.base import load_detector
-    from synthaug.detectors.box_calibration import CalibratedBoxRegressor, calibrate_boxes
+    from synthaug.detectors.box_calibration import CALIBRATION_VERSION, CalibratedBoxRegressor, calibrate_boxes
     from synthaug.detectors.frames import VideoFrames
     from synthaug.evaluate.matching import match_videos
     from synthaug.evaluate.videos import detect_on_eval_set, refine_detections
@@ -809,9 +809,10 @@ def test_box_calibration_scores_the_stored_detector_with_its_own_correction(ws, 
     monkeypatch.setattr(R, "train_from_videos", no_training)
     c = R.Condition("hog / 6 seeds", "hog", seed_count=6)
     plain = make_runner(ws, scale_check=False, patches=False)
-    cal = make_runner(ws, scale_check=False, patches=False, box_calibration=1)
-    assert cal.identity(c, 0)["box_calibration"] == {"stride": 1, "version": R.BOX_CALIBRATION_VERSION}
-    assert "box_calibration" not in plain.identity(c, 0) and cal.training_identity(c, 0) == plain.training_identity(c, 0)
+    cal = make_runner(ws, scale_check=False, patches=False, options=dataclasses.replace(FAST, box_calibration=1))
+    assert cal.identity(c, 0)["options"]["box_calibration"] == {"stride": 1, "version": CALIBRATION_VERSION}
+    assert "box_calibration" not in plain.identity(c, 0)["options"]
+    assert cal.training_identity(c, 0) == plain.training_identity(c, 0)
     res = cal.run(c, seeds=[0])[1.0]
     cell = CellCache(Path(ws["paths"].work_dir) / "cells").get(cal.identity(c, 0))
     assert cell["detector_read_back"] is True and cell["box_calibration"]["pairs"] >= 20
@@ -829,8 +830,9 @@ def test_box_calibration_scores_the_stored_detector_with_its_own_correction(ws, 
     assert [v.tp.tolist() for v in res.seeds[0].videos] == [v.tp.tolist() for v in ref]
     assert [v.det_size.tolist() for v in res.seeds[0].videos] == [v.det_size.tolist() for v in ref]
     with pytest.raises(ValueError, match="box_calibration"):
-        make_runner(ws, box_calibration=-1)
-    assert R.build_parser().parse_args(["synthetic", "--box-calibration", "15", "--out", "x"]).box_calibration == 15
+        TrainOptions(box_calibration=-1)
+    args = R.build_parser().parse_args(["synthetic", "--box-calibration", "15", "--out", "x"])
+    assert R.train_options(args).box_calibration == 15
     with pytest.raises(SystemExit):
         R.build_parser().parse_args(["synthetic", "--box-calibration", "-2", "--out", "x"])
     capsys.readouterr()

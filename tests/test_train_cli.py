@@ -62,6 +62,30 @@ def test_box_model_option_fits_that_map(ws: dict[str, Path], tmp_path: Path, mod
         assert box["samples"] > 0 and isinstance(reg, CNNBoxRegressor) and not isinstance(reg, EnsembleBoxRegressor)
 
 
+def test_box_calibration_corrects_the_trained_detectors_own_boxes(ws: dict[str, Path], tmp_path: Path) -> None:
+    """``--box-calibration 1``: the saved detector's box map is followed by the correction that
+    :func:`calibrate_boxes` fits on its training videos' frames, recorded in the metadata."""
+    from synthaug.detectors.base import load_detector
+    from synthaug.detectors.box_calibration import CalibratedBoxRegressor, calibrate_boxes
+    from synthaug.detectors.boxes import BoxRegressor
+    from synthaug.detectors.frames import VideoFrames
+
+    out = tmp_path / "cal.pt"
+    assert _train(ws, out, "--detector", "hog", "--seed-counts", "8", "--seed", "0", "--mining-rounds", "0",
+                  "--box-model", "ridge", "--box-calibration", "1") == 0
+    meta = json.loads(out.with_suffix(".json").read_text())
+    det = load_detector(out)
+    assert isinstance(det.box_regressor, CalibratedBoxRegressor) and isinstance(det.box_regressor.base, BoxRegressor)
+    assert meta["options"]["box_calibration"] == 1 and meta["box_calibration"]["stride"] == 1
+    assert meta["box_calibration"]["frames"] == 12 * len(meta["split"]["train"])  # every frame of the training videos
+    assert meta["box_calibration"]["pairs"] >= 20
+    # the same correction, fitted again on the uncorrected detector
+    det.box_regressor = det.box_regressor.base
+    again = calibrate_boxes(det, VideoFrames(ws["videos"], ws["labels"], positive=meta["split"]["train"], stride=1),
+                            scales=(1.0, 0.8))
+    assert again.meta["coef"] == meta["box_calibration"]["coef"]
+
+
 def test_box_regressor_is_cached_in_the_work_folder_by_its_inputs(ws: dict[str, Path], tmp_path: Path) -> None:
     # the box map depends on the training videos' labels, the model, the stride, the aspect and the seed, not on
     # the detector: a second training into the same --work reads it back (the same state); another seed, a changed

@@ -34,7 +34,11 @@ from torchvision.ops import box_convert, box_iou
 
 from synthaug.detectors.boxes import DeltaRegressor, decode_deltas, encode_deltas
 
-__all__ = ["CalibratedBoxRegressor", "calibrate_boxes", "detection_pairs", "fit_calibration", "size_features"]
+__all__ = ["CALIBRATION_VERSION", "CalibratedBoxRegressor", "calibrate_boxes", "detection_pairs", "fit_calibration",
+           "size_features"]
+
+CALIBRATION_VERSION = 1
+"""Part of the key of a cached cell scored with a calibrated detector: bump it when :func:`calibrate_boxes` changes."""
 
 REFERENCE_SIDE = 32.0
 """The box side (pixels) where the correction's size feature is 0: ``log(side / REFERENCE_SIDE)``."""

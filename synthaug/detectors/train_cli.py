@@ -123,7 +123,7 @@ def add_adaboost_options(parser: argparse.ArgumentParser, *, keyed: bool = False
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from synthaug._checks import add_option, dataclass_defaults, nonneg_float, positive_float
+    from synthaug._checks import add_option, dataclass_defaults, int_at_least, nonneg_float, positive_float
     from synthaug.data.captures import CAPTURE_SAMPLERS
     from synthaug.data.items import BACKGROUND_SAMPLING
     from synthaug.data.poses import POSE_SAMPLING
@@ -224,6 +224,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--box-model", choices=list(BOX_MODELS), default=d["box_model"],
                         help="box regression from the detection's context: a small CNN on its pixels, ridge on its HOG cells, or the "
                              "mean of both (ensemble)")
+    parser.add_argument("--box-calibration", type=int_at_least(0), default=d["box_calibration"], metavar="STRIDE",
+                        help="after training, correct the boxes by the detector's own errors on every STRIDE-th labelled "
+                             "frame of its training videos (0: off)")
     parser.add_argument("--cnn-shift", type=int, default=d["cnn_shift"],
                         help="CNN positives moved by random whole-pixel offsets up to this (0: off)")
     parser.add_argument("--extra-negatives", type=int, default=3000, help="object-free crops of the seed frames added to the seed set's negatives")
@@ -274,7 +277,8 @@ def main(args: argparse.Namespace) -> int:
         options = TrainOptions(**budget_options(args), cnn_shift=args.cnn_shift, mining_rounds=args.mining_rounds,
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
                                mining_select=args.mining_select, mining_patience=args.mining_patience,
-                               val_stride=args.val_frame_stride, box_model=args.box_model, scales=None if args.scales is None else tuple(args.scales),
+                               val_stride=args.val_frame_stride, box_model=args.box_model,
+                               box_calibration=args.box_calibration, scales=None if args.scales is None else tuple(args.scales),
                                mining_frame_scale=tuple(args.mining_frame_scale),
                                ada_energy_floor=args.ada_energy_floor, ada_transfer=args.ada_transfer,
                                ada_cascade=args.ada_cascade)

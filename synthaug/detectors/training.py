@@ -213,6 +213,11 @@ class TrainOptions:
             0.312, 0.359, 0.353 (``results/learning_curve/drone_box_cnn/README.md``). The CNN map costs
             ~2 min to fit (ridge ~20 s).
 
+        box_calibration: after training, correct the detector's boxes by its own errors on every k-th labelled
+            frame of its training videos (:func:`~synthaug.detectors.box_calibration.calibrate_boxes`: a linear
+            function of the box's log size, fitted by least squares on its detections matched at IoU >= 0.3);
+            0: off.
+
     The two ``mining_*`` selection fields, ``box_model`` and ``hog_kmeans_restarts`` were added after cells had
     been cached; at ``"fp"``, 0, ``"ridge"`` and 1 the training is the one before them, and
     :data:`LATER_FIELDS` lets a cache key leave them out (:meth:`key_fields`).
@@ -249,12 +254,13 @@ class TrainOptions:
     mining_patience: int | None = None
     box_model: str = "ensemble"
     mining_frame_scale: tuple[float, float] = (1.0, 1.0)
+    box_calibration: int = 0
 
     LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
                                                            ("box_model", "ridge"), ("hog_kmeans_restarts", 1),
                                                            ("cnn_finetune_epochs", 0), ("mining_frame_scale", (1.0, 1.0)),
                                                            ("ada_energy_floor", 0.0), ("ada_transfer", False),
-                                                           ("ada_cascade", "all"))
+                                                           ("ada_cascade", "all"), ("box_calibration", 0))
     """Fields added after cells were cached, with the value at which the training is the one before them
     (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys;
     nor are ``hog_kmeans_restarts``' default, 10, and ``cnn_finetune_epochs``' default, 4, which only HOG's and the
@@ -329,7 +335,7 @@ class TrainOptions:
             raise ValueError(f"mining_select must be one of {list(MINING_SELECT)} or None, got {self.mining_select!r}")
         # (name, lowest value, None allowed: the family's default)
         for name, low, optional in (("mining_patience", 0, True), ("ada_rounds", 1, True), ("hog_kmeans_restarts", 1, False),
-                                     ("cnn_finetune_epochs", 0, False)):
+                                     ("cnn_finetune_epochs", 0, False), ("box_calibration", 0, False)):
             v = getattr(self, name)
             if v is None and optional:
                 continue

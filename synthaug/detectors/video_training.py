@@ -47,7 +47,7 @@ from synthaug.detectors.training_sets import (
 __all__ = ["AddedPositives", "FAMILY_EFFECTS_OFF", "resolve_effects_off", "FAMILY_BACKGROUND_SAMPLING",
            "resolve_background_sampling", "FAMILY_SYNTHETIC_SHARE", "BY_COUNT",
            "resolve_synthetic_share", "check_placement", "TrainingInputError", "VideoSet", "discover_videos",
-           "split_by_video", "train_from_videos", "METADATA_FORMAT"]
+           "split_by_video", "train_from_videos", "calibrate_detector", "METADATA_FORMAT"]
 
 METADATA_FORMAT = "synthaug.trained_detector"
 METADATA_VERSION = 1
@@ -535,9 +535,31 @@ def train_from_videos(
                      seconds={"data": round(t_data, 1), "training": round(t_train, 1),
                               "total": round(time.perf_counter() - t_start, 1)},
                      command=command, out=out)
+    if options.box_calibration and sp["train"]:
+        meta["box_calibration"] = calibrate_detector(res.detector, vs.videos_dir, vs.labels_dir, sp["train"],
+                                                     stride=options.box_calibration, scales=options.scales,
+                                                     nms_iou=options.mining_nms_iou, say=say)
     if out is not None:
         _write_outputs(res.detector, meta, Path(out), say)
     return res.detector, meta
+
+
+def calibrate_detector(detector: Any, videos_dir: str | Path, labels_dir: str | Path, videos: Sequence[str], *,
+                       stride: int, scales: Sequence[float] | None = None, nms_iou: float = 0.3,
+                       max_detections: int = 100, say: Callable[[str], None] = lambda m: None) -> dict[str, Any]:
+    """Set ``detector.box_regressor`` to its box map followed by the detector's own correction, fitted on every
+    ``stride``-th labelled frame of ``videos`` (its training videos;
+    :func:`~synthaug.detectors.box_calibration.calibrate_boxes`), detected with ``scales`` and ``nms_iou`` as
+    scored. Returns the correction's metadata."""
+    from synthaug.detectors.box_calibration import calibrate_boxes
+
+    frames = VideoFrames(videos_dir, labels_dir, positive=list(videos), stride=stride)
+    detector.box_regressor = calibrate_boxes(detector, frames, scales=scales, nms_iou=nms_iou,
+                                             max_detections=max_detections)
+    info = dict(detector.box_regressor.meta, stride=int(stride))
+    say(f"box calibration: {info['pairs']} detections of {info['frames']} training frames, median deltas "
+        f"{info['median_deltas_before']} -> {info['median_deltas_after']} ({info['seconds']:.0f} s)")
+    return info
 
 
 def positive_video_subset(videos: Sequence[str], k: int, seed: int) -> list[str]:

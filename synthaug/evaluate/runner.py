@@ -49,10 +49,12 @@ from synthaug.detectors.train_cli import (
     effect_name,
     synthetic_share_arg,
 )
+from synthaug.detectors.box_calibration import CALIBRATION_VERSION
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import (
     BY_COUNT,
     AddedPositives,
+    calibrate_detector,
     check_placement,
     resolve_background_sampling,
     resolve_effects_off,
@@ -73,9 +75,6 @@ __all__ = ["TRAINING_VERSION", "OWN_DISTANCE", "Condition", "DataPaths", "Protoc
 OWN_DISTANCE = {"hog": "hog", "adaboost": "wl_learned", "cnn": "cnn"}
 """Each detector family's own distance of the paper's fits (d_HOG, d_WL^L, d_CNN)."""
 
-BOX_CALIBRATION_VERSION = 1
-"""Part of a box-calibrated cell's key: bump it when :func:`~synthaug.detectors.box_calibration.calibrate_boxes`
-changes."""
 
 TRAINING_VERSION = 6
 """Bumped whenever the training code changes what a cell would hold (2: the CNN trains through
@@ -235,10 +234,6 @@ class ProtocolRunner:
         max_test_videos: use only the first this-many test videos (smoke runs; part of the key).
         eval_split: ``"test"`` (the protocol's test frames) or ``"val"`` (its validation frames:
             choosing a setting on them keeps the test split for the final number; part of the key).
-        box_calibration: frame stride of the box calibration (0: none). With a stride k, each trained detector's
-            boxes are corrected by its own errors on every k-th labelled frame of its training videos
-            (:func:`~synthaug.detectors.box_calibration.calibrate_boxes`) before scoring. Part of the cell's key,
-            not of the trained detector's.
         log: progress printer.
     """
 
@@ -253,14 +248,11 @@ class ProtocolRunner:
     patches: bool = True
     max_test_videos: int | None = None
     eval_split: str = "test"
-    box_calibration: int = 0
     log: Callable[[str], None] = print
 
     def __post_init__(self) -> None:
         if self.eval_split not in ("test", "val"):
             raise ValueError(f"eval_split must be 'test' or 'val', got {self.eval_split!r}")
-        if not isinstance(self.box_calibration, int) or self.box_calibration < 0:
-            raise ValueError(f"box_calibration must be an int >= 0 (a frame stride; 0: none), got {self.box_calibration!r}")
         if self.cache is None:
             self.cache = CellCache(Path(self.paths.work_dir) / "cells")
         self._eval: dict[float, Any] = {}
@@ -307,6 +299,8 @@ class ProtocolRunner:
             path = Path(condition.params.format(seed=seed))
             cond["params_sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()[:16] if path.is_file() else None
         options = self.options.key_fields(condition.kind)
+        if "box_calibration" in options:  # applied when scoring (:meth:`_calibrated`), versioned with its fit
+            options["box_calibration"] = {"stride": options["box_calibration"], "version": CALIBRATION_VERSION}
         if not condition.adds_positives():  # the CNN's fine-tuning on the real positives, AdaBoost's transfer rule
             options.pop("cnn_finetune_epochs", None)  # and its real-positive cascade act on added positives only:
             options.pop("ada_transfer", None)  # without them, the same training and the same cell
@@ -317,8 +311,7 @@ class ProtocolRunner:
                 "patches": self.patches, "max_test_videos": self.max_test_videos,
                 **({} if self.eval_split == "test" else {"eval_split": self.eval_split}),
                 **({} if self.detect_scales is None else {"detect_scales": list(self.detect_scales)}),
-                **({"box_calibration": {"stride": self.box_calibration, "version": BOX_CALIBRATION_VERSION}}
-                   if self.box_calibration else {}),
+
                 "split_file": self.paths.split_file, "training_version": TRAINING_VERSION}
 
     def params_for(self, condition: Condition, seed: int) -> Any:
@@ -354,8 +347,9 @@ class ProtocolRunner:
         frames are the protocol's either way).
         """
         ident = self.identity(condition, seed)
-        for k in ("scored_scales", "patches", "max_test_videos", "eval_split", "detect_scales", "box_calibration"):
+        for k in ("scored_scales", "patches", "max_test_videos", "eval_split", "detect_scales"):
             ident.pop(k, None)
+        ident["options"] = {k: v for k, v in ident["options"].items() if k != "box_calibration"}
         return {**ident, "what": "trained_detector"}
 
     def _trained(self, condition: Condition, seed: int) -> tuple[Any, dict[str, Any], float, bool]:
@@ -398,6 +392,7 @@ class ProtocolRunner:
     def _train(self, condition: Condition, seed: int) -> tuple[Any, dict[str, Any], float]:
         t0 = time.perf_counter()
         options = self.options if self.scales is None else dataclasses.replace(self.options, scales=tuple(self.scales))
+        options = dataclasses.replace(options, box_calibration=0)  # the stored detector is uncorrected: _calibrated
         det, meta = train_from_videos(
             condition.kind, self.class_name, self.paths.videos_dir, self.paths.labels_dir,
             split=self.paths.split_file, seed=seed, seed_count=condition.seed_count, all_frames=condition.all_frames,
@@ -444,9 +439,8 @@ class ProtocolRunner:
         det, meta, t_train, read_back = self._trained(condition, seed)
         out: dict[str, Any] = {"train_s": round(t_train, 1), "train": meta, "scales": {},  # meta: plain JSON already
                                "machine": machine_info(), "detector_read_back": read_back}
-        if self.box_calibration:
-            det = self._calibrated(det, meta)
-            out["box_calibration"] = _json_safe(det.box_regressor.meta)
+        if self.options.box_calibration:
+            out["box_calibration"] = self._calibrated(det, meta)
         for s in self.scales_scored():
             es = self.eval_set(s)
             t1 = time.perf_counter()
@@ -472,21 +466,16 @@ class ProtocolRunner:
         out["total_s"] = round(time.perf_counter() - t0, 1)
         return out
 
-    def _calibrated(self, det: Any, meta: Mapping[str, Any]) -> Any:
-        """``det`` with its boxes corrected by its own errors on every ``box_calibration``-th labelled frame of
-        its training videos (the split its metadata records), detected as the scored frames are."""
-        from synthaug.detectors.box_calibration import calibrate_boxes
-        from synthaug.detectors.frames import VideoFrames
-
-        frames = VideoFrames(self.paths.videos_dir, self.paths.labels_dir, positive=meta["split"]["train"],
-                             stride=self.box_calibration)
-        det.box_regressor = calibrate_boxes(
-            det, frames, scales=self.scales if self.detect_scales is None else self.detect_scales,
-            nms_iou=self.protocol.detection.nms_iou, max_detections=self.protocol.detection.max_detections)
-        info = det.box_regressor.meta
-        self.log(f"    box calibration: {info['pairs']} detections of {info['frames']} training frames, median deltas "
-                 f"{info['median_deltas_before']} -> {info['median_deltas_after']} ({info['seconds']:.0f} s)")
-        return det
+    def _calibrated(self, det: Any, meta: Mapping[str, Any]) -> dict[str, Any]:
+        """Correct ``det``'s boxes by its own errors on every ``options.box_calibration``-th labelled frame of its
+        training videos (the split its metadata records), detected as the scored frames are
+        (:func:`~synthaug.detectors.video_training.calibrate_detector`); the correction's metadata. The stored
+        detector stays uncorrected, so cells that differ only in this option share it."""
+        return _json_safe(calibrate_detector(
+            det, self.paths.videos_dir, self.paths.labels_dir, meta["split"]["train"],
+            stride=self.options.box_calibration, scales=self.scales if self.detect_scales is None else self.detect_scales,
+            nms_iou=self.protocol.detection.nms_iou, max_detections=self.protocol.detection.max_detections,
+            say=lambda m: self.log(f"    {m}")))
 
     def run(self, condition: Condition, seeds: Sequence[int] | None = None, *,
             window_boxes: bool = False) -> dict[float, ProtocolResult]:
@@ -864,7 +853,7 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--eval-split", default="test", choices=["test", "val"],
                    help="score on the protocol's test frames, or its validation frames (to choose a setting)")
     q.add_argument("--threads", type=int, default=1, help="torch threads")
-    q.add_argument("--box-calibration", type=int_at_least(0), default=0, metavar="STRIDE",
+    q.add_argument("--box-calibration", type=int_at_least(0), default=TrainOptions.box_calibration, metavar="STRIDE",
                    help="correct each trained detector's boxes by its own errors on every STRIDE-th labelled frame of "
                         "its training videos before scoring (0: off; part of the cell's key, not the detector's)")
     q.add_argument("--read-only", action="store_true", help="never train: tables from cached cells only")
@@ -961,7 +950,8 @@ def train_options(args: argparse.Namespace) -> TrainOptions:
                                cnn_shift=args.cnn_shift, mining_select=args.mining_select,
                                mining_patience=args.mining_patience, box_model=args.box_model,
                                mining_frame_scale=tuple(args.mining_frame_scale), ada_energy_floor=args.ada_energy_floor,
-                               ada_transfer=args.ada_transfer, ada_cascade=args.ada_cascade)
+                               ada_transfer=args.ada_transfer, ada_cascade=args.ada_cascade,
+                               box_calibration=args.box_calibration)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -990,8 +980,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                             scales=None if args.scales is None else tuple(args.scales),
                             detect_scales=None if args.detect_scales is None else tuple(args.detect_scales),
                             scale_check=not args.no_scale_check, patches=not args.no_patches,
-                            max_test_videos=args.max_test_videos, eval_split=args.eval_split,
-                            box_calibration=args.box_calibration)
+                            max_test_videos=args.max_test_videos, eval_split=args.eval_split)
     t0 = time.perf_counter()
     if args.what == "learning-curve":
         learning_curve(runner, detectors=args.detectors, seed_counts=args.seed_counts, all_frames=args.all_frames,
