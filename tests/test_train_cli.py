@@ -84,6 +84,13 @@ def test_box_calibration_corrects_the_trained_detectors_own_boxes(ws: dict[str, 
     again = calibrate_boxes(det, VideoFrames(ws["videos"], ws["labels"], positive=meta["split"]["train"], stride=1),
                             scales=(1.0, 0.8))
     assert again.meta["coef"] == meta["box_calibration"]["coef"]
+    # too few labelled frames at the stride to fit a correction: the box map is kept, and the metadata says why
+    out = tmp_path / "few.pt"
+    assert _train(ws, out, "--detector", "hog", "--seed-counts", "8", "--seed", "0", "--mining-rounds", "0",
+                  "--box-model", "ridge", "--box-calibration", "12") == 0
+    few = json.loads(out.with_suffix(".json").read_text())["box_calibration"]
+    assert few["stride"] == 12 and "at least 20 needed" in few["skipped"]
+    assert isinstance(load_detector(out).box_regressor, BoxRegressor)
 
 
 def test_box_regressor_is_cached_in_the_work_folder_by_its_inputs(ws: dict[str, Path], tmp_path: Path) -> None:

@@ -550,13 +550,18 @@ def calibrate_detector(detector: Any, videos_dir: str | Path, labels_dir: str | 
     """Set ``detector.box_regressor`` to its box map followed by the detector's own correction, fitted on every
     ``stride``-th labelled frame of ``videos`` (its training videos;
     :func:`~synthaug.detectors.box_calibration.calibrate_boxes`), detected with ``scales`` and ``nms_iou`` as
-    scored. Returns the correction's metadata."""
+    scored. Returns the correction's metadata. With too few matched detections to fit (a few short videos), the
+    detector keeps its box map, and the metadata and the log say so (``skipped``)."""
     from synthaug.detectors.box_calibration import calibrate_boxes
 
     frames = VideoFrames(videos_dir, labels_dir, positive=list(videos), stride=stride)
-    detector.box_regressor = calibrate_boxes(detector, frames, scales=scales, nms_iou=nms_iou,
-                                             max_detections=max_detections)
-    info = dict(detector.box_regressor.meta, stride=int(stride))
+    try:
+        calibrated = calibrate_boxes(detector, frames, scales=scales, nms_iou=nms_iou, max_detections=max_detections)
+    except ValueError as e:
+        say(f"box calibration skipped, the box map kept: {e}")
+        return {"stride": int(stride), "skipped": str(e)}
+    detector.box_regressor = calibrated
+    info = dict(calibrated.meta, stride=int(stride))
     say(f"box calibration: {info['pairs']} detections of {info['frames']} training frames, median deltas "
         f"{info['median_deltas_before']} -> {info['median_deltas_after']} ({info['seconds']:.0f} s)")
     return info
