@@ -16,7 +16,7 @@ from synthaug.evaluate.protocol import Protocol, example_protocol_dict
 
 TRAIN = ["V_DRONE_003", "V_DRONE_010", "V_DRONE_027"]
 VAL, TEST = ["V_DRONE_031"], ["V_DRONE_044", "V_DRONE_052"]
-FAST = TrainOptions(scales=(1.0, 0.8), mining_rounds=1, mining_stride=4, val_stride=4, hog_components=2)
+FAST = TrainOptions(scales=(1.0, 0.8), mining_rounds=1, mining_stride=4, val_stride=4, hog_components=2, box_calibration=0)
 
 
 @pytest.fixture(scope="module")

@@ -226,7 +226,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "mean of both (ensemble)")
     parser.add_argument("--box-calibration", type=int_at_least(0), default=d["box_calibration"], metavar="STRIDE",
                         help="after training, correct the boxes by the detector's own errors on every STRIDE-th labelled "
-                             "frame of its training videos (0: off)")
+                             "frame of its training videos (0: off; default: the family's, 20 for HOG and the CNN, 0 for "
+                             "AdaBoost)")
     parser.add_argument("--cnn-shift", type=int, default=d["cnn_shift"],
                         help="CNN positives moved by random whole-pixel offsets up to this (0: off)")
     parser.add_argument("--extra-negatives", type=int, default=3000, help="object-free crops of the seed frames added to the seed set's negatives")

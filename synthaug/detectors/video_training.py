@@ -535,9 +535,10 @@ def train_from_videos(
                      seconds={"data": round(t_data, 1), "training": round(t_train, 1),
                               "total": round(time.perf_counter() - t_start, 1)},
                      command=command, out=out)
-    if options.box_calibration and sp["train"]:
+    calibration = options.for_family(kind).box_calibration
+    if calibration and sp["train"]:
         meta["box_calibration"] = calibrate_detector(res.detector, vs.videos_dir, vs.labels_dir, sp["train"],
-                                                     stride=options.box_calibration, scales=options.scales,
+                                                     stride=calibration, scales=options.scales,
                                                      nms_iou=options.mining_nms_iou, say=say)
     if out is not None:
         _write_outputs(res.detector, meta, Path(out), say)

@@ -439,8 +439,9 @@ class ProtocolRunner:
         det, meta, t_train, read_back = self._trained(condition, seed)
         out: dict[str, Any] = {"train_s": round(t_train, 1), "train": meta, "scales": {},  # meta: plain JSON already
                                "machine": machine_info(), "detector_read_back": read_back}
-        if self.options.box_calibration:
-            out["box_calibration"] = self._calibrated(det, meta)
+        calibration = self.options.for_family(condition.kind).box_calibration
+        if calibration:
+            out["box_calibration"] = self._calibrated(det, meta, calibration)
         for s in self.scales_scored():
             es = self.eval_set(s)
             t1 = time.perf_counter()
@@ -466,14 +467,14 @@ class ProtocolRunner:
         out["total_s"] = round(time.perf_counter() - t0, 1)
         return out
 
-    def _calibrated(self, det: Any, meta: Mapping[str, Any]) -> dict[str, Any]:
-        """Correct ``det``'s boxes by its own errors on every ``options.box_calibration``-th labelled frame of its
+    def _calibrated(self, det: Any, meta: Mapping[str, Any], stride: int) -> dict[str, Any]:
+        """Correct ``det``'s boxes by its own errors on every ``stride``-th labelled frame of its
         training videos (the split its metadata records), detected as the scored frames are
         (:func:`~synthaug.detectors.video_training.calibrate_detector`); the correction's metadata. The stored
         detector stays uncorrected, so cells that differ only in this option share it."""
         return _json_safe(calibrate_detector(
             det, self.paths.videos_dir, self.paths.labels_dir, meta["split"]["train"],
-            stride=self.options.box_calibration, scales=self.scales if self.detect_scales is None else self.detect_scales,
+            stride=stride, scales=self.scales if self.detect_scales is None else self.detect_scales,
             nms_iou=self.protocol.detection.nms_iou, max_detections=self.protocol.detection.max_detections,
             say=lambda m: self.log(f"    {m}")))
 
@@ -855,7 +856,8 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--threads", type=int, default=1, help="torch threads")
     q.add_argument("--box-calibration", type=int_at_least(0), default=TrainOptions.box_calibration, metavar="STRIDE",
                    help="correct each trained detector's boxes by its own errors on every STRIDE-th labelled frame of "
-                        "its training videos before scoring (0: off; part of the cell's key, not the detector's)")
+                        "its training videos before scoring (0: off; default: the family's, 20 for HOG and the CNN, "
+                        "0 for AdaBoost; part of the cell's key, not the detector's)")
     q.add_argument("--read-only", action="store_true", help="never train: tables from cached cells only")
     q.add_argument("--out", required=True, help="output folder")
 
