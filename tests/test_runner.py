@@ -428,18 +428,19 @@ def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(caps
     def ident(**kw):
         return R.ProtocolRunner(proto, "drone", paths, options=TrainOptions(**kw), log=lambda m: None).identity(c, 1)
 
-    base = ident(box_model="ridge")
+    base = ident(box_model="ridge", box_calibration=0)  # (the box calibration, stop 73: the CNN's default is on)
     later = ("mining_select", "mining_patience", "box_model", "hog_kmeans_restarts", "cnn_finetune_epochs",
-             "mining_frame_scale", "ada_energy_floor", "ada_transfer", "ada_cascade")
+             "mining_frame_scale", "ada_energy_floor", "ada_transfer", "ada_cascade", "box_calibration")
     assert base["options"] == {k: v for k, v in dataclasses.asdict(TrainOptions(ada_rounds=100)).items() if k not in later}
-    assert ident(mining_select="fp", mining_patience=0, box_model="ridge") == base
+    assert ident(mining_select="fp", mining_patience=0, box_model="ridge", box_calibration=0) == base
+    assert ident(box_model="ridge")["options"]["box_calibration"]["stride"] == 20  # scored differently: a new cell
     if R.TRAINING_VERSION == 6:  # the key computed before the three options existed (same protocol, paths, condition)
         assert cell_key(base) == "6475b1e4fead8163625ca26e"
     assert ident()["options"]["box_model"] == "ensemble" and cell_key(ident()) != cell_key(base)
-    base = ident(box_model="ridge")
-    keys = {cell_key(base), cell_key(ident(box_model="ridge", mining_select="ap")),
-            cell_key(ident(box_model="ridge", mining_patience=1)),
-            cell_key(ident(box_model="ridge", mining_select="ap", mining_patience=1)), cell_key(ident())}
+    keys = {cell_key(base), cell_key(ident(box_model="ridge", box_calibration=0, mining_select="ap")),
+            cell_key(ident(box_model="ridge", box_calibration=0, mining_patience=1)),
+            cell_key(ident(box_model="ridge", box_calibration=0, mining_select="ap", mining_patience=1)),
+            cell_key(ident())}
     assert len(keys) == 5
     # the command line reaches them; a negative patience is a usage error naming the option
     args = R.build_parser().parse_args(["synthetic", "--mining-select", "ap", "--mining-patience", "1", "--out", "x"])

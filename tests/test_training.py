@@ -309,7 +309,7 @@ def test_train_options_refuse_a_bad_mining_rule(field: str, value: Any) -> None:
 def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults() -> None:
     from dataclasses import asdict
 
-    old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100)).items()
+    old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100, box_calibration=20)).items()
            if k not in ("mining_select", "mining_patience", "mining_frame_scale", "ada_energy_floor", "ada_transfer",
                         "ada_cascade")}
     not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
@@ -325,7 +325,9 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
     assert (ada["ada_rounds"], ada["mining_select"], ada["mining_patience"]) == (300, "ap", 1)
     assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100, ada_energy_floor=0,
                         ada_cascade="all").key_fields("adaboost") \
-        == {k: v for k, v in not_hog.items() if k != "cnn_finetune_epochs"}
+        == {k: v for k, v in not_hog.items() if k not in ("cnn_finetune_epochs", "box_calibration")}
+    # the box calibration (stop 73) is HOG's and the CNN's default, off for AdaBoost: at 0 the keys of before it
+    assert "box_calibration" not in TrainOptions(box_calibration=0).key_fields("hog") and "box_calibration" not in ada
     # the floor and the real-positive cascade changed AdaBoost's training: its default cells have new keys
     assert (ada["ada_energy_floor"], ada["ada_cascade"]) == (1.0, "real")
 
