@@ -457,8 +457,11 @@ def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> 
         with pytest.raises(ZeroDivisionError):
             train_detector("adaboost", pos, neg, 0, options=opts)
         assert seen[-1] == want
-    assert TrainOptions().for_family("cnn") == TrainOptions(ada_rounds=100, mining_select="fp", mining_patience=0)
-    assert TrainOptions().for_family("adaboost") == TrainOptions(ada_rounds=300, mining_select="ap", mining_patience=1)
+    assert TrainOptions().for_family("cnn") == TrainOptions(ada_rounds=100, mining_select="fp", mining_patience=0,
+                                                            box_calibration=20)
+    assert TrainOptions().for_family("adaboost") == TrainOptions(ada_rounds=300, mining_select="ap", mining_patience=1,
+                                                                 box_calibration=0)
+    assert TrainOptions(box_calibration=5).for_family("adaboost").box_calibration == 5  # a value given is kept
     assert TrainOptions().for_family("some_plugin") == TrainOptions().for_family("hog")
     with pytest.raises(ValueError, match="ada_rounds"):
         TrainOptions(ada_rounds=0)
