@@ -104,7 +104,7 @@ def test_a_detector_whose_boxes_are_too_small_gets_the_labelled_boxes_back(tmp_p
             out.append(MiningFrame((image[0, 0] * 255).round().to(torch.uint8).numpy(), boxes.numpy(), "V_T_001", s))
         return out
 
-    cal = calibrate_boxes(det, frames(range(8)), scales=(1.0,), min_pairs=10)
+    cal = calibrate_boxes(det, frames(range(8)), scales=(1.0,), min_pairs=10, detect=detect_multiscale)
     assert cal.base is None and cal.meta["frames"] == 8 and cal.meta["pairs"] >= 10
     assert abs(float(cal.coef[0, 2]) - np.log(40 / 24)) < 0.1 and abs(float(cal.coef[0, 3]) - np.log(40 / 24)) < 0.1
 
@@ -123,4 +123,4 @@ def test_a_detector_whose_boxes_are_too_small_gets_the_labelled_boxes_back(tmp_p
     back = load_detector(save_detector(det, tmp_path / "d.pt"))
     assert isinstance(back.box_regressor, CalibratedBoxRegressor) and torch.equal(back.box_regressor.coef, cal.coef)
     with pytest.raises(ValueError, match="at least 1000 needed"):
-        calibrate_boxes(det, frames(range(2)), scales=(1.0,), min_pairs=1000)
+        calibrate_boxes(det, frames(range(2)), scales=(1.0,), min_pairs=1000, detect=detect_multiscale)

@@ -822,7 +822,8 @@ def test_box_calibration_scores_the_stored_detector_with_its_own_correction(ws, 
     nms, top = ws["proto"].detection.nms_iou, ws["proto"].detection.max_detections
     det.box_regressor = calibrate_boxes(det, VideoFrames(ws["paths"].videos_dir, ws["paths"].labels_dir,
                                                          positive=TRAIN, stride=1),
-                                        scales=(1.0, 0.8), nms_iou=nms, max_detections=top)
+                                        scales=(1.0, 0.8), nms_iou=nms, max_detections=top,
+                                        detect=__import__('synthaug.detectors.sliding', fromlist=['x']).detect_multiscale)
     assert isinstance(det.box_regressor, CalibratedBoxRegressor)
     assert det.box_regressor.meta["coef"] == cell["box_calibration"]["coef"]
     es = cal.eval_set(1.0)

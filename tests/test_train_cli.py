@@ -82,7 +82,7 @@ def test_box_calibration_corrects_the_trained_detectors_own_boxes(ws: dict[str, 
     # the same correction, fitted again on the uncorrected detector
     det.box_regressor = det.box_regressor.base
     again = calibrate_boxes(det, VideoFrames(ws["videos"], ws["labels"], positive=meta["split"]["train"], stride=1),
-                            scales=(1.0, 0.8))
+                            scales=(1.0, 0.8), detect=__import__('synthaug.detectors.sliding', fromlist=['x']).detect_multiscale)
     assert again.meta["coef"] == meta["box_calibration"]["coef"]
     # too few labelled frames at the stride to fit a correction: the box map is kept, and the metadata says why
     out = tmp_path / "few.pt"

@@ -91,11 +91,11 @@ class CalibratedBoxRegressor(DeltaRegressor):
                 "coef": self.coef.clone(), "meta": dict(self.meta)}
 
     @classmethod
-    def from_state_dict(cls, state: dict[str, Any]) -> "CalibratedBoxRegressor":
-        from synthaug.detectors.box_cnn import regressor_from_state_dict
-
+    def from_state_dict(cls, state: dict[str, Any], rebuild: Any = None) -> "CalibratedBoxRegressor":
+        """Rebuild from :meth:`state_dict`; ``rebuild`` turns the base map's state into a regressor
+        (:func:`~synthaug.detectors.box_cnn.regressor_from_state_dict`, which passes itself)."""
         try:
-            base = None if state["base"] is None else regressor_from_state_dict(state["base"])
+            base = None if state["base"] is None else rebuild(state["base"])
             return cls(base, torch.as_tensor(state["coef"]), dict(state.get("meta") or {}))
         except (KeyError, TypeError) as e:
             raise ValueError(f"calibrated box regressor state is missing or has a malformed field "
@@ -154,7 +154,7 @@ def detection_pairs(detections_xywhs: np.ndarray | Tensor, labelled_xywh: np.nda
 
 def calibrate_boxes(detector: Any, frames: Iterable[Any], *, scales: Sequence[float] | None = None,
                     nms_iou: float = 0.3, max_detections: int = 100, min_iou: float = 0.3,
-                    min_pairs: int = 20) -> CalibratedBoxRegressor:
+                    min_pairs: int = 20, detect: Any = None) -> CalibratedBoxRegressor:
     """Fit a detector's own box correction on labelled frames (its training videos' frames).
 
     Args:
@@ -164,6 +164,7 @@ def calibrate_boxes(detector: Any, frames: Iterable[Any], *, scales: Sequence[fl
         scales, nms_iou, max_detections: the detection's, as scored (:func:`~synthaug.detectors.sliding.detect_multiscale`).
         min_iou: the least IoU of a detection matched to a labelled box (the protocol's lowest, 0.3).
         min_pairs: fewer matched detections than this is an error (nothing to fit reliably).
+        detect: :func:`~synthaug.detectors.sliding.detect_multiscale` (passed in: this module stays below it).
 
     Returns:
         The :class:`CalibratedBoxRegressor` (set it as ``detector.box_regressor`` to use it); its ``meta`` holds
@@ -172,8 +173,8 @@ def calibrate_boxes(detector: Any, frames: Iterable[Any], *, scales: Sequence[fl
     Raises:
         ValueError: fewer than ``min_pairs`` matched detections.
     """
-    from synthaug.detectors.sliding import DEFAULT_SCALES, detect_multiscale
-
+    if detect is None:
+        raise ValueError("calibrate_boxes: pass detect=synthaug.detectors.sliding.detect_multiscale")
     t0 = time.perf_counter()
     base = getattr(detector, "box_regressor", None)
     found: list[Tensor] = []
@@ -184,7 +185,7 @@ def calibrate_boxes(detector: Any, frames: Iterable[Any], *, scales: Sequence[fl
             continue
         image = torch.as_tensor(np.asarray(item.image))
         image = image.float() / 255.0 if image.dtype == torch.uint8 else image.float()
-        det = detect_multiscale(detector, image, scales=list(DEFAULT_SCALES if scales is None else scales),
+        det = detect(detector, image, **({} if scales is None else {"scales": list(scales)}),
                                 nms_iou=nms_iou, max_detections=max_detections)
         p, g = detection_pairs(det.numpy(), item.boxes, min_iou=min_iou)
         found.append(p)

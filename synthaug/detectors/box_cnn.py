@@ -274,5 +274,5 @@ def regressor_from_state_dict(state: dict[str, Any]) -> Any:
     if model == "calibrated":
         from synthaug.detectors.box_calibration import CalibratedBoxRegressor
 
-        return CalibratedBoxRegressor.from_state_dict(state)
+        return CalibratedBoxRegressor.from_state_dict(state, rebuild=regressor_from_state_dict)
     raise ValueError(f"box regressor state has model {model!r}; expected 'ridge', 'cnn', 'ensemble' or 'calibrated'")

@@ -557,7 +557,10 @@ def calibrate_detector(detector: Any, videos_dir: str | Path, labels_dir: str | 
 
     frames = VideoFrames(videos_dir, labels_dir, positive=list(videos), stride=stride)
     try:
-        calibrated = calibrate_boxes(detector, frames, scales=scales, nms_iou=nms_iou, max_detections=max_detections)
+        from synthaug.detectors.sliding import detect_multiscale
+
+        calibrated = calibrate_boxes(detector, frames, scales=scales, nms_iou=nms_iou, max_detections=max_detections,
+                                     detect=detect_multiscale)
     except ValueError as e:
         say(f"box calibration skipped, the box map kept: {e}")
         return {"stride": int(stride), "skipped": str(e)}
