@@ -800,6 +800,7 @@ def test_box_calibration_scores_the_stored_detector_with_its_own_correction(ws, 
     detector with :func:`calibrate_boxes` fitted on its training videos' frames at that stride."""
     from synthaug.detectors.base import load_detector
     from synthaug.detectors.box_calibration import CALIBRATION_VERSION, CalibratedBoxRegressor, calibrate_boxes
+    from synthaug.detectors.sliding import detect_multiscale
     from synthaug.detectors.frames import VideoFrames
     from synthaug.evaluate.matching import match_videos
     from synthaug.evaluate.videos import detect_on_eval_set, refine_detections
@@ -823,7 +824,7 @@ def test_box_calibration_scores_the_stored_detector_with_its_own_correction(ws, 
     det.box_regressor = calibrate_boxes(det, VideoFrames(ws["paths"].videos_dir, ws["paths"].labels_dir,
                                                          positive=TRAIN, stride=1),
                                         scales=(1.0, 0.8), nms_iou=nms, max_detections=top,
-                                        detect=__import__('synthaug.detectors.sliding', fromlist=['x']).detect_multiscale)
+                                        detect=detect_multiscale)
     assert isinstance(det.box_regressor, CalibratedBoxRegressor)
     assert det.box_regressor.meta["coef"] == cell["box_calibration"]["coef"]
     es = cal.eval_set(1.0)

@@ -67,6 +67,7 @@ def test_box_calibration_corrects_the_trained_detectors_own_boxes(ws: dict[str, 
     :func:`calibrate_boxes` fits on its training videos' frames, recorded in the metadata."""
     from synthaug.detectors.base import load_detector
     from synthaug.detectors.box_calibration import CalibratedBoxRegressor, calibrate_boxes
+    from synthaug.detectors.sliding import detect_multiscale
     from synthaug.detectors.boxes import BoxRegressor
     from synthaug.detectors.frames import VideoFrames
 
@@ -82,7 +83,7 @@ def test_box_calibration_corrects_the_trained_detectors_own_boxes(ws: dict[str, 
     # the same correction, fitted again on the uncorrected detector
     det.box_regressor = det.box_regressor.base
     again = calibrate_boxes(det, VideoFrames(ws["videos"], ws["labels"], positive=meta["split"]["train"], stride=1),
-                            scales=(1.0, 0.8), detect=__import__('synthaug.detectors.sliding', fromlist=['x']).detect_multiscale)
+                            scales=(1.0, 0.8), detect=detect_multiscale)
     assert again.meta["coef"] == meta["box_calibration"]["coef"]
     # too few labelled frames at the stride to fit a correction: the box map is kept, and the metadata says why
     out = tmp_path / "few.pt"
