@@ -85,7 +85,7 @@ def test_refine_is_the_base_map_then_the_correction_and_the_state_round_trips(tm
     with pytest.raises(ValueError, match="finite"):
         CalibratedBoxRegressor(None, torch.zeros(3, 4))
     with pytest.raises(ValueError, match="malformed"):
-        CalibratedBoxRegressor.from_state_dict({"model": "calibrated", "base": None})
+        regressor_from_state_dict({"model": "calibrated", "base": None})
 
 
 def test_a_detector_whose_boxes_are_too_small_gets_the_labelled_boxes_back(tmp_path):

@@ -23,7 +23,7 @@ Example:
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -91,7 +91,8 @@ class CalibratedBoxRegressor(DeltaRegressor):
                 "coef": self.coef.clone(), "meta": dict(self.meta)}
 
     @classmethod
-    def from_state_dict(cls, state: dict[str, Any], rebuild: Any = None) -> "CalibratedBoxRegressor":
+    def from_state_dict(cls, state: dict[str, Any], *,
+                        rebuild: Callable[[dict[str, Any]], Any]) -> "CalibratedBoxRegressor":
         """Rebuild from :meth:`state_dict`; ``rebuild`` turns the base map's state into a regressor
         (:func:`~synthaug.detectors.box_cnn.regressor_from_state_dict`, which passes itself)."""
         try:
@@ -154,7 +155,7 @@ def detection_pairs(detections_xywhs: np.ndarray | Tensor, labelled_xywh: np.nda
 
 def calibrate_boxes(detector: Any, frames: Iterable[Any], *, scales: Sequence[float] | None = None,
                     nms_iou: float = 0.3, max_detections: int = 100, min_iou: float = 0.3,
-                    min_pairs: int = 20, detect: Any = None) -> CalibratedBoxRegressor:
+                    min_pairs: int = 20, detect: Callable[..., Tensor]) -> CalibratedBoxRegressor:
     """Fit a detector's own box correction on labelled frames (its training videos' frames).
 
     Args:
@@ -173,8 +174,6 @@ def calibrate_boxes(detector: Any, frames: Iterable[Any], *, scales: Sequence[fl
     Raises:
         ValueError: fewer than ``min_pairs`` matched detections.
     """
-    if detect is None:
-        raise ValueError("calibrate_boxes: pass detect=synthaug.detectors.sliding.detect_multiscale")
     t0 = time.perf_counter()
     base = getattr(detector, "box_regressor", None)
     found: list[Tensor] = []
