@@ -9,7 +9,10 @@ at box sizes 16 / 32 / 64 px (dw, dh: log size; dx, dy: fraction of the box), wi
 fit (95 % percentile interval).
 
     PYTHONPATH=. python results/synthetic/box_calibration/seed_overlap.py --cell KEY [--cell KEY ...] \
-        [--stride 20] [--near 10] --out results/synthetic/box_calibration/seed_overlap.json
+        [--stride 20] [--near 10] [--protocol configs/protocol/halmstad_v2.json] \
+        --out results/synthetic/box_calibration/seed_overlap.json
+
+Detection as the runner's calibration runs it: the default scales, the protocol's ``nms_iou`` and ``max_detections``.
 """
 from __future__ import annotations
 
@@ -54,8 +57,10 @@ def main() -> None:
     ap.add_argument("--near", type=int, default=10, help="frames from a seed frame that count as near it")
     ap.add_argument("--resamples", type=int, default=1000)
     ap.add_argument("--data", default="../shared/data/halmstad")
+    ap.add_argument("--protocol", default="configs/protocol/halmstad_v2.json", help="its detection settings")
     ap.add_argument("--out", required=True)
     args = ap.parse_args()
+    detection = json.loads(Path(args.protocol).read_text())["detection"]
     report = {}
     for key in args.cell:
         cell = json.loads((RUNS / "cells" / "detectors" / f"{key}.json").read_text())
@@ -69,7 +74,7 @@ def main() -> None:
             if item.boxes is None or np.asarray(item.boxes).size == 0:
                 continue
             image = torch.as_tensor(np.asarray(item.image)).float() / 255.0
-            d = detect_multiscale(det, image, nms_iou=0.3, max_detections=100)
+            d = detect_multiscale(det, image, nms_iou=detection["nms_iou"], max_detections=detection["max_detections"])
             p, g = detection_pairs(d.numpy(), item.boxes, min_iou=0.3)
             near = any(abs(item.index - f) <= args.near for f in seeds.get(item.video, ()))
             rows.append((near, p, g))
@@ -97,7 +102,8 @@ def main() -> None:
                                      np.round(np.percentile(b, 97.5, axis=0), 4).tolist()]
         report[key] = {"identity": cell["identity"]["condition"] | {"seed": cell["identity"]["seed"]}, **res}
         print(key, json.dumps(report[key]), flush=True)
-    Path(args.out).write_text(json.dumps({"stride": args.stride, "near": args.near, "cells": report}, indent=1) + "\n")
+    Path(args.out).write_text(json.dumps({"stride": args.stride, "near": args.near, "detection": detection,
+                                          "cells": report}, indent=1) + "\n")
 
 
 if __name__ == "__main__":
