@@ -127,6 +127,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug.data.captures import CAPTURE_SAMPLERS
     from synthaug.data.items import BACKGROUND_SAMPLING
     from synthaug.data.poses import POSE_SAMPLING
+    from synthaug.detectors.box_calibration import CALIBRATION_FORMS
     from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
@@ -228,6 +229,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="after training, correct the boxes by the detector's own errors on every STRIDE-th labelled "
                              "frame of its training videos (0: off; default: the family's, 20 for HOG and the CNN, 0 for "
                              "AdaBoost)")
+    parser.add_argument("--box-calibration-form", choices=list(CALIBRATION_FORMS), default=d["box_calibration_form"],
+                        help="how the calibration's size term is fitted: the labelled size on the detected one "
+                             "(regression) or the detected size on the labelled one, inverted (inverse)")
     parser.add_argument("--cnn-shift", type=int, default=d["cnn_shift"],
                         help="CNN positives moved by random whole-pixel offsets up to this (0: off)")
     parser.add_argument("--extra-negatives", type=int, default=3000, help="object-free crops of the seed frames added to the seed set's negatives")
@@ -279,7 +283,8 @@ def main(args: argparse.Namespace) -> int:
                                mining_stride=args.mining_stride, mining_per_frame=args.mining_per_frame,
                                mining_select=args.mining_select, mining_patience=args.mining_patience,
                                val_stride=args.val_frame_stride, box_model=args.box_model,
-                               box_calibration=args.box_calibration, scales=None if args.scales is None else tuple(args.scales),
+                               box_calibration=args.box_calibration, box_calibration_form=args.box_calibration_form,
+                               scales=None if args.scales is None else tuple(args.scales),
                                mining_frame_scale=tuple(args.mining_frame_scale),
                                ada_energy_floor=args.ada_energy_floor, ada_transfer=args.ada_transfer,
                                ada_cascade=args.ada_cascade)

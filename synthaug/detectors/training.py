@@ -223,6 +223,10 @@ class TrainOptions:
             videos (+0.107 [+0.048, +0.167]): the mapped boxes were ≈ 7 % too small (median log-size delta
             +0.06 to +0.09). None: the family's default (:data:`FAMILY_DEFAULTS`: 20 for HOG and the CNN, 0 for
             AdaBoost, whose calibration has not been measured yet).
+        box_calibration_form: how that correction's size term is fitted
+            (:data:`~synthaug.detectors.box_calibration.CALIBRATION_FORMS`): ``"regression"`` (least squares of the
+            labelled size on the detected one) or ``"inverse"`` (the detected size on the labelled one, inverted;
+            unbiased whatever the training videos' mix of sizes; :func:`~synthaug.detectors.box_calibration.fit_calibration`).
 
     The two ``mining_*`` selection fields, ``box_model`` and ``hog_kmeans_restarts`` were added after cells had
     been cached; at ``"fp"``, 0, ``"ridge"`` and 1 the training is the one before them, and
@@ -261,12 +265,14 @@ class TrainOptions:
     box_model: str = "ensemble"
     mining_frame_scale: tuple[float, float] = (1.0, 1.0)
     box_calibration: int | None = None
+    box_calibration_form: str = "regression"
 
     LATER_FIELDS: ClassVar[tuple[tuple[str, Any], ...]] = (("mining_select", "fp"), ("mining_patience", 0),
                                                            ("box_model", "ridge"), ("hog_kmeans_restarts", 1),
                                                            ("cnn_finetune_epochs", 0), ("mining_frame_scale", (1.0, 1.0)),
                                                            ("ada_energy_floor", 0.0), ("ada_transfer", False),
-                                                           ("ada_cascade", "all"), ("box_calibration", 0))
+                                                           ("ada_cascade", "all"), ("box_calibration", 0),
+                                                           ("box_calibration_form", "regression"))
     """Fields added after cells were cached, with the value at which the training is the one before them
     (``box_model``'s default, ``"ensemble"``, is not that value: cells of the default options have new keys;
     nor are ``hog_kmeans_restarts``' default, 10, and ``cnn_finetune_epochs``' default, 4, which only HOG's and the
@@ -350,6 +356,11 @@ class TrainOptions:
                 raise ValueError(f"{name} must be an integer >= {low}{' or None' if optional else ''}, got {v!r}")
         if self.box_model not in BOX_MODELS:
             raise ValueError(f"box_model must be one of {list(BOX_MODELS)}, got {self.box_model!r}")
+        from synthaug.detectors.box_calibration import CALIBRATION_FORMS
+
+        if self.box_calibration_form not in CALIBRATION_FORMS:
+            raise ValueError(f"box_calibration_form must be one of {list(CALIBRATION_FORMS)}, "
+                             f"got {self.box_calibration_form!r}")
         if self.scales is not None:
             object.__setattr__(self, "scales", tuple(float(s) for s in self.scales))
         from synthaug.detectors.frames import check_scale_range

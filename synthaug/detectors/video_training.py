@@ -539,7 +539,8 @@ def train_from_videos(
     if calibration and sp["train"]:
         meta["box_calibration"] = calibrate_detector(res.detector, vs.videos_dir, vs.labels_dir, sp["train"],
                                                      stride=calibration, scales=options.scales,
-                                                     nms_iou=options.mining_nms_iou, say=say)
+                                                     nms_iou=options.mining_nms_iou,
+                                                     form=options.box_calibration_form, say=say)
     if out is not None:
         _write_outputs(res.detector, meta, Path(out), say)
     return res.detector, meta
@@ -547,11 +548,13 @@ def train_from_videos(
 
 def calibrate_detector(detector: Any, videos_dir: str | Path, labels_dir: str | Path, videos: Sequence[str], *,
                        stride: int, scales: Sequence[float] | None = None, nms_iou: float = 0.3,
-                       max_detections: int = 100, say: Callable[[str], None] = lambda m: None) -> dict[str, Any]:
+                       max_detections: int = 100, form: str = "regression",
+                       say: Callable[[str], None] = lambda m: None) -> dict[str, Any]:
     """Set ``detector.box_regressor`` to its box map followed by the detector's own correction, fitted on every
     ``stride``-th labelled frame of ``videos`` (its training videos;
     :func:`~synthaug.detectors.box_calibration.calibrate_boxes`), detected with ``scales`` and ``nms_iou`` as
-    scored. Returns the correction's metadata. With too few matched detections to fit (a few short videos), the
+    scored, its size term fitted as ``form`` says (:func:`~synthaug.detectors.box_calibration.fit_calibration`).
+    Returns the correction's metadata. With too few matched detections to fit (a few short videos), the
     detector keeps its box map, and the metadata and the log say so (``skipped``)."""
     from synthaug.detectors.box_calibration import calibrate_boxes
 
@@ -560,7 +563,7 @@ def calibrate_detector(detector: Any, videos_dir: str | Path, labels_dir: str | 
         from synthaug.detectors.sliding import detect_multiscale
 
         calibrated = calibrate_boxes(detector, frames, scales=scales, nms_iou=nms_iou, max_detections=max_detections,
-                                     detect=detect_multiscale)
+                                     form=form, detect=detect_multiscale)
     except ValueError as e:
         say(f"box calibration skipped, the box map kept: {e}")
         return {"stride": int(stride), "skipped": str(e)}

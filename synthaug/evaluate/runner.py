@@ -49,7 +49,7 @@ from synthaug.detectors.train_cli import (
     effect_name,
     synthetic_share_arg,
 )
-from synthaug.detectors.box_calibration import CALIBRATION_VERSION
+from synthaug.detectors.box_calibration import CALIBRATION_FORMS, CALIBRATION_VERSION
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import (
     BY_COUNT,
@@ -349,7 +349,8 @@ class ProtocolRunner:
         ident = self.identity(condition, seed)
         for k in ("scored_scales", "patches", "max_test_videos", "eval_split", "detect_scales"):
             ident.pop(k, None)
-        ident["options"] = {k: v for k, v in ident["options"].items() if k != "box_calibration"}
+        ident["options"] = {k: v for k, v in ident["options"].items()
+                            if k not in ("box_calibration", "box_calibration_form")}
         return {**ident, "what": "trained_detector"}
 
     def _trained(self, condition: Condition, seed: int) -> tuple[Any, dict[str, Any], float, bool]:
@@ -476,7 +477,7 @@ class ProtocolRunner:
             det, self.paths.videos_dir, self.paths.labels_dir, meta["split"]["train"],
             stride=stride, scales=self.scales if self.detect_scales is None else self.detect_scales,
             nms_iou=self.protocol.detection.nms_iou, max_detections=self.protocol.detection.max_detections,
-            say=lambda m: self.log(f"    {m}")))
+            form=self.options.box_calibration_form, say=lambda m: self.log(f"    {m}")))
 
     def run(self, condition: Condition, seeds: Sequence[int] | None = None, *,
             window_boxes: bool = False) -> dict[float, ProtocolResult]:
@@ -858,6 +859,10 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
                    help="correct each trained detector's boxes by its own errors on every STRIDE-th labelled frame of "
                         "its training videos before scoring (0: off; default: the family's, 20 for HOG and the CNN, "
                         "0 for AdaBoost; part of the cell's key, not the detector's)")
+    q.add_argument("--box-calibration-form", choices=list(CALIBRATION_FORMS), default=TrainOptions.box_calibration_form,
+                   help="how the calibration's size term is fitted: the labelled size on the detected one (regression) "
+                        "or the detected size on the labelled one, inverted (inverse: unbiased whatever the training "
+                        "videos' sizes); part of the cell's key, not the detector's")
     q.add_argument("--read-only", action="store_true", help="never train: tables from cached cells only")
     q.add_argument("--out", required=True, help="output folder")
 
@@ -953,7 +958,7 @@ def train_options(args: argparse.Namespace) -> TrainOptions:
                                mining_patience=args.mining_patience, box_model=args.box_model,
                                mining_frame_scale=tuple(args.mining_frame_scale), ada_energy_floor=args.ada_energy_floor,
                                ada_transfer=args.ada_transfer, ada_cascade=args.ada_cascade,
-                               box_calibration=args.box_calibration)
+                               box_calibration=args.box_calibration, box_calibration_form=args.box_calibration_form)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
