@@ -52,6 +52,43 @@ def test_one_box_size_fits_the_intercept_alone_and_too_few_pairs_is_an_error():
         fit_calibration(boxes[:1], targets[:1])
 
 
+def test_inverse_form_is_unbiased_for_every_object_size_where_regression_leans_to_the_training_sizes():
+    """A detector whose sizes compress the true range (log side = a + 0.8 log true + noise): fitted on a mix of
+    mostly mid-size objects, the regression form makes small objects' boxes too large on a mix with many small ones;
+    the inverse form's slope is numpy's straight line of the detected size on the true one, inverted, and its boxes
+    are a median of 0 off the true size in every size band."""
+    g = np.random.default_rng(3)
+
+    def pairs(sides: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:
+        x, y = g.uniform(0, 500, sides.size), g.uniform(0, 400, sides.size)
+        det = np.exp(0.4 + 0.8 * np.log(sides) + g.normal(0, 0.12, sides.size))
+        lab = torch.as_tensor(np.stack([x, y, x + sides, y + sides], 1))
+        return torch.as_tensor(np.stack([x, y, x + det, y + det], 1)), lab
+
+    train = np.exp(np.r_[g.normal(np.log(36), 0.2, 900), g.uniform(np.log(12), np.log(90), 100)])
+    det, lab = pairs(train)
+    f_det = np.log(det[:, 2].numpy() - det[:, 0].numpy()) - np.log(32)
+    f_lab = np.log(lab[:, 2].numpy() - lab[:, 0].numpy()) - np.log(32)
+    slope_ref = 1.0 / np.polyfit(f_lab, f_det, 1)[0] - 1.0
+    inv, reg = fit_calibration(det, lab, form="inverse"), fit_calibration(det, lab)
+    np.testing.assert_allclose(inv[1, 2:].numpy(), [slope_ref, slope_ref], rtol=1e-9)
+    torch.testing.assert_close(inv[:, :2], reg[:, :2])  # the positions: least squares either way
+    test = np.exp(g.uniform(np.log(12), np.log(90), 3000))  # many small objects
+    d2, l2 = pairs(test)
+    true_side = l2[:, 2] - l2[:, 0]
+    for coef, small_bias in ((inv, (-0.04, 0.04)), (reg, (0.08, 1.0))):
+        out = decode_deltas(d2.float(), size_features(d2) @ coef).double()
+        err = torch.log((out[:, 2] - out[:, 0]) / true_side)
+        small, large = true_side < 20, true_side > 60
+        assert small_bias[0] < float(err[small].median()) < small_bias[1]
+        if coef is inv:
+            assert abs(float(err[large].median())) < 0.04
+        else:
+            assert float(err[large].median()) < -0.08
+    with pytest.raises(ValueError, match="form"):
+        fit_calibration(det, lab, form="median")
+
+
 def test_pairs_follow_the_greedy_rule_by_score():
     labelled = np.array([[0, 0, 10, 10], [100, 100, 10, 10]], float)
     dets = np.array([

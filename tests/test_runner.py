@@ -430,7 +430,8 @@ def test_later_options_leave_old_cell_keys_unchanged_at_their_former_values(caps
 
     base = ident(box_model="ridge", box_calibration=0)  # (the box calibration, stop 73: the CNN's default is on)
     later = ("mining_select", "mining_patience", "box_model", "hog_kmeans_restarts", "cnn_finetune_epochs",
-             "mining_frame_scale", "ada_energy_floor", "ada_transfer", "ada_cascade", "box_calibration")
+             "mining_frame_scale", "ada_energy_floor", "ada_transfer", "ada_cascade", "box_calibration",
+             "box_calibration_form")
     assert base["options"] == {k: v for k, v in dataclasses.asdict(TrainOptions(ada_rounds=100)).items() if k not in later}
     assert ident(mining_select="fp", mining_patience=0, box_model="ridge", box_calibration=0) == base
     assert ident(box_model="ridge")["options"]["box_calibration"]["stride"] == 20  # scored differently: a new cell
@@ -836,6 +837,15 @@ def test_box_calibration_scores_the_stored_detector_with_its_own_correction(ws, 
         TrainOptions(box_calibration=-1)
     args = R.build_parser().parse_args(["synthetic", "--box-calibration", "15", "--out", "x"])
     assert R.train_options(args).box_calibration == 15
+    inv = make_runner(ws, scale_check=False, patches=False,
+                      options=dataclasses.replace(FAST, box_calibration=1, box_calibration_form="inverse"))
+    assert inv.identity(c, 0)["options"]["box_calibration_form"] == "inverse"  # a cell of its own ...
+    assert "box_calibration_form" not in cal.identity(c, 0)["options"]  # (the default keeps the keys of before)
+    assert inv.training_identity(c, 0) == plain.training_identity(c, 0)  # ... scoring the same stored detector
+    args = R.build_parser().parse_args(["synthetic", "--box-calibration-form", "inverse", "--out", "x"])
+    assert R.train_options(args).box_calibration_form == "inverse"
+    with pytest.raises(ValueError, match="box_calibration_form"):
+        TrainOptions(box_calibration_form="median")
     with pytest.raises(SystemExit):
         R.build_parser().parse_args(["synthetic", "--box-calibration", "-2", "--out", "x"])
     capsys.readouterr()

@@ -84,7 +84,16 @@ def test_box_calibration_corrects_the_trained_detectors_own_boxes(ws: dict[str, 
     det.box_regressor = det.box_regressor.base
     again = calibrate_boxes(det, VideoFrames(ws["videos"], ws["labels"], positive=meta["split"]["train"], stride=1),
                             scales=(1.0, 0.8), detect=detect_multiscale)
-    assert again.meta["coef"] == meta["box_calibration"]["coef"]
+    assert again.meta["coef"] == meta["box_calibration"]["coef"] and meta["box_calibration"]["form"] == "regression"
+    # --box-calibration-form inverse: the size term fitted the other way round, on the same detections
+    out = tmp_path / "inverse.pt"
+    assert _train(ws, out, "--detector", "hog", "--seed-counts", "8", "--seed", "0", "--mining-rounds", "0",
+                  "--box-model", "ridge", "--box-calibration", "1", "--box-calibration-form", "inverse") == 0
+    inv = json.loads(out.with_suffix(".json").read_text())["box_calibration"]
+    assert inv["form"] == "inverse" and inv["pairs"] == meta["box_calibration"]["pairs"]
+    assert inv["coef"] == calibrate_boxes(det, VideoFrames(ws["videos"], ws["labels"], positive=meta["split"]["train"],
+                                                           stride=1),
+                                          scales=(1.0, 0.8), form="inverse", detect=detect_multiscale).meta["coef"]
     # too few labelled frames at the stride to fit a correction: the box map is kept, and the metadata says why
     out = tmp_path / "few.pt"
     assert _train(ws, out, "--detector", "hog", "--seed-counts", "8", "--seed", "0", "--mining-rounds", "0",

@@ -311,7 +311,7 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
 
     old = {k: v for k, v in asdict(TrainOptions(ada_rounds=100, box_calibration=20)).items()
            if k not in ("mining_select", "mining_patience", "mining_frame_scale", "ada_energy_floor", "ada_transfer",
-                        "ada_cascade")}
+                        "ada_cascade", "box_calibration_form")}
     not_hog = {k: v for k, v in old.items() if k != "hog_kmeans_restarts"}  # HOG's k-means is in HOG's keys only
     only_hog = {k: v for k, v in old.items() if k != "cnn_finetune_epochs"}  # the CNN's fine-tuning: the CNN's keys
     # the keys of before the family defaults; no kind keeps every family-only field (AdaBoost's floor and cascade at
