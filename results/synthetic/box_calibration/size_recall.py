@@ -63,11 +63,12 @@ def main(argv: list[str]) -> str:
     kw = dict(resamples=p.bootstrap.resamples, seed=p.bootstrap.seed, ci=p.bootstrap.ci)
     lines = [f"Baseline: {base.condition} ({a.baseline}); condition: {cond.condition} ({a.condition}); split "
              f"{base.split}, seeds {base.seed_ids} / {cond.seed_ids}, {len(base.stems)} videos.", "",
-             "| size | objects | found @0.3: base / cond, Δ [CI] | found @0.5: base / cond, Δ [CI] "
+             "| size | objects (videos) | found @0.3: base / cond, Δ [CI] | found @0.5: base / cond, Δ [CI] "
              "| median log(det/labelled) @0.3: base / cond | miss 0.5 of 0.3 matches: base / cond |",
              "|---|---|---|---|---|---|"]
     for b in p.size_buckets:
-        n = int(sum(b.contains(v.gt_size).sum() for v in base.seeds[base.seed_ids[0]].videos))
+        per_video = [int(b.contains(v.gt_size).sum()) for v in base.seeds[base.seed_ids[0]].videos]
+        n, n_videos = sum(per_video), sum(c > 0 for c in per_video)  # one video: its interval is a point
         if n == 0:
             continue
         cells = []
@@ -80,7 +81,7 @@ def main(argv: list[str]) -> str:
             cells.append(f"{_recall(fb, nb, one):.3f} / {_recall(fc, nc, one):.3f}, "
                          f"{iv.estimate:+.3f} [{iv.low:+.3f}, {iv.high:+.3f}]")
         (sb, mb), (sc, mc) = _boxes(base, b), _boxes(cond, b)
-        lines.append(f"| {b.label} | {n} | {cells[0]} | {cells[1]} | {sb:+.3f} / {sc:+.3f} | {mb:.3f} / {mc:.3f} |")
+        lines.append(f"| {b.label} | {n} ({n_videos}) | {cells[0]} | {cells[1]} | {sb:+.3f} / {sc:+.3f} | {mb:.3f} / {mc:.3f} |")
     text = "\n".join(lines) + "\n"
     if a.out:
         with open(a.out, "w") as f:
