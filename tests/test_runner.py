@@ -678,6 +678,33 @@ def test_background_sampling_is_a_condition_of_its_own_and_keeps_the_former_keys
     assert [a.background_sampling for a in _added_positives(ws, monkeypatch, own, other)] == ["seed", "other"]
 
 
+def test_synthetic_downscaled_copies_join_each_synthetic_condition(ws, monkeypatch, capsys):
+    """``--synthetic-downscaled-copies K``: every synthetic condition also holds K downscaled copies of each real seed
+    (named so, both in its key and in the ``AddedPositives`` its training gets), beside the copies alone
+    (``--downscaled-copies K``) and the synthetic data alone; 0, the default, keeps every former key and name."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json")
+    _, alone = made
+    made.clear()
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           downscaled_copies=[5], synthetic_downscaled=5)
+    real, both, copies = made
+    assert both.name == "hog / 12 seeds + 20x synthetic (f{seed}) + 5x downscaled"
+    assert copies.name == "hog / 12 seeds + 5x downscaled" and copies.synthetic_ratio == 0
+    assert (both.synthetic_ratio, both.downscaled_copies) == (20.0, 5)
+    assert {k: v for k, v in both.identity().items() if k != "downscaled_copies"} == alone.identity()
+    assert "downscaled_copies" not in alone.identity() and "downscaled_copies" not in real.identity()
+    added = _added_positives(ws, monkeypatch, alone, both)
+    assert [(a.synthetic_ratio, a.downscaled_copies) for a in added] == [(20.0, 0), (20.0, 5)]
+    parse = R.build_parser().parse_args
+    assert parse(["synthetic", "--out", "x"]).synthetic_downscaled_copies == 0
+    assert parse(["synthetic", "--synthetic-downscaled-copies", "5", "--out", "x"]).synthetic_downscaled_copies == 5
+    with pytest.raises(SystemExit) as e:
+        parse(["synthetic", "--synthetic-downscaled-copies", "-1", "--out", "x"])
+    assert e.value.code == 2 and "--synthetic-downscaled-copies" in capsys.readouterr().err
+
+
 def test_background_sampling_default_is_the_familys_and_resolved_into_the_key(ws, monkeypatch):
     """None (``--background-sampling default``): each family's own, resolved into the condition as the effects are,
     so a CNN's default cell is the cell of other seeds' backgrounds (its stored cells read back) and HOG's default

@@ -700,6 +700,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          dcnn_refit: Sequence[bool] = (False,),
                          quantize: Sequence[bool] = (False,),
                          background_sampling: Sequence[str | None] = (None,),
+                         synthetic_downscaled: int = 0,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -730,7 +731,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     once per value (True: the synthetic positives rounded to 8-bit levels, :class:`Condition`'s ``quantize``).
     ``background_sampling``: each synthetic ratio once per value (``"seed"``: the paper, each object on its own
     seed's background; ``"other"``: on another seed's; None: the family's, :class:`Condition`'s
-    ``background_sampling``).
+    ``background_sampling``). ``synthetic_downscaled``: every synthetic condition also holds that many downscaled
+    copies of each real seed (the two together, against each alone).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -758,7 +760,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{'' if not off else ', without ' + ' and '.join(off)}"
                             f"{', d_CNN refit every round' if rf else ''}"
                             f"{', 8-bit' if qz else ''}"
-                            f"{'' if bs == 'seed' else ', backgrounds of other seeds'})", kind, seed_count=seed_count,
+                            f"{'' if bs == 'seed' else ', backgrounds of other seeds'})"
+                            f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}", kind,
+                            seed_count=seed_count, downscaled_copies=int(synthetic_downscaled),
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
@@ -899,6 +903,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--copy-paste-ratios", type=float, nargs="*", default=[],
                     help="copy-paste baseline: patches per real seed, the seeds' objects cut out with the fit's "
                          "silhouettes and pasted on other seeds' backgrounds")
+    sy.add_argument("--synthetic-downscaled-copies", type=int_at_least(0), default=0, metavar="K",
+                    help="every synthetic condition also trains on K downscaled copies of each real seed (the two "
+                         "together; compare with --downscaled-copies K, the copies alone)")
     sy.add_argument("--downscaled-copies", type=int_at_least(1), nargs="*", default=[],
                     help="copies of every real seed shown as a smaller, farther object (longest side 16-24 px), cut "
                          "the way the pyramid sees it; one condition per count")
@@ -1000,6 +1007,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              perturb_copies=args.perturb_copies, mesh=args.mesh, pose_sampling=args.pose_sampling,
                              copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds,
                              synthetic_share=args.synthetic_share, downscaled_copies=args.downscaled_copies,
+                             synthetic_downscaled=args.synthetic_downscaled_copies,
                              faded_copies=args.faded_copies,
                              faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                              object_box=tuple(None if b == "none" else b for b in args.object_box),
