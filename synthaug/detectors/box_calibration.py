@@ -46,10 +46,10 @@ the detected one, least squares: it pulls every box towards the typical size of 
 ``"inverse"`` (the detected size given the labelled one, inverted: the classical calibration estimator, unbiased for
 an object of any size when the detector errs on its training videos as it errs elsewhere). Measured on the halmstad
 drone test videos (the CNN, 100 seeds, 3 training seeds, the same stored detectors; stop 76,
-``results/synthetic/box_calibration/README.md``): inverse − regression −0.137 [−0.193, −0.085] AP@0.5 for real only
-and −0.133 [−0.174, −0.093] with synthetic positives, 0 of 14 videos up. The detector's boxes are smaller on the test
-videos than on its training videos, so the inverse fit's boxes came out a median 8 % too small there, where the
-regression's lean towards mid sizes happens to undo that."""
+``results/synthetic/box_calibration/README.md``): inverse − regression −0.137 [−0.193, −0.085] AP@0.5 for real
+only and −0.133 [−0.174, −0.093] with synthetic positives, 0 of 14 videos up. The detector's boxes are smaller on the
+test videos than on its training videos, so the inverse fit's boxes came out a median 8 % too small there, where
+the regression's lean towards mid sizes happens to undo that."""
 
 REFERENCE_SIDE = 32.0
 """The box side (pixels) where the correction's size feature is 0: ``log(side / REFERENCE_SIDE)``."""

@@ -231,8 +231,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "AdaBoost)")
     parser.add_argument("--box-calibration-form", choices=list(CALIBRATION_FORMS), default=d["box_calibration_form"],
                         help="how the calibration's size term is fitted: the labelled size on the detected one "
-                             "(regression) or the detected size on the labelled one, inverted (inverse: −0.137 AP@0.5 on the "
-                             "drone test videos, stop 76)")
+                             "(regression) or the detected size on the labelled one, inverted (inverse: −0.137 "
+                             "AP@0.5 on the drone test videos, stop 76)")
     parser.add_argument("--cnn-shift", type=int, default=d["cnn_shift"],
                         help="CNN positives moved by random whole-pixel offsets up to this (0: off)")
     parser.add_argument("--extra-negatives", type=int, default=3000, help="object-free crops of the seed frames added to the seed set's negatives")

@@ -226,7 +226,8 @@ class TrainOptions:
         box_calibration_form: how that correction's size term is fitted
             (:data:`~synthaug.detectors.box_calibration.CALIBRATION_FORMS`): ``"regression"`` (least squares of the
             labelled size on the detected one) or ``"inverse"`` (the detected size on the labelled one, inverted;
-            unbiased whatever the training videos' mix of sizes; :func:`~synthaug.detectors.box_calibration.fit_calibration`).
+            unbiased whatever the training videos' mix of sizes;
+            :func:`~synthaug.detectors.box_calibration.fit_calibration`).
             Inverse − regression on the halmstad drone test videos (the CNN, 100 seeds, stop 76): −0.137 AP@0.5.
 
     The two ``mining_*`` selection fields, ``box_model`` and ``hog_kmeans_restarts`` were added after cells had
@@ -305,7 +306,8 @@ class TrainOptions:
             ...                                                                    box_calibration=20)).items()
             ...                                      if k not in ("mining_select", "mining_patience", "cnn_finetune_epochs",
             ...                                                   "mining_frame_scale", "ada_energy_floor",
-            ...                                                   "ada_transfer", "ada_cascade", "box_calibration_form")}
+            ...                                                   "ada_transfer", "ada_cascade",
+            ...                                                   "box_calibration_form")}
             True
             >>> TrainOptions().key_fields("cnn")["cnn_finetune_epochs"]  # the CNN's fine-tuning is in its keys only
             4

@@ -866,7 +866,8 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--box-calibration-form", choices=list(CALIBRATION_FORMS), default=TrainOptions.box_calibration_form,
                    help="how the calibration's size term is fitted: the labelled size on the detected one (regression) "
                         "or the detected size on the labelled one, inverted (inverse: unbiased whatever the training "
-                        "videos' sizes; −0.137 AP@0.5 on the drone test videos, stop 76); part of the cell's key, not the detector's")
+                        "videos' sizes; −0.137 AP@0.5 on the drone test videos, stop 76); part of the cell's key, "
+                        "not the detector's")
     q.add_argument("--read-only", action="store_true", help="never train: tables from cached cells only")
     q.add_argument("--out", required=True, help="output folder")
 
