@@ -88,6 +88,12 @@ def test_inverse_form_is_unbiased_for_every_object_size_where_regression_leans_t
     with pytest.raises(ValueError, match="form"):
         fit_calibration(det, lab, form="median")
 
+    def never(*a, **k):
+        raise AssertionError("a detection ran before the form was checked")
+
+    with pytest.raises(ValueError, match="form must be one of"):  # refused before any frame is detected
+        calibrate_boxes(object(), [object()], form="median", detect=never)
+
 
 def test_pairs_follow_the_greedy_rule_by_score():
     labelled = np.array([[0, 0, 10, 10], [100, 100, 10, 10]], float)

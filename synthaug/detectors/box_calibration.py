@@ -34,8 +34,8 @@ from torchvision.ops import box_convert, box_iou
 
 from synthaug.detectors.boxes import DeltaRegressor, decode_deltas, encode_deltas
 
-__all__ = ["CALIBRATION_FORMS", "CALIBRATION_VERSION", "CalibratedBoxRegressor", "calibrate_boxes", "detection_pairs",
-           "fit_calibration", "size_features"]
+__all__ = ["CALIBRATION_FORMS", "CALIBRATION_VERSION", "CalibratedBoxRegressor", "calibrate_boxes", "check_form",
+           "detection_pairs", "fit_calibration", "size_features"]
 
 CALIBRATION_VERSION = 1
 """Part of the key of a cached cell scored with a calibrated detector: bump it when :func:`calibrate_boxes` changes."""
@@ -50,6 +50,14 @@ drone test videos (the CNN, 100 seeds, 3 training seeds, the same stored detecto
 only and −0.133 [−0.174, −0.093] with synthetic positives, 0 of 14 videos up. The detector's boxes are smaller on the
 test videos than on its training videos, so the inverse fit's boxes came out a median 8 % too small there, where
 the regression's lean towards mid sizes happens to undo that."""
+
+
+def check_form(form: str, name: str = "form") -> str:
+    """``form`` if it is one of :data:`CALIBRATION_FORMS`; else a ValueError naming ``name``."""
+    if form not in CALIBRATION_FORMS:
+        raise ValueError(f"{name} must be one of {list(CALIBRATION_FORMS)}, got {form!r}")
+    return form
+
 
 REFERENCE_SIDE = 32.0
 """The box side (pixels) where the correction's size feature is 0: ``log(side / REFERENCE_SIDE)``."""
@@ -141,8 +149,7 @@ def fit_calibration(boxes_xyxy: Tensor, targets_xyxy: Tensor, *, form: str = "re
         >>> [round(v, 3) for v in fit_calibration(b, t, form="inverse")[:, 2].tolist()]  # f(det) = a + 0.88 f(lab)
         [0.154, 0.132]
     """
-    if form not in CALIBRATION_FORMS:
-        raise ValueError(f"form must be one of {list(CALIBRATION_FORMS)}, got {form!r}")
+    check_form(form)
     if boxes_xyxy.shape[0] < 2:
         raise ValueError(f"fit_calibration needs at least 2 matched boxes, got {boxes_xyxy.shape[0]}")
     x = size_features(boxes_xyxy)
@@ -217,8 +224,7 @@ def calibrate_boxes(detector: Any, frames: Iterable[Any], *, scales: Sequence[fl
     Raises:
         ValueError: fewer than ``min_pairs`` matched detections, or an unknown ``form``.
     """
-    if form not in CALIBRATION_FORMS:
-        raise ValueError(f"form must be one of {list(CALIBRATION_FORMS)}, got {form!r}")
+    check_form(form)
     t0 = time.perf_counter()
     base = getattr(detector, "box_regressor", None)
     found: list[Tensor] = []

@@ -359,11 +359,9 @@ class TrainOptions:
                 raise ValueError(f"{name} must be an integer >= {low}{' or None' if optional else ''}, got {v!r}")
         if self.box_model not in BOX_MODELS:
             raise ValueError(f"box_model must be one of {list(BOX_MODELS)}, got {self.box_model!r}")
-        from synthaug.detectors.box_calibration import CALIBRATION_FORMS
+        from synthaug.detectors.box_calibration import check_form
 
-        if self.box_calibration_form not in CALIBRATION_FORMS:
-            raise ValueError(f"box_calibration_form must be one of {list(CALIBRATION_FORMS)}, "
-                             f"got {self.box_calibration_form!r}")
+        check_form(self.box_calibration_form, "box_calibration_form")
         if self.scales is not None:
             object.__setattr__(self, "scales", tuple(float(s) for s in self.scales))
         from synthaug.detectors.frames import check_scale_range

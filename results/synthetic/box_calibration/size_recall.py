@@ -81,7 +81,8 @@ def main(argv: list[str]) -> str:
             cells.append(f"{_recall(fb, nb, one):.3f} / {_recall(fc, nc, one):.3f}, "
                          f"{iv.estimate:+.3f} [{iv.low:+.3f}, {iv.high:+.3f}]")
         (sb, mb), (sc, mc) = _boxes(base, b), _boxes(cond, b)
-        lines.append(f"| {b.label} | {n} ({n_videos}) | {cells[0]} | {cells[1]} | {sb:+.3f} / {sc:+.3f} | {mb:.3f} / {mc:.3f} |")
+        lines.append(f"| {b.label} | {n} ({n_videos}) | {cells[0]} | {cells[1]} | {sb:+.3f} / {sc:+.3f} "
+                     f"| {mb:.3f} / {mc:.3f} |")
     text = "\n".join(lines) + "\n"
     if a.out:
         with open(a.out, "w") as f:
