@@ -7,6 +7,7 @@ protocol's resamples and seed, so the same video resamples as its AP differences
 labelled) longest side of the IoU 0.3 matches, and the share of those matches that miss IoU 0.5.
 
 usage: PYTHONPATH=. python results/synthetic/box_calibration/size_recall.py BASELINE.json CONDITION.json [--out F.md]
+A side may name several files of one condition (other training seeds), comma-separated: A.json,B.json.
 """
 import argparse
 import sys
@@ -52,11 +53,12 @@ def _boxes(result: ProtocolResult, bucket) -> tuple[float, float]:
 
 def main(argv: list[str]) -> str:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("baseline")
-    ap.add_argument("condition")
+    ap.add_argument("baseline", help="stored result(s) of the baseline; several files of one condition: A.json,B.json")
+    ap.add_argument("condition", help="stored result(s) of the condition, as the baseline")
     ap.add_argument("--out", default=None)
     a = ap.parse_args(argv)
-    base, cond = ProtocolResult.load(a.baseline), ProtocolResult.load(a.condition)
+    base, cond = (ProtocolResult.combine([ProtocolResult.load(f) for f in arg.split(",")])
+                  for arg in (a.baseline, a.condition))
     p = base.protocol
     if cond.protocol.fingerprint() != p.fingerprint() or cond.stems != base.stems:
         raise SystemExit(f"{a.condition}: another protocol or other videos than {a.baseline}; the pairs would not hold")
