@@ -301,6 +301,10 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
 
     assert cell["machine"]["cpu_capability"] == torch.backends.cpu.get_cpu_capability()
     assert cell["machine"]["torch"] == torch.__version__ and cell["machine"]["torch_threads"] >= 1
+    # the machine that trained the stored detector, and both in the results' per-seed metadata (its files)
+    assert cell["train"]["machine"] == R.machine_info()
+    seed_meta = R.ProtocolResult.from_json(cell["scales"]["1.0"]).seeds[0].meta
+    assert seed_meta["trained_on"] == cell["train"]["machine"] and seed_meta["scored_on"] == cell["machine"]
     cond_cp = R.Condition(cp, "hog", seed_count=6, fit_distance="eucl", fit_options=tuple(sorted(fit_opts.items())),
                           copy_paste_ratio=2.0)
     cell = cache.get_or_compute(runner.identity(cond_cp, 1), lambda: pytest.fail("copy-paste cell not cached"))

@@ -382,7 +382,9 @@ class ProtocolRunner:
             det, meta, seconds = self._train(condition, seed)
             save_detector(det, ckpt)
             trained.append(det)
-            return {"meta": _json_safe(meta), "train_s": round(seconds, 1), "file": ckpt.name}
+            # where it was trained: a detector read back later is scored elsewhere (machine_info)
+            return {"meta": _json_safe({**meta, "machine": machine_info()}), "train_s": round(seconds, 1),
+                    "file": ckpt.name}
 
         doc = store.get_or_compute(ident, train)
         if trained:
@@ -438,8 +440,9 @@ class ProtocolRunner:
     def _train_and_score(self, condition: Condition, seed: int) -> dict[str, Any]:
         t0 = time.perf_counter()
         det, meta, t_train, read_back = self._trained(condition, seed)
+        machine = machine_info()
         out: dict[str, Any] = {"train_s": round(t_train, 1), "train": meta, "scales": {},  # meta: plain JSON already
-                               "machine": machine_info(), "detector_read_back": read_back}
+                               "machine": machine, "detector_read_back": read_back}
         calibration = self.options.for_family(condition.kind).box_calibration
         if calibration:
             out["box_calibration"] = self._calibrated(det, meta, calibration)
@@ -457,7 +460,10 @@ class ProtocolRunner:
             res.add_seed(seed, videos=match_videos(es.stems, dets, es.boxes, self.protocol), patches=pats,
                          meta={"detect_s": round(t_det + t_ref, 1), "fps": round(es.n_frames / max(t_det + t_ref, 1e-9), 2),
                                "box_regression_s": round(t_ref, 1),
-                               "positives": (meta.get("positives") or {}).get("count")})
+                               "positives": (meta.get("positives") or {}).get("count"),
+                               # carried into the results' files, so a cell that does not reproduce can be traced to
+                               # its machines (None: a detector stored before they were recorded)
+                               "trained_on": meta.get("machine"), "scored_on": machine})
             out["scales"][repr(float(s))] = res.to_json()
             if getattr(det, "box_regressor", None) is not None:  # item 5: AP before the box mapping, same detections
                 unref = ProtocolResult(f"{condition.name}, window boxes", self.protocol, split=self.eval_split, scale=s)
@@ -798,7 +804,10 @@ def machine_info() -> dict[str, Any]:
     A float32 CNN trained twice in one process set-up gives the same bytes, but another instruction set (AVX2 vs
     AVX-512 kernels) or thread count changes the last bits, which hard-negative mining then amplifies (issue 15:
     the CNN's cells moved by up to 0.03 AP between sessions on fresh machines). Recorded with each cell so that a
-    difference can be traced; not part of the key.
+    difference can be traced; not part of the key. The stored detector keeps the machine that trained it
+    (``meta["machine"]``), and each result's per-seed metadata both (``trained_on``, ``scored_on``), so the results'
+    files carry them (stop 78: HOG's 12-seed cells of stops 62/68 did not reproduce on stop 73's machine with the
+    same code, the same ingest bytes and a bit-identical box map, and nothing recorded where they were made).
     """
     import platform
 
