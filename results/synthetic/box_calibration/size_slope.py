@@ -1,27 +1,54 @@
 """Median log(detected / labelled size) of the IoU-0.3 matches per size bucket, read by the labelled and by the
 detected size, and the two regression slopes (log detected on log labelled and back), of stored runner results.
 
-Usage: PYTHONPATH=. python results/synthetic/box_calibration/size_slope.py RESULT.json [...]  (stop 78)
+Read by the labelled size, any detector whose box size is a noisy reading of the object's shows small objects'
+boxes too large and large objects' too small (regression to the mean); read by the detected size, only what a
+correction could still take out remains. Stop 78.
+
+Usage: PYTHONPATH=. python results/synthetic/box_calibration/size_slope.py RESULT.json [...]
 """
-import numpy as np, sys
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
 from synthaug.evaluate.results import ProtocolResult
-def rows(path):
-    r = ProtocolResult.load(path); out=[]
-    for s in r.seeds.values():
-        for v in s.videos:
-            k = 1  # IoU 0.3 row (thresholds [0.5, 0.3])
+
+BUCKETS = ((0, 24), (24, 48), (48, 96))
+
+
+def matched_sizes(path: str, iou: float = 0.3) -> np.ndarray:
+    """(N, 2): the longest side of each true positive at ``iou`` and of the labelled box it matched, all seeds."""
+    res = ProtocolResult.load(path)
+    k = list(res.protocol.iou_thresholds).index(iou)
+    rows = []
+    for seed in res.seeds.values():
+        for v in seed.videos:
             m = v.tp[k] & np.isfinite(v.match_size[k])
-            out.append(np.stack([v.det_size[m], v.match_size[k][m]], 1))
-    return np.concatenate(out)
-for path in sys.argv[1:]:
-    a = rows(path); d, t = np.log(a[:,0]), np.log(a[:,1]); e = d - t
-    print(path.split('/')[-3:], len(a))
-    for name, key in (("by labelled size", a[:,1]), ("by detected size", a[:,0])):
-        cells = []
-        for lo, hi in ((0,24),(24,48),(48,96)):
-            sel = (key>=lo)&(key<hi)
-            cells.append(f"{lo}-{hi}: n {sel.sum()}, median {np.median(e[sel]):+.3f}" if sel.sum() else f"{lo}-{hi}: -")
-        print("  ", name, " | ".join(cells))
-    # slope of log det on log true
-    A = np.stack([t, np.ones_like(t)],1); print("   slope log det ~ log true", np.linalg.lstsq(A,d,rcond=None)[0].round(3),
-          " slope log true ~ log det", np.linalg.lstsq(np.stack([d,np.ones_like(d)],1),t,rcond=None)[0].round(3))
+            rows.append(np.stack([v.det_size[m], v.match_size[k][m]], 1))
+    return np.concatenate(rows)
+
+
+def main(paths: list[str]) -> None:
+    for path in paths:
+        a = matched_sizes(path)
+        det, lab = np.log(a[:, 0]), np.log(a[:, 1])
+        err = det - lab
+        print(path, f"{len(a)} matches at IoU 0.3")
+        for name, key in (("by labelled size", a[:, 1]), ("by detected size", a[:, 0])):
+            cells = []
+            for lo, hi in BUCKETS:
+                sel = (key >= lo) & (key < hi)
+                cells.append(f"{lo}-{hi}: n {sel.sum()}, median {np.median(err[sel]):+.3f}" if sel.any()
+                             else f"{lo}-{hi}: -")
+            print("  ", name, " | ".join(cells))
+        ones = np.ones_like(det)
+        fwd = np.linalg.lstsq(np.stack([lab, ones], 1), det, rcond=None)[0]
+        back = np.linalg.lstsq(np.stack([det, ones], 1), lab, rcond=None)[0]
+        print(f"   slope of log detected on log labelled {fwd[0]:.3f}; of log labelled on log detected {back[0]:.3f}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
