@@ -6,6 +6,8 @@ boxes too large and large objects' too small (regression to the mean); read by t
 correction could still take out remains. Stop 78.
 
 Usage: PYTHONPATH=. python results/synthetic/box_calibration/size_slope.py RESULT.json [...]
+A result may name several files of one condition (other training seeds), comma-separated: A.json,B.json.
+The buckets are the protocol's (``size_buckets_px``), as in ``size_recall.py``.
 """
 
 from __future__ import annotations
@@ -16,12 +18,9 @@ import numpy as np
 
 from synthaug.evaluate.results import ProtocolResult
 
-BUCKETS = ((0, 24), (24, 48), (48, 96))
 
-
-def matched_sizes(path: str, iou: float = 0.3) -> np.ndarray:
+def matched_sizes(res: ProtocolResult, iou: float = 0.3) -> np.ndarray:
     """(N, 2): the longest side of each true positive at ``iou`` and of the labelled box it matched, all seeds."""
-    res = ProtocolResult.load(path)
     k = list(res.protocol.iou_thresholds).index(iou)
     rows = []
     for seed in res.seeds.values():
@@ -33,16 +32,17 @@ def matched_sizes(path: str, iou: float = 0.3) -> np.ndarray:
 
 def main(paths: list[str]) -> None:
     for path in paths:
-        a = matched_sizes(path)
+        res = ProtocolResult.combine([ProtocolResult.load(f) for f in path.split(",")])
+        a = matched_sizes(res)
         det, lab = np.log(a[:, 0]), np.log(a[:, 1])
         err = det - lab
         print(path, f"{len(a)} matches at IoU 0.3")
         for name, key in (("by labelled size", a[:, 1]), ("by detected size", a[:, 0])):
             cells = []
-            for lo, hi in BUCKETS:
-                sel = (key >= lo) & (key < hi)
-                cells.append(f"{lo}-{hi}: n {sel.sum()}, median {np.median(err[sel]):+.3f}" if sel.any()
-                             else f"{lo}-{hi}: -")
+            for b in res.protocol.size_buckets:
+                sel = b.contains(key)
+                cells.append(f"{b.label}: n {sel.sum()}, median {np.median(err[sel]):+.3f}" if sel.any()
+                             else f"{b.label}: -")
             print("  ", name, " | ".join(cells))
         ones = np.ones_like(det)
         fwd = np.linalg.lstsq(np.stack([lab, ones], 1), det, rcond=None)[0]
