@@ -703,3 +703,61 @@ def test_radial_flow_is_not_fooled_by_a_vignetting_in_both_looks():
     for k1 in (0.0, -0.15):
         out = radial_flow(vig * _lens_look(moved, k1), vig * _lens_look(scene, k1))
         assert out["k"] == pytest.approx(k1, abs=0.006), k1
+
+
+def test_a_lens_gain_under_the_utility_rule_is_named_when_the_frames_edges_steepen_toward_the_corners():
+    # lens k1 +0.1, power table case 4 (its scene did not move: no reading of the lens from the motion): the lens's
+    # pixel-distance gain passes its test and its calibrated floor but is 1.7 % of the distance, under the 2 % an
+    # extension is asked to give; the frames' edges steepen toward the corners beyond every clean frame's (0.057
+    # against 0.046). That reading names the lens; it rescues nothing that fails the test, the floor or the other
+    # space, and it is not used when the lens's own frame test has a reading (which then decides)
+    from scipy import stats
+
+    from synthaug.diagnose import screening
+    from synthaug.diagnose.calibration import HAND_MIN_GAIN
+    from synthaug.diagnose.frame_pattern import EDGE_RADIAL_FLOOR
+    from synthaug.diagnose.report import write_markdown
+
+    steep = {"sharpening": {"ratio": 0.650, "radial": EDGE_RADIAL_FLOOR + 0.011}, "lens_distortion": None}
+    cb = screening.frame_corroboration("lens_distortion", steep)
+    assert cb == {"statistic": "edge_radial", "value": EDGE_RADIAL_FLOOR + 0.011, "floor": EDGE_RADIAL_FLOOR}
+    for ev in ({**steep, "sharpening": {"radial": EDGE_RADIAL_FLOOR - 0.001}},  # within the clean range
+               {**steep, "sharpening": {"radial": -0.2}},  # one-sided, as calibrated
+               {**steep, "sharpening": {"radial": float("nan")}}, {**steep, "sharpening": {}},
+               {**steep, "sharpening": None}, None,
+               {**steep, "lens_distortion": {"k": 0.001, "p": 0.5, "scenes": 40, "frames": 60}}):  # motion read
+        assert screening.frame_corroboration("lens_distortion", ev) is None, ev
+    assert all(screening.frame_corroboration(e, steep) is None for e in screening.CANDIDATE_GRIDS
+               if e != "lens_distortion")
+
+    case4 = {"n_params": 1, "pixel": {"p": 2.6e-5, "gain": 0.01233, "raw_gain_all": 0.01733},
+             "feature": {"p": 0.44, "gain": 0.0004, "raw_gain_all": 0.0054}}
+    opts = {"n_tests": 41, "alpha": 0.01, "penalty": 0.005, "floor": 0.01081}
+    plain = screening.distance_channel(case4, "pixel", "feature", **opts)
+    assert not plain["significant"] and plain["corroborated_by"] is None
+    assert plain["p_adjusted"] == pytest.approx(41 * 2.6e-5) and plain["z"] == pytest.approx(stats.norm.isf(2.6e-5))
+    named = screening.distance_channel(case4, "pixel", "feature", corroboration=cb, **opts)
+    assert named["significant"] and named["corroborated_by"] == cb
+    assert {k: v for k, v in named.items() if k not in ("significant", "corroborated_by")} == \
+           {k: v for k, v in plain.items() if k not in ("significant", "corroborated_by")}
+    assert not screening.distance_channel(case4, "feature", "pixel", corroboration=cb, **opts)["significant"]
+    for bad in ({"pixel": {**case4["pixel"], "p": 1e-3}},  # p_adj 0.041: the test fails
+                {"pixel": {**case4["pixel"], "gain": 0.010}},  # under the calibrated floor
+                {"feature": {**case4["feature"], "gain": -0.02}}):  # the detector's space gets worse
+        ch = screening.distance_channel({**case4, **bad}, "pixel", "feature", corroboration=cb, **opts)
+        assert not ch["significant"] and ch["corroborated_by"] is None, bad
+    # a gain that is worth having on its own needs no corroboration, and none is recorded
+    big = {**case4, "pixel": {**case4["pixel"], "raw_gain_all": HAND_MIN_GAIN}}
+    ch = screening.distance_channel(big, "pixel", "feature", corroboration=cb, **opts)
+    assert ch["significant"] and ch["corroborated_by"] is None
+
+    base = {"inputs": {"seeds": "s", "n_seeds": 60, "mesh": "m", "fit": "f", "distance": "hog", "k_folds": 5,
+                       "alpha": 0.01}, "findings": [], "residuals": {}, "parameter_dependence": [],
+            "realism": {"accuracy_base": 0.5}, "seconds": 1.0}
+    row = {"effect": "lens_distortion", "significant": True, "channel": "distance:pixel", "score": 4.0,
+           "gain_feature": 0.0004, "gain_pixel": 0.0123}
+    md = write_markdown({**base, "screened": [{**row, "channels": [named]}]})
+    assert (f"The lens (`lens_distortion`) is named from its distance:pixel gain of 1.7 %, under the "
+            f"{100 * HAND_MIN_GAIN:.0f} % an extension is otherwise asked to give, because the whole frames show it: "
+            f"their edges steepen toward the corners (edge sharpness trend {EDGE_RADIAL_FLOOR + 0.011:+.3f}") in md
+    assert "The lens (" not in write_markdown({**base, "screened": [{**row, "channels": [ch]}]})

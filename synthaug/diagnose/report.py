@@ -663,6 +663,17 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                       f"corners (edge sharpness trend {ch['radial']:+.3f} per unit r² over scenes, clean frames ≤ "
                       f"{ch['radial_floor']:.3f}), a change of the image's scale with the distance from the centre "
                       "as a lens gives, where a sharpening steepens every edge alike."]
+        ch = next((c for c in r.get("channels") or [] if c.get("corroborated_by")), None)
+        if ch is not None:
+            from synthaug.diagnose.calibration import HAND_MIN_GAIN
+
+            cb = ch["corroborated_by"]
+            lines += ["", f"The lens (`{r['effect']}`) is named from its {ch['channel']} gain of "
+                      f"{100 * ch['raw_gain_all']:.1f} %, under the {100 * HAND_MIN_GAIN:.0f} % an extension is "
+                      "otherwise asked to give, "
+                      f"because the whole frames show it: their edges steepen toward the corners (edge sharpness "
+                      f"trend {cb['value']:+.3f} per unit r² over scenes, clean frames ≤ {cb['floor']:.3f}), and the "
+                      "lens changes little of an object near the centre of the frame."]
     col = report.get("colour") or {}
     if col and not col.get("screened"):
         skipped = [r["effect"] for r in report["screened"] if r.get("colour_skipped")]

@@ -17,7 +17,8 @@ one-sided t-test over seeds, Bonferroni-corrected over candidates and the
 two distance spaces (the detector's, pixels), decides significance; a
 finding must also exceed its floor measured on clean nuisance-varied data
 (:mod:`synthaug.diagnose.calibration`), reach ``min_gain`` (2 %: worth
-having) and must not make the other space worse on held-out seeds. Both the detector's distance (e.g. HOG) and the
+having; a lens's, less where the whole frames show it, :func:`frame_corroboration`)
+and must not make the other space worse on held-out seeds. Both the detector's distance (e.g. HOG) and the
 pixel distance are screened: HOG is nearly blind to intensity effects, pixels
 to some shape effects. Every model, base and extended, includes the seed
 patches' known crop-resampling blur (:func:`~synthaug.data.seedset.crop_resampling_sigma`).
@@ -91,7 +92,7 @@ from synthaug.params import EFFECT_PARAM_SPECS
 
 __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "screen_candidates", "screen_one", "absorption_gain",
            "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
-           "frame_evidence", "frame_channel"]
+           "frame_evidence", "frame_channel", "frame_corroboration", "distance_channel"]
 
 Setting = dict[str, float]
 
@@ -565,6 +566,34 @@ def frame_channel(effect: str, ev: dict[str, dict[str, Any] | None] | None, n_te
     return out
 
 
+def frame_corroboration(effect: str, ev: dict[str, dict[str, Any] | None] | None) -> dict[str, Any] | None:
+    """A reading of the whole frames, beyond every clean frame's, that points at ``effect`` without being a test of
+    its own: for lens distortion, edges that steepen toward the corners (the frames' edge-sharpness trend ``radial``,
+    :func:`~synthaug.diagnose.frame_pattern.edge_radial` over scenes, above
+    :data:`~synthaug.diagnose.frame_pattern.EDGE_RADIAL_FLOOR`: the reading that withholds sharpening), when the
+    lens's own frame test has no reading (no scene that moved between the two looks). A lens changes the scale of a
+    20-30 px object near the centre little, so its distance gain on the objects can be significant and above its
+    clean floor yet under the 2 % utility rule (:data:`~synthaug.diagnose.calibration.HAND_MIN_GAIN`); the frames
+    then say the effect is there. It lifts the utility rule only: the distance channel must still pass its test and
+    its calibrated floor (:func:`screen_candidates`). One-sided, as calibrated: the trend's sign with a barrel lens
+    is inside the clean range on the reference camera. None: no such reading.
+
+    Example:
+        >>> ev = {"sharpening": {"radial": 0.057}, "lens_distortion": None}
+        >>> frame_corroboration("lens_distortion", ev)["statistic"], frame_corroboration("defocus", ev)
+        ('edge_radial', None)
+        >>> frame_corroboration("lens_distortion", {"sharpening": {"radial": 0.01}, "lens_distortion": None})
+    """
+    from synthaug.diagnose.frame_pattern import EDGE_RADIAL_FLOOR
+
+    if effect != "lens_distortion" or ev is None or ev.get("lens_distortion") is not None:
+        return None
+    radial = float((ev.get("sharpening") or {}).get("radial", float("nan")))
+    if not (math.isfinite(radial) and radial > EDGE_RADIAL_FLOOR):
+        return None
+    return {"statistic": "edge_radial", "value": radial, "floor": EDGE_RADIAL_FLOOR}
+
+
 def frame_setting(effect: str, fc: dict[str, Any] | None) -> Setting | None:
     """The camera setting a frame channel implies: vignetting's fall-off ``k``; compression's JPEG quality
     read from the frames' DCT steps, within the screening grid's range (None when the frames show no JPEG
@@ -656,9 +685,10 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         alpha: family-wise significance level (Bonferroni over candidates and channels).
         penalty: subtracted from each held-out relative gain per extra parameter.
         min_gain: a significant distance gain must also reach this raw relative size (an extension worth
-            having, not a detectable sliver); besides, every channel must exceed its floor measured on clean
-            nuisance-varied data (:mod:`synthaug.diagnose.calibration`), and the other distance space must
-            not get worse on held-out seeds.
+            having, not a detectable sliver), unless the whole frames show the effect beyond every clean frame
+            (:func:`frame_corroboration`: the channel then carries ``corroborated_by``); besides, every channel must
+            exceed its floor measured on clean nuisance-varied data (:mod:`synthaug.diagnose.calibration`), and the
+            other distance space must not get worse on held-out seeds.
         given: extensions already accepted, ``{effect: setting}``: the base
             model includes them and every candidate is screened on top of them
             (the conditional gain of forward selection).
@@ -708,19 +738,11 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
             sc["colour_skipped"] = data.colour_note or "no colour channel"
         ab = absorption_gain(data, name, w0.numpy(), folds, rng)
         channels = []
+        corroboration = frame_corroboration(name, frame_ev)
         for space, other in (("feature", "pixel"), ("pixel", "feature")):
-            s = sc[space]
-            p_adj = min(1.0, s["p"] * n_tests)
-            z = _z(s["p"])
-            # ... and the other space must not get worse (unpenalised held-out gain >= 0): an "extension"
-            # that buys pixel distance by erasing detail the detector sees is not more realistic
-            other_ok = sc[other]["gain"] + penalty * sc["n_params"] >= 0.0
-            floor = gain_floor(name, f"distance:{space}")  # above what clean data give, and worth having
-            big = s["raw_gain_all"] >= min_gain and (floor is None or s["gain"] > floor)
-            channels.append({"channel": f"distance:{space}", "p_adjusted": p_adj, "z": z, "gain": s["gain"],
-                             "other_space_gain": sc[other]["gain"], "raw_gain_all": s["raw_gain_all"],
-                             "floor": floor, "significant": bool(p_adj < alpha and s["gain"] > 0 and big
-                                                                 and other_ok)})
+            channels.append(distance_channel(sc, space, other, n_tests=n_tests, alpha=alpha, penalty=penalty,
+                                             floor=gain_floor(name, f"distance:{space}"), min_gain=min_gain,
+                                             corroboration=corroboration))
         if ab is not None:
             p_adj = min(1.0, ab["p"] * n_tests)
             n = len(data)
@@ -756,6 +778,40 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
                      "frame_setting": frame_setting(name, fc)})
     rows.sort(key=_rank)
     return rows
+
+
+def distance_channel(sc: dict[str, Any], space: str, other: str, *, n_tests: int, alpha: float, penalty: float,
+                     floor: float | None, min_gain: float = HAND_MIN_GAIN,
+                     corroboration: dict[str, Any] | None = None) -> dict[str, Any]:
+    """A candidate's distance channel in ``space`` (``"feature"`` or ``"pixel"``) from its screening ``sc``
+    (:func:`screen_one`): significant when the one-sided test over held-out seeds rejects at α (Bonferroni over
+    ``n_tests``), the penalised held-out gain exceeds the calibrated clean ``floor`` (None: not calibrated), the raw
+    gain over all seeds reaches ``min_gain`` — or, short of it, the frames ``corroboration``
+    (:func:`frame_corroboration`) show the effect, recorded as ``corroborated_by`` — and the ``other`` space does
+    not get worse on held-out seeds (an "extension" that buys pixel distance by erasing detail the detector sees is
+    not more realistic).
+
+    Example:
+        >>> sc = {"n_params": 1, "pixel": {"p": 1e-5, "gain": 0.012, "raw_gain_all": 0.017},
+        ...       "feature": {"p": 0.4, "gain": 0.0, "raw_gain_all": 0.005}}
+        >>> ch = distance_channel(sc, "pixel", "feature", n_tests=40, alpha=0.01, penalty=0.005, floor=0.011)
+        >>> ch["significant"], ch["corroborated_by"]
+        (False, None)
+        >>> cb = {"statistic": "edge_radial", "value": 0.057, "floor": 0.046}
+        >>> distance_channel(sc, "pixel", "feature", n_tests=40, alpha=0.01, penalty=0.005, floor=0.011,
+        ...                  corroboration=cb)["corroborated_by"]["statistic"]
+        'edge_radial'
+    """
+    s = sc[space]
+    p_adj = min(1.0, s["p"] * n_tests)
+    other_ok = sc[other]["gain"] + penalty * sc["n_params"] >= 0.0
+    worth = s["raw_gain_all"] >= min_gain or corroboration is not None
+    big = worth and (floor is None or s["gain"] > floor)
+    significant = bool(p_adj < alpha and s["gain"] > 0 and big and other_ok)
+    return {"channel": f"distance:{space}", "p_adjusted": p_adj, "z": _z(s["p"]), "gain": s["gain"],
+            "other_space_gain": sc[other]["gain"], "raw_gain_all": s["raw_gain_all"], "floor": floor,
+            "significant": significant,
+            "corroborated_by": corroboration if significant and s["raw_gain_all"] < min_gain else None}
 
 
 def _rank(row: dict[str, Any]) -> tuple[int, float]:
