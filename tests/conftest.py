@@ -55,6 +55,17 @@ def _private_view_cache(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def bench_null():
+    """``benchmarks/bench_diagnose_null.py`` as a module: the null/power benchmark's case maker and bookkeeping."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_diagnose_null", REPO / "benchmarks" / "bench_diagnose_null.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="session")
 def small_cache():
     """A coarse view cache of the built-in quadcopter (30° grid, 48 px sprites)."""
     from synthaug.render.cache import ViewCache

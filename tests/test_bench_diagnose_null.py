@@ -2,33 +2,20 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import pytest
 
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_diagnose_null.py"
+
+def test_a_candidate_is_named_by_the_first_finding(bench_null):
+    assert bench_null._first_name(["gamma (noise_level)", "defocus (distance:pixel)"], "gamma") == "gamma"
+    assert bench_null._first_name(["haze (distance:feature)"], "gamma") == "haze"
+    assert bench_null._first_name([], "gamma") is None
 
 
-@pytest.fixture(scope="module")
-def bench():
-    spec = importlib.util.spec_from_file_location("bench_diagnose_null", _PATH)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def test_a_candidate_is_named_by_the_first_finding(bench):
-    assert bench._first_name(["gamma (noise_level)", "defocus (distance:pixel)"], "gamma") == "gamma"
-    assert bench._first_name(["haze (distance:feature)"], "gamma") == "haze"
-    assert bench._first_name([], "gamma") is None
-
-
-def test_an_outside_effect_is_named_by_its_structure_in_an_unexplained_finding(bench):
+def test_an_outside_effect_is_named_by_its_structure_in_an_unexplained_finding(bench_null):
     from synthaug.diagnose.reference_camera import OUTSIDE_EFFECTS
 
-    assert set(bench.OUTSIDE_STRUCTURE) == set(OUTSIDE_EFFECTS)  # every outside effect has its structure
-    f = bench._first_name
+    assert set(bench_null.OUTSIDE_STRUCTURE) == set(OUTSIDE_EFFECTS)  # every outside effect has its structure
+    f = bench_null._first_name
     assert f(["unexplained: column_pattern"], "column_pattern") == "column_pattern"
     # a blur candidate may explain part of interlacing's comb: the comb reported as unexplained still names it
     assert f(["defocus (distance:pixel)", "unexplained: high_frequency, periodic_rows"], "interlacing") == "interlacing"
@@ -37,7 +24,7 @@ def test_an_outside_effect_is_named_by_its_structure_in_an_unexplained_finding(b
     assert f(["defocus (distance:pixel)"], "interlacing") == "defocus"
 
 
-def test_wilson_interval_matches_the_formula_by_hand(bench):
+def test_wilson_interval_matches_the_formula_by_hand(bench_null):
     # Wilson score interval by hand: (p + z^2/2n -+ z sqrt(p(1-p)/n + z^2/4n^2)) / (1 + z^2/n)
     import math
 
@@ -45,10 +32,10 @@ def test_wilson_interval_matches_the_formula_by_hand(bench):
     p = k / n
     c = (p + z * z / (2 * n)) / (1 + z * z / n)
     h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    assert bench.wilson(k, n) == pytest.approx((c - h, c + h), abs=1e-9)
+    assert bench_null.wilson(k, n) == pytest.approx((c - h, c + h), abs=1e-9)
 
 
-def test_floors_pooled_from_outputs_name_a_frame_refresh(bench, tmp_path):
+def test_floors_pooled_from_outputs_name_a_frame_refresh(bench_null, tmp_path):
     """``--floors-from`` pools the outputs' null values per statistic (the floors are ``derive_floors``' of the
     pooled values, the rule by hand for one) and its source names an output whose frame statistics were remade
     without a refit (``frame_recalibrate.py``'s ``frame_refresh``), and says nothing of one that was not."""
@@ -72,7 +59,7 @@ def test_floors_pooled_from_outputs_name_a_frame_refresh(bench, tmp_path):
         (tmp_path / name).write_text(json.dumps(d))
         outs.append(gains)
     dest = tmp_path / "nf.py"
-    bench.pool_floors(argparse.Namespace(floors_from=[str(tmp_path / "a.json"), str(tmp_path / "b.json")],
+    bench_null.pool_floors(argparse.Namespace(floors_from=[str(tmp_path / "a.json"), str(tmp_path / "b.json")],
                                          write_floors=str(dest)))
     spec = iu.spec_from_file_location("nf_pooled", dest)
     mod = iu.module_from_spec(spec)

@@ -442,27 +442,22 @@ def test_lens_distortion_on_a_nuisance_varied_camera_is_named_from_the_scenes_mo
 
 
 @pytest.mark.slow
-def test_a_pincushion_lens_on_a_still_scene_is_named_from_the_objects_with_the_frames_edge_trend(tmp_path):
+def test_a_pincushion_lens_on_a_still_scene_is_named_from_the_objects_with_the_frames_edge_trend(tmp_path, bench_null):
     # lens k1 +0.1 (its second realistic strength) on the power table's case 4 (bench_diagnose_null.py's seeds and
     # nuisances): its scene moved at most 0.15 px between each frame and its background frame, so the lens's motion
     # channel has no reading; on the objects the lens gains 1.7 % of the pixel distance (its test and its clean
     # floor passed, the 2 % utility rule not), and the frames' edges steepen toward the corners beyond every clean
     # frame's: named first from the objects, at its setting, with the report saying why, and not as sharpening
-    import importlib.util
-
     from synthaug.diagnose.frame_pattern import EDGE_RADIAL_FLOOR
     from synthaug.diagnose.nuisances import Nuisances
     from synthaug.diagnose.report import diagnose, write_markdown
 
-    spec = importlib.util.spec_from_file_location(
-        "bench_diagnose_null", Path(__file__).resolve().parents[1] / "benchmarks" / "bench_diagnose_null.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    k1 = bench.hidden_settings("lens_distortion", "alt")["lens_distortion"]["distortion_k1"]
+    k1 = bench_null.hidden_settings("lens_distortion", "alt")["lens_distortion"]["distortion_k1"]
     assert k1 == pytest.approx(0.1)
     seeds = tmp_path / "seeds"
-    bench.case_seedset(seeds, 4, base_seed=8000, n_seeds=60, nuisances=Nuisances.draw(np.random.default_rng([8000, 4])),
-                       hidden="lens_distortion", strength="alt")
+    bench_null.case_seedset(seeds, 4, base_seed=8000, n_seeds=60,
+                            nuisances=Nuisances.draw(np.random.default_rng([8000, 4])),
+                            hidden="lens_distortion", strength="alt")
     report = diagnose(seeds, "quadcopter", converged_fit(seeds, tmp_path / "fit.json"), out_dir=None, plots=False,
                       seed=0)
     first = report["findings"][0]
