@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+import scipy.stats
 import torch
 from torch.utils.data import Dataset
 from torchvision.transforms import v2
@@ -347,6 +348,40 @@ def test_object_box_frames_every_object_as_ingest_frames_a_labelled_seed(small_c
     a, b = ds[5], ds[5]
     assert torch.equal(a[0], b[0]) and torch.equal(a[1]["theta"], b[1]["theta"])
     assert ds.make_params(5).pose["t_x"] != pytest.approx(float(a[1]["theta"][3]))
+
+
+def test_object_box_share_frames_a_drawn_share_of_the_objects_and_leaves_the_rest_as_the_paper_draws_them(small_cache):
+    """object_box_share: the items drawn as framed are exactly the object_box dataset's items, the others exactly the
+    paper's (same seed, same draws: the share is drawn last), their count binomial around the share; at 1 nothing
+    moves; a batch renders what the items render one by one."""
+    n = 3
+    fit = CaptureParams.default(n)
+    fit = fit.replace(w_d=torch.zeros(fit.w_d.shape))
+    bgs = [np.full((64, 72), 0.8, np.float32) for _ in range(n)]
+
+    def make(box, **kw):
+        return SyntheticObjectDataset("quadcopter", bgs, fit, render=small_cache, length=60, negative_fraction=0.0,
+                                      effects=["material"], object_box=box, seed=4, **kw)
+
+    mixed, framed, paper = make(0.6, object_box_share=0.3), make(0.6), make(None)
+    flags = np.array([mixed.make_params(i).framed for i in range(60)])
+    assert not any(not framed.make_params(i).framed for i in range(60))  # a share of 1 draws nothing
+    assert scipy.stats.binomtest(int(flags.sum()), 60, 0.3).pvalue > 1e-3 and 0 < flags.sum() < 60
+    for i in range(60):
+        ref = framed if flags[i] else paper
+        assert torch.equal(mixed[i][0], ref[i][0]), i
+    batch = mixed.__getitems__(list(range(12)))
+    assert all(torch.equal(img, mixed[i][0]) for i, (img, _) in enumerate(batch))
+    with_one = make(0.6, object_box_share=1.0)
+    assert all(torch.equal(with_one[i][0], framed[i][0]) for i in range(5))
+    sides, _ = _object_boxes(mixed, 60)
+    # framed: 0.6 x 40 px to a pixel or two (as the test above; a thin part can cross 0.5); the rest vary
+    assert np.abs(sides[flags] - 24).max() <= 2 and np.abs(sides[~flags] - 24).max() > 3
+    with pytest.raises(ValueError, match="give an object_box"):
+        make(None, object_box_share=0.5)
+    for bad in (0.0, 1.2, -0.1, True, "half"):
+        with pytest.raises(ValueError, match="object_box_share must be a fraction in"):
+            make(0.6, object_box_share=bad)
 
 
 def test_bad_object_box_is_refused_with_a_clear_message(small_cache):

@@ -682,6 +682,42 @@ def test_background_sampling_is_a_condition_of_its_own_and_keeps_the_former_keys
     assert [a.background_sampling for a in _added_positives(ws, monkeypatch, own, other)] == ["seed", "other"]
 
 
+def test_object_box_share_mixes_the_two_framings_and_keeps_the_former_keys(ws, monkeypatch, capsys):
+    """``--object-box fit --object-box-share 0.5``: the framed condition frames half its objects (named so, the share
+    in its key and in the ``AddedPositives`` its training gets); the paper's framing ignores the share; the default 1
+    keeps every former key and name; a share without a framing is a usage error."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           object_box=(None, "fit"))
+    _, paper, framed = made
+    made.clear()
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           object_box=(None, "fit"), object_box_share=0.5)
+    _, paper_mix, mixed = made
+    assert paper_mix.identity() == paper.identity() and paper_mix.name == paper.name
+    assert "object_box_share" not in framed.identity() and mixed.identity()["object_box_share"] == 0.5
+    assert {k: v for k, v in mixed.identity().items() if k != "object_box_share"} == framed.identity()
+    assert framed.name == "hog / 12 seeds + 20x synthetic (f{seed}, framed as the seeds (fit))"
+    assert mixed.name == "hog / 12 seeds + 20x synthetic (f{seed}, framed as the seeds (fit) for 50%)"
+    assert [a.object_box_share for a in _added_positives(ws, monkeypatch, framed, mixed)] == [1.0, 0.5]
+    parse = R.build_parser().parse_args
+    assert parse(["synthetic", "--out", "x"]).object_box_share == 1.0
+    for bad in ("0", "1.5", "half"):
+        with pytest.raises(SystemExit) as e:
+            parse(["synthetic", "--object-box-share", bad, "--out", "x"])
+        assert e.value.code == 2 and "--object-box-share" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:
+        R.main(["synthetic", "--object-box-share", "0.5", "--out", "x"])
+    assert e.value.code == 2 and "give --object-box seed or fit" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="give an object_box"):
+        R.Condition("x", "hog", synthetic_ratio=20.0, params="f.json", object_box_share=0.5)
+    from synthaug.detectors.video_training import AddedPositives
+
+    with pytest.raises(ValueError, match="object_box_share must be a fraction in"):
+        AddedPositives(object_box="fit", object_box_share=0.0)
+
+
 def test_synthetic_downscaled_copies_join_each_synthetic_condition(ws, monkeypatch, capsys):
     """``--synthetic-downscaled-copies K``: every synthetic condition also holds K downscaled copies of each real seed
     (named so, both in its key and in the ``AddedPositives`` its training gets), beside the copies alone

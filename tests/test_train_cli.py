@@ -326,9 +326,11 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     calls = []
 
     def fake(seedset: Any, mesh: Any, fit_file: Any, count: int, *, seed: int = 0, pose_sampling: str = "uniform",
-             object_box: Any = None, shape_variation: float = 0.0, **_: Any) -> torch.Tensor:
+             object_box: Any = None, shape_variation: float = 0.0, object_box_share: float = 1.0,
+             **_: Any) -> torch.Tensor:
         calls.append((len(seedset), str(mesh), count, seed, pose_sampling) + ((object_box,) if object_box else ())
-                     + ((shape_variation,) if shape_variation else ()))
+                     + ((shape_variation,) if shape_variation else ())
+                     + ((object_box_share,) if object_box_share != 1 else ()))
         return torch.rand(count, 1, 40, 40, generator=torch.Generator().manual_seed(seed))
 
     monkeypatch.setattr(video_training, "synthetic_positives", fake)
@@ -356,6 +358,17 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
                   "--object-box", "seed", "--mining-rounds", "0") == 0
     assert calls[-1] == (8, "quadcopter", 24, 2, "uniform", "seed")
     assert json.loads(out_box.with_suffix(".json").read_text())["synthetic"]["object_box"] == "seed"
+    assert "object_box_share" not in json.loads(out_box.with_suffix(".json").read_text())["synthetic"]
+    # --object-box-share: a mixture of the two framings, in the metadata; without --object-box, a clear error
+    out_mix = ws["root"] / "runs" / "hog_syn_mix.pt"
+    assert _train(ws, out_mix, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
+                  "--object-box", "seed", "--object-box-share", "0.5", "--mining-rounds", "0") == 0
+    assert calls[-1] == (8, "quadcopter", 24, 2, "uniform", "seed", 0.5)
+    assert json.loads(out_mix.with_suffix(".json").read_text())["synthetic"]["object_box_share"] == 0.5
+    n_calls = len(calls)
+    assert _train(ws, out_mix, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
+                  "--object-box-share", "0.5", "--mining-rounds", "0") == 2
+    assert len(calls) == n_calls
     # --shape-variation likewise (absent from the metadata at its default 0, above)
     out_shape = ws["root"] / "runs" / "hog_syn_shape.pt"
     assert _train(ws, out_shape, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio",

@@ -47,6 +47,8 @@ class ItemParams:
         variant: which of the dataset's shapes the object has (``shape_variation``: 0 is the mesh itself).
         background_index: the seed whose background the object is composited on, where that is not
             ``seed_index``'s own (``background_sampling="other"``); None: the item's own seed's (the paper).
+        framed: whether the dataset's ``object_box`` frames the item's object (drawn with ``object_box_share`` under
+            1; True otherwise, and meaningless without an ``object_box``).
     """
 
     index: int
@@ -61,6 +63,7 @@ class ItemParams:
     fields: Mapping[str, torch.Tensor] = field(default_factory=dict)
     variant: int = 0
     background_index: int | None = None
+    framed: bool = True
 
     @property
     def background(self) -> int:

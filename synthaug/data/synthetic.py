@@ -123,6 +123,10 @@ class SyntheticObjectDataset(Dataset):
             generated videos, whose labels are tight (``results/synthetic/demo_box/README.md``); on the real drone
             videos, whose labels are loose, ``"seed"`` loses and ``"fit"`` is level with None
             (``results/synthetic/drone_box/README.md``).
+        object_box_share: the fraction of the synthetic objects that ``object_box`` frames (1, default: every one);
+            the others keep the paper's framing (the mesh's scale and the drawn translation), a mixture of the two
+            object-size distributions. Which items are framed is drawn per item, last, from its own generator (and
+            only when the share is under 1, so no other draw moves).
         negative_fraction: patch mode: fraction of synthetic items that are
             background-only patches (label 0); frame mode: fraction of frames
             without an object.
@@ -206,6 +210,7 @@ class SyntheticObjectDataset(Dataset):
         patch_size: int = 40,
         object_scale: float | None = None,
         object_box: float | Literal["seed", "fit"] | None = None,
+        object_box_share: float = 1.0,
         negative_fraction: float | None = None,
         object_size: tuple[float, float] = (20.0, 60.0),
         effects: Sequence[str] | None = None,
@@ -237,6 +242,7 @@ class SyntheticObjectDataset(Dataset):
         self.object_scale = 0.7 if object_scale is None else float(object_scale)
         self.seed_scales: torch.Tensor | None = None
         self.object_box = _check_object_box(object_box, backgrounds, mode)
+        self.object_box_share = check_object_box_share(object_box_share, self.object_box)
         self.negative_fraction = neg
         self.object_size = (float(object_size[0]), float(object_size[1]))
         self.seed = int(seed)
@@ -490,6 +496,9 @@ class SyntheticObjectDataset(Dataset):
         if self.background_sampling == "other":  # uniform over the other seeds
             j = min(int(torch.rand(1, generator=g, dtype=torch.float64).item() * (n_seeds - 1)), n_seeds - 2)
             background = j + int(j >= seed_index)
+        framed = True  # drawn after everything else, and only with an object box's share under 1
+        if self.object_box is not None and self.object_box_share < 1:
+            framed = torch.rand(1, generator=g, dtype=torch.float64).item() < self.object_box_share
         h, w = self.backgrounds[seed_index if background is None else background].shape[-2:]
         lo, hi = self.object_size
         return ItemParams(
@@ -497,7 +506,7 @@ class SyntheticObjectDataset(Dataset):
             pose=pose,
             crop_xy=(min(int(u[7] * (w - crop + 1)), w - crop), min(int(u[8] * (h - crop + 1)), h - crop)),
             object_px=lo + (hi - lo) * u[9] if self.mode == "frame" else None,
-            capture=capture, fields=fields, variant=variant, background_index=background)
+            capture=capture, fields=fields, variant=variant, background_index=background, framed=framed)
 
     @overload
     def render(self, params: ItemParams) -> tuple[Any, dict[str, Any]]: ...
@@ -588,7 +597,8 @@ class SyntheticObjectDataset(Dataset):
             scale = (self.seed_scales[seeds].float() if self.seed_scales is not None
                      else torch.full((len(batch),), self.object_scale))
             if self.object_box is not None:
-                pose, scale = self._box_framed(pose, crop, scale, variant)
+                pose, scale = self._box_framed_items(pose, crop, scale, variant,
+                                                     torch.tensor([p.framed for p in batch], dtype=torch.bool))
         else:
             scale = torch.tensor([p.object_px / crop for p in batch])
         theta = theta_rows.replace(**pose) if self._pose_in_range(pose) else CaptureParams(
@@ -709,6 +719,24 @@ class SyntheticObjectDataset(Dataset):
         framed["t_y"] = torch.where(ok, -cy * k / size, pose["t_y"].double()).to(pose["t_y"].dtype)
         return framed, (scale.double() * k).to(scale.dtype)
 
+    def _box_framed_items(self, pose: dict[str, torch.Tensor], size: int, scale: torch.Tensor, variant: torch.Tensor,
+                          framed: torch.Tensor) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
+        """:meth:`_box_framed` for the items where ``framed`` is True (``object_box_share``); the others keep their
+        drawn pose and scale (the paper's framing). Each item's framing is its own, so a subset gives the same
+        values."""
+        if bool(framed.all()):
+            return self._box_framed(pose, size, scale, variant)
+        if not bool(framed.any()):
+            return pose, scale
+        sub, sub_scale = self._box_framed({k: v[framed] for k, v in pose.items()}, size, scale[framed],
+                                          variant[framed])
+        out = {k: v.clone() for k, v in pose.items()}
+        for k, v in sub.items():
+            out[k][framed] = v
+        scale = scale.clone()
+        scale[framed] = sub_scale
+        return out, scale
+
     def _frame_batch(self, batch: list[ItemParams]) -> list[torch.Tensor]:
         """The batch's full frames (copies of their backgrounds), views of one storage.
 
@@ -749,6 +777,16 @@ def _check_background_sampling(background_sampling: Any, n_seeds: int) -> str:
         raise ValueError(f"background_sampling='other' puts each object on another seed's background: it needs at "
                          f"least 2 backgrounds, got {n_seeds}")
     return str(background_sampling)
+
+
+def check_object_box_share(share: Any, object_box: Any) -> float:
+    """``object_box_share`` as a float in (0, 1]; a share under 1 needs an ``object_box``."""
+    if isinstance(share, bool) or not isinstance(share, numbers.Real) or not 0 < float(share) <= 1:
+        raise ValueError(f"object_box_share must be a fraction in (0, 1], got {share!r}")
+    if float(share) < 1 and object_box is None:
+        raise ValueError(f"object_box_share {share!r} is the share of the objects that object_box frames: "
+                         "give an object_box")
+    return float(share)
 
 
 def _check_object_box(object_box: Any, backgrounds: Any, mode: str) -> float | str | None:

@@ -123,7 +123,7 @@ def add_adaboost_options(parser: argparse.ArgumentParser, *, keyed: bool = False
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from synthaug._checks import add_option, dataclass_defaults, int_at_least, nonneg_float, positive_float
+    from synthaug._checks import add_option, dataclass_defaults, float_in, int_at_least, nonneg_float, positive_float
     from synthaug.data.captures import CAPTURE_SAMPLERS
     from synthaug.data.items import BACKGROUND_SAMPLING
     from synthaug.data.poses import POSE_SAMPLING
@@ -159,6 +159,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="frame each synthetic object as ingest frames a labelled seed, its box centred and its "
                              "longest side the seed set's object_fraction of the patch (seed) or the median size of the "
                              "fitted renders' boxes (fit); default: the paper's mesh-scale framing")
+    parser.add_argument("--object-box-share", type=float_in(0.0, 1.0, low_open=True), default=1.0, metavar="SHARE",
+                        help="with --object-box: the fraction of the synthetic objects it frames, the others framed as "
+                             "the paper's (default 1: every one; e.g. 0.5, a mixture of the two framings)")
     parser.add_argument("--shape-variation", type=nonneg_float, default=0.0,
                         help="vary the synthetic objects' shape around the mesh (axes stretched, parts such as arms and "
                              "rotors scaled) within +- this fraction, e.g. 0.3; default 0: the mesh alone")
@@ -270,6 +273,9 @@ def main(args: argparse.Namespace) -> int:
         check_placement([args.pose_sampling], [args.object_box])
     except ValueError as e:
         return _err(f"--pose-sampling: {e}")
+    if args.object_box_share < 1 and args.object_box is None:
+        return _err(f"--object-box-share {args.object_box_share:g} is the share of the objects --object-box frames: "
+                    "give --object-box seed or fit")
     ratio = args.synthetic_ratio if args.synthetic_ratio is not None else (10.0 if args.params is not None else 0.0)
 
     import torch
@@ -303,7 +309,8 @@ def main(args: argparse.Namespace) -> int:
             frame_step=args.frame_step, seedset=args.seed_set, positive_videos=args.positive_videos,
             added=AddedPositives(params=args.params, mesh=args.mesh, synthetic_ratio=ratio,
                                  perturb_copies=args.perturb_copies, pose_sampling=args.pose_sampling,
-                                 object_box=args.object_box, shape_variation=args.shape_variation,
+                                 object_box=args.object_box, object_box_share=args.object_box_share,
+                                 shape_variation=args.shape_variation,
                                  capture_sampling=args.capture_sampling, effects_off=_effects_off(args.effects_off),
                                  copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,

@@ -257,6 +257,7 @@ def synthetic_positives(
     seed_geometry: Mapping[str, Any] | str | None = "auto",
     pose_sampling: str = "uniform",
     object_box: float | str | None = None,
+    object_box_share: float = 1.0,
     shape_variation: float = 0.0,
     quantize: bool = False,
     background_sampling: str = "seed",
@@ -285,6 +286,8 @@ def synthetic_positives(
         object_box: None (the paper) or each object framed as ingest frames a labelled seed: its coverage box
             centred, its longest side this fraction of the patch (``"seed"``: the seed set's ``object_fraction``;
             see :class:`~synthaug.data.synthetic.SyntheticObjectDataset`).
+        object_box_share: the fraction of the objects ``object_box`` frames (1: every one); the others keep the
+            paper's framing (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box_share``).
         shape_variation: 0 (the paper: the mesh alone) or > 0: each patch's object one of
             :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s shapes around the mesh (its
             ``shape_variation``: stretched axes, parts scaled, within ± this fraction).
@@ -314,6 +317,7 @@ def synthetic_positives(
         mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
         effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
         seed_geometry=seed_geometry, pose_sampling=pose_sampling, object_box=object_box,  # type: ignore[arg-type]
+        object_box_share=object_box_share,
         shape_variation=shape_variation, background_sampling=background_sampling,  # type: ignore[arg-type]
     )
     out, seed_index = [], []

@@ -196,6 +196,8 @@ class AddedPositives:
             (:data:`~synthaug.data.poses.POSE_SAMPLING`).
         object_box: None (the paper) or ``"seed"`` / a fraction: each synthetic object framed as ingest frames a
             labelled seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
+        object_box_share: the fraction of the synthetic objects ``object_box`` frames (1: every one), the others
+            framed as the paper's (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box_share``).
         shape_variation: 0 (the paper) or > 0: the synthetic objects' shapes vary around the mesh within ± this
             fraction (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``shape_variation``).
         capture_sampling: how each synthetic patch's capture parameters are drawn: ``"seed"`` (the paper: one seed's
@@ -247,6 +249,7 @@ class AddedPositives:
     shape_variation: float = 0.0
     capture_sampling: str = "seed"
     effects_off: tuple[str, ...] | None = None
+    object_box_share: float = 1.0
     copy_paste_ratio: float = 0.0
     perturb_copies: int = 0
     synthetic_share: float | str | None = None
@@ -260,6 +263,7 @@ class AddedPositives:
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
         from synthaug.data.poses import POSE_SAMPLING
+        from synthaug.data.synthetic import check_object_box_share
 
         resolve_background_sampling("", self.background_sampling)  # raises on a value that is not one
         if self.capture_sampling not in CAPTURE_SAMPLERS:
@@ -267,6 +271,7 @@ class AddedPositives:
         if self.pose_sampling not in POSE_SAMPLING:
             raise ValueError(f"pose_sampling must be one of {list(POSE_SAMPLING)}, got {self.pose_sampling!r}")
         check_placement([self.pose_sampling], [self.object_box])
+        check_object_box_share(self.object_box_share, self.object_box)
         if self.effects_off is not None:
             if isinstance(self.effects_off, str) or not all(isinstance(e, str) for e in self.effects_off):
                 raise ValueError(f"effects_off must be None or a sequence of effect names, got {self.effects_off!r}")
@@ -819,7 +824,8 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
     if n_syn:
         def draw(fit: str | Path) -> Tensor:
             return synthetic_positives(ss, mesh, fit, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
-                                       object_box=added.object_box, shape_variation=added.shape_variation,
+                                       object_box=added.object_box, object_box_share=added.object_box_share,
+                                       shape_variation=added.shape_variation,
                                        capture_sampling=added.capture_sampling, effects=effects,
                                        quantize=added.quantize, background_sampling=background_sampling)
 
@@ -834,6 +840,7 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
     info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
                             "pose_sampling": pose_sampling,
                             **({"object_box": added.object_box} if added.object_box is not None else {}),
+                            **({"object_box_share": added.object_box_share} if added.object_box_share < 1 else {}),
                             **({"shape_variation": added.shape_variation} if added.shape_variation else {}),
                             **({"capture_sampling": added.capture_sampling} if added.capture_sampling != "seed" else {}),
                             **({"effects_off": list(effects_off)} if effects_off else {}),

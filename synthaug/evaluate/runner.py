@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from synthaug._checks import add_option, int_at_least, nonneg_float, positive_float
+from synthaug._checks import add_option, float_in, int_at_least, nonneg_float, positive_float
 from synthaug.data.captures import CAPTURE_SAMPLERS
 from synthaug.data.items import BACKGROUND_SAMPLING
 from synthaug.data.poses import POSE_SAMPLING
@@ -125,6 +125,8 @@ class Condition:
             count, so cells by count keep their keys, and a family's default share has the key of that share given).
         object_box: None (the paper's framing) or ``"seed"``: synthetic objects framed as ingest frames a labelled
             seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
+        object_box_share: the fraction of the synthetic objects ``object_box`` frames (1: every one), the others
+            framed as the paper's (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box_share``).
         shape_variation: 0 (the paper) or the synthetic objects' shape variation around the mesh
             (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``shape_variation``).
         capture_sampling: ``"seed"`` (the paper) or how else the synthetic positives' capture parameters are drawn
@@ -168,6 +170,7 @@ class Condition:
     dcnn_refit: bool = False
     quantize: bool = False
     background_sampling: str | None = None
+    object_box_share: float = 1.0
 
     def __post_init__(self) -> None:
         off = self.effects_off
@@ -178,6 +181,9 @@ class Condition:
                            resolve_background_sampling(self.kind, bs, None if self.all_frames else self.seed_count))
         object.__setattr__(self, "synthetic_share", resolve_synthetic_share(self.kind, self.synthetic_share)
                            if self.adds_positives() else None)
+        from synthaug.data.synthetic import check_object_box_share
+
+        check_object_box_share(self.object_box_share, self.object_box)
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -192,7 +198,8 @@ class Condition:
             if d[k] in (None, 0, (), "uniform"):                     # absent at their defaults (older cells keep their keys)
                 d.pop(k)
         for k, default in (("capture_sampling", "seed"), ("effects_off", ()),  # added later still: the same, with
-                           ("dcnn_refit", False), ("quantize", False), ("background_sampling", "seed")):
+                           ("dcnn_refit", False), ("quantize", False), ("background_sampling", "seed"),
+                           ("object_box_share", 1.0)):
             if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
@@ -407,6 +414,7 @@ class ProtocolRunner:
                                                   else BY_COUNT if condition.adds_positives() else None),
                                  downscaled_copies=condition.downscaled_copies,
                                  faded_copies=condition.faded_copies, object_box=condition.object_box,
+                                 object_box_share=condition.object_box_share,
                                  faded_contrast=condition.faded_contrast, shape_variation=condition.shape_variation,
                                  capture_sampling=condition.capture_sampling,
                                  # the family's own set goes as None: training keeps those the fit has
@@ -699,6 +707,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          copy_paste_ratios: Sequence[float] = (), seeds: Sequence[int] | None = None,
                          synthetic_share: float | str | None = None, downscaled_copies: Sequence[int] = (),
                          faded_copies: Sequence[int] = (), object_box: Sequence[str | None] = (None,),
+                         object_box_share: float = 1.0,
                          faded_contrast: tuple[float, float] | None = None,
                          shape_variation: Sequence[float] = (0.0,),
                          capture_sampling: Sequence[str] = ("seed",),
@@ -727,6 +736,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     the positive class's weight in every synthetic, perturbed, copy-paste, downscaled and faded condition (None: each
     family's own, named in the condition when it is a share; ``"count"``: every positive weighs the same).
     ``object_box``: each synthetic ratio once per framing (None: the paper's; ``"seed"``: as ingest frames a seed).
+    ``object_box_share``: the fraction of the synthetic objects each framing other than None frames, the others
+    framed as the paper's (1: every one; under 1, a mixture of the two framings).
     ``shape_variation``: each synthetic ratio once per value (0: the mesh alone; > 0: shapes varied around it).
     ``capture_sampling``: each synthetic ratio once per way of drawing the capture parameters (``"seed"``: the
     paper's, one seed's fitted row; ``"uniform"``: between the fitted extremes, Fig. 10). ``effects_off``: each
@@ -761,6 +772,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         conds += [Condition(f"{base} + {r:g}x synthetic ({fit}"
                             f"{_POSE_NAMES.get(ps, f', {ps} poses')}{share}"
                             f"{'' if ob is None else f', framed as the seeds ({ob})'}"
+                            f"{'' if ob is None or object_box_share == 1 else f' for {object_box_share:.0%}'}"
                             f"{'' if not sv else f', shapes varied {sv:g}'}"
                             f"{'' if cs == 'seed' else f', capture {cs}'}"
                             f"{'' if not off else ', without ' + ' and '.join(off)}"
@@ -771,6 +783,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             seed_count=seed_count, downscaled_copies=int(synthetic_downscaled),
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
+                            object_box_share=1.0 if ob is None else float(object_box_share),
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
                             quantize=qz, background_sampling=bs)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
@@ -931,6 +944,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--object-box", nargs="+", choices=["none", "seed", "fit"], default=["none"],
                     help="framing of the synthetic objects, one condition per value: none (the paper's mesh scale), "
                          "seed (as ingest frames a labelled seed) or fit (at the fitted renders' median box size)")
+    sy.add_argument("--object-box-share", type=float_in(0.0, 1.0, low_open=True), default=1.0, metavar="SHARE",
+                    help="the fraction of the synthetic objects that a framing other than none frames, the others "
+                         "framed as the paper's (default 1: every one; e.g. 0.5, a mixture of the two framings)")
     sy.add_argument("--shape-variation", type=nonneg_float, nargs="+", default=[0.0],
                     help="the synthetic objects' shape variation around the mesh (axes stretched, parts such as arms "
                          "and rotors scaled within +- this fraction), one condition per value; 0: the mesh alone")
@@ -994,6 +1010,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             check_placement(args.pose_sampling, [None if b == "none" else b for b in args.object_box])
         except ValueError as e:
             parser.error(f"--pose-sampling: {e}")
+        if args.object_box_share < 1 and all(b == "none" for b in args.object_box):
+            parser.error(f"--object-box-share {args.object_box_share:g} is the share of the objects a framing frames: "
+                         "give --object-box seed or fit")
     import torch
 
     torch.set_num_threads(args.threads)
@@ -1021,6 +1040,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              faded_copies=args.faded_copies,
                              faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                              object_box=tuple(None if b == "none" else b for b in args.object_box),
+                             object_box_share=args.object_box_share,
                              shape_variation=tuple(args.shape_variation),
                              capture_sampling=tuple(args.capture_sampling),
                              effects_off=tuple(None if e == "default" else () if e == "none" else tuple(e.split("+"))
