@@ -249,7 +249,6 @@ class AddedPositives:
     shape_variation: float = 0.0
     capture_sampling: str = "seed"
     effects_off: tuple[str, ...] | None = None
-    object_box_share: float = 1.0
     copy_paste_ratio: float = 0.0
     perturb_copies: int = 0
     synthetic_share: float | str | None = None
@@ -259,6 +258,7 @@ class AddedPositives:
     refit: Callable[[Path, Path, Any, int], str | Path] | None = None
     quantize: bool = False
     background_sampling: str | None = None
+    object_box_share: float = 1.0
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
