@@ -361,13 +361,14 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     assert "object_box_share" not in json.loads(out_box.with_suffix(".json").read_text())["synthetic"]
     # --object-box-share: a mixture of the two framings, in the metadata; without --object-box, a clear error
     out_mix = ws["root"] / "runs" / "hog_syn_mix.pt"
-    assert _train(ws, out_mix, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
-                  "--object-box", "seed", "--object-box-share", "0.5", "--mining-rounds", "0") == 0
+    assert _train(ws, out_mix, "--detector", "hog", "--seedset", seedset, "--params", str(fit),
+                  "--synthetic-ratio", "3", "--object-box", "seed", "--object-box-share", "0.5",
+                  "--mining-rounds", "0") == 0
     assert calls[-1] == (8, "quadcopter", 24, 2, "uniform", "seed", 0.5)
     assert json.loads(out_mix.with_suffix(".json").read_text())["synthetic"]["object_box_share"] == 0.5
     n_calls = len(calls)
-    assert _train(ws, out_mix, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
-                  "--object-box-share", "0.5", "--mining-rounds", "0") == 2
+    assert _train(ws, out_mix, "--detector", "hog", "--seedset", seedset, "--params", str(fit),
+                  "--synthetic-ratio", "3", "--object-box-share", "0.5", "--mining-rounds", "0") == 2
     assert len(calls) == n_calls
     # --shape-variation likewise (absent from the metadata at its default 0, above)
     out_shape = ws["root"] / "runs" / "hog_syn_shape.pt"
