@@ -60,7 +60,7 @@ def test_floors_pooled_from_outputs_name_a_frame_refresh(bench_null, tmp_path):
         outs.append(gains)
     dest = tmp_path / "nf.py"
     bench_null.pool_floors(argparse.Namespace(floors_from=[str(tmp_path / "a.json"), str(tmp_path / "b.json")],
-                                         write_floors=str(dest)))
+                                              write_floors=str(dest)))
     spec = iu.spec_from_file_location("nf_pooled", dest)
     mod = iu.module_from_spec(spec)
     spec.loader.exec_module(mod)

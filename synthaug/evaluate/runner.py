@@ -42,6 +42,7 @@ from synthaug._checks import add_option, float_in, int_at_least, nonneg_float, p
 from synthaug.data.captures import CAPTURE_SAMPLERS
 from synthaug.data.items import BACKGROUND_SAMPLING
 from synthaug.data.poses import POSE_SAMPLING
+from synthaug.data.synthetic import check_object_box_share
 from synthaug.detectors.train_cli import (
     add_adaboost_options,
     add_budget_options,
@@ -181,8 +182,6 @@ class Condition:
                            resolve_background_sampling(self.kind, bs, None if self.all_frames else self.seed_count))
         object.__setattr__(self, "synthetic_share", resolve_synthetic_share(self.kind, self.synthetic_share)
                            if self.adds_positives() else None)
-        from synthaug.data.synthetic import check_object_box_share
-
         check_object_box_share(self.object_box_share, self.object_box)
 
     def identity(self) -> dict[str, Any]:
