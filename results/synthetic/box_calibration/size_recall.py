@@ -6,7 +6,15 @@ training seeds), the paired difference condition - baseline of each with its boo
 protocol's resamples and seed, so the same video resamples as its AP differences), the median log(detected /
 labelled) longest side of the IoU 0.3 matches, and the share of those matches that miss IoU 0.5.
 
-usage: PYTHONPATH=. python results/synthetic/box_calibration/size_recall.py BASELINE.json CONDITION.json [--out F.md]
+With --false-positives (stop 81) a second table gives the other half of AP: per bucket, the bucket's AP@0.5 with COCO
+semantics (a false positive counts in the bucket of its own box's size; ``ProtocolResult.pools(bucket=)``) with its
+paired difference, and at each detector's R-precision point (its top N detections pooled over the videos, N the
+labelled objects: a rank, so detectors whose scores are on different scales compare) the bucket's objects found there
+and the false positives of the bucket's size among them, with those still on an object at the loose IoU (a misplaced
+box rather than background); means over training seeds.
+
+usage: PYTHONPATH=. python results/synthetic/box_calibration/size_recall.py BASELINE.json CONDITION.json
+       [--false-positives] [--out F.md]
 A side may name several files of one condition (other training seeds), comma-separated: A.json,B.json.
 """
 import argparse
@@ -14,8 +22,9 @@ import sys
 
 import numpy as np
 
+from synthaug.evaluate.protocol import SizeBucket
 from synthaug.evaluate.results import ProtocolResult
-from synthaug.evaluate.stats import bootstrap_statistic
+from synthaug.evaluate.stats import bootstrap_statistic, paired_difference
 
 
 def _per_video(result: ProtocolResult, bucket, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -51,10 +60,66 @@ def _boxes(result: ProtocolResult, bucket) -> tuple[float, float]:
     return (float(np.median(x)), float(m.mean())) if x.size else (float("nan"), float("nan"))
 
 
+def _top_n(result: ProtocolResult, seed: int, k: int, k_loose: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(is_tp, size, loose)`` of one seed's top-N pooled detections at IoU index ``k``: the object's size for a
+    true positive, the box's own for a false positive; whether it matches at IoU index ``k_loose`` (a false positive
+    that does is a misplaced box on an object, not a detection of background); N = the labelled objects."""
+    videos = result.seeds[seed].videos
+    scores = np.concatenate([v.scores for v in videos])
+    tp = np.concatenate([np.asarray(v.tp[k], bool) for v in videos])
+    loose = np.concatenate([np.asarray(v.tp[k_loose], bool) for v in videos])
+    size = np.concatenate([np.where(np.asarray(v.tp[k], bool), v.match_size[k], v.det_size) for v in videos])
+    n = int(sum(v.gt_size.size for v in videos))
+    order = np.argsort(-scores, kind="stable")[:n]  # the pooled order of synthaug.evaluate.stats.PooledRanking
+    return tp[order], size[order], loose[order]
+
+
+def _at_r_precision(result: ProtocolResult, bucket, k: int, k_loose: int) -> tuple[float, float, float, float]:
+    """Means over seeds, in the top N: objects of the bucket found, false positives of the bucket's size, those of
+    them that match an object at the loose IoU; and the precision there."""
+    found, fps, near, prec = [], [], [], []
+    for s in result.seed_ids:
+        tp, size, loose = _top_n(result, s, k, k_loose)
+        inb = bucket.contains(size)
+        found.append(float((tp & inb).sum()))
+        fps.append(float((~tp & inb).sum()))
+        near.append(float((~tp & inb & loose).sum()))
+        prec.append(float(tp.mean()) if tp.size else float("nan"))
+    return float(np.mean(found)), float(np.mean(fps)), float(np.mean(near)), float(np.mean(prec))
+
+
+def _false_positive_lines(base: ProtocolResult, cond: ProtocolResult) -> list[str]:
+    """The --false-positives table: bucket AP (COCO) and the top N's objects and false positives by size."""
+    proto = base.protocol
+    k = proto.iou_thresholds.index(proto.main_iou)
+    k_loose = int(np.argmin(proto.iou_thresholds))
+    kw = dict(resamples=proto.bootstrap.resamples, seed=proto.bootstrap.seed, ci=proto.bootstrap.ci)
+    every = SizeBucket(0.0, None)
+    d_all = paired_difference(base.pools(), cond.pools(), **kw)
+    qb, qc = (_at_r_precision(r, every, k, k_loose)[3] for r in (base, cond))
+    lines = ["", f"All sizes: AP@{proto.main_iou:g} {base.mean_ap():.3f} / {cond.mean_ap():.3f}, "
+                 f"{d_all.difference.format(signed=True)}; precision at the R-precision point {qb:.3f} / {qc:.3f}.",
+             "", f"| size | objects | AP@{proto.main_iou:g} of the bucket (COCO): base / cond, Δ [CI] | objects "
+                 "found in the top N: base / cond | false positives of this size in the top N: base / cond | of which "
+                 f"on an object at IoU {proto.iou_thresholds[k_loose]:g} |", "|---|---|---|---|---|---|"]
+    for bucket in proto.size_buckets:
+        if base.n_objects(bucket) == 0:
+            continue
+        d = paired_difference(base.pools(bucket=bucket), cond.pools(bucket=bucket), **kw)
+        fb, pb, nb, _ = _at_r_precision(base, bucket, k, k_loose)
+        fc, pc, nc, _ = _at_r_precision(cond, bucket, k, k_loose)
+        lines.append(f"| {bucket.label} | {base.n_objects(bucket)} | {base.mean_ap(bucket=bucket):.3f} / "
+                     f"{cond.mean_ap(bucket=bucket):.3f}, {d.difference.format(signed=True)} | {fb:.1f} / {fc:.1f} | "
+                     f"{pb:.1f} / {pc:.1f} | {nb:.1f} / {nc:.1f} |")
+    return lines
+
+
 def main(argv: list[str]) -> str:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("baseline", help="stored result(s) of the baseline; several files of one condition: A.json,B.json")
     ap.add_argument("condition", help="stored result(s) of the condition, as the baseline")
+    ap.add_argument("--false-positives", action="store_true",
+                    help="add the bucket APs and the top N's false positives by size")
     ap.add_argument("--out", default=None)
     a = ap.parse_args(argv)
     base, cond = (ProtocolResult.combine([ProtocolResult.load(f) for f in arg.split(",")])
@@ -85,6 +150,8 @@ def main(argv: list[str]) -> str:
         (sb, mb), (sc, mc) = _boxes(base, b), _boxes(cond, b)
         lines.append(f"| {b.label} | {n} ({n_videos}) | {cells[0]} | {cells[1]} | {sb:+.3f} / {sc:+.3f} "
                      f"| {mb:.3f} / {mc:.3f} |")
+    if a.false_positives:
+        lines += _false_positive_lines(base, cond)
     text = "\n".join(lines) + "\n"
     if a.out:
         with open(a.out, "w") as f:
