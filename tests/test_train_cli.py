@@ -204,6 +204,88 @@ def test_two_trainings_needing_one_box_regressor_fit_it_once(ws: dict[str, Path]
     assert torch.equal(out[0][0].state_dict()["weights"], out[1][0].state_dict()["weights"])
 
 
+def test_two_trainings_on_one_ingest_folder_take_turns(ws: dict[str, Path], tmp_path: Path,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    # the runner's jobs side by side on one ingest folder: the ingest rewrites the seed set even when every video is
+    # reused, and a second process swapping the folder at the same time failed (stop 81). With the lock the two
+    # ingests never overlap and both read the same seed set.
+    import threading
+    import time
+
+    import numpy as np
+
+    from synthaug.data import ingest as ingest_mod
+    from synthaug.detectors import video_training as VT
+
+    vs = VT.discover_videos(ws["videos"], ws["labels"])
+    sp = {"class": "drone", "train": sorted(s for s, c in vs.classes.items() if c == "drone"),
+          "negative_train": sorted(s for s, c in vs.classes.items() if c != "drone")}
+    real_ingest = ingest_mod.ingest_videos
+    active, overlap = [0], [0]
+    guard = threading.Lock()
+
+    def slow_ingest(*a: Any, **k: Any) -> Any:
+        with guard:
+            active[0] += 1
+            overlap[0] = max(overlap[0], active[0])
+        try:
+            time.sleep(0.5)  # long enough for the other thread to arrive
+            return real_ingest(*a, **k)
+        finally:
+            with guard:
+                active[0] -= 1
+
+    monkeypatch.setattr(ingest_mod, "ingest_videos", slow_ingest)
+    out: dict[int, Any] = {}
+    errors: list[BaseException] = []
+
+    def run(i: int) -> None:
+        try:
+            out[i] = VT._seed_set_by_ingest(vs, sp, 6, tmp_path / "work", ingest_seed=0, workers=1,
+                                            log=lambda m: None, negative_classes=("bird",))
+        except BaseException as e:  # noqa: BLE001 - reported by the assertion below
+            errors.append(e)
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == [] and overlap[0] == 1 and len(out) == 3
+    assert all(np.array_equal(out[0].patches, out[i].patches) for i in (1, 2)) and len(out[0]) >= 6
+
+
+def test_replace_dir_by_two_writers_keeps_one_whole_folder(tmp_path: Path) -> None:
+    import threading
+
+    from synthaug.data.seedset import replace_dir
+
+    final = tmp_path / "set"
+    final.mkdir()
+    (final / "v").write_text("old")
+    tmps = []
+    for i in range(8):
+        t = tmp_path / f".set.tmp-{i}"
+        t.mkdir()
+        (t / "v").write_text(str(i))
+        tmps.append(t)
+    errors: list[BaseException] = []
+
+    def swap(t: Path) -> None:
+        try:
+            replace_dir(t, final)
+        except BaseException as e:  # noqa: BLE001 - reported by the assertion below
+            errors.append(e)
+
+    threads = [threading.Thread(target=swap, args=(t,)) for t in tmps]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == [] and (final / "v").read_text() in {str(i) for i in range(8)}
+    assert [p.name for p in tmp_path.iterdir()] == ["set"]  # no temporary or old folder left
+
+
 def test_mining_round_choice_options_reach_the_training(ws: dict[str, Path], tmp_path: Path) -> None:
     # --mining-select / --mining-patience (the runner's options) are synthaug train's too, and recorded
     out = tmp_path / "ap.pt"

@@ -47,10 +47,12 @@ Example:
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import shutil
 import tempfile
+import uuid
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -115,17 +117,30 @@ def load_npz(path: str | os.PathLike, keys: Sequence[str] = ()) -> dict[str, np.
 
 
 def replace_dir(tmp: Path, final: Path) -> None:
-    """Move the finished folder ``tmp`` to ``final``, replacing an older ``final``."""
+    """Move the finished folder ``tmp`` to ``final``, replacing an older ``final``.
+
+    Safe against another writer replacing the same folder at the same time (one of the two folders stays, whole):
+    a ``final`` moved away between the check and the move, or put back before ours lands, is looked at again.
+    """
     final = Path(final)
-    if final.exists():
-        old = final.with_name(f".{final.name}.old-{os.getpid()}")
-        if old.exists():
-            shutil.rmtree(old)
-        os.replace(final, old)
-        os.replace(tmp, final)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(tmp, final)
+    while True:
+        old = None
+        if final.exists():
+            old = final.with_name(f".{final.name}.old-{os.getpid()}-{uuid.uuid4().hex[:8]}")
+            try:
+                os.replace(final, old)
+            except FileNotFoundError:  # another writer moved it first
+                continue
+        try:
+            os.replace(tmp, final)
+        except OSError as e:  # another writer's folder landed in between: replace that one
+            if e.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+                raise
+            continue
+        finally:
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+        return
 
 
 def crop_geometry(box: Sequence[float], *, patch_size: int = 40, object_fraction: float = 0.7) -> np.ndarray:

@@ -396,15 +396,20 @@ def _seed_set_by_ingest(vs: VideoSet, split: Mapping[str, Any], n: int, work: Pa
                             {"train": list(split["negative_train"]), "val": [], "test": []},
                             {s: vs.classes[s] for s in train + list(split["negative_train"])})
     t0 = time.perf_counter()
-    report = ingest_videos(vs.videos_dir, vs.labels_dir, work, split=only_train, splits=("train",), cfg=cfg, seed_counts=[n],
-                           workers=workers, progress=False)
+    # Two trainings on one ingest folder (the runner's jobs side by side): the ingest rewrites the seed sets even when
+    # every video is reused, so one ingests and reads its seed set while the other waits (a swap of the seed set's
+    # folder by one under the other's feet failed, stop 81).
+    with exclusive_lock(work / ".ingest.lock"):
+        report = ingest_videos(vs.videos_dir, vs.labels_dir, work, split=only_train, splits=("train",), cfg=cfg,
+                               seed_counts=[n], workers=workers, progress=False)
+        path = work / "seedsets" / f"{cls}_{n}"
+        if not (path / "seedset.json").is_file():
+            raise TrainingInputError("--seed-counts", f"ingest drew no seed of class {cls!r} from the training videos "
+                                                      f"({report['failed']})")
+        ss = SeedSet.load(path)
     if report["failed"]:
         log(f"ingest: {len(report['failed'])} video(s) failed: {report['failed']}")
     log(f"ingest: {report['processed']} videos processed, {report['skipped_current']} reused ({time.perf_counter() - t0:.0f}s)")
-    path = work / "seedsets" / f"{cls}_{n}"
-    if not (path / "seedset.json").is_file():
-        raise TrainingInputError("--seed-counts", f"ingest drew no seed of class {cls!r} from the training videos ({report['failed']})")
-    ss = SeedSet.load(path)
     if len(ss) < n:
         raise TrainingInputError("--seed-counts", f"{n} seeds asked but the training videos give only {len(ss)} usable seed frames "
                                                   f"(box fully inside the frame, longest side >= {cfg.min_box_side:g} px, "
