@@ -284,6 +284,26 @@ def test_replace_dir_by_two_writers_keeps_one_whole_folder(tmp_path: Path) -> No
         t.join()
     assert errors == [] and (final / "v").read_text() in {str(i) for i in range(8)}
     assert [p.name for p in tmp_path.iterdir()] == ["set"]  # no temporary or old folder left
+    # a move that fails for another reason puts the former folder back and raises
+    import errno
+
+    from synthaug.data import seedset
+
+    keep = (final / "v").read_text()
+    bad = tmp_path / ".set.tmp-bad"
+    bad.mkdir()
+    real_replace = os.replace
+
+    def denied(a: Any, b: Any) -> None:
+        if Path(a) == bad:
+            raise PermissionError(errno.EACCES, "denied")
+        real_replace(a, b)
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(seedset.os, "replace", denied)
+        with pytest.raises(PermissionError):
+            replace_dir(bad, final)
+    assert (final / "v").read_text() == keep and sorted(p.name for p in tmp_path.iterdir()) == [".set.tmp-bad", "set"]
 
 
 def test_mining_round_choice_options_reach_the_training(ws: dict[str, Path], tmp_path: Path) -> None:

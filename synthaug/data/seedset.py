@@ -47,6 +47,7 @@ Example:
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import os
@@ -133,13 +134,17 @@ def replace_dir(tmp: Path, final: Path) -> None:
                 continue
         try:
             os.replace(tmp, final)
-        except OSError as e:  # another writer's folder landed in between: replace that one
-            if e.errno not in (errno.ENOTEMPTY, errno.EEXIST):
-                raise
-            continue
-        finally:
-            if old is not None:
-                shutil.rmtree(old, ignore_errors=True)
+        except OSError as e:
+            if e.errno in (errno.ENOTEMPTY, errno.EEXIST):  # another writer's folder landed in between: replace it
+                if old is not None:
+                    shutil.rmtree(old, ignore_errors=True)
+                continue
+            if old is not None:  # put the former folder back: nothing lost
+                with contextlib.suppress(OSError):
+                    os.replace(old, final)
+            raise
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
         return
 
 
