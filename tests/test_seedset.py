@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import os
+import threading
 
 import cv2
 import numpy as np
 import pytest
 
-from synthaug.data.seedset import SeedSet, crop_geometry, crop_patch, write_seedset
+from synthaug.data import seedset
+from synthaug.data.seedset import SeedSet, crop_geometry, crop_patch, replace_dir, write_seedset
 
 
 def _smooth(h=120, w=160, seed=0):
@@ -150,6 +153,50 @@ def test_write_errors(tmp_path):
         write_seedset(tmp_path / "x", patches=(), backgrounds=(), boxes=(), centres=(), crops=(), records=[],
                       frames=[], background_frames=[], metadata={})
     assert not (tmp_path / "x").exists()
+
+
+def test_replace_dir_by_two_writers_keeps_one_whole_folder(tmp_path):
+    # two writers replacing one folder at once (the runner's jobs re-ingesting one seed, stop 81)
+    final = tmp_path / "set"
+    final.mkdir()
+    (final / "v").write_text("old")
+    tmps = []
+    for i in range(8):
+        t = tmp_path / f".set.tmp-{i}"
+        t.mkdir()
+        (t / "v").write_text(str(i))
+        tmps.append(t)
+    errors = []
+
+    def swap(t):
+        try:
+            replace_dir(t, final)
+        except BaseException as e:  # noqa: BLE001 - reported by the assertion below
+            errors.append(e)
+
+    threads = [threading.Thread(target=swap, args=(t,)) for t in tmps]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == [] and (final / "v").read_text() in {str(i) for i in range(8)}
+    assert [p.name for p in tmp_path.iterdir()] == ["set"]  # no temporary or old folder left
+    # a move that fails for another reason puts the former folder back and raises
+    keep = (final / "v").read_text()
+    bad = tmp_path / ".set.tmp-bad"
+    bad.mkdir()
+    real_replace = os.replace
+
+    def denied(a, b):
+        if os.fspath(a) == os.fspath(bad):
+            raise PermissionError(errno.EACCES, "denied")
+        real_replace(a, b)
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(seedset.os, "replace", denied)
+        with pytest.raises(PermissionError):
+            replace_dir(bad, final)
+    assert (final / "v").read_text() == keep and sorted(p.name for p in tmp_path.iterdir()) == [".set.tmp-bad", "set"]
 
 
 def test_interrupted_write_leaves_nothing(tmp_path, monkeypatch):

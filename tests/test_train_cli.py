@@ -255,57 +255,6 @@ def test_two_trainings_on_one_ingest_folder_take_turns(ws: dict[str, Path], tmp_
     assert all(np.array_equal(out[0].patches, out[i].patches) for i in (1, 2)) and len(out[0]) >= 6
 
 
-def test_replace_dir_by_two_writers_keeps_one_whole_folder(tmp_path: Path) -> None:
-    import threading
-
-    from synthaug.data.seedset import replace_dir
-
-    final = tmp_path / "set"
-    final.mkdir()
-    (final / "v").write_text("old")
-    tmps = []
-    for i in range(8):
-        t = tmp_path / f".set.tmp-{i}"
-        t.mkdir()
-        (t / "v").write_text(str(i))
-        tmps.append(t)
-    errors: list[BaseException] = []
-
-    def swap(t: Path) -> None:
-        try:
-            replace_dir(t, final)
-        except BaseException as e:  # noqa: BLE001 - reported by the assertion below
-            errors.append(e)
-
-    threads = [threading.Thread(target=swap, args=(t,)) for t in tmps]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    assert errors == [] and (final / "v").read_text() in {str(i) for i in range(8)}
-    assert [p.name for p in tmp_path.iterdir()] == ["set"]  # no temporary or old folder left
-    # a move that fails for another reason puts the former folder back and raises
-    import errno
-
-    from synthaug.data import seedset
-
-    keep = (final / "v").read_text()
-    bad = tmp_path / ".set.tmp-bad"
-    bad.mkdir()
-    real_replace = os.replace
-
-    def denied(a: Any, b: Any) -> None:
-        if Path(a) == bad:
-            raise PermissionError(errno.EACCES, "denied")
-        real_replace(a, b)
-
-    with pytest.MonkeyPatch.context() as m:
-        m.setattr(seedset.os, "replace", denied)
-        with pytest.raises(PermissionError):
-            replace_dir(bad, final)
-    assert (final / "v").read_text() == keep and sorted(p.name for p in tmp_path.iterdir()) == [".set.tmp-bad", "set"]
-
-
 def test_mining_round_choice_options_reach_the_training(ws: dict[str, Path], tmp_path: Path) -> None:
     # --mining-select / --mining-patience (the runner's options) are synthaug train's too, and recorded
     out = tmp_path / "ap.pt"
