@@ -22,7 +22,6 @@ import sys
 
 import numpy as np
 
-from synthaug.evaluate.protocol import SizeBucket
 from synthaug.evaluate.results import ProtocolResult
 from synthaug.evaluate.stats import bootstrap_statistic, paired_difference
 
@@ -60,32 +59,33 @@ def _boxes(result: ProtocolResult, bucket) -> tuple[float, float]:
     return (float(np.median(x)), float(m.mean())) if x.size else (float("nan"), float("nan"))
 
 
-def _top_n(result: ProtocolResult, seed: int, k: int, k_loose: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(is_tp, size, loose)`` of one seed's top-N pooled detections at IoU index ``k``: the object's size for a
+def _top_n(result: ProtocolResult, k: int, k_loose: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per seed, ``(is_tp, size, loose)`` of its top-N pooled detections at IoU index ``k``: the object's size for a
     true positive, the box's own for a false positive; whether it matches at IoU index ``k_loose`` (a false positive
     that does is a misplaced box on an object, not a detection of background); N = the labelled objects."""
-    videos = result.seeds[seed].videos
-    scores = np.concatenate([v.scores for v in videos])
-    tp = np.concatenate([np.asarray(v.tp[k], bool) for v in videos])
-    loose = np.concatenate([np.asarray(v.tp[k_loose], bool) for v in videos])
-    size = np.concatenate([np.where(np.asarray(v.tp[k], bool), v.match_size[k], v.det_size) for v in videos])
-    n = int(sum(v.gt_size.size for v in videos))
-    order = np.argsort(-scores, kind="stable")[:n]  # the pooled order of synthaug.evaluate.stats.PooledRanking
-    return tp[order], size[order], loose[order]
+    out = []
+    for seed in result.seed_ids:
+        videos = result.seeds[seed].videos
+        scores = np.concatenate([v.scores for v in videos])
+        tp = np.concatenate([np.asarray(v.tp[k], bool) for v in videos])
+        loose = np.concatenate([np.asarray(v.tp[k_loose], bool) for v in videos])
+        size = np.concatenate([np.where(np.asarray(v.tp[k], bool), v.match_size[k], v.det_size) for v in videos])
+        n = int(sum(v.gt_size.size for v in videos))
+        order = np.argsort(-scores, kind="stable")[:n]  # the pooled order of synthaug.evaluate.stats.PooledRanking
+        out.append((tp[order], size[order], loose[order]))
+    return out
 
 
-def _at_r_precision(result: ProtocolResult, bucket, k: int, k_loose: int) -> tuple[float, float, float, float]:
-    """Means over seeds, in the top N: objects of the bucket found, false positives of the bucket's size, those of
-    them that match an object at the loose IoU; and the precision there."""
-    found, fps, near, prec = [], [], [], []
-    for s in result.seed_ids:
-        tp, size, loose = _top_n(result, s, k, k_loose)
+def _at_r_precision(tops: list[tuple[np.ndarray, np.ndarray, np.ndarray]], bucket) -> tuple[float, float, float]:
+    """Means over seeds (``tops``: :func:`_top_n`), in the top N: objects of the bucket found, false positives of the
+    bucket's size, and those of them that match an object at the loose IoU."""
+    found, fps, near = [], [], []
+    for tp, size, loose in tops:
         inb = bucket.contains(size)
         found.append(float((tp & inb).sum()))
         fps.append(float((~tp & inb).sum()))
         near.append(float((~tp & inb & loose).sum()))
-        prec.append(float(tp.mean()) if tp.size else float("nan"))
-    return float(np.mean(found)), float(np.mean(fps)), float(np.mean(near)), float(np.mean(prec))
+    return float(np.mean(found)), float(np.mean(fps)), float(np.mean(near))
 
 
 def _false_positive_lines(base: ProtocolResult, cond: ProtocolResult) -> list[str]:
@@ -94,9 +94,9 @@ def _false_positive_lines(base: ProtocolResult, cond: ProtocolResult) -> list[st
     k = proto.iou_thresholds.index(proto.main_iou)
     k_loose = int(np.argmin(proto.iou_thresholds))
     kw = dict(resamples=proto.bootstrap.resamples, seed=proto.bootstrap.seed, ci=proto.bootstrap.ci)
-    every = SizeBucket(0.0, None)
+    tops_b, tops_c = _top_n(base, k, k_loose), _top_n(cond, k, k_loose)
     d_all = paired_difference(base.pools(), cond.pools(), **kw)
-    qb, qc = (_at_r_precision(r, every, k, k_loose)[3] for r in (base, cond))
+    qb, qc = (float(np.mean([tp.mean() if tp.size else np.nan for tp, _, _ in t])) for t in (tops_b, tops_c))
     lines = ["", f"All sizes: AP@{proto.main_iou:g} {base.mean_ap():.3f} / {cond.mean_ap():.3f}, "
                  f"{d_all.difference.format(signed=True)}; precision at the R-precision point {qb:.3f} / {qc:.3f}.",
              "", f"| size | objects | AP@{proto.main_iou:g} of the bucket (COCO): base / cond, Δ [CI] | objects "
@@ -106,8 +106,8 @@ def _false_positive_lines(base: ProtocolResult, cond: ProtocolResult) -> list[st
         if base.n_objects(bucket) == 0:
             continue
         d = paired_difference(base.pools(bucket=bucket), cond.pools(bucket=bucket), **kw)
-        fb, pb, nb, _ = _at_r_precision(base, bucket, k, k_loose)
-        fc, pc, nc, _ = _at_r_precision(cond, bucket, k, k_loose)
+        fb, pb, nb = _at_r_precision(tops_b, bucket)
+        fc, pc, nc = _at_r_precision(tops_c, bucket)
         lines.append(f"| {bucket.label} | {base.n_objects(bucket)} | {base.mean_ap(bucket=bucket):.3f} / "
                      f"{cond.mean_ap(bucket=bucket):.3f}, {d.difference.format(signed=True)} | {fb:.1f} / {fc:.1f} | "
                      f"{pb:.1f} / {pc:.1f} | {nb:.1f} / {nc:.1f} |")

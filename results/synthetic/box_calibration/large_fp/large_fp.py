@@ -16,9 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-def _xyxy(b: np.ndarray) -> np.ndarray:
-    return np.c_[b[:, :2], b[:, :2] + b[:, 2:4]]
+from synthaug.data.boxes import xywh_to_xyxy
 
 
 def detections(seed: int, cache: Path) -> list[Path]:
@@ -69,7 +67,7 @@ def count(path: Path) -> str:
                 continue
             d = np.asarray(d, float)
             g = np.zeros((0, 4)) if g is None or len(g) == 0 else np.asarray(g, float)[:, :4]
-            dx, gx = _xyxy(d[:, :4]), _xyxy(g)
+            dx, gx = xywh_to_xyxy(d[:, :4]), xywh_to_xyxy(g)
             ix = np.clip(np.minimum(dx[:, None, 2], gx[None, :, 2]) - np.maximum(dx[:, None, 0], gx[None, :, 0]), 0, None)
             iy = np.clip(np.minimum(dx[:, None, 3], gx[None, :, 3]) - np.maximum(dx[:, None, 1], gx[None, :, 1]), 0, None)
             inter = ix * iy
