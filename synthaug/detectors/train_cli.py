@@ -168,6 +168,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quantize", action="store_true",
                         help="round the synthetic positives to 8-bit levels, as the real frames are stored (default: "
                              "the renderer's continuous values, the paper's)")
+    parser.add_argument("--realism-keep", type=float_in(0.0, 1.0, low_open=True), default=1.0, metavar="FRACTION",
+                        help="draw synthetic positives 1/FRACTION times over and keep the FRACTION that a critic in HOG "
+                             "features, trained on the seed set's real patches, finds least synthetic (cross-fitted by "
+                             "seed; default 1: every drawn patch, the paper's)")
     parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own); "
@@ -315,7 +319,8 @@ def main(args: argparse.Namespace) -> int:
                                  copy_paste_ratio=args.copy_paste_ratio, synthetic_share=args.synthetic_share,
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,
                                  faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
-                                 quantize=args.quantize, background_sampling=args.background_sampling),
+                                 quantize=args.quantize, background_sampling=args.background_sampling,
+                                 realism_keep=args.realism_keep),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

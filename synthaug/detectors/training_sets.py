@@ -14,6 +14,8 @@ seed frames HOG mines on its own (:func:`mining_frames`). All patches are float
 
 from __future__ import annotations
 
+import math
+
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -261,6 +263,7 @@ def synthetic_positives(
     shape_variation: float = 0.0,
     quantize: bool = False,
     background_sampling: str = "seed",
+    realism_keep: float = 1.0,
     return_seed_index: bool = False,
 ) -> Tensor | tuple[Tensor, np.ndarray]:
     """``count`` synthetic object patches generated from a capture-parameter fit.
@@ -296,6 +299,11 @@ def synthetic_positives(
             synthetic patch has the exactly flat areas that real ones have.
         background_sampling: ``"seed"`` (the paper: each object on its own seed's background) or ``"other"`` (on
             another seed's; :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``background_sampling``).
+        realism_keep: 1 (the paper: every drawn patch) or the fraction of drawn patches kept: ``ceil(count /
+            realism_keep)`` are drawn (the first ``count`` of them are the patches drawn without the filter) and the
+            ``count`` that a critic in HOG features finds least synthetic against the seed set's real patches are
+            kept, in their drawn order (:func:`~synthaug.detectors.critic.least_synthetic`, cross-fitted by seed,
+            seeded by ``seed``; after ``quantize``, so the critic sees what training sees). Needs >= 2 seeds.
         return_seed_index: also return each patch's ``seed_index`` (the seed whose capture parameters it was
             drawn with), so that a seed's real and synthetic patches can be held out together
             (:func:`synthaug.diagnose.gap.training_samples`).
@@ -309,26 +317,38 @@ def synthetic_positives(
 
     if count < 0:
         raise ValueError(f"count must be >= 0, got {count}")
+    if not (isinstance(realism_keep, (int, float)) and 0 < realism_keep <= 1):
+        raise ValueError(f"realism_keep must be a fraction in (0, 1], got {realism_keep!r}")
+    drawn = count if realism_keep == 1 else int(math.ceil(count / realism_keep - 1e-9))
     p = int(seedset.patches.shape[-1])
     if count == 0:
         empty = torch.zeros(0, 1, p, p)
         return (empty, np.zeros(0, np.int64)) if return_seed_index else empty
     ds = SyntheticObjectDataset(
-        mesh, seedset, params=str(fit_file), length=count, patch_size=p, negative_fraction=0.0,
+        mesh, seedset, params=str(fit_file), length=drawn, patch_size=p, negative_fraction=0.0,
         effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
         seed_geometry=seed_geometry, pose_sampling=pose_sampling, object_box=object_box,  # type: ignore[arg-type]
         object_box_share=object_box_share,
         shape_variation=shape_variation, background_sampling=background_sampling,  # type: ignore[arg-type]
     )
     out, seed_index = [], []
-    for start in range(0, count, batch):
-        items = ds.__getitems__(list(range(start, min(count, start + batch))))
+    for start in range(0, drawn, batch):
+        items = ds.__getitems__(list(range(start, min(drawn, start + batch))))
         out.append(torch.stack([img for img, _ in items]))
         seed_index += [int(t["seed_index"]) for _, t in items]
     patches = torch.cat(out).float().clamp(0, 1)
     if quantize:
         patches = quantize_levels(patches)
-    return (patches, np.array(seed_index, dtype=np.int64)) if return_seed_index else patches
+    groups = np.array(seed_index, dtype=np.int64)
+    if drawn > count:
+        from synthaug.detectors.critic import least_synthetic
+
+        if len(seedset) < 2:
+            raise ValueError(f"realism_keep < 1 needs a seed set of >= 2 seeds (the critic is cross-fitted by seed), "
+                             f"got {len(seedset)}")
+        keep = least_synthetic(np.asarray(seedset.patches), patches, groups, count, seed=seed)
+        patches, groups = patches[torch.from_numpy(keep)], groups[keep]
+    return (patches, groups) if return_seed_index else patches
 
 
 def negative_pool(seedset: Any, extra: int = 3000, *, seed: int = 0) -> Tensor:

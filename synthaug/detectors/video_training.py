@@ -233,6 +233,9 @@ class AddedPositives:
             :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``background_sampling``). None (the default):
             the detector family's (:data:`FAMILY_BACKGROUND_SAMPLING`: the CNN ``"other"``, the others ``"seed"``; a
             one-seed set ``"seed"``).
+        realism_keep: 1 (the paper) or the fraction of drawn synthetic positives kept: the ones a critic in HOG
+            features finds least synthetic against the seed set's real patches
+            (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_keep``).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; :data:`BY_COUNT` (``"count"``): every positive weighs the same, so the added ones
             hold ``added / (real + added)``; None (the default): the detector family's (:data:`FAMILY_SYNTHETIC_SHARE`:
@@ -259,6 +262,7 @@ class AddedPositives:
     quantize: bool = False
     background_sampling: str | None = None
     object_box_share: float = 1.0
+    realism_keep: float = 1.0
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
@@ -615,6 +619,11 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
                 and added.faded_copies <= 0):
             raise TrainingInputError("--synthetic-share", "there are no added positives to weigh: give --synthetic-ratio, "
                                      "--copy-paste-ratio, --perturb-copies, --downscaled-copies or --faded-copies")
+    if not 0 < added.realism_keep <= 1:
+        raise TrainingInputError("--realism-keep", f"must be a fraction in (0, 1], got {added.realism_keep}")
+    if added.realism_keep < 1 and synthetic_ratio <= 0:
+        raise TrainingInputError("--realism-keep", "there are no synthetic positives to filter: give --params (and a "
+                                                   "--synthetic-ratio above 0)")
     if added.quantize and synthetic_ratio <= 0:
         raise TrainingInputError("--quantize", "there are no synthetic positives to round: give --params (and a "
                                                "--synthetic-ratio above 0)")
@@ -832,7 +841,8 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                                        object_box=added.object_box, object_box_share=added.object_box_share,
                                        shape_variation=added.shape_variation,
                                        capture_sampling=added.capture_sampling, effects=effects,
-                                       quantize=added.quantize, background_sampling=background_sampling)
+                                       quantize=added.quantize, background_sampling=background_sampling,
+                                       realism_keep=added.realism_keep)
 
         t0 = time.perf_counter()
         syn = draw(params)
@@ -841,7 +851,8 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
         ts.positives = torch.cat([ts.positives, syn])
         say(f"synthetic: {n_syn} patches from {params}"
             f"{', without ' + ' and '.join(effects_off) if effects_off else ''}{', 8-bit' if added.quantize else ''}"
-            f"{where} ({time.perf_counter() - t0:.0f}s)")
+            f"{where}{f', the {added.realism_keep:.0%} least synthetic kept' if added.realism_keep < 1 else ''}"
+            f" ({time.perf_counter() - t0:.0f}s)")
     info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
                             "pose_sampling": pose_sampling,
                             **({"object_box": added.object_box} if added.object_box is not None else {}),
@@ -850,7 +861,8 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                             **({"capture_sampling": added.capture_sampling} if added.capture_sampling != "seed" else {}),
                             **({"effects_off": list(effects_off)} if effects_off else {}),
                             **({"quantize": True} if added.quantize else {}),
-                            **({"background_sampling": background_sampling} if background_sampling != "seed" else {})}
+                            **({"background_sampling": background_sampling} if background_sampling != "seed" else {}),
+                            **({"realism_keep": added.realism_keep} if added.realism_keep < 1 else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

@@ -144,6 +144,8 @@ class Condition:
             ``"other"`` (on another seed's; ``AddedPositives``' ``background_sampling``); None (the default): the
             family's (:data:`~synthaug.detectors.video_training.FAMILY_BACKGROUND_SAMPLING`), resolved here as the
             effects are.
+        realism_keep: 1 (the paper) or the fraction of drawn synthetic positives kept, those a critic in HOG features
+            finds least synthetic (``AddedPositives``' ``realism_keep``).
     """
 
     name: str
@@ -172,6 +174,7 @@ class Condition:
     quantize: bool = False
     background_sampling: str | None = None
     object_box_share: float = 1.0
+    realism_keep: float = 1.0
 
     def __post_init__(self) -> None:
         off = self.effects_off
@@ -198,7 +201,7 @@ class Condition:
                 d.pop(k)
         for k, default in (("capture_sampling", "seed"), ("effects_off", ()),  # added later still: the same, with
                            ("dcnn_refit", False), ("quantize", False), ("background_sampling", "seed"),
-                           ("object_box_share", 1.0)):
+                           ("object_box_share", 1.0), ("realism_keep", 1.0)):
             if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
@@ -420,7 +423,8 @@ class ProtocolRunner:
                                  effects_off=None if condition.effects_off == resolve_effects_off(condition.kind, None)
                                  else condition.effects_off,
                                  refit=self._refit(condition, seed) if condition.dcnn_refit else None,
-                                 quantize=condition.quantize, background_sampling=condition.background_sampling),
+                                 quantize=condition.quantize, background_sampling=condition.background_sampling,
+                                 realism_keep=condition.realism_keep),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -714,6 +718,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          dcnn_refit: Sequence[bool] = (False,),
                          quantize: Sequence[bool] = (False,),
                          background_sampling: Sequence[str | None] = (None,),
+                         realism_keep: Sequence[float] = (1.0,),
                          synthetic_downscaled: int = 0,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
@@ -747,7 +752,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     once per value (True: the synthetic positives rounded to 8-bit levels, :class:`Condition`'s ``quantize``).
     ``background_sampling``: each synthetic ratio once per value (``"seed"``: the paper, each object on its own
     seed's background; ``"other"``: on another seed's; None: the family's, :class:`Condition`'s
-    ``background_sampling``). ``synthetic_downscaled``: every synthetic condition also holds that many downscaled
+    ``background_sampling``). ``realism_keep``: each synthetic ratio once per value (1: every drawn positive; under
+    1, that fraction of them, the least synthetic to a critic in HOG features, :class:`Condition`'s
+    ``realism_keep``). ``synthetic_downscaled``: every synthetic condition also holds that many downscaled
     copies of each real seed (the two together, against each alone).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
@@ -756,6 +763,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     results: dict[str, dict[str, ProtocolResult]] = {}
     refits = list(dict.fromkeys(bool(v) for v in dcnn_refit))
     rounding = list(dict.fromkeys(bool(v) for v in quantize))
+    keeps = list(dict.fromkeys(float(v) for v in realism_keep))
+    if any(not 0 < v <= 1 for v in keeps):
+        raise ValueError(f"realism_keep values must be fractions in (0, 1], got {keeps}")
     check_dcnn_refit(detectors, refits)
     check_placement(pose_sampling, object_box)
     for kind in detectors:
@@ -777,17 +787,18 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{'' if not off else ', without ' + ' and '.join(off)}"
                             f"{', d_CNN refit every round' if rf else ''}"
                             f"{', 8-bit' if qz else ''}"
-                            f"{'' if bs == 'seed' else ', backgrounds of other seeds'})"
+                            f"{'' if bs == 'seed' else ', backgrounds of other seeds'}"
+                            f"{'' if rk == 1 else f', the {rk:.0%} least synthetic of {1 / rk:.3g}x drawn'})"
                             f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}", kind,
                             seed_count=seed_count, downscaled_copies=int(synthetic_downscaled),
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
                             object_box_share=1.0 if ob is None else float(object_box_share),
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
-                            quantize=qz, background_sampling=bs)
+                            quantize=qz, background_sampling=bs, realism_keep=rk)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
                   for cs in capture_sampling for off in offs for rf in refits
-                  for qz in rounding for bs in grounds]
+                  for qz in rounding for bs in grounds for rk in keeps]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -968,6 +979,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the synthetic objects' backgrounds, one condition per value: seed (the paper: each on its "
                          "own seed's background), other (each on another seed's, its capture parameters its own) or "
                          "default (the family's: other for the CNN, seed for the others)")
+    sy.add_argument("--realism-keep", nargs="+", type=float_in(0.0, 1.0, low_open=True), default=[1.0],
+                    metavar="FRACTION",
+                    help="the synthetic positives drawn 1/FRACTION times over, the FRACTION that a critic in HOG "
+                         "features finds least synthetic against the seed set's real patches kept (cross-fitted by "
+                         "seed), one condition per value; 1: every drawn positive (the paper)")
     return p
 
 
@@ -1047,7 +1063,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              dcnn_refit=tuple(v == "on" for v in args.dcnn_refit),
                              quantize=tuple(v == "on" for v in args.quantize),
                              background_sampling=tuple(None if b == "default" else b for b in args.background_sampling),
-                             out=args.out)
+                             realism_keep=tuple(args.realism_keep), out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 

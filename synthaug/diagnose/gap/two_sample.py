@@ -10,87 +10,8 @@ from typing import Any, Sequence
 import numpy as np
 from torch import Tensor
 
+from synthaug.detectors.critic import _standardiser, fit_logistic
 from synthaug.diagnose.gap.features import _features_pair
-
-
-
-def fit_logistic(x: np.ndarray, y: np.ndarray, *, C: float = 1.0, max_iter: int = 100,
-                 tol: float = 1e-9) -> tuple[np.ndarray, float]:
-    """L2-penalised logistic regression, ``min Σ_i log(1 + exp(-s_i (x_i·w + b))) + ||w||² / (2C)``.
-
-    The objective of scikit-learn's ``LogisticRegression(C=C)`` (intercept not penalised); scikit-learn is
-    not a dependency of synthaug. Minimised by Newton's method with a backtracking line search, from zero —
-    deterministic, and quadratic convergence also when the classes are (nearly) separable, where first-order
-    methods crawl. With more features than samples (HOG, CNN activations of a seed set), the problem is
-    solved exactly in the span of the samples: the optimum satisfies ``w = -C Xᵀ(σ(z) - y)``, so with
-    ``Xᵀ = Q R`` (thin QR) ``w = Q β`` and ``x_i·w = (Rᵀ β)_i``, an n-dimensional problem with the same
-    penalty ``||β||²``.
-
-    Args:
-        x: features ``(N, D)`` (standardise them first: the penalty is isotropic).
-        y: labels in {0, 1}, ``(N,)``.
-        C: inverse penalty strength.
-        max_iter: Newton iterations.
-        tol: stop when the gradient's largest entry is below ``tol`` times ``N``.
-
-    Returns:
-        ``(w, b)``: weights ``(D,)`` and intercept; P(y = 1 | x) = σ(x·w + b).
-
-    Example:
-        >>> w, b = fit_logistic(np.array([[-1.0], [1.0]]), np.array([0, 1]))
-        >>> round(float(w[0]), 3), abs(round(b, 6))  # the optimum solves w = 2 σ(-w)
-        (0.675, 0.0)
-    """
-    from scipy.special import expit
-
-    if not C > 0:
-        raise ValueError(f"C must be > 0, got {C}")
-    x = np.asarray(x, dtype=np.float64)
-    y = np.asarray(y, dtype=np.float64)
-    n, d = x.shape
-    if x.shape[0] != y.shape[0]:
-        raise ValueError(f"x and y must have the same number of rows, got {x.shape[0]} and {y.shape[0]}")
-    q = None
-    if d > n:
-        q, r = np.linalg.qr(x.T)  # (D, N), (N, N)
-        z_feats = r.T
-    else:
-        z_feats = x
-    k = z_feats.shape[1]
-    design = np.concatenate([z_feats, np.ones((n, 1))], axis=1)
-    penalty = np.full(k + 1, 1.0 / C)
-    penalty[k] = 0.0
-
-    def objective(theta: np.ndarray) -> float:
-        z = design @ theta
-        return float(np.sum(np.logaddexp(0.0, z) - y * z) + 0.5 * np.sum(penalty * theta * theta))
-
-    theta = np.zeros(k + 1)
-    f = objective(theta)
-    for _ in range(max_iter):
-        p = expit(design @ theta)
-        grad = design.T @ (p - y) + penalty * theta
-        if np.abs(grad).max() < tol * n:
-            break
-        hess = (design * (p * (1 - p))[:, None]).T @ design
-        hess[np.diag_indices_from(hess)] += penalty + 1e-12
-        step = np.linalg.solve(hess, grad)
-        t, slope = 1.0, float(grad @ step)
-        while True:  # Armijo backtracking: a full Newton step can overshoot far from the optimum
-            candidate = theta - t * step
-            f_new = objective(candidate)
-            if f_new <= f - 1e-4 * t * slope or t < 1e-10:
-                break
-            t *= 0.5
-        theta, f = candidate, f_new
-    w = theta[:k] if q is None else q @ theta[:k]
-    return w.copy(), float(theta[k])
-
-
-def _standardiser(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    mu = x.mean(0)
-    sd = x.std(0)
-    return mu, np.where(sd > 1e-12, sd, 1.0)  # constant features stay constant (0), not NaN
 
 
 def binomial_ci(successes: int, trials: int, *, confidence: float = 0.95, method: str = "wilson") -> tuple[float, float]:

@@ -1,0 +1,208 @@
+"""A realism critic in a detector's features: which synthetic patches look synthetic to a linear classifier.
+
+The paper fits the capture parameters so that each seed's render is close to the real seed *in the detector's
+features*; the random poses drawn afterwards are not checked. :func:`realism_scores` checks them: an L2 logistic
+regression (:func:`fit_logistic`) trained to tell the seed set's real patches from synthetic ones in HOG features
+gives every synthetic patch a "looks synthetic" logit, cross-fitted by seed (a patch is scored by a critic that never
+saw its own seed, real or synthetic), and :func:`least_synthetic` keeps the patches the critic finds least synthetic
+(discriminator rejection sampling, Azadi et al., ICLR 2019, with a linear critic).
+
+:func:`fit_logistic` is also the classifier of the two-sample test
+(:func:`synthaug.diagnose.gap.classifier_two_sample_test`); it lives here, upstream of the diagnosis, so that the
+training sets can use it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+from torch import Tensor
+
+__all__ = ["fit_logistic", "hog_features", "least_synthetic", "realism_scores"]
+
+
+def fit_logistic(x: np.ndarray, y: np.ndarray, *, C: float = 1.0, max_iter: int = 100,
+                 tol: float = 1e-9) -> tuple[np.ndarray, float]:
+    """L2-penalised logistic regression, ``min Σ_i log(1 + exp(-s_i (x_i·w + b))) + ||w||² / (2C)``.
+
+    The objective of scikit-learn's ``LogisticRegression(C=C)`` (intercept not penalised); scikit-learn is
+    not a dependency of synthaug. Minimised by Newton's method with a backtracking line search, from zero —
+    deterministic, and quadratic convergence also when the classes are (nearly) separable, where first-order
+    methods crawl. With more features than samples (HOG, CNN activations of a seed set), the problem is
+    solved exactly in the span of the samples: the optimum satisfies ``w = -C Xᵀ(σ(z) - y)``, so with
+    ``Xᵀ = Q R`` (thin QR) ``w = Q β`` and ``x_i·w = (Rᵀ β)_i``, an n-dimensional problem with the same
+    penalty ``||β||²``.
+
+    Args:
+        x: features ``(N, D)`` (standardise them first: the penalty is isotropic).
+        y: labels in {0, 1}, ``(N,)``.
+        C: inverse penalty strength.
+        max_iter: Newton iterations.
+        tol: stop when the gradient's largest entry is below ``tol`` times ``N``.
+
+    Returns:
+        ``(w, b)``: weights ``(D,)`` and intercept; P(y = 1 | x) = σ(x·w + b).
+
+    Example:
+        >>> w, b = fit_logistic(np.array([[-1.0], [1.0]]), np.array([0, 1]))
+        >>> round(float(w[0]), 3), abs(round(b, 6))  # the optimum solves w = 2 σ(-w)
+        (0.675, 0.0)
+    """
+    from scipy.special import expit
+
+    if not C > 0:
+        raise ValueError(f"C must be > 0, got {C}")
+    x = np.asarray(x, dtype=np.float64)
+    y = np.asarray(y, dtype=np.float64)
+    n, d = x.shape
+    if x.shape[0] != y.shape[0]:
+        raise ValueError(f"x and y must have the same number of rows, got {x.shape[0]} and {y.shape[0]}")
+    q = None
+    if d > n:
+        q, r = np.linalg.qr(x.T)  # (D, N), (N, N)
+        z_feats = r.T
+    else:
+        z_feats = x
+    k = z_feats.shape[1]
+    design = np.concatenate([z_feats, np.ones((n, 1))], axis=1)
+    penalty = np.full(k + 1, 1.0 / C)
+    penalty[k] = 0.0
+
+    def objective(theta: np.ndarray) -> float:
+        z = design @ theta
+        return float(np.sum(np.logaddexp(0.0, z) - y * z) + 0.5 * np.sum(penalty * theta * theta))
+
+    theta = np.zeros(k + 1)
+    f = objective(theta)
+    for _ in range(max_iter):
+        p = expit(design @ theta)
+        grad = design.T @ (p - y) + penalty * theta
+        if np.abs(grad).max() < tol * n:
+            break
+        hess = (design * (p * (1 - p))[:, None]).T @ design
+        hess[np.diag_indices_from(hess)] += penalty + 1e-12
+        step = np.linalg.solve(hess, grad)
+        t, slope = 1.0, float(grad @ step)
+        while True:  # Armijo backtracking: a full Newton step can overshoot far from the optimum
+            candidate = theta - t * step
+            f_new = objective(candidate)
+            if f_new <= f - 1e-4 * t * slope or t < 1e-10:
+                break
+            t *= 0.5
+        theta, f = candidate, f_new
+    w = theta[:k] if q is None else q @ theta[:k]
+    return w.copy(), float(theta[k])
+
+
+def _standardiser(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    mu = x.mean(0)
+    sd = x.std(0)
+    return mu, np.where(sd > 1e-12, sd, 1.0)  # constant features stay constant (0), not NaN
+
+
+def hog_features(patches: Tensor | np.ndarray, config: Any = None) -> np.ndarray:
+    """HOG descriptors (:func:`~synthaug.detectors.hog.hog`, the detector's default settings unless ``config``) of
+    grayscale patches: uint8 ``(N, P, P)`` as a seed set stores them, or float ``(N, 1, P, P)`` in [0, 1].
+
+    Returns:
+        float64 ``(N, D)``.
+    """
+    from synthaug.detectors.hog import DEFAULT_HOG, hog
+
+    x = torch.as_tensor(np.asarray(patches)) if isinstance(patches, np.ndarray) else patches
+    if not isinstance(x, Tensor):
+        raise ValueError(f"patches must be a torch.Tensor or numpy array, got {type(patches).__name__}")
+    if x.dim() == 3:
+        x = x[:, None]
+    if x.dim() != 4 or x.shape[1] != 1:
+        raise ValueError(f"patches must be grayscale (N, P, P) or (N, 1, P, P), got shape {tuple(x.shape)}")
+    x = x.float() / 255.0 if x.dtype == torch.uint8 else x.float()
+    with torch.no_grad():
+        return torch.cat([hog(c, config or DEFAULT_HOG) for c in x.split(1024)]).double().numpy()
+
+
+def realism_scores(
+    real: Tensor | np.ndarray,
+    synthetic: Tensor | np.ndarray,
+    groups: np.ndarray,
+    *,
+    folds: int = 2,
+    synthetic_per_real: int = 5,
+    C: float = 1.0,
+    seed: int = 0,
+) -> np.ndarray:
+    """Cross-fitted "looks synthetic" logit of every synthetic patch, in HOG features.
+
+    The real seeds are split at random into ``folds`` parts. For each part, a logistic regression (:func:`fit_logistic`,
+    features standardised on its training rows) learns real (0) vs synthetic (1) from the *other* parts' real seeds
+    and the synthetic patches drawn with those seeds (at most ``synthetic_per_real`` per real seed, drawn without
+    replacement), and scores the synthetic patches of its own part. So no patch is scored by a critic that saw its
+    seed: a seed's background or fitted render cannot make its own patches look real.
+
+    Args:
+        real: the seed set's real patches, ``(N, P, P)`` uint8 or ``(N, 1, P, P)`` float in [0, 1]; seed ``i`` is row i.
+        synthetic: synthetic patches, same formats.
+        groups: ``(M,)`` int, the seed each synthetic patch was drawn with (its capture parameters), in ``[0, N)``.
+        folds: parts of the seeds (>= 2, <= N).
+        synthetic_per_real: cap on the synthetic training rows, per real training row.
+        C: inverse L2 penalty.
+        seed: seeds the parts and the subsample (``numpy.random.default_rng``).
+
+    Returns:
+        float64 ``(M,)``: the critic's logit ``x·w + b`` of each synthetic patch (higher: looks more synthetic).
+    """
+    fr, fs = hog_features(real), hog_features(synthetic)
+    n, m = len(fr), len(fs)
+    groups = np.asarray(groups)
+    if groups.shape != (m,) or not np.issubdtype(groups.dtype, np.integer):
+        raise ValueError(f"groups must be ({m},) integers (the seed of each synthetic patch), got "
+                         f"{groups.dtype} {groups.shape}")
+    if m and (groups.min() < 0 or groups.max() >= n):
+        raise ValueError(f"groups must lie in [0, {n}) (one real patch per seed), got [{groups.min()}, {groups.max()}]")
+    if not (isinstance(folds, int) and 2 <= folds <= n):
+        raise ValueError(f"folds must be an int in [2, number of real seeds = {n}], got {folds!r}: the critic of "
+                         f"each part is trained on the other parts' seeds")
+    if not (isinstance(synthetic_per_real, int) and synthetic_per_real >= 1):
+        raise ValueError(f"synthetic_per_real must be an int >= 1, got {synthetic_per_real!r}")
+    rng = np.random.default_rng(seed)
+    part = np.empty(n, np.int64)
+    for j, idx in enumerate(np.array_split(rng.permutation(n), folds)):
+        part[idx] = j
+    scores = np.zeros(m)
+    for j in range(folds):
+        train_real, train_syn = np.flatnonzero(part != j), np.flatnonzero(part[groups] != j)
+        if len(train_syn) == 0:
+            raise ValueError(f"no synthetic patch was drawn with the seeds outside part {j}: draw more patches")
+        cap = synthetic_per_real * len(train_real)
+        if len(train_syn) > cap:
+            train_syn = np.sort(rng.choice(train_syn, cap, replace=False))
+        x = np.concatenate([fr[train_real], fs[train_syn]])
+        y = np.r_[np.zeros(len(train_real)), np.ones(len(train_syn))]
+        mu, sd = _standardiser(x)
+        w, b = fit_logistic((x - mu) / sd, y, C=C)
+        mine = part[groups] == j
+        scores[mine] = ((fs[mine] - mu) / sd) @ w + b
+    return scores
+
+
+def least_synthetic(
+    real: Tensor | np.ndarray,
+    synthetic: Tensor | np.ndarray,
+    groups: np.ndarray,
+    count: int,
+    **kwargs: Any,
+) -> np.ndarray:
+    """Indices of the ``count`` synthetic patches :func:`realism_scores` finds least synthetic, in their drawn order.
+
+    Ties keep the earlier patch. ``kwargs`` go to :func:`realism_scores`.
+
+    Returns:
+        int64 ``(count,)``, increasing.
+    """
+    m = len(synthetic)
+    if not (isinstance(count, (int, np.integer)) and 0 <= count <= m):
+        raise ValueError(f"count must be an int in [0, {m}], got {count!r}")
+    scores = realism_scores(real, synthetic, groups, **kwargs)
+    return np.sort(np.argsort(scores, kind="stable")[:count]).astype(np.int64)
