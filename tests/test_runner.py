@@ -659,6 +659,30 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
     assert [a.quantize for a in _added_positives(ws, monkeypatch, plain, eight)] == [False, True]
 
 
+def test_realism_keep_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkeypatch, capsys):
+    """``--realism-keep 1 0.25`` adds a filtered condition per synthetic ratio (named with the fraction kept and the
+    draw, ``realism_keep`` in its key and its training's ``AddedPositives``); 1, the default, keeps every former key
+    and name; a value out of (0, 1] is refused."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           realism_keep=(1.0, 0.25, 0.25))
+    real, plain, kept = made
+    assert "realism_keep" not in plain.identity() and kept.identity()["realism_keep"] == 0.25
+    assert {k: v for k, v in kept.identity().items() if k != "realism_keep"} == plain.identity()
+    assert plain.name == "hog / 12 seeds + 20x synthetic (f{seed})"
+    assert kept.name == "hog / 12 seeds + 20x synthetic (f{seed}, the 25% least synthetic of 4x drawn)"
+    assert [a.realism_keep for a in _added_positives(ws, monkeypatch, plain, kept)] == [1.0, 0.25]
+    parse = R.build_parser().parse_args
+    assert parse(["synthetic", "--out", "x"]).realism_keep == [1.0]
+    assert parse(["synthetic", "--realism-keep", "1", "0.5", "--out", "x"]).realism_keep == [1.0, 0.5]
+    with pytest.raises(SystemExit) as e:
+        parse(["synthetic", "--realism-keep", "1.5", "--out", "x"])
+    assert e.value.code == 2 and "--realism-keep" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="realism_keep"):
+        R.synthetic_comparison(None, detectors=["hog"], synthetic_ratios=[20], params="f.json", realism_keep=(0.0,))
+
+
 def test_background_sampling_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkeypatch, capsys):
     """``--background-sampling other`` adds a condition per synthetic ratio whose objects sit on other seeds'
     backgrounds (named so, ``background_sampling`` in its key and in the ``AddedPositives`` its training gets); the

@@ -572,6 +572,7 @@ def test_synthetic_share_is_a_number_or_count(capsys: pytest.CaptureFixture[str]
         ("background_sampling_without_synthetic", "--background-sampling"),
         ("effects_off_without_synthetic", "--effects-off"),
         ("effect_off_not_in_the_fit", "--effects-off"),
+        ("realism_keep_without_synthetic", "--realism-keep"),
     ],
 )
 def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str, Any], tmp_path: Path,
@@ -640,6 +641,8 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         extra += ["--background-sampling", "other"]
     elif case == "effects_off_without_synthetic":
         extra += ["--effects-off", "motion_blur"]
+    elif case == "realism_keep_without_synthetic":
+        extra += ["--realism-keep", "0.5"]
     elif case == "effect_off_not_in_the_fit":  # rotor_blur is a registered effect, but not one the paper's fit holds
         fit8 = tmp_path / "fit8.json"
         CaptureParams.sample(8, generator=torch.Generator().manual_seed(0)).save(fit8)
@@ -705,6 +708,16 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
     assert _train(ws, out3, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
                   "--mining-rounds", "0", "--quantize") == 0
     assert quantized == [True] and json.loads(out3.with_suffix(".json").read_text())["synthetic"]["quantize"] is True
+    # --realism-keep likewise; 1 (the paper) is not in the metadata
+    out4 = ws["root"] / "runs" / "hog_fig9_critic.pt"
+    kept_fractions = []
+    monkeypatch.setattr(video_training, "synthetic_positives",
+                        lambda *a, realism_keep=1.0, **k: kept_fractions.append(realism_keep) or fake(*a, **k))
+    assert _train(ws, out4, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
+                  "--mining-rounds", "0", "--realism-keep", "0.25") == 0
+    assert kept_fractions == [0.25]
+    assert json.loads(out4.with_suffix(".json").read_text())["synthetic"]["realism_keep"] == 0.25
+    assert "realism_keep" not in syn2
     monkeypatch.setattr(video_training, "synthetic_positives", fake)
     # the family's default (effects_off=None): the CNN's synthetic positives leave the fitted blurs out (only those
     # the fit has), HOG and AdaBoost keep every effect, () keeps every effect for the CNN too
@@ -738,6 +751,9 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
 
     with pytest.raises(ValueError, match="capture_sampling"):
         AddedPositives(capture_sampling="fitted")
+    for bad_keep in (0.0, 1.5):
+        with pytest.raises(ValueError, match="realism_keep"):
+            AddedPositives(realism_keep=bad_keep)
     with pytest.raises(ValueError, match="effects_off"):
         AddedPositives(effects_off="motion_blur")  # type: ignore[arg-type]
     assert AddedPositives(effects_off=["material"]).effects_off == ("material",)  # type: ignore[arg-type]
@@ -752,6 +768,10 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
         parser.parse_args(["--detector", "hog", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o",
                            "--effects-off", "speckle"])
     assert e.value.code == 2 and "unknown effect 'speckle'" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:
+        parser.parse_args(["--detector", "hog", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o",
+                           "--realism-keep", "0"])
+    assert e.value.code == 2 and "--realism-keep: must be in (0, 1], got '0'" in capsys.readouterr().err
 
 
 def test_the_cnn_family_puts_its_synthetic_objects_on_other_seeds_backgrounds(ws: dict[str, Path],

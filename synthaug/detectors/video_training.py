@@ -282,6 +282,8 @@ class AddedPositives:
             object.__setattr__(self, "effects_off", tuple(self.effects_off))
         if isinstance(self.synthetic_share, str):
             resolve_synthetic_share("", self.synthetic_share)  # raises on any string but BY_COUNT
+        if not (isinstance(self.realism_keep, (int, float)) and 0 < self.realism_keep <= 1):
+            raise ValueError(f"realism_keep must be a fraction in (0, 1], got {self.realism_keep!r}")
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
@@ -619,8 +621,6 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
                 and added.faded_copies <= 0):
             raise TrainingInputError("--synthetic-share", "there are no added positives to weigh: give --synthetic-ratio, "
                                      "--copy-paste-ratio, --perturb-copies, --downscaled-copies or --faded-copies")
-    if not 0 < added.realism_keep <= 1:
-        raise TrainingInputError("--realism-keep", f"must be a fraction in (0, 1], got {added.realism_keep}")
     if added.realism_keep < 1 and synthetic_ratio <= 0:
         raise TrainingInputError("--realism-keep", "there are no synthetic positives to filter: give --params (and a "
                                                    "--synthetic-ratio above 0)")
