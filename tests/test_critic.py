@@ -121,7 +121,8 @@ def seeds_and_fit(tmp_path_factory):
     n = 6
     bgs = sky_backgrounds(n, (40, 40), seed=0)
     write_seedset(root / "s", patches=bgs, backgrounds=bgs, boxes=[[0, 0, 16, 16]] * n, centres=[[20, 20]] * n,
-                  crops=[[20, 20, 40]] * n, records=[{"video": "v"}] * n, frames=list(sky_backgrounds(n, (64, 64), seed=1)),
+                  crops=[[20, 20, 40]] * n, records=[{"video": "v"}] * n,
+                  frames=list(sky_backgrounds(n, (64, 64), seed=1)),
                   background_frames=list(sky_backgrounds(n, (64, 64), seed=1)),
                   metadata={"patch_size": 40, "object_fraction": 0.7})
     fit = root / "fit.json"

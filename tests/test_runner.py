@@ -263,8 +263,10 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
                                  perturb_copies=[2], copy_paste_ratios=[2], downscaled_copies=[1], faded_copies=[1],
                                  object_box=(None, "seed"), seeds=[0, 1], out=out)
     group = res["hog"]
-    syn, per = "hog / 6 seeds + 2x synthetic (eucl)", "hog / 6 seeds + 2x perturbed"
-    framed = "hog / 6 seeds + 2x synthetic (eucl, framed as the seeds (seed))"
+    # HOG's synthetic positives: the realism critic's quarter by default (FAMILY_REALISM_KEEP)
+    syn = "hog / 6 seeds + 2x synthetic (eucl, the 25% least synthetic of 4x drawn)"
+    per = "hog / 6 seeds + 2x perturbed"
+    framed = "hog / 6 seeds + 2x synthetic (eucl, framed as the seeds (seed), the 25% least synthetic of 4x drawn)"
     cp, down = "hog / 6 seeds + 2x copy-paste (eucl silhouettes)", "hog / 6 seeds + 1x downscaled"
     faded = "hog / 6 seeds + 1x faded"
     assert list(group) == ["hog / 6 seeds", syn, framed, per, cp, down, faded]
@@ -287,6 +289,7 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
                            fit_options=tuple(sorted(fit_opts.items())))
     cell = cache.get_or_compute(runner.identity(cond_syn, 1), lambda: pytest.fail("synthetic cell not cached"))
     assert cell["train"]["synthetic"]["count"] == 12 and cell["train"]["synthetic"]["params"].endswith("drone_6_seed1_eucl.json")
+    assert cell["train"]["synthetic"]["realism_keep"] == 0.25 and cond_syn.identity()["realism_keep"] == 0.25
     assert "object_box" not in cell["train"]["synthetic"] and "object_box" not in cond_syn.identity()
     # the framed condition: its own key (the framing), the same fit, the framing reaching the generator
     cond_framed = dataclasses.replace(cond_syn, name=framed, object_box="seed")
@@ -542,13 +545,14 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
     made = []
     monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=100, synthetic_ratios=[20], params="f{seed}.json",
-                           capture_sampling=("seed", "uniform"), effects_off=(None, "motion_blur"))
+                           capture_sampling=("seed", "uniform"), effects_off=(None, "motion_blur"),
+                           realism_keep=(1.0,))  # every draw: the names and keys the cells had
     syn = [c for c in made if c.synthetic_ratio]
     assert [(c.capture_sampling, c.effects_off) for c in syn] == [
         ("seed", ()), ("seed", ("motion_blur",)), ("uniform", ()), ("uniform", ("motion_blur",))]
     made.clear()  # several effects left out in one condition
     R.synthetic_comparison(None, detectors=["hog"], seed_count=100, synthetic_ratios=[20], params="f{seed}.json",
-                           effects_off=(("boundary_blur", "motion_blur"),))
+                           effects_off=(("boundary_blur", "motion_blur"),), realism_keep=(1.0,))
     both = [c for c in made if c.synthetic_ratio]
     assert [c.effects_off for c in both] == [("boundary_blur", "motion_blur")]
     assert both[0].name == "hog / 100 seeds + 20x synthetic (f{seed}, without boundary_blur and motion_blur)"
@@ -557,7 +561,8 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
     made.clear()
     R.synthetic_comparison(None, detectors=["cnn", "hog"], seed_count=100, synthetic_ratios=[20],
                            params="f{seed}.json", effects_off=(None, (), ("boundary_blur", "motion_blur")),
-                           background_sampling=("seed",))  # the CNN's former cells: their own seeds' backgrounds
+                           background_sampling=("seed",),  # the CNN's former cells: their own seeds' backgrounds
+                           realism_keep=(1.0,))
     fam = [c for c in made if c.synthetic_ratio]
     blurs = ("boundary_blur", "motion_blur")
     assert [(c.kind, c.effects_off) for c in fam] == [("cnn", blurs), ("cnn", ()), ("hog", ()), ("hog", blurs)]
@@ -572,7 +577,8 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
                                           "hog / 100 seeds + 20x synthetic (f{seed}, capture uniform)"]
     keys = [c.identity() for c in syn]
     assert "capture_sampling" not in keys[0] and "effects_off" not in keys[0]  # the paper's: the former key
-    assert keys[0] == R.Condition("x", "hog", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0).identity()
+    assert keys[0] == R.Condition("x", "hog", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0,
+                                  realism_keep=1.0).identity()
     assert keys[1]["effects_off"] == ("motion_blur",) and keys[2]["capture_sampling"] == "uniform"
     assert len({json.dumps(k, sort_keys=True) for k in keys}) == 4
     # the command line: one condition per value; effect names checked when parsed
@@ -599,7 +605,8 @@ def test_synthetic_share_default_is_the_familys_and_keeps_the_cells_keys(monkeyp
     monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
     for share in (None, 0.25, "count"):
         R.synthetic_comparison(None, detectors=["adaboost", "hog"], seed_count=12, synthetic_ratios=[20],
-                               params="f{seed}.json", perturb_copies=[5], synthetic_share=share)
+                               params="f{seed}.json", perturb_copies=[5], synthetic_share=share,
+                               realism_keep=(1.0,))  # HOG's every draw: the names its cells had
     default, explicit, count = (made[i * 6:(i + 1) * 6] for i in range(3))
     assert [(c.kind, c.synthetic_share) for c in default] == [
         ("adaboost", None), ("adaboost", 0.25), ("adaboost", 0.25), ("hog", None), ("hog", None), ("hog", None)]
@@ -659,23 +666,32 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
     assert [a.quantize for a in _added_positives(ws, monkeypatch, plain, eight)] == [False, True]
 
 
-def test_realism_keep_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkeypatch, capsys):
-    """``--realism-keep 1 0.25`` adds a filtered condition per synthetic ratio (named with the fraction kept and the
-    draw, ``realism_keep`` in its key and its training's ``AddedPositives``); 1, the default, keeps every former key
-    and name; a value out of (0, 1] is refused."""
+def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monkeypatch, capsys):
+    """``--realism-keep 1 0.25`` makes a condition per value (named with the fraction kept and the draw,
+    ``realism_keep`` in its key and its training's ``AddedPositives``); 1 keeps every former key and name; the default is the family's
+    (HOG a quarter, resolved into the key; AdaBoost and the CNN 1); a value out of (0, 1] is refused."""
     made = []
     monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           realism_keep=(1.0, 0.25, 0.25))
-    real, plain, kept = made
+                           realism_keep=(1.0, 0.25, None))
+    real, plain, kept = made  # None is HOG's 0.25: one condition
     assert "realism_keep" not in plain.identity() and kept.identity()["realism_keep"] == 0.25
+    assert "realism_keep" not in real.identity() and real.realism_keep == 1.0  # no synthetic positive to filter
     assert {k: v for k, v in kept.identity().items() if k != "realism_keep"} == plain.identity()
     assert plain.name == "hog / 12 seeds + 20x synthetic (f{seed})"
     assert kept.name == "hog / 12 seeds + 20x synthetic (f{seed}, the 25% least synthetic of 4x drawn)"
+    assert R.Condition("x", "hog", seed_count=12, params="f{seed}.json", synthetic_ratio=20.0).identity() \
+        == kept.identity()
     assert [a.realism_keep for a in _added_positives(ws, monkeypatch, plain, kept)] == [1.0, 0.25]
+    made.clear()
+    R.synthetic_comparison(None, detectors=["adaboost", "cnn"], seed_count=12, synthetic_ratios=[20],
+                           params="f{seed}.json")
+    assert [c.realism_keep for c in made] == [1.0] * 4 and not any("realism_keep" in c.identity() for c in made)
+    assert R.Condition("x", "hog", seed_count=1, synthetic_ratio=20.0).realism_keep == 1.0  # one seed: no critic
     parse = R.build_parser().parse_args
-    assert parse(["synthetic", "--out", "x"]).realism_keep == [1.0]
-    assert parse(["synthetic", "--realism-keep", "1", "0.5", "--out", "x"]).realism_keep == [1.0, 0.5]
+    assert parse(["synthetic", "--out", "x"]).realism_keep == ["default"]
+    assert parse(["synthetic", "--realism-keep", "1", "default", "0.5", "--out", "x"]).realism_keep == [1.0, "default",
+                                                                                                     0.5]
     with pytest.raises(SystemExit) as e:
         parse(["synthetic", "--realism-keep", "1.5", "--out", "x"])
     assert e.value.code == 2 and "--realism-keep" in capsys.readouterr().err
@@ -690,7 +706,7 @@ def test_background_sampling_is_a_condition_of_its_own_and_keeps_the_former_keys
     made = []
     monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           background_sampling=("seed", "other", "other"))
+                           background_sampling=("seed", "other", "other"), realism_keep=(1.0,))  # the former names
     real, own, other = made
     assert "background_sampling" not in own.identity() and other.identity()["background_sampling"] == "other"
     assert {k: v for k, v in other.identity().items() if k != "background_sampling"} == own.identity()
@@ -713,11 +729,11 @@ def test_object_box_share_mixes_the_two_framings_and_keeps_the_former_keys(ws, m
     made = []
     monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           object_box=(None, "fit"))
+                           object_box=(None, "fit"), realism_keep=(1.0,))  # every draw: the former names
     _, paper, framed = made
     made.clear()
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           object_box=(None, "fit"), object_box_share=0.5)
+                           object_box=(None, "fit"), object_box_share=0.5, realism_keep=(1.0,))
     _, paper_mix, mixed = made
     assert paper_mix.identity() == paper.identity() and paper_mix.name == paper.name
     assert "object_box_share" not in framed.identity() and mixed.identity()["object_box_share"] == 0.5
@@ -748,11 +764,12 @@ def test_synthetic_downscaled_copies_join_each_synthetic_condition(ws, monkeypat
     (``--downscaled-copies K``) and the synthetic data alone; 0, the default, keeps every former key and name."""
     made = []
     monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
-    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json")
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           realism_keep=(1.0,))  # every draw: the former names
     _, alone = made
     made.clear()
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           downscaled_copies=[5], synthetic_downscaled=5)
+                           downscaled_copies=[5], synthetic_downscaled=5, realism_keep=(1.0,))
     real, both, copies = made
     assert both.name == "hog / 12 seeds + 20x synthetic (f{seed}) + 5x downscaled"
     assert copies.name == "hog / 12 seeds + 5x downscaled" and copies.synthetic_ratio == 0
@@ -811,7 +828,8 @@ def test_at_seed_pose_sampling_is_a_condition_of_its_own_and_refuses_an_object_b
     made = []
     monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           pose_sampling=("uniform", "fitted", "uniform_at_seed", "fitted_at_seed"))
+                           pose_sampling=("uniform", "fitted", "uniform_at_seed", "fitted_at_seed"),
+                           realism_keep=(1.0,))  # every draw: the former names
     real, uniform, fitted, at, fitted_at = made
     assert "pose_sampling" not in uniform.identity() and fitted.identity()["pose_sampling"] == "fitted"
     assert at.identity()["pose_sampling"] == "uniform_at_seed"

@@ -393,7 +393,9 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
                   "--mining-rounds", "0") == 0
     meta = json.loads(out.with_suffix(".json").read_text())
     assert calls == [(8, "quadcopter", 24, 2, "uniform")]
-    assert meta["synthetic"] == {"params": str(fit), "mesh": "quadcopter", "ratio": 3.0, "count": 24, "pose_sampling": "uniform"}
+    # HOG's default: the critic keeps a quarter (FAMILY_REALISM_KEEP)
+    assert meta["synthetic"] == {"params": str(fit), "mesh": "quadcopter", "ratio": 3.0, "count": 24,
+                                 "pose_sampling": "uniform", "realism_keep": 0.25}
     # --pose-sampling reaches the synthetic positives and the metadata; --perturb-copies adds perturbed real ones
     out2 = ws["root"] / "runs" / "hog_syn_fitted.pt"
     assert _train(ws, out2, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
@@ -708,16 +710,20 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
     assert _train(ws, out3, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
                   "--mining-rounds", "0", "--quantize") == 0
     assert quantized == [True] and json.loads(out3.with_suffix(".json").read_text())["synthetic"]["quantize"] is True
-    # --realism-keep likewise; 1 (the paper) is not in the metadata
-    out4 = ws["root"] / "runs" / "hog_fig9_critic.pt"
+    # --realism-keep likewise: HOG's default a quarter (above, syn2), a value given itself; 1 (the paper) is not in
+    # the metadata
+    assert syn2["realism_keep"] == 0.25
     kept_fractions = []
     monkeypatch.setattr(video_training, "synthetic_positives",
                         lambda *a, realism_keep=1.0, **k: kept_fractions.append(realism_keep) or fake(*a, **k))
-    assert _train(ws, out4, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
-                  "--mining-rounds", "0", "--realism-keep", "0.25") == 0
-    assert kept_fractions == [0.25]
-    assert json.loads(out4.with_suffix(".json").read_text())["synthetic"]["realism_keep"] == 0.25
-    assert "realism_keep" not in syn2
+    for i, (given, kind) in enumerate(((["--realism-keep", "0.5"], "hog"), (["--realism-keep", "1"], "hog"),
+                                       ([], "adaboost"))):
+        out4 = ws["root"] / "runs" / f"critic_{i}.pt"
+        assert _train(ws, out4, "--detector", kind, "--seedset", seedset, "--params", str(fit), "--synthetic-ratio",
+                      "2", "--mining-rounds", "0", *given) == 0
+        assert json.loads(out4.with_suffix(".json").read_text())["synthetic"].get("realism_keep") == (
+            0.5 if i == 0 else None)
+    assert kept_fractions == [0.5, 1.0, 1.0]
     monkeypatch.setattr(video_training, "synthetic_positives", fake)
     # the family's default (effects_off=None): the CNN's synthetic positives leave the fitted blurs out (only those
     # the fit has), HOG and AdaBoost keep every effect, () keeps every effect for the CNN too

@@ -59,6 +59,7 @@ from synthaug.detectors.video_training import (
     check_placement,
     resolve_background_sampling,
     resolve_effects_off,
+    resolve_realism_keep,
     resolve_synthetic_share,
     train_from_videos,
 )
@@ -144,8 +145,10 @@ class Condition:
             ``"other"`` (on another seed's; ``AddedPositives``' ``background_sampling``); None (the default): the
             family's (:data:`~synthaug.detectors.video_training.FAMILY_BACKGROUND_SAMPLING`), resolved here as the
             effects are.
-        realism_keep: 1 (the paper) or the fraction of drawn synthetic positives kept, those a critic in HOG features
-            finds least synthetic (``AddedPositives``' ``realism_keep``).
+        realism_keep: the fraction of drawn synthetic positives kept, those a critic in HOG features finds least
+            synthetic (``AddedPositives``' ``realism_keep``; 1: every draw, the paper); None (the default): the
+            family's (:data:`~synthaug.detectors.video_training.FAMILY_REALISM_KEEP`), resolved here as the effects
+            are.
     """
 
     name: str
@@ -174,7 +177,7 @@ class Condition:
     quantize: bool = False
     background_sampling: str | None = None
     object_box_share: float = 1.0
-    realism_keep: float = 1.0
+    realism_keep: float | None = None
 
     def __post_init__(self) -> None:
         off = self.effects_off
@@ -186,6 +189,9 @@ class Condition:
         object.__setattr__(self, "synthetic_share", resolve_synthetic_share(self.kind, self.synthetic_share)
                            if self.adds_positives() else None)
         check_object_box_share(self.object_box_share, self.object_box)
+        rk = self.realism_keep
+        object.__setattr__(self, "realism_keep", 1.0 if rk is None and not self.synthetic_ratio else
+                           resolve_realism_keep(self.kind, rk, None if self.all_frames else self.seed_count))
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -718,7 +724,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          dcnn_refit: Sequence[bool] = (False,),
                          quantize: Sequence[bool] = (False,),
                          background_sampling: Sequence[str | None] = (None,),
-                         realism_keep: Sequence[float] = (1.0,),
+                         realism_keep: Sequence[float | None] = (None,),
                          synthetic_downscaled: int = 0,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
@@ -753,9 +759,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``background_sampling``: each synthetic ratio once per value (``"seed"``: the paper, each object on its own
     seed's background; ``"other"``: on another seed's; None: the family's, :class:`Condition`'s
     ``background_sampling``). ``realism_keep``: each synthetic ratio once per value (1: every drawn positive; under
-    1, that fraction of them, the least synthetic to a critic in HOG features, :class:`Condition`'s
-    ``realism_keep``). ``synthetic_downscaled``: every synthetic condition also holds that many downscaled
-    copies of each real seed (the two together, against each alone).
+    1, that fraction of them, the least synthetic to a critic in HOG features; None: the family's,
+    :class:`Condition`'s ``realism_keep``). ``synthetic_downscaled``: every synthetic condition also holds that many
+    downscaled copies of each real seed (the two together, against each alone).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -763,14 +769,12 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     results: dict[str, dict[str, ProtocolResult]] = {}
     refits = list(dict.fromkeys(bool(v) for v in dcnn_refit))
     rounding = list(dict.fromkeys(bool(v) for v in quantize))
-    keeps = list(dict.fromkeys(float(v) for v in realism_keep))
-    if any(not 0 < v <= 1 for v in keeps):
-        raise ValueError(f"realism_keep values must be fractions in (0, 1], got {keeps}")
     check_dcnn_refit(detectors, refits)
     check_placement(pose_sampling, object_box)
     for kind in detectors:
         offs = list(dict.fromkeys(resolve_effects_off(kind, off) for off in effects_off))  # one per capture set
         grounds = list(dict.fromkeys(resolve_background_sampling(kind, bs, seed_count) for bs in background_sampling))
+        keeps = list(dict.fromkeys(resolve_realism_keep(kind, rk, seed_count) for rk in realism_keep))
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
@@ -979,12 +983,18 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the synthetic objects' backgrounds, one condition per value: seed (the paper: each on its "
                          "own seed's background), other (each on another seed's, its capture parameters its own) or "
                          "default (the family's: other for the CNN, seed for the others)")
-    sy.add_argument("--realism-keep", nargs="+", type=float_in(0.0, 1.0, low_open=True), default=[1.0],
+    sy.add_argument("--realism-keep", nargs="+", type=_fraction_or_default, default=["default"],
                     metavar="FRACTION",
                     help="the synthetic positives drawn 1/FRACTION times over, the FRACTION that a critic in HOG "
                          "features finds least synthetic against the seed set's real patches kept (cross-fitted by "
-                         "seed), one condition per value; 1: every drawn positive (the paper)")
+                         "seed), one condition per value; 1: every drawn positive (the paper); default: the family's "
+                         "(0.25 for HOG, 1 for AdaBoost and the CNN)")
     return p
+
+
+def _fraction_or_default(text: str) -> float | str:
+    """``--realism-keep`` values: ``default`` or a fraction in (0, 1]."""
+    return text if text == "default" else float_in(0.0, 1.0, low_open=True)(text)
 
 
 def _effect_or_none(name: str) -> str:
@@ -1063,7 +1073,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              dcnn_refit=tuple(v == "on" for v in args.dcnn_refit),
                              quantize=tuple(v == "on" for v in args.quantize),
                              background_sampling=tuple(None if b == "default" else b for b in args.background_sampling),
-                             realism_keep=tuple(args.realism_keep), out=args.out)
+                             realism_keep=tuple(None if k == "default" else k for k in args.realism_keep),
+                             out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
 

@@ -81,6 +81,7 @@ _BGV = _seeds(f"background/hog_val_{{s}}/{_BGS}.json", ("a", "b", "c", "d"))  # 
 _CBG = ("test04", "a", "b")  # the CNN's background cells, seeds 0-4 (stop 69, read back) and 5-9 (stop 67)
 _CBGV = ("val04_a", "val04_b", "val_a", "val_b")  # the same on validation, seeds 0-1, 2-4 (stop 69), 5-9 (stop 68)
 _FITTED_ROT = "rotation: uniform -> around each seed's fitted rotation (20°)"
+_RC = "hog_100_seeds_20x_synthetic_hog"  # stop 82's HOG cells (built-in fits, calibrated), seeds 0-9 in four folders
 _AT_SEED_GAP = (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_uniform_at_seed_poses"))
 
 FACTORS: tuple[Factor, ...] = (
@@ -130,6 +131,19 @@ FACTORS: tuple[Factor, ...] = (
            "mesh_factor/"),
     Factor("drone", "hog", "capture effects (Fig. 9)", "both blurs: fitted -> left out (built-in fits)", "val",
            f"hog_blurs/val/{_BGS}.json", f"hog_blurs/val/{_BGS}_{_NB}.json", "hog_blurs/"),
+    # stop 82: the realism critic (every draw -> the quarter of 4x drawn a cross-fitted HOG critic finds least
+    # synthetic), ten training seeds, both splits; HOG's default since
+    Factor("drone", "hog", "appearance (realism critic)", "every draw -> the quarter of 4x drawn that a critic in HOG "
+           "features finds least synthetic (built-in fits, calibrated)", "test",
+           _seeds(f"realism_critic/test_{{s}}/{_RC}.json", "abcd"),
+           _seeds(f"realism_critic/test_{{s}}/{_RC}_the_25_least_synthetic_of_4x_drawn.json", "abcd"),
+           "realism_critic/",
+           (("realism_critic/gap", "synthetic_hog"), ("realism_critic/gap", "synthetic_hog_critic_0p25"))),
+    Factor("drone", "hog", "appearance (realism critic)", "every draw -> the quarter of 4x drawn that a critic in HOG "
+           "features finds least synthetic (built-in fits, calibrated)", "val",
+           _seeds(f"realism_critic/val_{{s}}/{_RC}.json", "abcd"),
+           _seeds(f"realism_critic/val_{{s}}/{_RC}_the_25_least_synthetic_of_4x_drawn.json", "abcd"),
+           "realism_critic/"),
     Factor("drone", "hog", "appearance (object noise level)", "σ_n of the built-in fits -> of the .glb fits, seed by "
            "seed (built-in mesh)", "test", _BI5, _seeds("mesh_factor/hog_builtin_gnoise_seed{s}/"
            "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_gnoise.json"), "mesh_factor/"),
