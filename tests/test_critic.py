@@ -84,10 +84,13 @@ def test_scores_are_the_logits_of_scipys_optimum_on_each_part():
         np.testing.assert_allclose(scores[mine], expected, rtol=1e-4, atol=1e-4)
 
 
-def test_fit_logistic_is_the_two_sample_tests_own():
+def test_the_critic_and_the_two_sample_test_share_classifier_and_features():
     import synthaug.diagnose.gap as gap
 
     assert gap.fit_logistic is fit_logistic
+    x = blobs(5, 50)  # uint8 as a seed set stores them, and the same as float
+    np.testing.assert_array_equal(hog_features(x), gap.feature_extractor("hog")(x))
+    np.testing.assert_array_equal(hog_features(torch.from_numpy(x)[:, None].float() / 255), hog_features(x))
 
 
 def test_bad_inputs_are_refused():
@@ -104,8 +107,10 @@ def test_bad_inputs_are_refused():
         realism_scores(real, syn, groups, synthetic_per_real=0)
     with pytest.raises(ValueError, match="count must be"):
         least_synthetic(real, syn, groups, len(syn) + 1)
-    with pytest.raises(ValueError, match="grayscale"):
+    with pytest.raises(ValueError, match=r"patches must be \(N, 1, 40, 40\)"):
         hog_features(np.zeros((2, 3, 40, 40), np.uint8))
+    with pytest.raises(ValueError, match="patches must be a torch.Tensor"):
+        hog_features([[0.0]])
     # every synthetic patch drawn with seeds of one part: the other part's critic has no synthetic example
     with pytest.raises(ValueError, match="no synthetic patch"):
         realism_scores(real, syn[:2], np.zeros(2, np.int64), folds=4)

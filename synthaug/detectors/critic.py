@@ -109,16 +109,11 @@ def hog_features(patches: Tensor | np.ndarray, config: Any = None) -> np.ndarray
     Returns:
         float64 ``(N, D)``.
     """
+    from synthaug.detectors.base import to_float_patches
     from synthaug.detectors.hog import DEFAULT_HOG, hog
 
-    x = torch.as_tensor(np.asarray(patches)) if isinstance(patches, np.ndarray) else patches
-    if not isinstance(x, Tensor):
-        raise ValueError(f"patches must be a torch.Tensor or numpy array, got {type(patches).__name__}")
-    if x.dim() == 3:
-        x = x[:, None]
-    if x.dim() != 4 or x.shape[1] != 1:
-        raise ValueError(f"patches must be grayscale (N, P, P) or (N, 1, P, P), got shape {tuple(x.shape)}")
-    x = x.float() / 255.0 if x.dtype == torch.uint8 else x.float()
+    x = torch.from_numpy(np.ascontiguousarray(patches)) if isinstance(patches, np.ndarray) else patches
+    x = to_float_patches(x, int(x.shape[-1]) if isinstance(x, Tensor) and x.dim() else 0)
     with torch.no_grad():
         return torch.cat([hog(c, config or DEFAULT_HOG) for c in x.split(1024)]).double().numpy()
 
