@@ -20,7 +20,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-__all__ = ["fit_logistic", "hog_features", "least_synthetic", "realism_scores"]
+__all__ = ["fit_logistic", "hog_features", "least_synthetic", "realism_scores", "standardiser"]
 
 
 def fit_logistic(x: np.ndarray, y: np.ndarray, *, C: float = 1.0, max_iter: int = 100,
@@ -96,7 +96,9 @@ def fit_logistic(x: np.ndarray, y: np.ndarray, *, C: float = 1.0, max_iter: int 
     return w.copy(), float(theta[k])
 
 
-def _standardiser(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def standardiser(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Column means and standard deviations of ``x`` for ``(x - mean) / std``; a constant column's std is 1, so it
+    stays constant (0) instead of NaN. The critic's and the two-sample test's standardisation."""
     mu = x.mean(0)
     sd = x.std(0)
     return mu, np.where(sd > 1e-12, sd, 1.0)  # constant features stay constant (0), not NaN
@@ -175,7 +177,7 @@ def realism_scores(
             train_syn = np.sort(rng.choice(train_syn, cap, replace=False))
         x = np.concatenate([fr[train_real], fs[train_syn]])
         y = np.r_[np.zeros(len(train_real)), np.ones(len(train_syn))]
-        mu, sd = _standardiser(x)
+        mu, sd = standardiser(x)
         w, b = fit_logistic((x - mu) / sd, y, C=C)
         mine = part[groups] == j
         scores[mine] = ((fs[mine] - mu) / sd) @ w + b

@@ -10,7 +10,7 @@ from typing import Any, Sequence
 import numpy as np
 from torch import Tensor
 
-from synthaug.detectors.critic import _standardiser, fit_logistic
+from synthaug.detectors.critic import standardiser, fit_logistic
 from synthaug.diagnose.gap.features import _features_pair
 
 
@@ -102,7 +102,7 @@ def _heldout_probabilities(x: np.ndarray, y: np.ndarray, fold_of: np.ndarray, fo
     prob = np.empty(len(y))
     for j in range(folds):
         te = fold_of == j
-        mu, sd = _standardiser(x[~te])
+        mu, sd = standardiser(x[~te])
         w, b = fit_logistic((x[~te] - mu) / sd, y[~te], C=C)
         prob[te] = expit(((x[te] - mu) / sd) @ w + b)
     return prob
@@ -213,7 +213,7 @@ def classifier_two_sample_test(
             fold_b = fold_of if grouped else _stratified_folds(y_b, folds, rng)
             as_extreme += _n_correct(_heldout_probabilities(x, y_b, fold_b, folds, C), y_b) >= correct
         p_perm = (1 + as_extreme) / (1 + permutations)
-    mu, sd = _standardiser(x)
+    mu, sd = standardiser(x)
     w_all, b_all = fit_logistic((x - mu) / sd, y, C=C)
     return TwoSampleTest(
         accuracy=correct / n, ci=binomial_ci(correct, n, confidence=confidence, method=ci_method),
