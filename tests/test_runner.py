@@ -668,8 +668,9 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
 
 def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monkeypatch, capsys):
     """``--realism-keep 1 0.25`` makes a condition per value (named with the fraction kept and the draw,
-    ``realism_keep`` in its key and its training's ``AddedPositives``); 1 keeps every former key and name; the default is the family's
-    (HOG a quarter, resolved into the key; AdaBoost and the CNN 1); a value out of (0, 1] is refused."""
+    ``realism_keep`` in its key and its training's ``AddedPositives``); 1 keeps every former key and name; the
+    default is the family's (HOG a quarter, resolved into the key; AdaBoost and the CNN 1); a value out of (0, 1] is
+    refused."""
     made = []
     monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",

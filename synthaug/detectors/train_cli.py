@@ -169,10 +169,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="round the synthetic positives to 8-bit levels, as the real frames are stored (default: "
                              "the renderer's continuous values, the paper's)")
     parser.add_argument("--realism-keep", type=float_in(0.0, 1.0, low_open=True), default=None, metavar="FRACTION",
-                        help="draw synthetic positives 1/FRACTION times over and keep the FRACTION that a critic in HOG "
-                             "features, trained on the seed set's real patches, finds least synthetic (cross-fitted by "
-                             "seed); 1: every drawn patch, the paper's; default: the detector family's (0.25 for HOG, "
-                             "1 for AdaBoost and the CNN)")
+                        help="draw synthetic positives 1/FRACTION times over and keep the FRACTION that a critic in "
+                             "HOG features, trained on the seed set's real patches, finds least synthetic (cross-fitted "
+                             "by seed); 1: every drawn patch, the paper's; default: the detector family's (0.25 for "
+                             "HOG, 1 for AdaBoost and the CNN)")
     parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own); "

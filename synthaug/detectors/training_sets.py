@@ -15,7 +15,6 @@ seed frames HOG mines on its own (:func:`mining_frames`). All patches are float
 from __future__ import annotations
 
 import math
-
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 

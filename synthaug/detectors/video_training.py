@@ -264,8 +264,9 @@ class AddedPositives:
             one-seed set ``"seed"``).
         realism_keep: the fraction of drawn synthetic positives kept, the ones a critic in HOG features finds least
             synthetic against the seed set's real patches
-            (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_keep``); 1: every draw (the paper). None (the default): the detector family's
-            (:data:`FAMILY_REALISM_KEEP`: HOG 0.25, the others 1; a one-seed set 1).
+            (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_keep``); 1: every draw (the
+            paper). None (the default): the detector family's (:data:`FAMILY_REALISM_KEEP`: HOG 0.25, the others 1; a
+            one-seed set 1).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; :data:`BY_COUNT` (``"count"``): every positive weighs the same, so the added ones
             hold ``added / (real + added)``; None (the default): the detector family's (:data:`FAMILY_SYNTHETIC_SHARE`:
