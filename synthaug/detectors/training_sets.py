@@ -29,6 +29,7 @@ __all__ = [
     "perturbed_positives",
     "downscaled_positives",
     "faded_positives",
+    "check_realism_keep",
     "synthetic_positives",
     "negative_pool",
     "mining_frames",
@@ -245,6 +246,17 @@ def faded_positives(
     return _as_float_patches(np.clip(np.stack(out), 0.0, 1.0).astype(np.float32)), info
 
 
+def check_realism_keep(realism_keep: Any) -> float:
+    """``realism_keep`` (:func:`synthetic_positives`) as a float: a fraction in (0, 1], else ``ValueError``.
+
+    >>> check_realism_keep(1), check_realism_keep(0.25)
+    (1.0, 0.25)
+    """
+    if isinstance(realism_keep, bool) or not isinstance(realism_keep, (int, float)) or not 0 < realism_keep <= 1:
+        raise ValueError(f"realism_keep must be a fraction in (0, 1], got {realism_keep!r}")
+    return float(realism_keep)
+
+
 def synthetic_positives(
     seedset: Any,
     mesh: Any,
@@ -316,8 +328,7 @@ def synthetic_positives(
 
     if count < 0:
         raise ValueError(f"count must be >= 0, got {count}")
-    if not (isinstance(realism_keep, (int, float)) and 0 < realism_keep <= 1):
-        raise ValueError(f"realism_keep must be a fraction in (0, 1], got {realism_keep!r}")
+    realism_keep = check_realism_keep(realism_keep)
     drawn = count if realism_keep == 1 else int(math.ceil(count / realism_keep - 1e-9))
     p = int(seedset.patches.shape[-1])
     if count == 0:

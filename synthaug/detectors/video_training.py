@@ -37,6 +37,7 @@ from synthaug.detectors.frames import VideoFrames
 from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mining
 from synthaug.detectors.training_sets import (
     bird_hard_negatives,
+    check_realism_keep,
     frames_training_set,
     mining_frames,
     negative_pool,
@@ -137,9 +138,7 @@ def resolve_realism_keep(kind: str, realism_keep: float | None, seed_count: int 
     if realism_keep is None:
         chosen = FAMILY_REALISM_KEEP.get(kind, 1.0)
         return 1.0 if seed_count is not None and seed_count < 2 else chosen
-    if isinstance(realism_keep, bool) or not isinstance(realism_keep, (int, float)) or not 0 < realism_keep <= 1:
-        raise ValueError(f"realism_keep must be a fraction in (0, 1] or None, got {realism_keep!r}")
-    return float(realism_keep)
+    return check_realism_keep(realism_keep)
 
 
 BY_COUNT = "count"
