@@ -20,7 +20,13 @@ import numpy as np
 import torch
 from torch import Tensor
 
-__all__ = ["fit_logistic", "hog_features", "least_synthetic", "realism_scores", "standardiser"]
+__all__ = ["REALISM_SELECTION", "fit_logistic", "hog_features", "least_synthetic", "realism_scores", "seed_quotas",
+           "standardiser"]
+
+REALISM_SELECTION = ("set", "seed")
+"""How :func:`least_synthetic` picks: ``"set"`` (the ``count`` least synthetic of the whole draw, stop 82's) or
+``"seed"`` (every seed keeps its share of its own draws, the least synthetic of them: the critic then picks poses
+within a seed and never drops a seed)."""
 
 
 def fit_logistic(x: np.ndarray, y: np.ndarray, *, C: float = 1.0, max_iter: int = 100,
@@ -184,16 +190,52 @@ def realism_scores(
     return scores
 
 
+def seed_quotas(groups: np.ndarray, count: int) -> np.ndarray:
+    """How many of each seed's drawn patches to keep so that ``count`` are kept in all, every seed the same share of
+    its own draws: ``count · drawn_s / drawn`` rounded by largest remainders (ties: the lower seed), so the quotas
+    sum to ``count`` and never exceed a seed's draws.
+
+    Args:
+        groups: ``(M,)`` int >= 0, the seed of each drawn patch.
+        count: patches kept in all, in ``[0, M]``.
+
+    Returns:
+        int64 ``(max(groups) + 1,)``: the quota of each seed (0 for a seed that drew nothing).
+
+    Example:
+        >>> seed_quotas(np.array([0, 0, 0, 1, 1, 2, 2, 2, 2, 2]), 5).tolist()  # exact shares 1.5, 1, 2.5
+        [2, 1, 2]
+    """
+    groups = np.asarray(groups)
+    m = len(groups)
+    if not (isinstance(count, (int, np.integer)) and 0 <= count <= m):
+        raise ValueError(f"count must be an int in [0, {m}], got {count!r}")
+    drawn = np.bincount(groups, minlength=int(groups.max()) + 1 if m else 0).astype(np.int64)
+    exact = drawn * (int(count) / m) if m else drawn.astype(np.float64)
+    quota = np.floor(exact + 1e-9).astype(np.int64)
+    short = int(count) - int(quota.sum())
+    if short > 0:  # largest remainders first; a stable sort keeps the lower seed first among equal remainders
+        quota[np.argsort(-(exact - quota), kind="stable")[:short]] += 1
+    return quota
+
+
 def least_synthetic(
     real: Tensor | np.ndarray,
     synthetic: Tensor | np.ndarray,
     groups: np.ndarray,
     count: int,
+    *,
+    selection: str = "set",
     **kwargs: Any,
 ) -> np.ndarray:
     """Indices of the ``count`` synthetic patches :func:`realism_scores` finds least synthetic, in their drawn order.
 
     Ties keep the earlier patch. ``kwargs`` go to :func:`realism_scores`.
+
+    Args:
+        selection: ``"set"``: the ``count`` lowest logits of the whole draw (a seed whose renders all look synthetic
+            may keep none); ``"seed"``: each seed keeps its :func:`seed_quotas` share of its own draws, its lowest
+            logits (:data:`REALISM_SELECTION`).
 
     Returns:
         int64 ``(count,)``, increasing.
@@ -201,5 +243,13 @@ def least_synthetic(
     m = len(synthetic)
     if not (isinstance(count, (int, np.integer)) and 0 <= count <= m):
         raise ValueError(f"count must be an int in [0, {m}], got {count!r}")
+    if selection not in REALISM_SELECTION:
+        raise ValueError(f"selection must be one of {list(REALISM_SELECTION)}, got {selection!r}")
     scores = realism_scores(real, synthetic, groups, **kwargs)
-    return np.sort(np.argsort(scores, kind="stable")[:count]).astype(np.int64)
+    if selection == "set":
+        return np.sort(np.argsort(scores, kind="stable")[:count]).astype(np.int64)
+    groups = np.asarray(groups)
+    quota = seed_quotas(groups, count)
+    keep = [idx[np.argsort(scores[idx], kind="stable")[:quota[g]]]
+            for g, idx in enumerate(np.flatnonzero(groups == g) for g in range(len(quota)))]
+    return np.sort(np.concatenate(keep) if keep else np.zeros(0, np.int64)).astype(np.int64)

@@ -128,6 +128,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug.data.items import BACKGROUND_SAMPLING
     from synthaug.data.poses import POSE_SAMPLING
     from synthaug.detectors.box_calibration import CALIBRATION_FORMS
+    from synthaug.detectors.critic import REALISM_SELECTION
     from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
@@ -173,6 +174,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "HOG features, trained on the seed set's real patches, finds least synthetic (cross-fitted "
                              "by seed); 1: every drawn patch, the paper's; default: the detector family's (0.25 for "
                              "HOG, 1 for AdaBoost and the CNN)")
+    parser.add_argument("--realism-selection", choices=list(REALISM_SELECTION), default="set",
+                        help="how the critic keeps its fraction: set (the least synthetic of the whole draw; a seed "
+                             "may keep none, the default) or seed (each seed keeps the same share of its own draws)")
     parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own); "
@@ -321,7 +325,7 @@ def main(args: argparse.Namespace) -> int:
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,
                                  faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                                  quantize=args.quantize, background_sampling=args.background_sampling,
-                                 realism_keep=args.realism_keep),
+                                 realism_keep=args.realism_keep, realism_selection=args.realism_selection),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

@@ -275,6 +275,7 @@ def synthetic_positives(
     quantize: bool = False,
     background_sampling: str = "seed",
     realism_keep: float = 1.0,
+    realism_selection: str = "set",
     return_seed_index: bool = False,
 ) -> Tensor | tuple[Tensor, np.ndarray]:
     """``count`` synthetic object patches generated from a capture-parameter fit.
@@ -315,6 +316,9 @@ def synthetic_positives(
             ``count`` that a critic in HOG features finds least synthetic against the seed set's real patches are
             kept, in their drawn order (:func:`~synthaug.detectors.critic.least_synthetic`, cross-fitted by seed,
             seeded by ``seed``; after ``quantize``, so the critic sees what training sees). Needs >= 2 seeds.
+        realism_selection: with ``realism_keep`` under 1, ``"set"`` (the ``count`` least synthetic of the whole
+            draw) or ``"seed"`` (each seed keeps the same share of its own draws, the least synthetic of them;
+            :data:`~synthaug.detectors.critic.REALISM_SELECTION`).
         return_seed_index: also return each patch's ``seed_index`` (the seed whose capture parameters it was
             drawn with), so that a seed's real and synthetic patches can be held out together
             (:func:`synthaug.diagnose.gap.training_samples`).
@@ -328,7 +332,11 @@ def synthetic_positives(
 
     if count < 0:
         raise ValueError(f"count must be >= 0, got {count}")
+    from synthaug.detectors.critic import REALISM_SELECTION
+
     realism_keep = check_realism_keep(realism_keep)
+    if realism_selection not in REALISM_SELECTION:
+        raise ValueError(f"realism_selection must be one of {list(REALISM_SELECTION)}, got {realism_selection!r}")
     drawn = count if realism_keep == 1 else int(math.ceil(count / realism_keep - 1e-9))
     p = int(seedset.patches.shape[-1])
     if count == 0:
@@ -356,7 +364,8 @@ def synthetic_positives(
         if len(seedset) < 2:
             raise ValueError(f"realism_keep < 1 needs a seed set of >= 2 seeds (the critic is cross-fitted by seed), "
                              f"got {len(seedset)}")
-        keep = least_synthetic(np.asarray(seedset.patches), patches, groups, count, seed=seed)
+        keep = least_synthetic(np.asarray(seedset.patches), patches, groups, count, seed=seed,
+                               selection=realism_selection)
         patches, groups = patches[torch.from_numpy(keep)], groups[keep]
     return (patches, groups) if return_seed_index else patches
 

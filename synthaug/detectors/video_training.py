@@ -266,6 +266,9 @@ class AddedPositives:
             (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_keep``); 1: every draw (the
             paper). None (the default): the detector family's (:data:`FAMILY_REALISM_KEEP`: HOG 0.25, the others 1; a
             one-seed set 1).
+        realism_selection: with ``realism_keep`` under 1, ``"set"`` (the least synthetic of the whole draw) or
+            ``"seed"`` (each seed keeps the same share of its own draws;
+            :func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_selection``).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; :data:`BY_COUNT` (``"count"``): every positive weighs the same, so the added ones
             hold ``added / (real + added)``; None (the default): the detector family's (:data:`FAMILY_SYNTHETIC_SHARE`:
@@ -293,9 +296,11 @@ class AddedPositives:
     background_sampling: str | None = None
     object_box_share: float = 1.0
     realism_keep: float | None = None
+    realism_selection: str = "set"
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
+        from synthaug.detectors.critic import REALISM_SELECTION
         from synthaug.data.poses import POSE_SAMPLING
         from synthaug.data.synthetic import check_object_box_share
 
@@ -313,6 +318,9 @@ class AddedPositives:
         if isinstance(self.synthetic_share, str):
             resolve_synthetic_share("", self.synthetic_share)  # raises on any string but BY_COUNT
         resolve_realism_keep("", self.realism_keep)  # raises on a value that is not a fraction in (0, 1]
+        if self.realism_selection not in REALISM_SELECTION:
+            raise ValueError(f"realism_selection must be one of {list(REALISM_SELECTION)}, got "
+                             f"{self.realism_selection!r}")
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
@@ -873,7 +881,7 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                                        shape_variation=added.shape_variation,
                                        capture_sampling=added.capture_sampling, effects=effects,
                                        quantize=added.quantize, background_sampling=background_sampling,
-                                       realism_keep=realism_keep)
+                                       realism_keep=realism_keep, realism_selection=added.realism_selection)
 
         t0 = time.perf_counter()
         syn = draw(params)
@@ -883,6 +891,7 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
         say(f"synthetic: {n_syn} patches from {params}"
             f"{', without ' + ' and '.join(effects_off) if effects_off else ''}{', 8-bit' if added.quantize else ''}"
             f"{where}{f', the {realism_keep:.0%} least synthetic kept' if realism_keep < 1 else ''}"
+            f"{' of each seed' if realism_keep < 1 and added.realism_selection == 'seed' else ''}"
             f" ({time.perf_counter() - t0:.0f}s)")
     info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
                             "pose_sampling": pose_sampling,
@@ -893,7 +902,9 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                             **({"effects_off": list(effects_off)} if effects_off else {}),
                             **({"quantize": True} if added.quantize else {}),
                             **({"background_sampling": background_sampling} if background_sampling != "seed" else {}),
-                            **({"realism_keep": realism_keep} if realism_keep < 1 else {})}
+                            **({"realism_keep": realism_keep} if realism_keep < 1 else {}),
+                            **({"realism_selection": added.realism_selection}
+                               if realism_keep < 1 and added.realism_selection != "set" else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

@@ -51,6 +51,7 @@ from synthaug.detectors.train_cli import (
     synthetic_share_arg,
 )
 from synthaug.detectors.box_calibration import CALIBRATION_FORMS, CALIBRATION_VERSION
+from synthaug.detectors.critic import REALISM_SELECTION
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import (
     BY_COUNT,
@@ -149,6 +150,8 @@ class Condition:
             synthetic (``AddedPositives``' ``realism_keep``; 1: every draw, the paper); None (the default): the
             family's (:data:`~synthaug.detectors.video_training.FAMILY_REALISM_KEEP`), resolved here as the effects
             are.
+        realism_selection: ``AddedPositives``' ``realism_selection`` (``"set"`` or ``"seed"``); ``"set"`` wherever
+            every draw is kept.
     """
 
     name: str
@@ -178,6 +181,7 @@ class Condition:
     background_sampling: str | None = None
     object_box_share: float = 1.0
     realism_keep: float | None = None
+    realism_selection: str = "set"
 
     def __post_init__(self) -> None:
         off = self.effects_off
@@ -192,6 +196,11 @@ class Condition:
         rk = self.realism_keep
         object.__setattr__(self, "realism_keep", 1.0 if rk is None and not self.synthetic_ratio else
                            resolve_realism_keep(self.kind, rk, None if self.all_frames else self.seed_count))
+        if self.realism_selection not in REALISM_SELECTION:
+            raise ValueError(f"realism_selection must be one of {list(REALISM_SELECTION)}, got "
+                             f"{self.realism_selection!r}")
+        if self.realism_keep == 1:  # nothing is selected: one cell, whatever the selection
+            object.__setattr__(self, "realism_selection", "set")
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -207,7 +216,7 @@ class Condition:
                 d.pop(k)
         for k, default in (("capture_sampling", "seed"), ("effects_off", ()),  # added later still: the same, with
                            ("dcnn_refit", False), ("quantize", False), ("background_sampling", "seed"),
-                           ("object_box_share", 1.0), ("realism_keep", 1.0)):
+                           ("object_box_share", 1.0), ("realism_keep", 1.0), ("realism_selection", "set")):
             if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
@@ -430,7 +439,8 @@ class ProtocolRunner:
                                  else condition.effects_off,
                                  refit=self._refit(condition, seed) if condition.dcnn_refit else None,
                                  quantize=condition.quantize, background_sampling=condition.background_sampling,
-                                 realism_keep=condition.realism_keep),
+                                 realism_keep=condition.realism_keep,
+                                 realism_selection=condition.realism_selection),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -725,6 +735,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          quantize: Sequence[bool] = (False,),
                          background_sampling: Sequence[str | None] = (None,),
                          realism_keep: Sequence[float | None] = (None,),
+                         realism_selection: Sequence[str] = ("set",),
                          synthetic_downscaled: int = 0,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
@@ -760,7 +771,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     seed's background; ``"other"``: on another seed's; None: the family's, :class:`Condition`'s
     ``background_sampling``). ``realism_keep``: each synthetic ratio once per value (1: every drawn positive; under
     1, that fraction of them, the least synthetic to a critic in HOG features; None: the family's,
-    :class:`Condition`'s ``realism_keep``). ``synthetic_downscaled``: every synthetic condition also holds that many
+    :class:`Condition`'s ``realism_keep``). ``realism_selection``: each ``realism_keep`` under 1 once per value
+    (``"set"`` or ``"seed"``, :class:`Condition`'s ``realism_selection``). ``synthetic_downscaled``: every synthetic condition also holds that many
     downscaled copies of each real seed (the two together, against each alone).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
@@ -775,6 +787,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         offs = list(dict.fromkeys(resolve_effects_off(kind, off) for off in effects_off))  # one per capture set
         grounds = list(dict.fromkeys(resolve_background_sampling(kind, bs, seed_count) for bs in background_sampling))
         keeps = list(dict.fromkeys(resolve_realism_keep(kind, rk, seed_count) for rk in realism_keep))
+        keeps = list(dict.fromkeys((rk, "set" if rk == 1 else sel) for rk in keeps for sel in realism_selection))
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
@@ -792,17 +805,18 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{', d_CNN refit every round' if rf else ''}"
                             f"{', 8-bit' if qz else ''}"
                             f"{'' if bs == 'seed' else ', backgrounds of other seeds'}"
-                            f"{'' if rk == 1 else f', the {rk:.0%} least synthetic of {1 / rk:.3g}x drawn'})"
+                            f"{'' if rk == 1 else f', the {rk:.0%} least synthetic of {1 / rk:.3g}x drawn'}"
+                            f"{' of each seed' if sel == 'seed' else ''})"
                             f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}", kind,
                             seed_count=seed_count, downscaled_copies=int(synthetic_downscaled),
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
                             object_box_share=1.0 if ob is None else float(object_box_share),
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
-                            quantize=qz, background_sampling=bs, realism_keep=rk)
+                            quantize=qz, background_sampling=bs, realism_keep=rk, realism_selection=sel)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
                   for cs in capture_sampling for off in offs for rf in refits
-                  for qz in rounding for bs in grounds for rk in keeps]
+                  for qz in rounding for bs in grounds for rk, sel in keeps]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
                             synthetic_share=synthetic_share)
                   for c in perturb_copies]
@@ -989,6 +1003,10 @@ def build_parser() -> argparse.ArgumentParser:
                          "features finds least synthetic against the seed set's real patches kept (cross-fitted by "
                          "seed), one condition per value; 1: every drawn positive (the paper); default: the family's "
                          "(0.25 for HOG, 1 for AdaBoost and the CNN)")
+    sy.add_argument("--realism-selection", nargs="+", choices=list(REALISM_SELECTION), default=["set"],
+                    help="how the critic keeps its fraction, one condition per value (for --realism-keep under 1): "
+                         "set (the least synthetic of the whole draw; a seed may keep none) or seed (each seed keeps "
+                         "the same share of its own draws, the least synthetic of them)")
     return p
 
 
@@ -1074,6 +1092,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              quantize=tuple(v == "on" for v in args.quantize),
                              background_sampling=tuple(None if b == "default" else b for b in args.background_sampling),
                              realism_keep=tuple(None if k == "default" else k for k in args.realism_keep),
+                             realism_selection=tuple(args.realism_selection),
                              out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
