@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import torch
 
-from synthaug.detectors.critic import fit_logistic, hog_features, least_synthetic, realism_scores
+from synthaug.detectors.critic import fit_logistic, hog_features, least_synthetic, realism_scores, seed_quotas
 from test_gap import blobs
 
 
@@ -35,6 +35,60 @@ def test_the_critic_keeps_the_patches_drawn_like_the_real_ones(odd):
     assert (keep % 2 == 0).mean() >= 0.7, (keep % 2 == 0).mean()
     scores = realism_scores(real, syn, groups, seed=0)
     assert scores[1::2].mean() > scores[0::2].mean()
+
+
+def _hamilton(drawn: np.ndarray, count: int) -> np.ndarray:
+    """Hamilton's (largest-remainder) apportionment in exact rational arithmetic, written independently."""
+    from fractions import Fraction
+
+    total = int(drawn.sum())
+    exact = [Fraction(int(d) * count, total) for d in drawn]
+    quota = [int(e) for e in exact]  # floor (non-negative)
+    order = sorted(range(len(drawn)), key=lambda i: (-(exact[i] - quota[i]), i))
+    for i in order[:count - sum(quota)]:
+        quota[i] += 1
+    return np.array(quota)
+
+
+def test_seed_quotas_are_the_largest_remainder_shares():
+    assert seed_quotas(np.array([0, 0, 0, 1, 1, 2, 2, 2, 2, 2]), 5).tolist() == [2, 1, 2]  # exact 1.5, 1, 2.5
+    assert seed_quotas(np.array([1, 1, 3]), 3).tolist() == [0, 2, 0, 1]  # every draw kept; a seed that drew none
+    assert seed_quotas(np.array([0, 1, 2, 3]), 2).tolist() == [1, 1, 0, 0]  # equal remainders: the lower seeds
+    assert seed_quotas(np.zeros(0, np.int64), 0).tolist() == []
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        groups = rng.integers(0, int(rng.integers(1, 30)), int(rng.integers(1, 400)))
+        count = int(rng.integers(0, len(groups) + 1))
+        q = seed_quotas(groups, count)
+        drawn = np.bincount(groups)
+        np.testing.assert_array_equal(q, _hamilton(drawn, count))
+        assert q.sum() == count and np.all(q <= drawn) and np.all(np.abs(q - drawn * count / len(groups)) < 1)
+    with pytest.raises(ValueError, match="count must be"):
+        seed_quotas(np.array([0, 1]), 3)
+
+
+def test_the_seed_selection_keeps_every_seeds_share_and_its_least_synthetic():
+    """Seed 0's synthetic patches are all speckled: selecting over the whole set drops (nearly) all of them, selecting
+    per seed keeps its share, and within every seed the kept patches are its lowest logits."""
+    real, syn, groups = _mixed(12, 8, 60, speckle=0.03)
+    syn[groups == 0] = blobs(8, 61, speckle=0.06)
+    count = 24
+    kwargs = dict(seed=2, folds=2)
+    scores = realism_scores(real, syn, groups, **kwargs)
+    by_set = least_synthetic(real, syn, groups, count, **kwargs)
+    by_seed = least_synthetic(real, syn, groups, count, selection="seed", **kwargs)
+    np.testing.assert_array_equal(by_set, np.sort(np.argsort(scores, kind="stable")[:count]))
+    assert by_seed.shape == (count,) and by_seed.dtype == np.int64 and np.all(np.diff(by_seed) > 0)
+    kept = np.bincount(groups[by_seed], minlength=12)
+    np.testing.assert_array_equal(kept, np.full(12, 2))  # 8 drawn a seed, a quarter kept: 2 each
+    assert np.bincount(groups[by_set], minlength=12)[0] == 0  # the speckled seed: none kept over the whole set
+    for g in range(12):
+        mine = np.flatnonzero(groups == g)
+        np.testing.assert_array_equal(by_seed[groups[by_seed] == g], np.sort(mine[np.argsort(scores[mine])[:2]]))
+    # like-the-real patches still preferred within the seeds (the even half; chance 0.5)
+    assert (by_seed % 2 == 0).mean() >= 0.7
+    with pytest.raises(ValueError, match="selection must be one of"):
+        least_synthetic(real, syn, groups, count, selection="seeds")
 
 
 def test_a_patch_is_scored_by_a_critic_that_never_saw_its_seed():
@@ -156,6 +210,14 @@ def test_synthetic_positives_keep_the_least_synthetic_of_a_larger_draw(seeds_and
     for bad in (0.0, 1.5, -0.2):
         with pytest.raises(ValueError, match="realism_keep"):
             synthetic_positives(seeds, "quadcopter", fit, 4, realism_keep=bad)
+    # per seed: the same draw, each seed's share of it (seed_quotas), its least synthetic
+    per_seed, per_seed_idx = synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, realism_keep=0.4,
+                                                 realism_selection="seed", return_seed_index=True)
+    keep = least_synthetic(np.asarray(seeds.patches), pool, pool_idx, 12, seed=3, selection="seed")
+    torch.testing.assert_close(per_seed, pool[torch.from_numpy(keep)])
+    np.testing.assert_array_equal(np.bincount(per_seed_idx, minlength=6), seed_quotas(pool_idx, 12))
+    with pytest.raises(ValueError, match="realism_selection"):
+        synthetic_positives(seeds, "quadcopter", fit, 4, realism_keep=0.5, realism_selection="video")
 
 
 def test_a_one_seed_set_cannot_be_filtered(tmp_path):

@@ -700,6 +700,37 @@ def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monk
         R.synthetic_comparison(None, detectors=["hog"], synthetic_ratios=[20], params="f.json", realism_keep=(0.0,))
 
 
+def test_realism_selection_makes_a_condition_per_value_only_where_the_critic_keeps_a_fraction(ws, monkeypatch,
+                                                                                              capsys):
+    """``--realism-selection set seed`` with ``--realism-keep 1 0.25``: every draw once (nothing is selected), the
+    quarter twice; the set selection keeps stop 82's key and name, the seed selection adds ``realism_selection`` to
+    the key and "of each seed" to the name, and reaches the training's ``AddedPositives``."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           realism_keep=(1.0, 0.25), realism_selection=("set", "seed"))
+    real, plain, by_set, by_seed = made
+    assert "realism_selection" not in plain.identity() and plain.realism_selection == "set"
+    assert by_set.identity() == R.Condition("x", "hog", seed_count=12, params="f{seed}.json",
+                                            synthetic_ratio=20.0).identity()  # stop 82's key
+    assert by_seed.identity() == {**by_set.identity(), "realism_selection": "seed"}
+    assert by_set.name == "hog / 12 seeds + 20x synthetic (f{seed}, the 25% least synthetic of 4x drawn)"
+    assert by_seed.name == by_set.name[:-1] + " of each seed)"
+    assert [(a.realism_keep, a.realism_selection) for a in _added_positives(ws, monkeypatch, by_set, by_seed)] == [
+        (0.25, "set"), (0.25, "seed")]
+    # every draw: nothing selected, one key whatever the selection
+    assert R.Condition("x", "hog", seed_count=12, params="f{seed}.json", synthetic_ratio=20.0, realism_keep=1.0,
+                       realism_selection="seed").identity() == plain.identity()
+    with pytest.raises(ValueError, match="realism_selection"):
+        R.Condition("x", "hog", seed_count=12, synthetic_ratio=20.0, realism_selection="video")
+    parse = R.build_parser().parse_args
+    assert parse(["synthetic", "--out", "x"]).realism_selection == ["set"]
+    assert parse(["synthetic", "--realism-selection", "seed", "set", "--out", "x"]).realism_selection == ["seed", "set"]
+    with pytest.raises(SystemExit) as e:
+        parse(["synthetic", "--realism-selection", "video", "--out", "x"])
+    assert e.value.code == 2 and "--realism-selection" in capsys.readouterr().err
+
+
 def test_background_sampling_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkeypatch, capsys):
     """``--background-sampling other`` adds a condition per synthetic ratio whose objects sit on other seeds'
     backgrounds (named so, ``background_sampling`` in its key and in the ``AddedPositives`` its training gets); the

@@ -724,6 +724,16 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
         assert json.loads(out4.with_suffix(".json").read_text())["synthetic"].get("realism_keep") == (
             0.5 if i == 0 else None)
     assert kept_fractions == [0.5, 1.0, 1.0]
+    # --realism-selection seed reaches the generator and the metadata (the default, set, is not in the metadata)
+    selections = []
+    monkeypatch.setattr(video_training, "synthetic_positives",
+                        lambda *a, realism_selection="set", **k: selections.append(realism_selection) or fake(*a, **k))
+    out5 = ws["root"] / "runs" / "critic_per_seed.pt"
+    assert _train(ws, out5, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
+                  "--mining-rounds", "0", "--realism-selection", "seed") == 0
+    assert selections == ["seed"]
+    assert json.loads(out5.with_suffix(".json").read_text())["synthetic"]["realism_selection"] == "seed"
+    assert "realism_selection" not in syn2
     monkeypatch.setattr(video_training, "synthetic_positives", fake)
     # the family's default (effects_off=None): the CNN's synthetic positives leave the fitted blurs out (only those
     # the fit has), HOG and AdaBoost keep every effect, () keeps every effect for the CNN too
@@ -760,6 +770,8 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
     for bad_keep in (0.0, 1.5):
         with pytest.raises(ValueError, match="realism_keep"):
             AddedPositives(realism_keep=bad_keep)
+    with pytest.raises(ValueError, match="realism_selection"):
+        AddedPositives(realism_selection="video")
     with pytest.raises(ValueError, match="effects_off"):
         AddedPositives(effects_off="motion_blur")  # type: ignore[arg-type]
     assert AddedPositives(effects_off=["material"]).effects_off == ("material",)  # type: ignore[arg-type]

@@ -211,11 +211,11 @@ def seed_quotas(groups: np.ndarray, count: int) -> np.ndarray:
     if not (isinstance(count, (int, np.integer)) and 0 <= count <= m):
         raise ValueError(f"count must be an int in [0, {m}], got {count!r}")
     drawn = np.bincount(groups, minlength=int(groups.max()) + 1 if m else 0).astype(np.int64)
-    exact = drawn * (int(count) / m) if m else drawn.astype(np.float64)
-    quota = np.floor(exact + 1e-9).astype(np.int64)
+    scaled = drawn * int(count)  # the exact shares are scaled / m: integer arithmetic, so equal remainders are equal
+    quota, remainder = scaled // max(m, 1), scaled % max(m, 1)
     short = int(count) - int(quota.sum())
     if short > 0:  # largest remainders first; a stable sort keeps the lower seed first among equal remainders
-        quota[np.argsort(-(exact - quota), kind="stable")[:short]] += 1
+        quota[np.argsort(-remainder, kind="stable")[:short]] += 1
     return quota
 
 
