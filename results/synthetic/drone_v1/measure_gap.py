@@ -67,6 +67,9 @@ def main() -> None:
     ap.add_argument("--realism-keep", nargs="+", type=float, default=[1.0],
                     help="synthetic samples once per value: under 1, drawn 1/K times over and the K least synthetic to "
                          "the cross-fitted HOG critic kept (synthaug train --realism-keep)")
+    ap.add_argument("--realism-selection", nargs="+", choices=["set", "seed"], default=["set"],
+                    help="with --realism-keep under 1, once per value: set (the least synthetic of the whole draw) or "
+                         "seed (each seed's share of its own draws; synthaug train --realism-selection)")
     ap.add_argument("--fitted-renders", action="store_true",
                     help="also each fit's own renders S(Θ_i, B_i) (the fitted pose itself: no pose sampling)")
     ap.add_argument("--seed-set", default="data/runs/ingest_drone_seed{s}/seedsets/drone_100",
@@ -106,8 +109,11 @@ def main() -> None:
                         sampler = SeedOffset(sampler, fit) if ps.endswith("_at_seed") else sampler
                     for box in args.object_box:
                         for sv in args.shape_variation:
-                            for off, qz, bs, rk in ((o, q, b, k) for o in args.effects_off for q in args.quantize
-                                                    for b in args.background_sampling for k in args.realism_keep):
+                            keeps = dict.fromkeys((k, "set" if k == 1 else sel) for k in args.realism_keep
+                                                  for sel in args.realism_selection)
+                            for off, qz, bs, (rk, sel) in ((o, q, b, k) for o in args.effects_off
+                                                           for q in args.quantize for b in args.background_sampling
+                                                           for k in keeps):
                                 gone = [] if off == "none" else off.split("+")
                                 name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
                                         + ("" if jit == 20.0 else f"_jitter_{jit:g}")
@@ -116,14 +122,15 @@ def main() -> None:
                                         + ("" if not gone else "_without_" + "_".join(gone))
                                         + ("_8bit" if qz == "on" else "")
                                         + ("" if bs == "seed" else "_other_backgrounds")
-                                        + ("" if rk == 1 else "_critic_" + f"{rk:g}".replace(".", "p")))
+                                        + ("" if rk == 1 else "_critic_" + f"{rk:g}".replace(".", "p"))
+                                        + ("_per_seed" if sel == "seed" else ""))
                                 effects = None if not gone else [e for e in fit_effects if e not in gone]
                                 syn[name] = training_samples(ss, args.mesh, fit, 5 * n, seed=s + 2,
                                                              pose_sampling=sampler,  # type: ignore[arg-type]
                                                              object_box=None if box == "none" else box,
                                                              shape_variation=sv, effects=effects,
                                                              quantize=qz == "on", background_sampling=bs,
-                                                             realism_keep=rk)
+                                                             realism_keep=rk, realism_selection=sel)
                 if args.fitted_renders:
                     from synthaug.fit.render_fit import render_fitted
 

@@ -8,6 +8,9 @@ two-sample test of synthaug.diagnose.gap, 5n synthetic patches drawn as training
 
     PYTHONPATH=. python results/synthetic/realism_critic/heldout_real.py --seeds 0 1 2 \
         --out results/synthetic/realism_critic/heldout_real.json
+    # stop 83: the per-seed selection beside the set's
+    PYTHONPATH=. python results/synthetic/realism_critic/heldout_real.py --seeds 0 1 2 --quantize off \
+        --keep 1 0.25 --selection set seed --out results/synthetic/realism_critic/heldout_real_per_seed.json
 """
 
 from __future__ import annotations
@@ -33,6 +36,8 @@ def main() -> None:
     ap.add_argument("--gap", type=int, default=30, help="frames of one video closer than this to a seed are dropped")
     ap.add_argument("--keep", type=float, nargs="+", default=[1.0, 0.5, 0.25])
     ap.add_argument("--quantize", choices=["off", "on"], nargs="+", default=["off", "on"])
+    ap.add_argument("--selection", choices=["set", "seed"], nargs="+", default=["set"],
+                    help="the critic's selection (synthetic_positives' realism_selection), one row per value")
     ap.add_argument("--seed-set", default="data/runs/ingest_drone_seed{s}/seedsets/drone_100")
     ap.add_argument("--fit", default="data/runs/fits/drone_100_seed{s}_hog.json")
     ap.add_argument("--out", required=True)
@@ -50,11 +55,12 @@ def main() -> None:
                      if all(abs(int(r["frame"]) - f) > args.gap for f in near.get(r["video"], []))]
         real = hog_features(np.asarray(other.patches)[keep_rows])
         for q in args.quantize:
-            for k in args.keep:
+            for k, sel in dict.fromkeys((k, "set" if k == 1 else sel) for k in args.keep for sel in args.selection):
                 syn = synthetic_positives(ss, "quadcopter", args.fit.format(s=s), 5 * len(ss), seed=s + 2,
-                                          quantize=q == "on", realism_keep=k)
+                                          quantize=q == "on", realism_keep=k, realism_selection=sel)
                 t = classifier_two_sample_test(real, hog_features(syn), seed=s, permutations=100)
                 rows.append({"seed": s, "quantize": q, "realism_keep": k, "real_heldout": len(keep_rows),
+                             **({"realism_selection": sel} if sel != "set" else {}),
                              "accuracy": t.accuracy, "ci": list(t.ci), "p_permutation": t.p_permutation})
                 print(json.dumps(rows[-1]), flush=True)
         print(f"seed {s}: {time.perf_counter() - t0:.0f} s", flush=True)
