@@ -75,8 +75,8 @@ def test_the_seed_selection_keeps_every_seeds_share_and_its_least_synthetic():
     count = 24
     kwargs = dict(seed=2, folds=2)
     scores = realism_scores(real, syn, groups, **kwargs)
-    by_set = least_synthetic(real, syn, groups, count, **kwargs)
-    by_seed = least_synthetic(real, syn, groups, count, selection="seed", **kwargs)
+    by_set = least_synthetic(real, syn, groups, count, selection="set", **kwargs)
+    by_seed = least_synthetic(real, syn, groups, count, **kwargs)  # the default
     np.testing.assert_array_equal(by_set, np.sort(np.argsort(scores, kind="stable")[:count]))
     assert by_seed.shape == (count,) and by_seed.dtype == np.int64 and np.all(np.diff(by_seed) > 0)
     kept = np.bincount(groups[by_seed], minlength=12)
@@ -210,12 +210,11 @@ def test_synthetic_positives_keep_the_least_synthetic_of_a_larger_draw(seeds_and
     for bad in (0.0, 1.5, -0.2):
         with pytest.raises(ValueError, match="realism_keep"):
             synthetic_positives(seeds, "quadcopter", fit, 4, realism_keep=bad)
-    # per seed: the same draw, each seed's share of it (seed_quotas), its least synthetic
-    per_seed, per_seed_idx = synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, realism_keep=0.4,
-                                                 realism_selection="seed", return_seed_index=True)
-    keep = least_synthetic(np.asarray(seeds.patches), pool, pool_idx, 12, seed=3, selection="seed")
-    torch.testing.assert_close(per_seed, pool[torch.from_numpy(keep)])
-    np.testing.assert_array_equal(np.bincount(per_seed_idx, minlength=6), seed_quotas(pool_idx, 12))
+    # the default keeps each seed's share of the draw (seed_quotas), its least synthetic; "set" the whole draw's
+    np.testing.assert_array_equal(np.bincount(kept_idx, minlength=6), seed_quotas(pool_idx, 12))
+    by_set = synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, realism_keep=0.4, realism_selection="set")
+    keep = least_synthetic(np.asarray(seeds.patches), pool, pool_idx, 12, seed=3, selection="set")
+    torch.testing.assert_close(by_set, pool[torch.from_numpy(keep)])
     with pytest.raises(ValueError, match="realism_selection"):
         synthetic_positives(seeds, "quadcopter", fit, 4, realism_keep=0.5, realism_selection="video")
 

@@ -264,9 +264,10 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
                                  object_box=(None, "seed"), seeds=[0, 1], out=out)
     group = res["hog"]
     # HOG's synthetic positives: the realism critic's quarter by default (FAMILY_REALISM_KEEP)
-    syn = "hog / 6 seeds + 2x synthetic (eucl, the 25% least synthetic of 4x drawn)"
+    syn = "hog / 6 seeds + 2x synthetic (eucl, the 25% least synthetic of 4x drawn of each seed)"
     per = "hog / 6 seeds + 2x perturbed"
-    framed = "hog / 6 seeds + 2x synthetic (eucl, framed as the seeds (seed), the 25% least synthetic of 4x drawn)"
+    framed = ("hog / 6 seeds + 2x synthetic (eucl, framed as the seeds (seed), the 25% least synthetic of 4x drawn of "
+              "each seed)")
     cp, down = "hog / 6 seeds + 2x copy-paste (eucl silhouettes)", "hog / 6 seeds + 1x downscaled"
     faded = "hog / 6 seeds + 1x faded"
     assert list(group) == ["hog / 6 seeds", syn, framed, per, cp, down, faded]
@@ -290,6 +291,7 @@ def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_ag
     cell = cache.get_or_compute(runner.identity(cond_syn, 1), lambda: pytest.fail("synthetic cell not cached"))
     assert cell["train"]["synthetic"]["count"] == 12 and cell["train"]["synthetic"]["params"].endswith("drone_6_seed1_eucl.json")
     assert cell["train"]["synthetic"]["realism_keep"] == 0.25 and cond_syn.identity()["realism_keep"] == 0.25
+    assert cell["train"]["synthetic"]["realism_selection"] == cond_syn.identity()["realism_selection"] == "seed"
     assert "object_box" not in cell["train"]["synthetic"] and "object_box" not in cond_syn.identity()
     # the framed condition: its own key (the framing), the same fit, the framing reaching the generator
     cond_framed = dataclasses.replace(cond_syn, name=framed, object_box="seed")
@@ -678,9 +680,11 @@ def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monk
     real, plain, kept = made  # None is HOG's 0.25: one condition
     assert "realism_keep" not in plain.identity() and kept.identity()["realism_keep"] == 0.25
     assert "realism_keep" not in real.identity() and real.realism_keep == 1.0  # no synthetic positive to filter
-    assert {k: v for k, v in kept.identity().items() if k != "realism_keep"} == plain.identity()
+    assert kept.identity()["realism_selection"] == "seed"  # the default selection (stop 83)
+    assert {k: v for k, v in kept.identity().items() if k not in ("realism_keep", "realism_selection")} \
+        == plain.identity()
     assert plain.name == "hog / 12 seeds + 20x synthetic (f{seed})"
-    assert kept.name == "hog / 12 seeds + 20x synthetic (f{seed}, the 25% least synthetic of 4x drawn)"
+    assert kept.name == "hog / 12 seeds + 20x synthetic (f{seed}, the 25% least synthetic of 4x drawn of each seed)"
     assert R.Condition("x", "hog", seed_count=12, params="f{seed}.json", synthetic_ratio=20.0).identity() \
         == kept.identity()
     assert [a.realism_keep for a in _added_positives(ws, monkeypatch, plain, kept)] == [1.0, 0.25]
@@ -703,17 +707,18 @@ def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monk
 def test_realism_selection_makes_a_condition_per_value_only_where_the_critic_keeps_a_fraction(ws, monkeypatch,
                                                                                               capsys):
     """``--realism-selection set seed`` with ``--realism-keep 1 0.25``: every draw once (nothing is selected), the
-    quarter twice; the set selection keeps stop 82's key and name, the seed selection adds ``realism_selection`` to
-    the key and "of each seed" to the name, and reaches the training's ``AddedPositives``."""
+    quarter twice; the set selection keeps stop 82's key and name, the seed selection (the default since stop 83)
+    adds ``realism_selection`` to the key and "of each seed" to the name; both reach the training's
+    ``AddedPositives``."""
     made = []
     monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                            realism_keep=(1.0, 0.25), realism_selection=("set", "seed"))
     real, plain, by_set, by_seed = made
     assert "realism_selection" not in plain.identity() and plain.realism_selection == "set"
-    assert by_set.identity() == R.Condition("x", "hog", seed_count=12, params="f{seed}.json",
-                                            synthetic_ratio=20.0).identity()  # stop 82's key
-    assert by_seed.identity() == {**by_set.identity(), "realism_selection": "seed"}
+    assert by_seed.identity() == R.Condition("x", "hog", seed_count=12, params="f{seed}.json",
+                                             synthetic_ratio=20.0).identity()  # the default (stop 83)
+    assert by_seed.identity() == {**by_set.identity(), "realism_selection": "seed"}  # set: stop 82's key
     assert by_set.name == "hog / 12 seeds + 20x synthetic (f{seed}, the 25% least synthetic of 4x drawn)"
     assert by_seed.name == by_set.name[:-1] + " of each seed)"
     assert [(a.realism_keep, a.realism_selection) for a in _added_positives(ws, monkeypatch, by_set, by_seed)] == [
@@ -724,7 +729,7 @@ def test_realism_selection_makes_a_condition_per_value_only_where_the_critic_kee
     with pytest.raises(ValueError, match="realism_selection"):
         R.Condition("x", "hog", seed_count=12, synthetic_ratio=20.0, realism_selection="video")
     parse = R.build_parser().parse_args
-    assert parse(["synthetic", "--out", "x"]).realism_selection == ["set"]
+    assert parse(["synthetic", "--out", "x"]).realism_selection == ["seed"]
     assert parse(["synthetic", "--realism-selection", "seed", "set", "--out", "x"]).realism_selection == ["seed", "set"]
     with pytest.raises(SystemExit) as e:
         parse(["synthetic", "--realism-selection", "video", "--out", "x"])

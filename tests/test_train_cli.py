@@ -395,7 +395,7 @@ def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, 
     assert calls == [(8, "quadcopter", 24, 2, "uniform")]
     # HOG's default: the critic keeps a quarter (FAMILY_REALISM_KEEP)
     assert meta["synthetic"] == {"params": str(fit), "mesh": "quadcopter", "ratio": 3.0, "count": 24,
-                                 "pose_sampling": "uniform", "realism_keep": 0.25}
+                                 "pose_sampling": "uniform", "realism_keep": 0.25, "realism_selection": "seed"}
     # --pose-sampling reaches the synthetic positives and the metadata; --perturb-copies adds perturbed real ones
     out2 = ws["root"] / "runs" / "hog_syn_fitted.pt"
     assert _train(ws, out2, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "3",
@@ -724,16 +724,16 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
         assert json.loads(out4.with_suffix(".json").read_text())["synthetic"].get("realism_keep") == (
             0.5 if i == 0 else None)
     assert kept_fractions == [0.5, 1.0, 1.0]
-    # --realism-selection seed reaches the generator and the metadata (the default, set, is not in the metadata)
+    # --realism-selection reaches the generator and the metadata (HOG's default above: seed)
     selections = []
     monkeypatch.setattr(video_training, "synthetic_positives",
-                        lambda *a, realism_selection="set", **k: selections.append(realism_selection) or fake(*a, **k))
-    out5 = ws["root"] / "runs" / "critic_per_seed.pt"
+                        lambda *a, realism_selection="?", **k: selections.append(realism_selection) or fake(*a, **k))
+    out5 = ws["root"] / "runs" / "critic_per_set.pt"
     assert _train(ws, out5, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
-                  "--mining-rounds", "0", "--realism-selection", "seed") == 0
-    assert selections == ["seed"]
-    assert json.loads(out5.with_suffix(".json").read_text())["synthetic"]["realism_selection"] == "seed"
-    assert "realism_selection" not in syn2
+                  "--mining-rounds", "0", "--realism-selection", "set") == 0
+    assert selections == ["set"]
+    assert json.loads(out5.with_suffix(".json").read_text())["synthetic"]["realism_selection"] == "set"
+    assert syn2["realism_selection"] == "seed"
     monkeypatch.setattr(video_training, "synthetic_positives", fake)
     # the family's default (effects_off=None): the CNN's synthetic positives leave the fitted blurs out (only those
     # the fit has), HOG and AdaBoost keep every effect, () keeps every effect for the CNN too

@@ -23,10 +23,10 @@ from torch import Tensor
 __all__ = ["REALISM_SELECTION", "fit_logistic", "hog_features", "least_synthetic", "realism_scores", "seed_quotas",
            "standardiser"]
 
-REALISM_SELECTION = ("set", "seed")
-"""How :func:`least_synthetic` picks: ``"set"`` (the ``count`` least synthetic of the whole draw, stop 82's) or
-``"seed"`` (every seed keeps its share of its own draws, the least synthetic of them: the critic then picks poses
-within a seed and never drops a seed)."""
+REALISM_SELECTION = ("seed", "set")
+"""How :func:`least_synthetic` picks: ``"seed"`` (the default since stop 83: every seed keeps its share of its own
+draws, the least synthetic of them, so the critic picks poses within a seed and never drops a seed) or ``"set"`` (the
+``count`` least synthetic of the whole draw, stop 82's: a seed whose renders all look synthetic may keep none)."""
 
 
 def fit_logistic(x: np.ndarray, y: np.ndarray, *, C: float = 1.0, max_iter: int = 100,
@@ -225,7 +225,7 @@ def least_synthetic(
     groups: np.ndarray,
     count: int,
     *,
-    selection: str = "set",
+    selection: str = "seed",
     **kwargs: Any,
 ) -> np.ndarray:
     """Indices of the ``count`` synthetic patches :func:`realism_scores` finds least synthetic, in their drawn order.
@@ -233,9 +233,9 @@ def least_synthetic(
     Ties keep the earlier patch. ``kwargs`` go to :func:`realism_scores`.
 
     Args:
-        selection: ``"set"``: the ``count`` lowest logits of the whole draw (a seed whose renders all look synthetic
-            may keep none); ``"seed"``: each seed keeps its :func:`seed_quotas` share of its own draws, its lowest
-            logits (:data:`REALISM_SELECTION`).
+        selection: ``"seed"`` (the default): each seed keeps its :func:`seed_quotas` share of its own draws, its
+            lowest logits; ``"set"``: the ``count`` lowest logits of the whole draw (a seed whose renders all look
+            synthetic may keep none; :data:`REALISM_SELECTION`).
 
     Returns:
         int64 ``(count,)``, increasing.

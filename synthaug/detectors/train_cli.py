@@ -174,9 +174,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "HOG features, trained on the seed set's real patches, finds least synthetic (cross-fitted "
                              "by seed); 1: every drawn patch, the paper's; default: the detector family's (0.25 for "
                              "HOG, 1 for AdaBoost and the CNN)")
-    parser.add_argument("--realism-selection", choices=list(REALISM_SELECTION), default="set",
-                        help="how the critic keeps its fraction: set (the least synthetic of the whole draw; a seed "
-                             "may keep none, the default) or seed (each seed keeps the same share of its own draws)")
+    parser.add_argument("--realism-selection", choices=list(REALISM_SELECTION), default="seed",
+                        help="how the critic keeps its fraction: seed (each seed keeps the same share of its own "
+                             "draws, the least synthetic of them; the default) or set (the least synthetic of the "
+                             "whole draw; a seed may keep none)")
     parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own); "

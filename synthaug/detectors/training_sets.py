@@ -275,7 +275,7 @@ def synthetic_positives(
     quantize: bool = False,
     background_sampling: str = "seed",
     realism_keep: float = 1.0,
-    realism_selection: str = "set",
+    realism_selection: str = "seed",
     return_seed_index: bool = False,
 ) -> Tensor | tuple[Tensor, np.ndarray]:
     """``count`` synthetic object patches generated from a capture-parameter fit.
@@ -316,8 +316,8 @@ def synthetic_positives(
             ``count`` that a critic in HOG features finds least synthetic against the seed set's real patches are
             kept, in their drawn order (:func:`~synthaug.detectors.critic.least_synthetic`, cross-fitted by seed,
             seeded by ``seed``; after ``quantize``, so the critic sees what training sees). Needs >= 2 seeds.
-        realism_selection: with ``realism_keep`` under 1, ``"set"`` (the ``count`` least synthetic of the whole
-            draw) or ``"seed"`` (each seed keeps the same share of its own draws, the least synthetic of them;
+        realism_selection: with ``realism_keep`` under 1, ``"seed"`` (the default: each seed keeps the same share of
+            its own draws, the least synthetic of them) or ``"set"`` (the ``count`` least synthetic of the whole draw;
             :data:`~synthaug.detectors.critic.REALISM_SELECTION`).
         return_seed_index: also return each patch's ``seed_index`` (the seed whose capture parameters it was
             drawn with), so that a seed's real and synthetic patches can be held out together

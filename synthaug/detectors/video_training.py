@@ -266,8 +266,8 @@ class AddedPositives:
             (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_keep``); 1: every draw (the
             paper). None (the default): the detector family's (:data:`FAMILY_REALISM_KEEP`: HOG 0.25, the others 1; a
             one-seed set 1).
-        realism_selection: with ``realism_keep`` under 1, ``"set"`` (the least synthetic of the whole draw) or
-            ``"seed"`` (each seed keeps the same share of its own draws;
+        realism_selection: with ``realism_keep`` under 1, ``"seed"`` (the default: each seed keeps the same share of
+            its own draws) or ``"set"`` (the least synthetic of the whole draw;
             :func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_selection``).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; :data:`BY_COUNT` (``"count"``): every positive weighs the same, so the added ones
@@ -296,7 +296,7 @@ class AddedPositives:
     background_sampling: str | None = None
     object_box_share: float = 1.0
     realism_keep: float | None = None
-    realism_selection: str = "set"
+    realism_selection: str = "seed"
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
@@ -903,8 +903,7 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                             **({"quantize": True} if added.quantize else {}),
                             **({"background_sampling": background_sampling} if background_sampling != "seed" else {}),
                             **({"realism_keep": realism_keep} if realism_keep < 1 else {}),
-                            **({"realism_selection": added.realism_selection}
-                               if realism_keep < 1 and added.realism_selection != "set" else {})}
+                            **({"realism_selection": added.realism_selection} if realism_keep < 1 else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

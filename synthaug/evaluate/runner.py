@@ -150,8 +150,8 @@ class Condition:
             synthetic (``AddedPositives``' ``realism_keep``; 1: every draw, the paper); None (the default): the
             family's (:data:`~synthaug.detectors.video_training.FAMILY_REALISM_KEEP`), resolved here as the effects
             are.
-        realism_selection: ``AddedPositives``' ``realism_selection`` (``"set"`` or ``"seed"``); ``"set"`` wherever
-            every draw is kept.
+        realism_selection: ``AddedPositives``' ``realism_selection`` (``"seed"``, the default, or ``"set"``, which
+            is absent from the key: stop 82's cells keep theirs); ``"set"`` wherever every draw is kept.
     """
 
     name: str
@@ -181,7 +181,7 @@ class Condition:
     background_sampling: str | None = None
     object_box_share: float = 1.0
     realism_keep: float | None = None
-    realism_selection: str = "set"
+    realism_selection: str = "seed"
 
     def __post_init__(self) -> None:
         off = self.effects_off
@@ -735,7 +735,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          quantize: Sequence[bool] = (False,),
                          background_sampling: Sequence[str | None] = (None,),
                          realism_keep: Sequence[float | None] = (None,),
-                         realism_selection: Sequence[str] = ("set",),
+                         realism_selection: Sequence[str] = ("seed",),
                          synthetic_downscaled: int = 0,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
@@ -772,8 +772,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``background_sampling``). ``realism_keep``: each synthetic ratio once per value (1: every drawn positive; under
     1, that fraction of them, the least synthetic to a critic in HOG features; None: the family's,
     :class:`Condition`'s ``realism_keep``). ``realism_selection``: each ``realism_keep`` under 1 once per value
-    (``"set"`` or ``"seed"``, :class:`Condition`'s ``realism_selection``). ``synthetic_downscaled``: every synthetic condition also holds that many
-    downscaled copies of each real seed (the two together, against each alone).
+    (``"seed"`` or ``"set"``, :class:`Condition`'s ``realism_selection``). ``synthetic_downscaled``: every synthetic
+    condition also holds that many downscaled copies of each real seed (the two together, against each alone).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
     detector and scale, paired against real only).
@@ -1003,10 +1003,10 @@ def build_parser() -> argparse.ArgumentParser:
                          "features finds least synthetic against the seed set's real patches kept (cross-fitted by "
                          "seed), one condition per value; 1: every drawn positive (the paper); default: the family's "
                          "(0.25 for HOG, 1 for AdaBoost and the CNN)")
-    sy.add_argument("--realism-selection", nargs="+", choices=list(REALISM_SELECTION), default=["set"],
+    sy.add_argument("--realism-selection", nargs="+", choices=list(REALISM_SELECTION), default=["seed"],
                     help="how the critic keeps its fraction, one condition per value (for --realism-keep under 1): "
-                         "set (the least synthetic of the whole draw; a seed may keep none) or seed (each seed keeps "
-                         "the same share of its own draws, the least synthetic of them)")
+                         "seed (each seed keeps the same share of its own draws, the least synthetic of them; the "
+                         "default) or set (the least synthetic of the whole draw; a seed may keep none)")
     return p
 
 

@@ -9,7 +9,7 @@ for n in 12 100; do
   real=hog_${n}_seeds.json every=hog_${n}_seeds_20x_synthetic_hog.json
   set=hog_${n}_seeds_20x_synthetic_hog_the_25_least_synthetic_of_4x_drawn.json
   seed=hog_${n}_seeds_20x_synthetic_hog_the_25_least_synthetic_of_4x_drawn_of_each_seed.json
-  seeds=$(ls -d $D/test_* | sed 's/.*test_//' | sort -n)
+  seeds=$(ls -d $D/test_*/ | sed 's/.*test_//; s/\/$//' | sort -n)
   for sp in test val; do
     rows() { for c in "$@"; do for s in $seeds; do echo "$D/${sp}_$s/${!c}=$c"; done; done; }
     python $T $(rows every real set seed) --out $D/${sp}_vs_every_draw.md
