@@ -120,8 +120,10 @@ FAMILY_REALISM_KEEP: dict[str, float] = {"hog": 0.25}
 (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_keep``); a family not listed keeps every
 draw (1, the paper). HOG keeps a quarter of 4x drawn: chosen on the validation videos (drones, 100 seeds, + 20x,
 calibrated, ten training seeds, paired against every draw; ``results/synthetic/realism_critic/README.md``), +0.026
-[+0.009, +0.051] AP@0.5 there and +0.008 [-0.006, +0.022] on the test videos. AdaBoost and the CNN were not measured
-with it."""
+[+0.009, +0.051] AP@0.5 there and +0.008 [-0.006, +0.022] on the test videos. Since stop 83 the quarter is taken of
+each seed's own draws (:class:`AddedPositives`' ``realism_selection="seed"``): at 12 seeds +0.017 [+0.003, +0.033] on
+validation over the whole draw's quarter, at 100 seeds level (+0.001). AdaBoost and the CNN were not measured with
+it."""
 
 
 def resolve_realism_keep(kind: str, realism_keep: float | None, seed_count: int | None = None) -> float:
