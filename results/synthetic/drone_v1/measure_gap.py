@@ -67,9 +67,10 @@ def main() -> None:
     ap.add_argument("--realism-keep", nargs="+", type=float, default=[1.0],
                     help="synthetic samples once per value: under 1, drawn 1/K times over and the K least synthetic to "
                          "the cross-fitted HOG critic kept (synthaug train --realism-keep)")
-    ap.add_argument("--realism-selection", nargs="+", choices=["set", "seed"], default=["set"],
-                    help="with --realism-keep under 1, once per value: set (the least synthetic of the whole draw) or "
-                         "seed (each seed's share of its own draws; synthaug train --realism-selection)")
+    ap.add_argument("--realism-selection", nargs="+", choices=["seed", "set"], default=["seed"],
+                    help="with --realism-keep under 1, once per value: seed (each seed's share of its own draws, "
+                         "training's default since stop 83) or set (the least synthetic of the whole draw, stop 82's; "
+                         "synthaug train --realism-selection)")
     ap.add_argument("--fitted-renders", action="store_true",
                     help="also each fit's own renders S(Θ_i, B_i) (the fitted pose itself: no pose sampling)")
     ap.add_argument("--seed-set", default="data/runs/ingest_drone_seed{s}/seedsets/drone_100",

@@ -6,8 +6,8 @@ by seed) was trained on for the other half of the seeds. Here the real side is a
 video: real drones the critic never saw (no groups: no background is shared). HOG features, the classifier
 two-sample test of synthaug.diagnose.gap, 5n synthetic patches drawn as training draws them.
 
-    PYTHONPATH=. python results/synthetic/realism_critic/heldout_real.py --seeds 0 1 2 \
-        --out results/synthetic/realism_critic/heldout_real.json
+    PYTHONPATH=. python results/synthetic/realism_critic/heldout_real.py --seeds 0 1 2 --selection set \
+        --out results/synthetic/realism_critic/heldout_real.json   # stop 82
     # stop 83: the per-seed selection beside the set's
     PYTHONPATH=. python results/synthetic/realism_critic/heldout_real.py --seeds 0 1 2 --quantize off \
         --keep 1 0.25 --selection set seed --out results/synthetic/realism_critic/heldout_real_per_seed.json
@@ -36,7 +36,7 @@ def main() -> None:
     ap.add_argument("--gap", type=int, default=30, help="frames of one video closer than this to a seed are dropped")
     ap.add_argument("--keep", type=float, nargs="+", default=[1.0, 0.5, 0.25])
     ap.add_argument("--quantize", choices=["off", "on"], nargs="+", default=["off", "on"])
-    ap.add_argument("--selection", choices=["set", "seed"], nargs="+", default=["set"],
+    ap.add_argument("--selection", choices=["seed", "set"], nargs="+", default=["seed"],
                     help="the critic's selection (synthetic_positives' realism_selection), one row per value")
     ap.add_argument("--seed-set", default="data/runs/ingest_drone_seed{s}/seedsets/drone_100")
     ap.add_argument("--fit", default="data/runs/fits/drone_100_seed{s}_hog.json")

@@ -4,12 +4,13 @@
 # least synthetic kept), both splits; real-only and unfiltered cells are stops 79-81's (read back from the cache).
 # usage (from the repository root): results/synthetic/realism_critic/run.sh TAG KEEP SEED...
 # (run parallel jobs on disjoint seeds: a seed set's fit is not locked). X="..." adds runner options, and then only KEEP
-# is run (e.g. X="--quantize on" run.sh e 0.5 0 1 2: the 8-bit positives, half kept).
+# is run (e.g. X="--quantize on" run.sh e 0.5 0 1 2: the 8-bit positives, half kept). Stop 82's selection over the
+# whole draw (--realism-selection set; the default since stop 83 is seed: run_seed.sh).
 tag=$1; keep=$2; shift 2
 O=results/synthetic/realism_critic
 R="python -m synthaug.evaluate.runner synthetic --protocol configs/protocol/halmstad_v2.json --class drone --detectors hog \
    --synthetic-ratios 20 --fit-distance hog --no-scale-check --no-patches --threads 1 --seed-counts 100 --box-calibration 20 \
-   ${X:---realism-keep 1 $keep}"
+   --realism-selection set ${X:---realism-keep 1 $keep}"
 [ -n "${X:-}" ] && R="$R --realism-keep $keep"
 export PYTHONPATH=${PYTHONPATH:-.} OMP_NUM_THREADS=1 PYOPENGL_PLATFORM=egl
 s0=$(date +%s)
