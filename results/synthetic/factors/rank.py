@@ -82,6 +82,7 @@ _CBG = ("test04", "a", "b")  # the CNN's background cells, seeds 0-4 (stop 69, r
 _CBGV = ("val04_a", "val04_b", "val_a", "val_b")  # the same on validation, seeds 0-1, 2-4 (stop 69), 5-9 (stop 68)
 _FITTED_ROT = "rotation: uniform -> around each seed's fitted rotation (20°)"
 _RC = "hog_100_seeds_20x_synthetic_hog"  # stop 82's HOG cells (built-in fits, calibrated), seeds 0-9 in four folders
+_PS100, _PS12 = (f"hog_{n}_seeds_20x_synthetic_hog_the_25_least_synthetic_of_4x_drawn" for n in (100, 12))  # stop 83
 _AT_SEED_GAP = (("placement/gap", "synthetic_hog"), ("placement/gap", "synthetic_hog_uniform_at_seed_poses"))
 
 FACTORS: tuple[Factor, ...] = (
@@ -143,6 +144,30 @@ FACTORS: tuple[Factor, ...] = (
            "features finds least synthetic (built-in fits, calibrated)", "val",
            _seeds(f"realism_critic/val_{{s}}/{_RC}.json", "abcd"),
            _seeds(f"realism_critic/val_{{s}}/{_RC}_the_25_least_synthetic_of_4x_drawn.json", "abcd"),
+           "realism_critic/"),
+    # stop 83: the critic's quarter taken of each seed's own draws instead of the whole draw, ten training seeds,
+    # 100 and 12 seeds, both splits; HOG's default since
+    Factor("drone", "hog", "appearance (realism critic)", "the critic's quarter of the whole draw -> of each seed's "
+           "own draws (built-in fits, calibrated)", "test",
+           _seeds(f"realism_critic/per_seed_100/test_{{s}}/{_PS100}.json", tuple(range(10))),
+           _seeds(f"realism_critic/per_seed_100/test_{{s}}/{_PS100}_of_each_seed.json", tuple(range(10))),
+           "realism_critic/",
+           (("realism_critic/gap_per_seed", "synthetic_hog_critic_0p25"),
+            ("realism_critic/gap_per_seed", "synthetic_hog_critic_0p25_per_seed"))),
+    Factor("drone", "hog", "appearance (realism critic)", "the critic's quarter of the whole draw -> of each seed's "
+           "own draws (built-in fits, calibrated)", "val",
+           _seeds(f"realism_critic/per_seed_100/val_{{s}}/{_PS100}.json", tuple(range(10))),
+           _seeds(f"realism_critic/per_seed_100/val_{{s}}/{_PS100}_of_each_seed.json", tuple(range(10))),
+           "realism_critic/"),
+    Factor("drone", "hog", "appearance (realism critic)", "the critic's quarter of the whole draw -> of each seed's "
+           "own draws (12 real seeds) (built-in fits, calibrated)", "test",
+           _seeds(f"realism_critic/per_seed_12/test_{{s}}/{_PS12}.json", tuple(range(10))),
+           _seeds(f"realism_critic/per_seed_12/test_{{s}}/{_PS12}_of_each_seed.json", tuple(range(10))),
+           "realism_critic/"),
+    Factor("drone", "hog", "appearance (realism critic)", "the critic's quarter of the whole draw -> of each seed's "
+           "own draws (12 real seeds) (built-in fits, calibrated)", "val",
+           _seeds(f"realism_critic/per_seed_12/val_{{s}}/{_PS12}.json", tuple(range(10))),
+           _seeds(f"realism_critic/per_seed_12/val_{{s}}/{_PS12}_of_each_seed.json", tuple(range(10))),
            "realism_critic/"),
     Factor("drone", "hog", "appearance (object noise level)", "σ_n of the built-in fits -> of the .glb fits, seed by "
            "seed (built-in mesh)", "test", _BI5, _seeds("mesh_factor/hog_builtin_gnoise_seed{s}/"
