@@ -20,13 +20,24 @@ import numpy as np
 import torch
 from torch import Tensor
 
-__all__ = ["REALISM_SELECTION", "fit_logistic", "hog_features", "least_synthetic", "realism_scores", "seed_quotas",
-           "standardiser"]
+__all__ = ["REALISM_SELECTION", "check_realism_selection", "fit_logistic", "hog_features", "least_synthetic",
+           "realism_scores", "seed_quotas", "standardiser"]
 
 REALISM_SELECTION = ("seed", "set")
 """How :func:`least_synthetic` picks: ``"seed"`` (the default since stop 83: every seed keeps its share of its own
 draws, the least synthetic of them, so the critic picks poses within a seed and never drops a seed) or ``"set"`` (the
 ``count`` least synthetic of the whole draw, stop 82's: a seed whose renders all look synthetic may keep none)."""
+
+
+def check_realism_selection(selection: Any, name: str = "realism_selection") -> str:
+    """``selection`` if it is one of :data:`REALISM_SELECTION`, else ``ValueError`` naming ``name``.
+
+    >>> check_realism_selection("seed")
+    'seed'
+    """
+    if not isinstance(selection, str) or selection not in REALISM_SELECTION:
+        raise ValueError(f"{name} must be one of {list(REALISM_SELECTION)}, got {selection!r}")
+    return selection
 
 
 def fit_logistic(x: np.ndarray, y: np.ndarray, *, C: float = 1.0, max_iter: int = 100,
@@ -243,8 +254,7 @@ def least_synthetic(
     m = len(synthetic)
     if not (isinstance(count, (int, np.integer)) and 0 <= count <= m):
         raise ValueError(f"count must be an int in [0, {m}], got {count!r}")
-    if selection not in REALISM_SELECTION:
-        raise ValueError(f"selection must be one of {list(REALISM_SELECTION)}, got {selection!r}")
+    check_realism_selection(selection, "selection")
     scores = realism_scores(real, synthetic, groups, **kwargs)
     if selection == "set":
         return np.sort(np.argsort(scores, kind="stable")[:count]).astype(np.int64)

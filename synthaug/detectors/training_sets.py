@@ -332,11 +332,10 @@ def synthetic_positives(
 
     if count < 0:
         raise ValueError(f"count must be >= 0, got {count}")
-    from synthaug.detectors.critic import REALISM_SELECTION
+    from synthaug.detectors.critic import check_realism_selection
 
     realism_keep = check_realism_keep(realism_keep)
-    if realism_selection not in REALISM_SELECTION:
-        raise ValueError(f"realism_selection must be one of {list(REALISM_SELECTION)}, got {realism_selection!r}")
+    check_realism_selection(realism_selection)
     drawn = count if realism_keep == 1 else int(math.ceil(count / realism_keep - 1e-9))
     p = int(seedset.patches.shape[-1])
     if count == 0:

@@ -302,9 +302,9 @@ class AddedPositives:
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
-        from synthaug.detectors.critic import REALISM_SELECTION
         from synthaug.data.poses import POSE_SAMPLING
         from synthaug.data.synthetic import check_object_box_share
+        from synthaug.detectors.critic import check_realism_selection
 
         resolve_background_sampling("", self.background_sampling)  # raises on a value that is not one
         if self.capture_sampling not in CAPTURE_SAMPLERS:
@@ -320,9 +320,7 @@ class AddedPositives:
         if isinstance(self.synthetic_share, str):
             resolve_synthetic_share("", self.synthetic_share)  # raises on any string but BY_COUNT
         resolve_realism_keep("", self.realism_keep)  # raises on a value that is not a fraction in (0, 1]
-        if self.realism_selection not in REALISM_SELECTION:
-            raise ValueError(f"realism_selection must be one of {list(REALISM_SELECTION)}, got "
-                             f"{self.realism_selection!r}")
+        check_realism_selection(self.realism_selection)
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:

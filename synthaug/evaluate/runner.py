@@ -51,7 +51,7 @@ from synthaug.detectors.train_cli import (
     synthetic_share_arg,
 )
 from synthaug.detectors.box_calibration import CALIBRATION_FORMS, CALIBRATION_VERSION
-from synthaug.detectors.critic import REALISM_SELECTION
+from synthaug.detectors.critic import REALISM_SELECTION, check_realism_selection
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import (
     BY_COUNT,
@@ -196,9 +196,7 @@ class Condition:
         rk = self.realism_keep
         object.__setattr__(self, "realism_keep", 1.0 if rk is None and not self.synthetic_ratio else
                            resolve_realism_keep(self.kind, rk, None if self.all_frames else self.seed_count))
-        if self.realism_selection not in REALISM_SELECTION:
-            raise ValueError(f"realism_selection must be one of {list(REALISM_SELECTION)}, got "
-                             f"{self.realism_selection!r}")
+        check_realism_selection(self.realism_selection)
         if self.realism_keep == 1:  # nothing is selected: one cell, whatever the selection
             object.__setattr__(self, "realism_selection", "set")
 
