@@ -147,28 +147,15 @@ FACTORS: tuple[Factor, ...] = (
            "realism_critic/"),
     # stop 83: the critic's quarter taken of each seed's own draws instead of the whole draw, ten training seeds,
     # 100 and 12 seeds, both splits; HOG's default since
-    Factor("drone", "hog", "appearance (realism critic)", "the critic's quarter of the whole draw -> of each seed's "
-           "own draws (built-in fits, calibrated)", "test",
-           _seeds(f"realism_critic/per_seed_100/test_{{s}}/{_PS100}.json", tuple(range(10))),
-           _seeds(f"realism_critic/per_seed_100/test_{{s}}/{_PS100}_of_each_seed.json", tuple(range(10))),
-           "realism_critic/",
-           (("realism_critic/gap_per_seed", "synthetic_hog_critic_0p25"),
-            ("realism_critic/gap_per_seed", "synthetic_hog_critic_0p25_per_seed"))),
-    Factor("drone", "hog", "appearance (realism critic)", "the critic's quarter of the whole draw -> of each seed's "
-           "own draws (built-in fits, calibrated)", "val",
-           _seeds(f"realism_critic/per_seed_100/val_{{s}}/{_PS100}.json", tuple(range(10))),
-           _seeds(f"realism_critic/per_seed_100/val_{{s}}/{_PS100}_of_each_seed.json", tuple(range(10))),
-           "realism_critic/"),
-    Factor("drone", "hog", "appearance (realism critic)", "the critic's quarter of the whole draw -> of each seed's "
-           "own draws (12 real seeds) (built-in fits, calibrated)", "test",
-           _seeds(f"realism_critic/per_seed_12/test_{{s}}/{_PS12}.json", tuple(range(10))),
-           _seeds(f"realism_critic/per_seed_12/test_{{s}}/{_PS12}_of_each_seed.json", tuple(range(10))),
-           "realism_critic/"),
-    Factor("drone", "hog", "appearance (realism critic)", "the critic's quarter of the whole draw -> of each seed's "
-           "own draws (12 real seeds) (built-in fits, calibrated)", "val",
-           _seeds(f"realism_critic/per_seed_12/val_{{s}}/{_PS12}.json", tuple(range(10))),
-           _seeds(f"realism_critic/per_seed_12/val_{{s}}/{_PS12}_of_each_seed.json", tuple(range(10))),
-           "realism_critic/"),
+    *(Factor("drone", "hog", "appearance (realism critic)", "the critic's quarter of the whole draw -> of each seed's "
+             f"own draws{'' if n == 100 else f' ({n} real seeds)'} (built-in fits, calibrated)", sp,
+             _seeds(f"realism_critic/per_seed_{n}/{sp}_{{s}}/{stem}.json", tuple(range(10))),
+             _seeds(f"realism_critic/per_seed_{n}/{sp}_{{s}}/{stem}_of_each_seed.json", tuple(range(10))),
+             "realism_critic/",
+             (("realism_critic/gap_per_seed", "synthetic_hog_critic_0p25"),
+              ("realism_critic/gap_per_seed", "synthetic_hog_critic_0p25_per_seed")) if (n, sp) == (100, "test")
+             else None)
+      for n, stem in ((100, _PS100), (12, _PS12)) for sp in ("test", "val")),
     Factor("drone", "hog", "appearance (object noise level)", "σ_n of the built-in fits -> of the .glb fits, seed by "
            "seed (built-in mesh)", "test", _BI5, _seeds("mesh_factor/hog_builtin_gnoise_seed{s}/"
            "hog_100_seeds_20x_synthetic_drone_100_seed_seed_hog_builtin_gnoise.json"), "mesh_factor/"),
