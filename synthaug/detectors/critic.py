@@ -21,7 +21,7 @@ import torch
 from torch import Tensor
 
 __all__ = ["REALISM_SELECTION", "check_realism_selection", "fit_logistic", "hog_features", "least_synthetic",
-           "realism_scores", "seed_quotas", "standardiser"]
+           "realism_scores", "realism_variants", "seed_quotas", "standardiser"]
 
 REALISM_SELECTION = ("seed", "set")
 """How :func:`least_synthetic` picks: ``"seed"`` (the default since stop 83: every seed keeps its share of its own
@@ -38,6 +38,16 @@ def check_realism_selection(selection: Any, name: str = "realism_selection") -> 
     if not isinstance(selection, str) or selection not in REALISM_SELECTION:
         raise ValueError(f"{name} must be one of {list(REALISM_SELECTION)}, got {selection!r}")
     return selection
+
+
+def realism_variants(keeps: Any, selections: Any) -> list[tuple[float, str]]:
+    """Each distinct ``(realism_keep, realism_selection)`` of ``keeps`` × ``selections``, in order. A keep of 1 selects
+    nothing, so it comes once, as ``"set"`` (the selection every-draw cells are keyed under).
+
+    >>> realism_variants([1.0, 0.25], ["seed", "set"])
+    [(1.0, 'set'), (0.25, 'seed'), (0.25, 'set')]
+    """
+    return list(dict.fromkeys((k, "set" if k == 1 else check_realism_selection(s)) for k in keeps for s in selections))
 
 
 def fit_logistic(x: np.ndarray, y: np.ndarray, *, C: float = 1.0, max_iter: int = 100,
@@ -259,7 +269,8 @@ def least_synthetic(
     if selection == "set":
         return np.sort(np.argsort(scores, kind="stable")[:count]).astype(np.int64)
     groups = np.asarray(groups)
-    quota = seed_quotas(groups, count)
-    keep = [idx[np.argsort(scores[idx], kind="stable")[:quota[g]]]
-            for g, idx in enumerate(np.flatnonzero(groups == g) for g in range(len(quota)))]
-    return np.sort(np.concatenate(keep) if keep else np.zeros(0, np.int64)).astype(np.int64)
+    keep = [np.zeros(0, np.int64)]
+    for g, quota in enumerate(seed_quotas(groups, count)):  # each seed's own lowest logits
+        idx = np.flatnonzero(groups == g)
+        keep.append(idx[np.argsort(scores[idx], kind="stable")[:quota]])
+    return np.sort(np.concatenate(keep)).astype(np.int64)

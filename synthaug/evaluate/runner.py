@@ -51,7 +51,7 @@ from synthaug.detectors.train_cli import (
     synthetic_share_arg,
 )
 from synthaug.detectors.box_calibration import CALIBRATION_FORMS, CALIBRATION_VERSION
-from synthaug.detectors.critic import REALISM_SELECTION, check_realism_selection
+from synthaug.detectors.critic import REALISM_SELECTION, check_realism_selection, realism_variants
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import (
     BY_COUNT,
@@ -197,8 +197,9 @@ class Condition:
         object.__setattr__(self, "realism_keep", 1.0 if rk is None and not self.synthetic_ratio else
                            resolve_realism_keep(self.kind, rk, None if self.all_frames else self.seed_count))
         check_realism_selection(self.realism_selection)
-        if self.realism_keep == 1:  # nothing is selected: one cell, whatever the selection
-            object.__setattr__(self, "realism_selection", "set")
+        # a keep of 1 selects nothing: one cell, whatever the selection
+        (_, selection), = realism_variants([self.realism_keep], [self.realism_selection])
+        object.__setattr__(self, "realism_selection", selection)
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -784,8 +785,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     for kind in detectors:
         offs = list(dict.fromkeys(resolve_effects_off(kind, off) for off in effects_off))  # one per capture set
         grounds = list(dict.fromkeys(resolve_background_sampling(kind, bs, seed_count) for bs in background_sampling))
-        keeps = list(dict.fromkeys(resolve_realism_keep(kind, rk, seed_count) for rk in realism_keep))
-        keeps = list(dict.fromkeys((rk, "set" if rk == 1 else sel) for rk in keeps for sel in realism_selection))
+        keeps = realism_variants([resolve_realism_keep(kind, rk, seed_count) for rk in realism_keep],
+                                 realism_selection)
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()

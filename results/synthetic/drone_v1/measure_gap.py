@@ -26,6 +26,7 @@ import torch
 from synthaug.data.items import BACKGROUND_SAMPLING
 from synthaug.data.poses import POSE_SAMPLING, FittedPose, SeedOffset
 from synthaug.data.seedset import SeedSet
+from synthaug.detectors.critic import realism_variants
 from synthaug.diagnose.gap import gap_section, training_samples
 from synthaug.distances.cnn import cnn_distance
 from synthaug.effects.camera_functional import quantize_levels
@@ -110,11 +111,10 @@ def main() -> None:
                         sampler = SeedOffset(sampler, fit) if ps.endswith("_at_seed") else sampler
                     for box in args.object_box:
                         for sv in args.shape_variation:
-                            keeps = dict.fromkeys((k, "set" if k == 1 else sel) for k in args.realism_keep
-                                                  for sel in args.realism_selection)
                             for off, qz, bs, (rk, sel) in ((o, q, b, k) for o in args.effects_off
                                                            for q in args.quantize for b in args.background_sampling
-                                                           for k in keeps):
+                                                           for k in realism_variants(args.realism_keep,
+                                                                                     args.realism_selection)):
                                 gone = [] if off == "none" else off.split("+")
                                 name = (f"synthetic_{dist}" + ("" if ps == "uniform" else f"_{ps}_poses")
                                         + ("" if jit == 20.0 else f"_jitter_{jit:g}")

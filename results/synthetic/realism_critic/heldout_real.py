@@ -24,7 +24,7 @@ import numpy as np
 import torch
 
 from synthaug.data.seedset import SeedSet
-from synthaug.detectors.critic import hog_features
+from synthaug.detectors.critic import hog_features, realism_variants
 from synthaug.detectors.training_sets import synthetic_positives
 from synthaug.diagnose.gap import classifier_two_sample_test
 
@@ -55,7 +55,7 @@ def main() -> None:
                      if all(abs(int(r["frame"]) - f) > args.gap for f in near.get(r["video"], []))]
         real = hog_features(np.asarray(other.patches)[keep_rows])
         for q in args.quantize:
-            for k, sel in dict.fromkeys((k, "set" if k == 1 else sel) for k in args.keep for sel in args.selection):
+            for k, sel in realism_variants(args.keep, args.selection):
                 syn = synthetic_positives(ss, "quadcopter", args.fit.format(s=s), 5 * len(ss), seed=s + 2,
                                           quantize=q == "on", realism_keep=k, realism_selection=sel)
                 t = classifier_two_sample_test(real, hog_features(syn), seed=s, permutations=100)

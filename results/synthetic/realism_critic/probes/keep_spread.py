@@ -5,7 +5,7 @@
 import sys, numpy as np, torch, json
 from synthaug.data.seedset import SeedSet
 from synthaug.detectors.training_sets import synthetic_positives
-from synthaug.detectors.critic import realism_scores
+from synthaug.detectors.critic import least_synthetic
 torch.set_num_threads(1)
 n = int(sys.argv[1]); seeds = [int(x) for x in sys.argv[2:]]
 for s in seeds:
@@ -13,8 +13,7 @@ for s in seeds:
     count = 20 * len(ss)
     syn, g = synthetic_positives(ss, "quadcopter", f"data/runs/fits/drone_{n}_seed{s}_hog.json", count * 4, seed=s + 2,
                                  return_seed_index=True)
-    sc = realism_scores(np.asarray(ss.patches), syn, g, seed=s + 2)
-    keep = np.sort(np.argsort(sc, kind="stable")[:count])
+    keep = least_synthetic(np.asarray(ss.patches), syn, g, count, seed=s + 2, selection="set")
     per = np.bincount(g[keep], minlength=len(ss)); drawn = np.bincount(g, minlength=len(ss))
     p = per / per.sum(); ent = np.exp(-(p[p > 0] * np.log(p[p > 0])).sum())
     pd = drawn / drawn.sum(); entd = np.exp(-(pd[pd > 0] * np.log(pd[pd > 0])).sum())
