@@ -234,3 +234,142 @@ def test_a_one_seed_set_cannot_be_filtered(tmp_path):
     CaptureParams.sample(1, generator=torch.Generator().manual_seed(0)).save(fit)
     with pytest.raises(ValueError, match=">= 2 seeds"):
         synthetic_positives(SeedSet.load(tmp_path / "s"), "quadcopter", fit, 4, realism_keep=0.5)
+
+
+# ------------------------------------------------------------------ the critic in SyntheticObjectDataset (lazy form)
+class _Brightness:
+    """A toy critic (picklable, module level): a patch looks the more synthetic the brighter it is."""
+
+    def __call__(self, patches, seed_index):
+        return patches.float().mean(dim=(1, 2, 3)).double().numpy()
+
+
+class _Constant:
+    def __call__(self, patches, seed_index):
+        return np.zeros(len(patches))
+
+
+class _WrongShape:
+    def __call__(self, patches, seed_index):
+        return np.zeros(len(patches) + 1)
+
+
+def _critic_dataset(cache, **kw):
+    from synthaug.data.procedural import sky_backgrounds
+    from synthaug.data.synthetic import SyntheticObjectDataset
+
+    return SyntheticObjectDataset("quadcopter", list(sky_backgrounds(5, (40, 40), seed=2)), length=40, render=cache,
+                                  seed=7, **kw)
+
+
+def test_a_critic_keeps_each_item_the_least_synthetic_of_its_candidates(small_cache):
+    plain = _critic_dataset(small_cache)
+    ds = _critic_dataset(small_cache, realism_critic=_Brightness(), realism_candidates=4)
+    items, base = ds.__getitems__(list(range(40))), plain.__getitems__(list(range(40)))
+    score = _Brightness()
+    lower = 0
+    for i, ((img, t), (img0, t0)) in enumerate(zip(items, base)):
+        p, p0 = ds.make_params(i), plain.make_params(i)
+        assert int(t["seed_index"]) == int(t0["seed_index"]) == p.seed_index  # the candidates keep the item's seed
+        assert p.negative == p0.negative and int(t["labels"]) == int(t0["labels"])
+        torch.testing.assert_close(ds.render(p)[0], img, rtol=0, atol=0)  # render(make_params(i)) is ds[i]
+        torch.testing.assert_close(ds[i][0], img, rtol=0, atol=0)  # alone or in a batch: the same item
+        if p.negative:  # not scored: the plain draw
+            assert p == p0
+            continue
+        s, s0 = score(img[None], None)[0], score(img0[None], None)[0]
+        assert s <= s0  # the first candidate is the plain draw: the kept one is never more synthetic
+        lower += s < s0
+    # with 4 candidates the plain draw is the least bright in 1 of 4 (ties aside): the others move
+    n_obj = sum(not ds.make_params(i).negative for i in range(40))
+    assert lower >= 0.5 * n_obj, (lower, n_obj)
+    # a critic indifferent to every candidate keeps the first of equal scores: the plain draw
+    flat = _critic_dataset(small_cache, realism_critic=_Constant())
+    for (img, _), (img0, _) in zip(flat.__getitems__(list(range(40))), base):
+        torch.testing.assert_close(img, img0, rtol=0, atol=0)
+    # epochs draw new candidates; the same (epoch, index) the same item
+    e1 = ds.__getitems__([(1, i) for i in range(10)])
+    assert any(not torch.equal(a[0], b[0]) for a, b in zip(e1, items[:10]))
+    for a, b in zip(e1, ds.__getitems__([(1, i) for i in range(10)])):
+        torch.testing.assert_close(a[0], b[0], rtol=0, atol=0)
+
+
+def test_a_fitted_critic_travels_to_dataloader_workers(small_cache):
+    import pickle
+
+    from torch.utils.data import DataLoader
+
+    from synthaug.data.procedural import sky_backgrounds
+    from synthaug.detectors.critic import RealismCritic
+
+    ds = _critic_dataset(small_cache)
+    real = sky_backgrounds(5, (40, 40), seed=11)
+    critic = RealismCritic.from_dataset(ds, real, folds=2)
+    assert critic.n_seeds == 5 and critic.weight.shape[0] == 2
+    # from_dataset is fit on the dataset's object draws in index order, before transforms
+    # (the default count: 2 * 5 * 5 seeds = 50 objects; the next epochs' draws after the first's 40 items)
+    drawn = [p for p in (ds.make_params(i, e) for e in range(3) for i in range(40)) if not p.negative][:50]
+    syn = torch.stack([img for img, _ in ds.render(drawn, transformed=False)]).clamp(0, 1)
+    groups = np.array([p.seed_index for p in drawn])
+    ref = RealismCritic.fit(real, syn, groups, folds=2)
+    np.testing.assert_array_equal(critic.weight, ref.weight)
+    # the critic scores a patch with the part that never saw its seed: realism_scores' logits
+    np.testing.assert_allclose(critic(syn, groups), realism_scores(real, syn, groups, folds=2), rtol=0, atol=1e-12)
+    back = pickle.loads(pickle.dumps(critic))
+    np.testing.assert_array_equal(back(syn, groups), critic(syn, groups))
+    ds.realism_critic = critic
+    ref_bytes = [img for img, _ in ds.__getitems__(list(range(12)))]
+    for workers in (0, 2):
+        loader = DataLoader(ds, batch_size=4, num_workers=workers, multiprocessing_context="fork" if workers else None)
+        got = torch.cat([b[0] for b in loader])[:12]
+        torch.testing.assert_close(got, torch.stack(ref_bytes), rtol=0, atol=0)
+
+
+def test_a_bad_critic_is_refused_with_a_clear_message(small_cache):
+    from synthaug.data.procedural import sky_backgrounds
+    from synthaug.data.synthetic import SyntheticObjectDataset
+    from synthaug.detectors.critic import RealismCritic
+
+    with pytest.raises(ValueError, match="realism_candidates"):
+        _critic_dataset(small_cache, realism_candidates=1)
+    with pytest.raises(ValueError, match="realism_candidates"):
+        _critic_dataset(small_cache, realism_critic=_Brightness(), realism_candidates=2.5)
+    with pytest.raises(ValueError, match="callable"):
+        _critic_dataset(small_cache, realism_critic="hog")
+    with pytest.raises(ValueError, match="patch mode"):
+        SyntheticObjectDataset("quadcopter", list(sky_backgrounds(2, (160, 160), seed=2)), length=4, mode="frame",
+                               render=small_cache, realism_critic=_Brightness())
+    ds = _critic_dataset(small_cache, realism_critic=_WrongShape())
+    with pytest.raises(ValueError, match="one score per patch"):
+        ds.__getitems__(list(range(8)))
+    with pytest.raises(ValueError, match="already has a realism_critic"):
+        RealismCritic.from_dataset(_critic_dataset(small_cache, realism_critic=_Brightness()),
+                                   sky_backgrounds(5, (40, 40), seed=1))
+    other = RealismCritic.fit(sky_backgrounds(3, (40, 40), seed=1), sky_backgrounds(9, (40, 40), seed=3),
+                              np.repeat(np.arange(3), 3))
+    with pytest.raises(ValueError, match="fitted on 3 seeds but this dataset has 5"):
+        _critic_dataset(small_cache).realism_critic = other
+    with pytest.raises(ValueError, match="no synthetic object"):
+        RealismCritic.from_dataset(_critic_dataset(small_cache, negative_fraction=1.0),
+                                   sky_backgrounds(5, (40, 40), seed=1))
+
+
+def test_synthetic_positives_item_selection_keeps_each_draws_seed_and_its_least_synthetic_candidate(seeds_and_fit):
+    from synthaug.data.synthetic import SyntheticObjectDataset
+    from synthaug.detectors.critic import RealismCritic
+    from synthaug.detectors.training_sets import synthetic_positives
+
+    seeds, fit = seeds_and_fit
+    plain, plain_idx = synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, return_seed_index=True)
+    kept, kept_idx = synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, realism_keep=0.25, batch=5,
+                                         realism_selection="item", return_seed_index=True)
+    np.testing.assert_array_equal(kept_idx, plain_idx)  # each patch keeps its draw's seed: the shares exactly
+    assert kept.shape == plain.shape and not torch.equal(kept, plain)
+    # the same dataset, its critic fitted on its own draws: each kept patch scores at most its plain draw
+    ds = SyntheticObjectDataset("quadcopter", seeds, params=str(fit), length=12, patch_size=40, negative_fraction=0.0,
+                                seed=3)
+    critic = RealismCritic.from_dataset(ds, np.asarray(seeds.patches), seed=3)
+    s, s0 = critic(kept, kept_idx), critic(plain, plain_idx)
+    assert np.all(s <= s0 + 1e-9) and np.sum(s < s0 - 1e-9) >= 6, (s, s0)
+    with pytest.raises(ValueError, match="'item' picks among"):
+        least_synthetic(np.asarray(seeds.patches), plain, plain_idx, 6, selection="item")

@@ -731,6 +731,14 @@ def test_realism_selection_makes_a_condition_per_value_only_where_the_critic_kee
     parse = R.build_parser().parse_args
     assert parse(["synthetic", "--out", "x"]).realism_selection == ["seed"]
     assert parse(["synthetic", "--realism-selection", "seed", "set", "--out", "x"]).realism_selection == ["seed", "set"]
+    # the lazy form (SyntheticObjectDataset's critic): a key and a name of its own
+    made.clear()
+    R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           realism_keep=(0.25,), realism_selection=("item",))
+    by_item = made[1]
+    assert by_item.identity() == {**by_set.identity(), "realism_selection": "item"}
+    assert by_item.name == "hog / 12 seeds + 20x synthetic (f{seed}, the least synthetic of 4 candidates per patch)"
+    assert [a.realism_selection for a in _added_positives(ws, monkeypatch, by_item)] == ["item"]
     with pytest.raises(SystemExit) as e:
         parse(["synthetic", "--realism-selection", "video", "--out", "x"])
     assert e.value.code == 2 and "--realism-selection" in capsys.readouterr().err

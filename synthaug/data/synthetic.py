@@ -54,7 +54,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, overload
 
@@ -64,7 +64,7 @@ from torch.utils.data import Dataset
 from torchvision import tv_tensors
 
 from synthaug.data.captures import CAPTURE_SAMPLERS, CaptureSampler
-from synthaug.data.dataset_args import check_arguments, legacy_arguments, render_backend
+from synthaug.data.dataset_args import check_arguments, is_integral, legacy_arguments, render_backend
 from synthaug.data.epochs import EpochSampler, item_generator, item_seed
 from synthaug.data.items import BACKGROUND_SAMPLING, ItemParams
 from synthaug.data.mixing import RealItems, mixed_counts, to_float_image
@@ -186,6 +186,19 @@ class SyntheticObjectDataset(Dataset):
             16). The background's place in its frame then serves the position-aware effects. Needs 2 seeds.
             ``synthaug train``'s default for the CNN (measured better on the drone videos,
             :data:`~synthaug.detectors.video_training.FAMILY_BACKGROUND_SAMPLING`); this dataset keeps the paper's.
+        realism_critic: patch mode: a realism critic, ``critic(patches, seed_index) -> logits`` ((M, C, P, P) float
+            in [0, 1] and (M,) int in, (M,) "looks synthetic" scores out, higher: more synthetic), e.g. a
+            :class:`~synthaug.detectors.critic.RealismCritic` fitted on the seed set's real patches and draws of
+            this dataset without a critic (:meth:`RealismCritic.from_dataset
+            <synthaug.detectors.critic.RealismCritic.from_dataset>`). Each synthetic object item then renders
+            ``realism_candidates`` draws that keep its seed (capture parameters and background) and differ in
+            everything else (pose, crop, noise fields, shape), and keeps the one the critic finds least synthetic
+            (discriminator rejection sampling, per item: the lazy form of ``synthaug train``'s
+            ``--realism-selection item``). Negative items are not scored. None (default): every draw, the paper.
+            A picklable critic travels to DataLoader workers with the dataset.
+        realism_candidates: draws per item with a ``realism_critic`` (>= 2; 4 keeps one in four, as
+            ``synthaug train``'s ``--realism-keep 0.25``). The first candidate is the draw the item has without a
+            critic.
         transforms: a callable ``(image, target) -> (image, target)`` applied to
             every item, real and synthetic alike, as torchvision datasets take
             one (e.g. ``transforms.v2.Compose([...])``: frame-mode boxes are
@@ -224,6 +237,8 @@ class SyntheticObjectDataset(Dataset):
         shape_variation: float = 0.0,
         shape_variants: int = 8,
         background_sampling: Literal["seed", "other"] = "seed",
+        realism_critic: Callable[[torch.Tensor, torch.Tensor], Any] | None = None,
+        realism_candidates: int = 4,
         transforms: Any = None,
         **deprecated: Any,
     ) -> None:
@@ -252,6 +267,8 @@ class SyntheticObjectDataset(Dataset):
         self._set_up_capture(backgrounds, params, effects=effects, object_scale=object_scale,
                              capture_sampling=capture_sampling, seed_geometry=seed_geometry)
         self.background_sampling = _check_background_sampling(background_sampling, len(self.backgrounds))
+        self.realism_candidates = _check_realism_candidates(realism_candidates)
+        self.realism_critic = realism_critic
         # after the capture set-up: "fitted" reads the fit's rotations (given, never the sampled rows)
         self._set_up_pose(pose_sampling, fitted=params is not None)
         # real items first, then the synthetic ones (synthaug.data.mixing says why the layout lives here)
@@ -267,6 +284,17 @@ class SyntheticObjectDataset(Dataset):
                 raise ValueError("object_box='fit' reads each seed's fitted pose and object scale: give params from a "
                                  "fit with per-seed scales (synthaug fit's default)")
             self.object_box = self._fitted_box_fraction()
+
+    @property
+    def realism_critic(self) -> Callable[[torch.Tensor, torch.Tensor], Any] | None:
+        """The realism critic (see the class's ``realism_critic``); settable, e.g. to a
+        :meth:`RealismCritic.from_dataset <synthaug.detectors.critic.RealismCritic.from_dataset>` of this dataset
+        (checked as the argument is)."""
+        return self._realism_critic
+
+    @realism_critic.setter
+    def realism_critic(self, critic: Callable[[torch.Tensor, torch.Tensor], Any] | None) -> None:
+        self._realism_critic = _check_realism_critic(critic, self.mode, len(self.backgrounds))
 
     # ----------------------------------------------------------- set-up
     def _set_up_capture(self, backgrounds: Any, params: CaptureParams | str | os.PathLike | None, *,
@@ -448,15 +476,22 @@ class SyntheticObjectDataset(Dataset):
 
     def __getitems__(self, indices: Sequence[Any]) -> list[tuple[torch.Tensor, dict[str, torch.Tensor]]]:
         """Items of a batch; each index is an int (the dataset's epoch) or an ``(epoch, index)`` pair."""
-        params = []
+        keys = []
         for i in indices:
             if isinstance(i, (tuple, list)):
                 if len(i) != 2:
                     raise IndexError(f"an index is an int or an (epoch, index) pair, got {i!r}")
-                params.append(self.make_params(int(i[1]), int(i[0])))
+                keys.append((int(i[0]), int(i[1])))
             else:
-                params.append(self.make_params(int(i)))
-        return self.render(params)
+                keys.append((self.epoch, int(i)))
+        params, items = self._draw_batch(keys)
+        todo = [k for k, item in enumerate(items) if item is None]
+        if todo:  # the items a critic did not render while choosing
+            for k, item in zip(todo, self._render_items([params[k] for k in todo])):
+                items[k] = item
+        if self.transforms is not None:
+            items = [self._transform(item, p.epoch, p.index) for item, p in zip(items, params)]
+        return items
 
     def make_params(self, index: int, epoch: int | None = None) -> ItemParams:
         """All random choices of item ``index`` in ``epoch`` (default: the dataset's), from its own generator.
@@ -467,23 +502,64 @@ class SyntheticObjectDataset(Dataset):
         draws more, as "fitted", moves no other draw); after it only the shape (with ``shape_variation``) and the
         other seed's background (with ``background_sampling="other"``), each drawn only when asked for.
 
+        With a ``realism_critic``, an object item's ``realism_candidates`` draws are rendered and scored here,
+        and the params of the one kept are returned (candidate ``j >= 1`` draws as above from its own generator,
+        with the item's seed): the choice is a draw too, so ``render(make_params(i))`` is still ``ds[i]``.
+
         Example:
             >>> p = ds.make_params(3)  # doctest: +SKIP
             >>> torch.equal(ds.render(p)[0], ds[3][0])  # doctest: +SKIP
             True
         """
-        n, index = len(self), int(index)
-        epoch = self.epoch if epoch is None else int(epoch)
-        if index < 0:
-            index += n
-        if not 0 <= index < n:
-            raise IndexError(f"index {index} out of range for a dataset of length {n}")
-        if index < self.n_real:
-            return ItemParams(index=index, epoch=epoch, real=True)
-        g = item_generator(self.seed, epoch, index)
+        return self._draw_batch([(self.epoch if epoch is None else int(epoch), int(index))])[0][0]
+
+    def _draw_batch(self, keys: Sequence[tuple[int, int]]) -> tuple[list[ItemParams], list[Any]]:
+        """The params of each ``(epoch, index)`` and, for the items a critic chose among candidates, the rendered
+        item (untransformed; None for the others, which are not rendered yet)."""
+        n = len(self)
+        params = []
+        for epoch, index in keys:
+            if index < 0:
+                index += n
+            if not 0 <= index < n:
+                raise IndexError(f"index {index} out of range for a dataset of length {n}")
+            params.append(ItemParams(index=index, epoch=epoch, real=True) if index < self.n_real else
+                          self._draw(item_generator(self.seed, epoch, index), index, epoch))
+        items: list[Any] = [None] * len(params)
+        scored = [k for k, p in enumerate(params) if not p.real and not p.negative]
+        if self.realism_critic is None or not scored:
+            return params, items
+        k_c = self.realism_candidates
+        candidates = []
+        for k in scored:
+            p = params[k]
+            candidates.append(p)
+            base = item_seed(self.seed, p.epoch, p.index)
+            candidates += [self._draw(item_generator(base, j, _CANDIDATE_STREAM), p.index, p.epoch, p.seed_index)
+                           for j in range(1, k_c)]
+        rendered = self._render_items(candidates)
+        images = torch.stack([img for img, _ in rendered]).clamp(0, 1)
+        seeds = torch.tensor([c.seed_index for c in candidates], dtype=torch.int64)
+        logits = torch.as_tensor(np.asarray(self.realism_critic(images, seeds), dtype=np.float64))
+        if logits.shape != (len(candidates),):
+            raise ValueError(f"realism_critic must return one score per patch, shape ({len(candidates)},), got "
+                             f"{tuple(logits.shape)}")
+        if not bool(torch.isfinite(logits).all()):
+            raise ValueError("realism_critic returned a non-finite score")
+        best = logits.view(len(scored), k_c).argmin(1).tolist()  # the first of equal scores
+        for slot, (k, b) in enumerate(zip(scored, best)):
+            params[k], items[k] = candidates[slot * k_c + b], rendered[slot * k_c + b]
+        return params, items
+
+    def _draw(self, g: torch.Generator, index: int, epoch: int, seed_index: int | None = None) -> ItemParams:
+        """One synthetic item's params from generator ``g`` (:meth:`make_params`' order of draws); ``seed_index``
+        given: a critic's candidate, an object (never negative) of that seed, the draws of the seed and the
+        negative flag made and ignored, so that everything after them keeps its place."""
         u = torch.rand(10, generator=g, dtype=torch.float64).tolist()
         n_seeds = len(self.backgrounds)
-        seed_index = min(int(u[0] * n_seeds), n_seeds - 1)
+        negative = u[1] < self.negative_fraction if seed_index is None else False
+        if seed_index is None:
+            seed_index = min(int(u[0] * n_seeds), n_seeds - 1)
         crop = self._crop()
         fields: dict[str, torch.Tensor] = {}
         for eff in self._random_effects:
@@ -502,24 +578,25 @@ class SyntheticObjectDataset(Dataset):
         h, w = self.backgrounds[seed_index if background is None else background].shape[-2:]
         lo, hi = self.object_size
         return ItemParams(
-            index=index, epoch=epoch, real=False, seed_index=seed_index, negative=u[1] < self.negative_fraction,
+            index=index, epoch=epoch, real=False, seed_index=seed_index, negative=negative,
             pose=pose,
             crop_xy=(min(int(u[7] * (w - crop + 1)), w - crop), min(int(u[8] * (h - crop + 1)), h - crop)),
             object_px=lo + (hi - lo) * u[9] if self.mode == "frame" else None,
             capture=capture, fields=fields, variant=variant, background_index=background, framed=framed)
 
     @overload
-    def render(self, params: ItemParams) -> tuple[Any, dict[str, Any]]: ...
+    def render(self, params: ItemParams, *, transformed: bool = True) -> tuple[Any, dict[str, Any]]: ...
 
     @overload
-    def render(self, params: Sequence[ItemParams]) -> list[tuple[Any, dict[str, Any]]]: ...
+    def render(self, params: Sequence[ItemParams], *, transformed: bool = True) -> list[tuple[Any, dict[str, Any]]]: ...
 
-    def render(self, params: ItemParams | Sequence[ItemParams]) -> Any:
+    def render(self, params: ItemParams | Sequence[ItemParams], *, transformed: bool = True) -> Any:
         """The item(s) of ``params`` (from :meth:`make_params`), exactly as ``ds[i]`` / ``__getitems__`` give them.
 
         Draws nothing except the ``transforms``' own draws (seeded from the params' seed, epoch and index as
         in ``ds[i]``). A sequence renders as one batch (vectorised) and returns a list; one params object
-        returns one ``(image, target)``.
+        returns one ``(image, target)``. ``transformed=False``: before the ``transforms`` (what a
+        ``realism_critic`` scores).
         """
         single = isinstance(params, ItemParams)
         batch = [params] if single else list(params)
@@ -536,6 +613,13 @@ class SyntheticObjectDataset(Dataset):
                                  f"{len(self.backgrounds)} seeds")
             if not p.real and not 0 <= p.variant < self.n_shapes:
                 raise ValueError(f"variant {p.variant} out of range: this dataset has {self.n_shapes} shape(s)")
+        out = self._render_items(batch)
+        if self.transforms is not None and transformed:
+            out = [self._transform(item, p.epoch, p.index) for item, p in zip(out, batch)]
+        return out[0] if single else out
+
+    def _render_items(self, batch: list[ItemParams]) -> list[tuple[Any, Any]]:
+        """The items of checked params, before ``transforms``."""
         out: list[Any] = [None] * len(batch)
         for k, p in enumerate(batch):
             if p.real:
@@ -544,9 +628,7 @@ class SyntheticObjectDataset(Dataset):
         if syn:
             for k, item in zip(syn, self._synthetic_items([batch[k] for k in syn])):
                 out[k] = item
-        if self.transforms is not None:
-            out = [self._transform(item, p.epoch, p.index) for item, p in zip(out, batch)]
-        return out[0] if single else out
+        return out
 
     def _transform(self, item: tuple[Any, Any], epoch: int, index: int) -> tuple[Any, Any]:
         """``transforms(image, target)`` with torch's random draws seeded from (seed, epoch, index)."""
@@ -767,6 +849,33 @@ class SyntheticObjectDataset(Dataset):
 
 
 _CHUNK_PIXELS = 64 * 64 * 64  # pixels rendered together (see SyntheticObjectDataset._synthetic_items)
+_CANDIDATE_STREAM = 0x43524954  # a critic's candidate j of an item draws from item_generator(item's seed, j, this)
+
+
+def _check_realism_candidates(candidates: Any) -> int:
+    """``realism_candidates`` (:class:`SyntheticObjectDataset`) as an int >= 2, checked with or without a critic (a
+    bad value is a mistake either way)."""
+    if not is_integral(candidates) or candidates < 2:
+        raise ValueError(f"realism_candidates must be an integer >= 2 (draws per item, the critic keeps one), got "
+                         f"{candidates!r}")
+    return int(candidates)
+
+
+def _check_realism_critic(critic: Any, mode: str, n_seeds: int) -> Any:
+    """``realism_critic`` (:class:`SyntheticObjectDataset`) checked: None or a callable, in patch mode, fitted (when it
+    says so with ``n_seeds``) on as many seeds as the dataset has."""
+    if critic is None:
+        return None
+    if not callable(critic):
+        raise ValueError(f"realism_critic must be a callable (patches, seed_index) -> scores, got "
+                         f"{type(critic).__name__}")
+    if mode != "patch":
+        raise ValueError("realism_critic scores object patches: patch mode only")
+    fitted = getattr(critic, "n_seeds", None)
+    if fitted is not None and fitted != n_seeds:
+        raise ValueError(f"the realism_critic was fitted on {fitted} seeds but this dataset has {n_seeds}: fit it on "
+                         f"this dataset's seed set")
+    return critic
 
 
 def _check_background_sampling(background_sampling: Any, n_seeds: int) -> str:

@@ -14,19 +14,23 @@ training sets can use it.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import torch
 from torch import Tensor
 
-__all__ = ["REALISM_SELECTION", "check_realism_selection", "fit_logistic", "hog_features", "least_synthetic",
-           "realism_scores", "realism_variants", "seed_quotas", "standardiser"]
+__all__ = ["REALISM_SELECTION", "RealismCritic", "check_realism_selection", "fit_logistic", "hog_features",
+           "least_synthetic", "realism_scores", "realism_variants", "seed_quotas", "standardiser"]
 
-REALISM_SELECTION = ("seed", "set")
-"""How :func:`least_synthetic` picks: ``"seed"`` (the default since stop 83: every seed keeps its share of its own
-draws, the least synthetic of them, so the critic picks poses within a seed and never drops a seed) or ``"set"`` (the
-``count`` least synthetic of the whole draw, stop 82's: a seed whose renders all look synthetic may keep none)."""
+REALISM_SELECTION = ("seed", "set", "item")
+"""How a critic picks the synthetic positives (:func:`~synthaug.detectors.training_sets.synthetic_positives`):
+``"seed"`` (the default since stop 83: every seed keeps its share of its own draws, the least synthetic of them, so the
+critic picks poses within a seed and never drops a seed), ``"set"`` (the ``count`` least synthetic of the whole draw,
+stop 82's: a seed whose renders all look synthetic may keep none; these two are :func:`least_synthetic`'s) or
+``"item"`` (the lazy form, as :class:`~synthaug.data.synthetic.SyntheticObjectDataset` with a ``realism_critic``
+draws: each patch the least synthetic of its own candidates, which keep its seed)."""
 
 
 def check_realism_selection(selection: Any, name: str = "realism_selection") -> str:
@@ -147,6 +151,208 @@ def hog_features(patches: Tensor | np.ndarray, config: Any = None) -> np.ndarray
         return torch.cat([hog(c, config or DEFAULT_HOG) for c in x.split(1024)]).double().numpy()
 
 
+@dataclass(frozen=True, eq=False)
+class RealismCritic:
+    """A cross-fitted realism critic of a seed set, as a picklable callable ``critic(patches, seed_index) -> logits``.
+
+    :meth:`fit` splits the seeds into ``folds`` parts and trains one L2 logistic regression per part on the *other*
+    parts' seeds (real 0, synthetic 1, in HOG features); a patch drawn with seed ``s`` is scored by the part that never
+    saw ``s``. Holds numpy arrays only, so a :class:`~synthaug.data.synthetic.SyntheticObjectDataset` can take it as
+    its ``realism_critic`` into DataLoader workers (its best of ``realism_candidates`` draws per item).
+
+    Attributes:
+        part: ``(N,)`` int, the part of each seed.
+        mean, std: ``(folds, D)``, each part's standardiser.
+        weight: ``(folds, D)``, each part's weights; bias: ``(folds,)``.
+        hog_config: the HOG settings of the features (None: the detector's defaults).
+
+    Example:
+        >>> critic = RealismCritic.fit(seedset.patches, synthetic, groups)  # doctest: +SKIP
+        >>> critic(synthetic[:4], groups[:4])  # doctest: +SKIP
+        array([ 0.41, -1.2 ,  0.07,  2.3 ])
+    """
+
+    part: np.ndarray
+    mean: np.ndarray
+    std: np.ndarray
+    weight: np.ndarray
+    bias: np.ndarray
+    hog_config: Any = None
+
+    @classmethod
+    def fit(
+        cls,
+        real: Tensor | np.ndarray,
+        synthetic: Tensor | np.ndarray,
+        groups: np.ndarray,
+        *,
+        folds: int = 2,
+        synthetic_per_real: int = 5,
+        C: float = 1.0,
+        seed: int = 0,
+        hog_config: Any = None,
+    ) -> RealismCritic:
+        """The critic of real seeds ``real`` against ``synthetic`` patches drawn with seeds ``groups``.
+
+        Args:
+            real: the seed set's real patches, ``(N, P, P)`` uint8 or ``(N, 1, P, P)`` float in [0, 1]; seed ``i`` is
+                row i.
+            synthetic: synthetic patches, same formats.
+            groups: ``(M,)`` int, the seed each synthetic patch was drawn with (its capture parameters), in
+                ``[0, N)``.
+            folds: parts of the seeds (>= 2, <= N).
+            synthetic_per_real: cap on each part's synthetic training rows, per real training row (drawn without
+                replacement).
+            C: inverse L2 penalty.
+            seed: seeds the parts and the subsample (``numpy.random.default_rng``).
+            hog_config: HOG settings (None: the detector's defaults).
+        """
+        return cls.from_features(hog_features(real, hog_config), hog_features(synthetic, hog_config), groups,
+                                 folds=folds, synthetic_per_real=synthetic_per_real, C=C, seed=seed,
+                                 hog_config=hog_config)
+
+    @classmethod
+    def from_dataset(
+        cls,
+        dataset: Any,
+        real: Tensor | np.ndarray,
+        count: int | None = None,
+        *,
+        epoch: int = 0,
+        batch: int = 256,
+        folds: int = 2,
+        synthetic_per_real: int = 5,
+        C: float = 1.0,
+        seed: int = 0,
+        hog_config: Any = None,
+    ) -> RealismCritic:
+        """:meth:`fit` on ``count`` synthetic object draws of ``dataset`` (a
+        :class:`~synthaug.data.synthetic.SyntheticObjectDataset` in patch mode, without a critic yet): its items
+        from ``epoch`` on in index order, negatives skipped, as rendered before its ``transforms`` (what the
+        dataset's critic scores). Then ``dataset.realism_critic = critic`` makes each item the least synthetic of
+        its candidates.
+
+        Args:
+            real: the real patches of the dataset's seeds, one per seed in its order (e.g. ``seedset.patches``).
+            count: synthetic draws (default ``2 · synthetic_per_real · len(real)``, so that each part's cap is
+                reached).
+            epoch: the dataset's epoch the draws start in (further epochs when its synthetic items are fewer).
+            batch: items rendered together.
+            folds, synthetic_per_real, C, seed, hog_config: as in :meth:`fit`.
+
+        Example:
+            >>> ds = SyntheticObjectDataset("quadcopter", seedset, params="fit.pt", length=10_000)  # doctest: +SKIP
+            >>> ds.realism_critic = RealismCritic.from_dataset(ds, seedset.patches)  # doctest: +SKIP
+        """
+        if getattr(dataset, "realism_critic", None) is not None:
+            raise ValueError("the dataset already has a realism_critic: draw the critic's training patches from the "
+                             "dataset without one (set dataset.realism_critic = None first)")
+        if getattr(dataset, "mode", None) != "patch":
+            raise ValueError("a realism critic scores object patches: give a dataset in patch mode")
+        n_real, total = int(dataset.n_real), len(dataset)
+        if total == n_real or float(dataset.negative_fraction) >= 1:
+            raise ValueError("the dataset draws no synthetic object (no synthetic items, or negative_fraction 1)")
+        count = 2 * synthetic_per_real * len(real) if count is None else count
+        if not (isinstance(count, (int, np.integer)) and count >= 1):
+            raise ValueError(f"count must be an int >= 1, got {count!r}")
+        drawn, index, ep = [], n_real, int(epoch)
+        while len(drawn) < count:
+            if index == total:  # the next epoch's draws
+                index, ep = n_real, ep + 1
+            p = dataset.make_params(index, ep)
+            if not p.negative:
+                drawn.append(p)
+            index += 1
+        patches, groups = [], []
+        for start in range(0, count, batch):
+            items = dataset.render(drawn[start:start + batch], transformed=False)
+            patches.append(torch.stack([img for img, _ in items]).float().clamp(0, 1))
+            groups += [int(t["seed_index"]) for _, t in items]
+        synthetic = torch.cat(patches)
+        if synthetic.shape[1] == 3:
+            import kornia
+
+            synthetic = kornia.color.rgb_to_grayscale(synthetic)
+        return cls.fit(real, synthetic, np.asarray(groups, np.int64), folds=folds,
+                       synthetic_per_real=synthetic_per_real, C=C, seed=seed, hog_config=hog_config)
+
+    @classmethod
+    def from_features(cls, real: np.ndarray, synthetic: np.ndarray, groups: np.ndarray, *, folds: int = 2,
+                      synthetic_per_real: int = 5, C: float = 1.0, seed: int = 0,
+                      hog_config: Any = None) -> RealismCritic:
+        """:meth:`fit` on HOG features already computed (:func:`hog_features` with ``hog_config``): ``real``
+        ``(N, D)``, ``synthetic`` ``(M, D)``."""
+        fr, fs = real, synthetic
+        n, m = len(fr), len(fs)
+        groups = _check_groups(groups, m, n)
+        if not (isinstance(folds, int) and 2 <= folds <= n):
+            raise ValueError(f"folds must be an int in [2, number of real seeds = {n}], got {folds!r}: the critic "
+                             f"of each part is trained on the other parts' seeds")
+        if not (isinstance(synthetic_per_real, int) and synthetic_per_real >= 1):
+            raise ValueError(f"synthetic_per_real must be an int >= 1, got {synthetic_per_real!r}")
+        rng = np.random.default_rng(seed)
+        part = np.empty(n, np.int64)
+        for j, idx in enumerate(np.array_split(rng.permutation(n), folds)):
+            part[idx] = j
+        mean, std, weight, bias = [], [], [], []
+        for j in range(folds):
+            train_real, train_syn = np.flatnonzero(part != j), np.flatnonzero(part[groups] != j)
+            if len(train_syn) == 0:
+                raise ValueError(f"no synthetic patch was drawn with the seeds outside part {j}: draw more patches")
+            cap = synthetic_per_real * len(train_real)
+            if len(train_syn) > cap:
+                train_syn = np.sort(rng.choice(train_syn, cap, replace=False))
+            x = np.concatenate([fr[train_real], fs[train_syn]])
+            y = np.r_[np.zeros(len(train_real)), np.ones(len(train_syn))]
+            mu, sd = standardiser(x)
+            w, b = fit_logistic((x - mu) / sd, y, C=C)
+            mean.append(mu)
+            std.append(sd)
+            weight.append(w)
+            bias.append(b)
+        return cls(part, np.stack(mean), np.stack(std), np.stack(weight), np.asarray(bias), hog_config)
+
+    @property
+    def n_seeds(self) -> int:
+        """The number of seeds the critic was fitted on."""
+        return len(self.part)
+
+    def score_features(self, features: np.ndarray, seed_index: np.ndarray) -> np.ndarray:
+        """The logits of HOG ``features`` ``(M, D)`` (:func:`hog_features` with ``hog_config``) drawn with seeds
+        ``seed_index`` ``(M,)``, each by the part that never saw its seed."""
+        seed_index = _check_groups(seed_index, len(features), self.n_seeds)
+        out = np.zeros(len(features))
+        for j in range(len(self.bias)):
+            mine = self.part[seed_index] == j
+            out[mine] = ((features[mine] - self.mean[j]) / self.std[j]) @ self.weight[j] + self.bias[j]
+        return out
+
+    def __call__(self, patches: Tensor | np.ndarray, seed_index: Tensor | np.ndarray) -> np.ndarray:
+        """The "looks synthetic" logit (higher: more synthetic) of each patch, float64 ``(M,)``.
+
+        Args:
+            patches: ``(M, P, P)`` uint8 or ``(M, C, P, P)`` float in [0, 1]; a colour patch (C = 3) is scored in
+                gray (ITU-R 601 luma, the seed sets' conversion).
+            seed_index: ``(M,)`` int, the seed each patch was drawn with.
+        """
+        if isinstance(patches, Tensor) and patches.dim() == 4 and patches.shape[1] == 3:
+            import kornia
+
+            patches = kornia.color.rgb_to_grayscale(patches.float())
+        return self.score_features(hog_features(patches, self.hog_config), np.asarray(seed_index))
+
+
+def _check_groups(groups: Any, m: int, n: int) -> np.ndarray:
+    """``groups`` as an ``(m,)`` int array in ``[0, n)`` (the seed of each synthetic patch), else ``ValueError``."""
+    groups = np.asarray(groups)
+    if groups.shape != (m,) or not (m == 0 or np.issubdtype(groups.dtype, np.integer)):
+        raise ValueError(f"groups must be ({m},) integers (the seed of each synthetic patch), got "
+                         f"{groups.dtype} {groups.shape}")
+    if m and (groups.min() < 0 or groups.max() >= n):
+        raise ValueError(f"groups must lie in [0, {n}) (one real patch per seed), got [{groups.min()}, {groups.max()}]")
+    return groups.astype(np.int64)
+
+
 def realism_scores(
     real: Tensor | np.ndarray,
     synthetic: Tensor | np.ndarray,
@@ -163,7 +369,8 @@ def realism_scores(
     features standardised on its training rows) learns real (0) vs synthetic (1) from the *other* parts' real seeds
     and the synthetic patches drawn with those seeds (at most ``synthetic_per_real`` per real seed, drawn without
     replacement), and scores the synthetic patches of its own part. So no patch is scored by a critic that saw its
-    seed: a seed's background or fitted render cannot make its own patches look real.
+    seed: a seed's background or fitted render cannot make its own patches look real. (:meth:`RealismCritic.fit` on
+    the same patches, scoring them.)
 
     Args:
         real: the seed set's real patches, ``(N, P, P)`` uint8 or ``(N, 1, P, P)`` float in [0, 1]; seed ``i`` is row i.
@@ -177,38 +384,10 @@ def realism_scores(
     Returns:
         float64 ``(M,)``: the critic's logit ``x·w + b`` of each synthetic patch (higher: looks more synthetic).
     """
-    fr, fs = hog_features(real), hog_features(synthetic)
-    n, m = len(fr), len(fs)
-    groups = np.asarray(groups)
-    if groups.shape != (m,) or not np.issubdtype(groups.dtype, np.integer):
-        raise ValueError(f"groups must be ({m},) integers (the seed of each synthetic patch), got "
-                         f"{groups.dtype} {groups.shape}")
-    if m and (groups.min() < 0 or groups.max() >= n):
-        raise ValueError(f"groups must lie in [0, {n}) (one real patch per seed), got [{groups.min()}, {groups.max()}]")
-    if not (isinstance(folds, int) and 2 <= folds <= n):
-        raise ValueError(f"folds must be an int in [2, number of real seeds = {n}], got {folds!r}: the critic of "
-                         f"each part is trained on the other parts' seeds")
-    if not (isinstance(synthetic_per_real, int) and synthetic_per_real >= 1):
-        raise ValueError(f"synthetic_per_real must be an int >= 1, got {synthetic_per_real!r}")
-    rng = np.random.default_rng(seed)
-    part = np.empty(n, np.int64)
-    for j, idx in enumerate(np.array_split(rng.permutation(n), folds)):
-        part[idx] = j
-    scores = np.zeros(m)
-    for j in range(folds):
-        train_real, train_syn = np.flatnonzero(part != j), np.flatnonzero(part[groups] != j)
-        if len(train_syn) == 0:
-            raise ValueError(f"no synthetic patch was drawn with the seeds outside part {j}: draw more patches")
-        cap = synthetic_per_real * len(train_real)
-        if len(train_syn) > cap:
-            train_syn = np.sort(rng.choice(train_syn, cap, replace=False))
-        x = np.concatenate([fr[train_real], fs[train_syn]])
-        y = np.r_[np.zeros(len(train_real)), np.ones(len(train_syn))]
-        mu, sd = standardiser(x)
-        w, b = fit_logistic((x - mu) / sd, y, C=C)
-        mine = part[groups] == j
-        scores[mine] = ((fs[mine] - mu) / sd) @ w + b
-    return scores
+    fs = hog_features(synthetic)
+    critic = RealismCritic.from_features(hog_features(real), fs, groups, folds=folds,
+                                         synthetic_per_real=synthetic_per_real, C=C, seed=seed)
+    return critic.score_features(fs, groups)
 
 
 def seed_quotas(groups: np.ndarray, count: int) -> np.ndarray:
@@ -264,7 +443,9 @@ def least_synthetic(
     m = len(synthetic)
     if not (isinstance(count, (int, np.integer)) and 0 <= count <= m):
         raise ValueError(f"count must be an int in [0, {m}], got {count!r}")
-    check_realism_selection(selection, "selection")
+    if check_realism_selection(selection, "selection") == "item":
+        raise ValueError("least_synthetic picks from a drawn pool ('seed' or 'set'); 'item' picks among each item's "
+                         "own candidates, as SyntheticObjectDataset does with a realism_critic")
     scores = realism_scores(real, synthetic, groups, **kwargs)
     if selection == "set":
         return np.sort(np.argsort(scores, kind="stable")[:count]).astype(np.int64)

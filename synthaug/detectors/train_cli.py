@@ -176,8 +176,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "HOG, 1 for AdaBoost and the CNN)")
     parser.add_argument("--realism-selection", choices=list(REALISM_SELECTION), default="seed",
                         help="how the critic keeps its fraction: seed (each seed keeps the same share of its own "
-                             "draws, the least synthetic of them; the default) or set (the least synthetic of the "
-                             "whole draw; a seed may keep none)")
+                             "draws, the least synthetic of them; the default), set (the least synthetic of the "
+                             "whole draw; a seed may keep none) or item (each patch the least synthetic of its own "
+                             "1/keep candidates, as SyntheticObjectDataset's realism_critic draws)")
     parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own); "

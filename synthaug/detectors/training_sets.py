@@ -317,7 +317,10 @@ def synthetic_positives(
             kept, in their drawn order (:func:`~synthaug.detectors.critic.least_synthetic`, cross-fitted by seed,
             seeded by ``seed``; after ``quantize``, so the critic sees what training sees). Needs >= 2 seeds.
         realism_selection: with ``realism_keep`` under 1, ``"seed"`` (the default: each seed keeps the same share of
-            its own draws, the least synthetic of them) or ``"set"`` (the ``count`` least synthetic of the whole draw;
+            its own draws, the least synthetic of them), ``"set"`` (the ``count`` least synthetic of the whole draw)
+            or ``"item"`` (the dataset's lazy form: a :class:`~synthaug.detectors.critic.RealismCritic` fitted on
+            the first ``2 · 5 · seeds`` unfiltered draws, then each of the ``count`` patches the least synthetic of
+            its ``round(1 / realism_keep)`` candidates, which keep its seed; before ``quantize``;
             :data:`~synthaug.detectors.critic.REALISM_SELECTION`).
         return_seed_index: also return each patch's ``seed_index`` (the seed whose capture parameters it was
             drawn with), so that a seed's real and synthetic patches can be held out together
@@ -341,13 +344,23 @@ def synthetic_positives(
     if count == 0:
         empty = torch.zeros(0, 1, p, p)
         return (empty, np.zeros(0, np.int64)) if return_seed_index else empty
+    if drawn > count and len(seedset) < 2:
+        raise ValueError(f"realism_keep < 1 needs a seed set of >= 2 seeds (the critic is cross-fitted by seed), "
+                         f"got {len(seedset)}")
+    lazy = drawn > count and realism_selection == "item"  # the dataset's critic picks each item among candidates
     ds = SyntheticObjectDataset(
-        mesh, seedset, params=str(fit_file), length=drawn, patch_size=p, negative_fraction=0.0,
+        mesh, seedset, params=str(fit_file), length=count if lazy else drawn, patch_size=p, negative_fraction=0.0,
         effects=None if effects is None else list(effects), capture_sampling=capture_sampling, seed=seed,  # type: ignore[arg-type]
         seed_geometry=seed_geometry, pose_sampling=pose_sampling, object_box=object_box,  # type: ignore[arg-type]
         object_box_share=object_box_share,
         shape_variation=shape_variation, background_sampling=background_sampling,  # type: ignore[arg-type]
+        realism_candidates=max(2, round(1 / realism_keep)),
     )
+    if lazy:
+        from synthaug.detectors.critic import RealismCritic
+
+        ds.realism_critic = RealismCritic.from_dataset(ds, np.asarray(seedset.patches), seed=seed)
+        drawn = count
     out, seed_index = [], []
     for start in range(0, drawn, batch):
         items = ds.__getitems__(list(range(start, min(drawn, start + batch))))
@@ -357,12 +370,9 @@ def synthetic_positives(
     if quantize:
         patches = quantize_levels(patches)
     groups = np.array(seed_index, dtype=np.int64)
-    if drawn > count:
+    if drawn > count:  # "seed" and "set": the count least synthetic of the larger draw
         from synthaug.detectors.critic import least_synthetic
 
-        if len(seedset) < 2:
-            raise ValueError(f"realism_keep < 1 needs a seed set of >= 2 seeds (the critic is cross-fitted by seed), "
-                             f"got {len(seedset)}")
         keep = least_synthetic(np.asarray(seedset.patches), patches, groups, count, seed=seed,
                                selection=realism_selection)
         patches, groups = patches[torch.from_numpy(keep)], groups[keep]

@@ -269,7 +269,8 @@ class AddedPositives:
             paper). None (the default): the detector family's (:data:`FAMILY_REALISM_KEEP`: HOG 0.25, the others 1; a
             one-seed set 1).
         realism_selection: with ``realism_keep`` under 1, ``"seed"`` (the default: each seed keeps the same share of
-            its own draws) or ``"set"`` (the least synthetic of the whole draw;
+            its own draws), ``"set"`` (the least synthetic of the whole draw) or ``"item"`` (each patch the least
+            synthetic of its own candidates;
             :func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_selection``).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; :data:`BY_COUNT` (``"count"``): every positive weighs the same, so the added ones

@@ -150,8 +150,8 @@ class Condition:
             synthetic (``AddedPositives``' ``realism_keep``; 1: every draw, the paper); None (the default): the
             family's (:data:`~synthaug.detectors.video_training.FAMILY_REALISM_KEEP`), resolved here as the effects
             are.
-        realism_selection: ``AddedPositives``' ``realism_selection`` (``"seed"``, the default, or ``"set"``, which
-            is absent from the key: stop 82's cells keep theirs); ``"set"`` wherever every draw is kept.
+        realism_selection: ``AddedPositives``' ``realism_selection`` (``"seed"``, the default, ``"item"``, or ``"set"``,
+            which is absent from the key: stop 82's cells keep theirs); ``"set"`` wherever every draw is kept.
     """
 
     name: str
@@ -718,6 +718,15 @@ def check_dcnn_refit(detectors: Sequence[str], dcnn_refit: Sequence[bool]) -> No
                          f"(run them without it)")
 
 
+def _realism_name(keep: float, selection: str) -> str:
+    """The part of a synthetic condition's name that says what the realism critic keeps."""
+    if keep == 1:
+        return ""
+    if selection == "item":
+        return f", the least synthetic of {max(2, round(1 / keep))} candidates per patch"
+    return f", the {keep:.0%} least synthetic of {1 / keep:.3g}x drawn{' of each seed' if selection == 'seed' else ''}"
+
+
 def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
                          synthetic_ratios: Sequence[float] = (), fit_distance: str | Mapping[str, str] | None = None,
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
@@ -771,7 +780,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     ``background_sampling``). ``realism_keep``: each synthetic ratio once per value (1: every drawn positive; under
     1, that fraction of them, the least synthetic to a critic in HOG features; None: the family's,
     :class:`Condition`'s ``realism_keep``). ``realism_selection``: each ``realism_keep`` under 1 once per value
-    (``"seed"`` or ``"set"``, :class:`Condition`'s ``realism_selection``). ``synthetic_downscaled``: every synthetic
+    (``"seed"``, ``"set"`` or ``"item"``, :class:`Condition`'s
+    ``realism_selection``). ``synthetic_downscaled``: every synthetic
     condition also holds that many downscaled copies of each real seed (the two together, against each alone).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
@@ -804,8 +814,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{', d_CNN refit every round' if rf else ''}"
                             f"{', 8-bit' if qz else ''}"
                             f"{'' if bs == 'seed' else ', backgrounds of other seeds'}"
-                            f"{'' if rk == 1 else f', the {rk:.0%} least synthetic of {1 / rk:.3g}x drawn'}"
-                            f"{' of each seed' if sel == 'seed' else ''})"
+                            f"{_realism_name(rk, sel)})"
                             f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}", kind,
                             seed_count=seed_count, downscaled_copies=int(synthetic_downscaled),
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
@@ -1005,7 +1014,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--realism-selection", nargs="+", choices=list(REALISM_SELECTION), default=["seed"],
                     help="how the critic keeps its fraction, one condition per value (for --realism-keep under 1): "
                          "seed (each seed keeps the same share of its own draws, the least synthetic of them; the "
-                         "default) or set (the least synthetic of the whole draw; a seed may keep none)")
+                         "default), set (the least synthetic of the whole draw; a seed may keep none) or item (each "
+                         "patch the least synthetic of its own 1/keep candidates, as SyntheticObjectDataset's "
+                         "realism_critic draws)")
     return p
 
 
