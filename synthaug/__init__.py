@@ -22,6 +22,7 @@ _LAZY = {
     "CaptureParams": "synthaug.params",
     "ParamSpec": "synthaug.params",
     "SyntheticObjectDataset": "synthaug.data.synthetic",
+    "RealismCritic": "synthaug.detectors.critic",
     "ViewCache": "synthaug.render.cache",
     "Renderer": "synthaug.render.server",
     "load_mesh": "synthaug.render.mesh",
