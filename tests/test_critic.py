@@ -315,6 +315,10 @@ def test_a_fitted_critic_travels_to_dataloader_workers(small_cache):
     np.testing.assert_array_equal(critic.weight, ref.weight)
     # the critic scores a patch with the part that never saw its seed: realism_scores' logits
     np.testing.assert_allclose(critic(syn, groups), realism_scores(real, syn, groups, folds=2), rtol=0, atol=1e-12)
+    # a colour patch is scored in BT.601 luma (OpenCV's RGB2GRAY weights)
+    rgb = torch.stack([syn[:, 0], syn[:, 0].flip(-1), syn[:, 0].flip(-2)], 1)
+    luma = (rgb * torch.tensor([0.299, 0.587, 0.114])[None, :, None, None]).sum(1, keepdim=True)
+    np.testing.assert_allclose(critic(rgb, groups), critic(luma, groups), rtol=0, atol=1e-4)
     back = pickle.loads(pickle.dumps(critic))
     np.testing.assert_array_equal(back(syn, groups), critic(syn, groups))
     ds.realism_critic = critic

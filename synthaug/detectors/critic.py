@@ -268,12 +268,7 @@ class RealismCritic:
             items = dataset.render(drawn[start:start + batch], transformed=False)
             patches.append(torch.stack([img for img, _ in items]).float().clamp(0, 1))
             groups += [int(t["seed_index"]) for _, t in items]
-        synthetic = torch.cat(patches)
-        if synthetic.shape[1] == 3:
-            import kornia
-
-            synthetic = kornia.color.rgb_to_grayscale(synthetic)
-        return cls.fit(real, synthetic, np.asarray(groups, np.int64), folds=folds,
+        return cls.fit(real, _gray(torch.cat(patches)), np.asarray(groups, np.int64), folds=folds,
                        synthetic_per_real=synthetic_per_real, C=C, seed=seed, hog_config=hog_config)
 
     @classmethod
@@ -332,14 +327,19 @@ class RealismCritic:
 
         Args:
             patches: ``(M, P, P)`` uint8 or ``(M, C, P, P)`` float in [0, 1]; a colour patch (C = 3) is scored in
-                gray (ITU-R 601 luma, the seed sets' conversion).
+                gray (ITU-R BT.601 luma, as OpenCV's RGB2GRAY and the real items' conversion).
             seed_index: ``(M,)`` int, the seed each patch was drawn with.
         """
-        if isinstance(patches, Tensor) and patches.dim() == 4 and patches.shape[1] == 3:
-            import kornia
+        return self.score_features(hog_features(_gray(patches), self.hog_config), np.asarray(seed_index))
 
-            patches = kornia.color.rgb_to_grayscale(patches.float())
-        return self.score_features(hog_features(patches, self.hog_config), np.asarray(seed_index))
+
+def _gray(patches: Tensor | np.ndarray) -> Tensor | np.ndarray:
+    """Colour float patches ``(M, 3, P, P)`` in gray (kornia's ITU-R 601 luma); anything else as it is."""
+    if isinstance(patches, Tensor) and patches.dim() == 4 and patches.shape[1] == 3:
+        import kornia
+
+        return kornia.color.rgb_to_grayscale(patches.float())
+    return patches
 
 
 def _check_groups(groups: Any, m: int, n: int) -> np.ndarray:
