@@ -189,6 +189,7 @@ def seeds_and_fit(tmp_path_factory):
     return SeedSet.load(root / "s"), fit
 
 
+@pytest.mark.slow
 def test_synthetic_positives_keep_the_least_synthetic_of_a_larger_draw(seeds_and_fit):
     from synthaug.detectors.training_sets import synthetic_positives
 

@@ -100,6 +100,7 @@ def run(tmp_path_factory):
     return cli, record, Path(cli.trainer.log_dir), seeds
 
 
+@pytest.mark.slow
 def test_two_steps_log_finite_losses_and_val_map(run) -> None:
     cli, record, log_dir, seeds = run
     assert cli.trainer.global_step == 2

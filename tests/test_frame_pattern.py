@@ -148,6 +148,7 @@ def test_scene_clusters_join_chains_of_one_scene_and_place_textureless_frames_by
     assert lab.tolist() == [0, 0, 0, 1, 2, 2, 3, 4]
 
 
+@pytest.mark.slow
 def test_radial_falloff_p_values_are_uniform_over_scenes_not_frames():
     # 8 scenes of 6 frames each (a static camera: one texture and one scene slope per video, the frames' own
     # noise small), no vignetting: the test over scenes keeps its level; over frames it would not

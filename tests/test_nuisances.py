@@ -133,6 +133,7 @@ def test_draw_seed_light_is_per_video_and_tilted_within_the_spread():
         assert math.hypot(*s.drift) <= 1.0
 
 
+@pytest.mark.slow
 def test_reference_camera_with_nuisances(tmp_path):
     from synthaug.data.seedset import SeedSet
     from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset

@@ -235,6 +235,7 @@ def test_quadcopter_parts_and_mesh_perturbation():
     assert (np.linalg.norm(d[e[:, 0]] - d[e[:, 1]], axis=1) <= lip * dv + 1e-12).all()
 
 
+@pytest.mark.slow
 def test_a_perturbed_mesh_changes_the_object_not_the_scene(tmp_path, sets):
     pert = SeedSet.load(make_measured_seedset(tmp_path / "p", hidden={}, mesh_perturbation=0.08, **FAST))
     clean = sets["clean"]

@@ -110,6 +110,7 @@ def test_cache_round_trips_through_disk(tmp_path):
     assert len(list((tmp_path / "views").iterdir())) == 1
 
 
+@pytest.mark.slow
 def test_cache_folder_is_bounded_least_recently_used_first(tmp_path, monkeypatch):
     from synthaug.render.cache import prune_cache
 

@@ -54,6 +54,7 @@ def curve(ws):
     return {"out": out, "results": res}
 
 
+@pytest.mark.slow
 def test_learning_curve_results_and_files(ws, curve):
     res = curve["results"]
     assert set(res) == {"hog", "hog x0.75"}
@@ -122,6 +123,7 @@ def test_cells_are_reused_and_keyed_by_what_changes_a_result(ws, curve, monkeypa
     assert base.identity(R.Condition("renamed", "hog", seed_count=6), 0) == ident  # the label is not the condition
 
 
+@pytest.mark.slow
 def test_cells_that_only_score_differently_read_the_trained_detector_back(ws, curve, monkeypatch):
     store = Path(ws["paths"].work_dir) / "cells" / "detectors"
     assert len(list(store.glob("*.pt"))) == 4 and len(CellCache(store)) == 4  # one per (condition, seed)
@@ -209,6 +211,7 @@ def test_eval_split_val_scores_the_validation_videos_in_their_own_cells(ws, curv
         make_runner(ws, eval_split="train")
 
 
+@pytest.mark.slow
 def test_positive_videos_draw_the_positives_from_k_training_videos_and_mine_all(ws, curve):
     """``positive_videos`` (issue 15: more frames of the same videos vs more videos): the positives come from K
     training videos drawn by the seed, nested in K; mining and the box map keep every training video; the seed
@@ -250,6 +253,7 @@ def test_positive_videos_draw_the_positives_from_k_training_videos_and_mine_all(
     assert args.positive_videos == [14, 28]
 
 
+@pytest.mark.slow
 def test_synthetic_comparison_fits_each_training_seeds_own_seed_set_and_pairs_against_real(ws, curve):
     """Issue 16 under the protocol: + synthetic (a fit made on the fly per training seed) and + perturbed
     conditions share the real-only condition's seeds; each synthetic cell trains on its own seed set's fit."""

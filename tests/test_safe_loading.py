@@ -189,6 +189,7 @@ def _train_fit(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=240, env=env)
 
 
+@pytest.mark.slow
 def test_train_fit_yaml_config_with_a_python_tag_is_refused(tmp_path, marker):
     """LightningCLI (jsonargparse) parses the YAML config with a safe loader: a ``!!python`` tag is never built."""
     cfg = (REPO / "configs" / "cnn_tiny.yaml").read_text()
@@ -201,6 +202,7 @@ def test_train_fit_yaml_config_with_a_python_tag_is_refused(tmp_path, marker):
     assert not list(tmp_path.glob("lightning_logs/version_*/checkpoints/*.ckpt"))
 
 
+@pytest.mark.slow
 def test_train_fit_ckpt_path_refuses_a_malicious_checkpoint(tmp_path, marker):
     """``train/fit.py fit --ckpt_path`` (Lightning's resume loader) refuses a checkpoint that holds pickled code."""
     path = _evil_torch(tmp_path / "evil.ckpt", marker, lightning=True)

@@ -88,6 +88,7 @@ def _dataset(mesh, **kw):
                                   object_scale=0.7, render=CACHE, seed=7, **kw)
 
 
+@pytest.mark.slow
 def test_dataset_draws_a_shape_per_item_and_renders_it_as_that_mesh_alone():
     plain = _dataset("quadcopter")
     varied = _dataset("quadcopter", shape_variation=0.3, shape_variants=4)
@@ -114,6 +115,7 @@ def test_dataset_draws_a_shape_per_item_and_renders_it_as_that_mesh_alone():
     assert not torch.equal(batch[k1][0], plain[k1][0])
 
 
+@pytest.mark.slow
 def test_shape_variation_frames_objects_as_seeds_with_their_own_shape():
     """object_box measures each object's box on its own shape: read off the image (the material alone, a black
     object over a constant 0.8 background: coverage = 1 - image / 0.8), every object's longest side is the fraction."""

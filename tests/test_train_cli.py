@@ -62,6 +62,7 @@ def test_box_model_option_fits_that_map(ws: dict[str, Path], tmp_path: Path, mod
         assert box["samples"] > 0 and isinstance(reg, CNNBoxRegressor) and not isinstance(reg, EnsembleBoxRegressor)
 
 
+@pytest.mark.slow
 def test_box_calibration_corrects_the_trained_detectors_own_boxes(ws: dict[str, Path], tmp_path: Path) -> None:
     """``--box-calibration 1``: the saved detector's box map is followed by the correction that
     :func:`calibrate_boxes` fits on its training videos' frames, recorded in the metadata."""
@@ -103,6 +104,7 @@ def test_box_calibration_corrects_the_trained_detectors_own_boxes(ws: dict[str, 
     assert isinstance(load_detector(out).box_regressor, BoxRegressor)
 
 
+@pytest.mark.slow
 def test_box_regressor_is_cached_in_the_work_folder_by_its_inputs(ws: dict[str, Path], tmp_path: Path) -> None:
     # the box map depends on the training videos' labels, the model, the stride, the aspect and the seed, not on
     # the detector: a second training into the same --work reads it back (the same state); another seed, a changed
@@ -255,6 +257,7 @@ def test_two_trainings_on_one_ingest_folder_take_turns(ws: dict[str, Path], tmp_
     assert all(np.array_equal(out[0].patches, out[i].patches) for i in (1, 2)) and len(out[0]) >= 6
 
 
+@pytest.mark.slow
 def test_mining_round_choice_options_reach_the_training(ws: dict[str, Path], tmp_path: Path) -> None:
     # --mining-select / --mining-patience (the runner's options) are synthaug train's too, and recorded
     out = tmp_path / "ap.pt"
@@ -269,6 +272,7 @@ def test_mining_round_choice_options_reach_the_training(ws: dict[str, Path], tmp
     assert aps and rounds[meta["mining"]["chosen_round"]]["val"]["ap"] == max(aps)  # the round of the highest AP
 
 
+@pytest.mark.slow
 def test_train_then_detect_end_to_end(ws: dict[str, Path], trained: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
     from synthaug.detectors.base import load_detector
 
@@ -327,6 +331,7 @@ def test_metadata_split_by_video_deterministic(ws: dict[str, Path], trained: dic
     assert torch.equal(a["state"]["weights"], b["state"]["weights"])
 
 
+@pytest.mark.slow
 def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], trained: dict[str, Any],
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     out = ws["root"] / "runs" / "ada.pt"
@@ -369,6 +374,7 @@ def test_all_frames_adaboost_and_cnn_from_a_seed_set(ws: dict[str, Path], traine
     assert inv["count"] == meta["positives"]["count"]
 
 
+@pytest.mark.slow
 def test_synthetic_positives_from_a_fit(ws: dict[str, Path], trained: dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> None:
     """--params adds ratio x seeds synthetic patches made on the seed set (the generator itself is tested elsewhere)."""
     import synthaug.detectors.video_training as video_training
@@ -668,6 +674,7 @@ def test_errors_exit_2_naming_the_option(ws: dict[str, Path], trained: dict[str,
         assert "--params" in err
 
 
+@pytest.mark.slow
 def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict[str, Path], trained: dict[str, Any],
                                                                         monkeypatch: pytest.MonkeyPatch,
                                                                         capsys: pytest.CaptureFixture[str]) -> None:
