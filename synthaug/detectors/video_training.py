@@ -122,8 +122,10 @@ draw (1, the paper). HOG keeps a quarter of 4x drawn: chosen on the validation v
 calibrated, ten training seeds, paired against every draw; ``results/synthetic/realism_critic/README.md``), +0.026
 [+0.009, +0.051] AP@0.5 there and +0.008 [-0.006, +0.022] on the test videos. Since stop 83 the quarter is taken of
 each seed's own draws (:class:`AddedPositives`' ``realism_selection="seed"``): at 12 seeds +0.017 [+0.003, +0.033] on
-validation over the whole draw's quarter, at 100 seeds level (+0.001). AdaBoost and the CNN were not measured with
-it."""
+validation over the whole draw's quarter, at 100 seeds level (+0.001). AdaBoost keeps every draw: with the critic's
+quarter (100 seeds, two training seeds, stop 86; ``results/synthetic/adaboost_critic/``) it was level with real only
+on the validation videos (+0.001 [-0.033, +0.029]) and below it on the test videos (-0.041 [-0.068, -0.013]). The CNN
+was not measured with it."""
 
 
 def resolve_realism_keep(kind: str, realism_keep: float | None, seed_count: int | None = None) -> float:
