@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import os
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -38,9 +39,7 @@ def pytest_collection_modifyitems(config, items):
     running last: with the long ones first it is a short one. Keeping a module's tests together keeps its
     module-scoped fixtures (a trained detector, a fitted seed set, the demo's run) built once per worker.
     """
-    slow: dict = {}
-    for item in items:
-        slow[item.path] = slow.get(item.path, 0) + (item.get_closest_marker("slow") is not None)
+    slow = Counter(item.path for item in items if item.get_closest_marker("slow") is not None)
     items.sort(key=lambda item: -slow[item.path])  # stable: the collection order within a count
 
 REPO = Path(__file__).resolve().parents[1]

@@ -13,8 +13,8 @@ _run_into = R._run_into
 
 
 def _added_only(results, runner, condition, seeds, **kw):
-    if condition.name == f"{condition.kind} / {condition.seed_count} seeds":  # the real-only condition
-        return None
+    if condition == R.Condition(condition.name, condition.kind, seed_count=condition.seed_count):
+        return None  # the real-only condition: nothing added, every other field at its default
     return _run_into(results, runner, condition, seeds, **kw)
 
 
