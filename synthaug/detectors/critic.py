@@ -3,7 +3,8 @@
 The paper fits the capture parameters so that each seed's render is close to the real seed *in the detector's
 features*; the random poses drawn afterwards are not checked. :func:`realism_scores` checks them: an L2 logistic
 regression (:func:`fit_logistic`) trained to tell the seed set's real patches from synthetic ones in HOG features
-gives every synthetic patch a "looks synthetic" logit, cross-fitted by seed (a patch is scored by a critic that never
+(or in the edge-orientation energies AdaBoost's stumps threshold, :func:`weak_learner_features`) gives every
+synthetic patch a "looks synthetic" logit, cross-fitted by seed (a patch is scored by a critic that never
 saw its own seed, real or synthetic), and :func:`least_synthetic` keeps the patches the critic finds least synthetic
 (discriminator rejection sampling, Azadi et al., ICLR 2019, with a linear critic).
 
@@ -21,8 +22,14 @@ import numpy as np
 import torch
 from torch import Tensor
 
-__all__ = ["REALISM_SELECTION", "RealismCritic", "check_realism_selection", "fit_logistic", "hog_features",
-           "least_synthetic", "realism_scores", "realism_variants", "seed_quotas", "standardiser"]
+__all__ = ["REALISM_FEATURES", "REALISM_SELECTION", "RealismCritic", "check_realism_features",
+           "check_realism_selection", "fit_logistic", "hog_features", "least_synthetic", "realism_scores",
+           "realism_variants", "seed_quotas", "standardiser", "weak_learner_features"]
+
+REALISM_FEATURES = ("hog", "weak_learners")
+"""The features a critic of :func:`realism_scores` sees: ``"hog"`` (the HOG descriptor, :func:`hog_features`; the
+default) or ``"weak_learners"`` (the edge-orientation energies of random Levi–Weiss rectangles, the features AdaBoost's
+stumps threshold, at AdaBoost's energy floor: :func:`weak_learner_features`)."""
 
 REALISM_SELECTION = ("seed", "set", "item")
 """How a critic picks the synthetic positives (:func:`~synthaug.detectors.training_sets.synthetic_positives`):
@@ -42,6 +49,17 @@ def check_realism_selection(selection: Any, name: str = "realism_selection") -> 
     if not isinstance(selection, str) or selection not in REALISM_SELECTION:
         raise ValueError(f"{name} must be one of {list(REALISM_SELECTION)}, got {selection!r}")
     return selection
+
+
+def check_realism_features(features: Any, name: str = "realism_features") -> str:
+    """``features`` if it is one of :data:`REALISM_FEATURES`, else ``ValueError`` naming ``name``.
+
+    >>> check_realism_features("weak_learners")
+    'weak_learners'
+    """
+    if not isinstance(features, str) or features not in REALISM_FEATURES:
+        raise ValueError(f"{name} must be one of {list(REALISM_FEATURES)}, got {features!r}")
+    return features
 
 
 def realism_variants(keeps: Any, selections: Any) -> list[tuple[float, str]]:
@@ -149,6 +167,45 @@ def hog_features(patches: Tensor | np.ndarray, config: Any = None) -> np.ndarray
     x = to_float_patches(x, int(x.shape[-1]) if isinstance(x, Tensor) and x.dim() else 0)
     with torch.no_grad():
         return torch.cat([hog(c, config or DEFAULT_HOG) for c in x.split(1024)]).double().numpy()
+
+
+def weak_learner_features(patches: Tensor | np.ndarray, reference: Tensor | np.ndarray, *, n: int = 2000,
+                          seed: int = 0, floor: float = 1.0, n_bins: int = 4) -> np.ndarray:
+    """The edge-orientation energies ``E(X, R, o)`` of ``n`` random Levi–Weiss rectangles (the features AdaBoost's
+    stumps threshold, :func:`~synthaug.detectors.weak_learners.edge_orientation_energy`), at AdaBoost's energy floor.
+
+    Args:
+        patches: grayscale patches, uint8 ``(M, P, P)`` or float ``(M, 1, P, P)`` in [0, 1].
+        reference: the real patches (same formats); the floor's unit is their gradient level
+            (:func:`~synthaug.detectors.adaboost.gradient_level`), as AdaBoost's is its negatives'.
+        n: rectangles, drawn with ``seed`` (:func:`~synthaug.detectors.weak_learners.random_candidates`, sides >= 4).
+        seed: seeds the rectangles (the same rectangles for every call with the same ``seed`` and patch size).
+        floor: the energy floor per pixel in units of the reference's gradient level (AdaBoost's default,
+            ``TrainOptions.ada_energy_floor``, is 1; 0: the paper's E).
+        n_bins: orientation bins K.
+
+    Returns:
+        float64 ``(M, n)``, in [0, 1).
+    """
+    from synthaug.detectors.adaboost import gradient_level
+    from synthaug.detectors.base import to_float_patches
+    from synthaug.detectors.weak_learners import DEFAULT_EPS, edge_orientation_energy, random_candidates
+
+    def as_float(x: Tensor | np.ndarray) -> Tensor:
+        x = torch.from_numpy(np.ascontiguousarray(x)) if isinstance(x, np.ndarray) else x
+        return to_float_patches(x, int(x.shape[-1]) if x.dim() else 0).double()
+
+    x, ref = as_float(patches), as_float(reference)
+    if x.shape[-2:] != ref.shape[-2:]:
+        raise ValueError(f"patches and reference must have the same size, got {tuple(x.shape[-2:])} and "
+                         f"{tuple(ref.shape[-2:])}")
+    if not (isinstance(n, int) and n >= 1):
+        raise ValueError(f"n must be an int >= 1, got {n!r}")
+    rects, orients = random_candidates(n, int(x.shape[-1]), n_bins, generator=torch.Generator().manual_seed(seed))
+    level = float(floor) * gradient_level(ref) if floor else 0.0
+    with torch.no_grad():
+        return torch.cat([edge_orientation_energy(c, rects, orients, n_bins, DEFAULT_EPS, level)
+                          for c in x.split(1024)]).numpy()
 
 
 @dataclass(frozen=True, eq=False)
@@ -362,8 +419,9 @@ def realism_scores(
     synthetic_per_real: int = 5,
     C: float = 1.0,
     seed: int = 0,
+    features: str = "hog",
 ) -> np.ndarray:
-    """Cross-fitted "looks synthetic" logit of every synthetic patch, in HOG features.
+    """Cross-fitted "looks synthetic" logit of every synthetic patch, in HOG features (or AdaBoost's).
 
     The real seeds are split at random into ``folds`` parts. For each part, a logistic regression (:func:`fit_logistic`,
     features standardised on its training rows) learns real (0) vs synthetic (1) from the *other* parts' real seeds
@@ -379,13 +437,20 @@ def realism_scores(
         folds: parts of the seeds (>= 2, <= N).
         synthetic_per_real: cap on the synthetic training rows, per real training row.
         C: inverse L2 penalty.
-        seed: seeds the parts and the subsample (``numpy.random.default_rng``).
+        seed: seeds the parts and the subsample (``numpy.random.default_rng``), and the rectangles of
+            ``"weak_learners"`` features.
+        features: what the critic sees (:data:`REALISM_FEATURES`): ``"hog"`` (:func:`hog_features`) or
+            ``"weak_learners"`` (:func:`weak_learner_features` at its defaults, the floor's unit the real patches'
+            gradient level).
 
     Returns:
         float64 ``(M,)``: the critic's logit ``x·w + b`` of each synthetic patch (higher: looks more synthetic).
     """
-    fs = hog_features(synthetic)
-    critic = RealismCritic.from_features(hog_features(real), fs, groups, folds=folds,
+    if check_realism_features(features, "features") == "weak_learners":
+        fr, fs = weak_learner_features(real, real, seed=seed), weak_learner_features(synthetic, real, seed=seed)
+    else:
+        fr, fs = hog_features(real), hog_features(synthetic)
+    critic = RealismCritic.from_features(fr, fs, groups, folds=folds,
                                          synthetic_per_real=synthetic_per_real, C=C, seed=seed)
     return critic.score_features(fs, groups)
 

@@ -128,7 +128,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug.data.items import BACKGROUND_SAMPLING
     from synthaug.data.poses import POSE_SAMPLING
     from synthaug.detectors.box_calibration import CALIBRATION_FORMS
-    from synthaug.detectors.critic import REALISM_SELECTION
+    from synthaug.detectors.critic import REALISM_FEATURES, REALISM_SELECTION
     from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
@@ -179,6 +179,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "draws, the least synthetic of them; the default), set (the least synthetic of the "
                              "whole draw; a seed may keep none) or item (each patch the least synthetic of its own "
                              "1/keep candidates, as SyntheticObjectDataset's realism_critic draws)")
+    parser.add_argument("--realism-features", choices=list(REALISM_FEATURES), default="hog",
+                        help="the critic's features (selections seed and set): hog (the default) or weak_learners "
+                             "(the edge-orientation energies of random rectangles that AdaBoost's stumps threshold)")
     parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own); "
@@ -327,7 +330,8 @@ def main(args: argparse.Namespace) -> int:
                                  downscaled_copies=args.downscaled_copies, faded_copies=args.faded_copies,
                                  faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                                  quantize=args.quantize, background_sampling=args.background_sampling,
-                                 realism_keep=args.realism_keep, realism_selection=args.realism_selection),
+                                 realism_keep=args.realism_keep, realism_selection=args.realism_selection,
+                                 realism_features=args.realism_features),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

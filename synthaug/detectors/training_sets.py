@@ -276,6 +276,7 @@ def synthetic_positives(
     background_sampling: str = "seed",
     realism_keep: float = 1.0,
     realism_selection: str = "seed",
+    realism_features: str = "hog",
     return_seed_index: bool = False,
 ) -> Tensor | tuple[Tensor, np.ndarray]:
     """``count`` synthetic object patches generated from a capture-parameter fit.
@@ -322,6 +323,9 @@ def synthetic_positives(
             the first ``2 · 5 · seeds`` unfiltered draws, then each of the ``count`` patches the least synthetic of
             its ``round(1 / realism_keep)`` candidates, which keep its seed; before ``quantize``;
             :data:`~synthaug.detectors.critic.REALISM_SELECTION`).
+        realism_features: the critic's features with ``realism_keep`` under 1 (``"seed"`` and ``"set"``
+            selections): ``"hog"`` (the default) or ``"weak_learners"`` (AdaBoost's,
+            :data:`~synthaug.detectors.critic.REALISM_FEATURES`).
         return_seed_index: also return each patch's ``seed_index`` (the seed whose capture parameters it was
             drawn with), so that a seed's real and synthetic patches can be held out together
             (:func:`synthaug.diagnose.gap.training_samples`).
@@ -335,10 +339,13 @@ def synthetic_positives(
 
     if count < 0:
         raise ValueError(f"count must be >= 0, got {count}")
-    from synthaug.detectors.critic import check_realism_selection
+    from synthaug.detectors.critic import check_realism_features, check_realism_selection
 
     realism_keep = check_realism_keep(realism_keep)
     check_realism_selection(realism_selection)
+    if check_realism_features(realism_features) != "hog" and realism_selection == "item" and realism_keep < 1:
+        raise ValueError(f"realism_selection 'item' scores candidates with the dataset's RealismCritic, in HOG "
+                         f"features; realism_features {realism_features!r} takes 'seed' or 'set'")
     drawn = count if realism_keep == 1 else int(math.ceil(count / realism_keep - 1e-9))
     p = int(seedset.patches.shape[-1])
     if count == 0:
@@ -374,7 +381,7 @@ def synthetic_positives(
         from synthaug.detectors.critic import least_synthetic
 
         keep = least_synthetic(np.asarray(seedset.patches), patches, groups, count, seed=seed,
-                               selection=realism_selection)
+                               selection=realism_selection, features=realism_features)
         patches, groups = patches[torch.from_numpy(keep)], groups[keep]
     return (patches, groups) if return_seed_index else patches
 

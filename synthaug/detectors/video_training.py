@@ -274,6 +274,9 @@ class AddedPositives:
             its own draws), ``"set"`` (the least synthetic of the whole draw) or ``"item"`` (each patch the least
             synthetic of its own candidates;
             :func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_selection``).
+        realism_features: the critic's features, ``"hog"`` (the default) or ``"weak_learners"`` (the edge-orientation
+            energies AdaBoost's stumps threshold; ``"seed"`` and ``"set"`` selections;
+            :data:`~synthaug.detectors.critic.REALISM_FEATURES`).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; :data:`BY_COUNT` (``"count"``): every positive weighs the same, so the added ones
             hold ``added / (real + added)``; None (the default): the detector family's (:data:`FAMILY_SYNTHETIC_SHARE`:
@@ -302,12 +305,13 @@ class AddedPositives:
     object_box_share: float = 1.0
     realism_keep: float | None = None
     realism_selection: str = "seed"
+    realism_features: str = "hog"
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
         from synthaug.data.poses import POSE_SAMPLING
         from synthaug.data.synthetic import check_object_box_share
-        from synthaug.detectors.critic import check_realism_selection
+        from synthaug.detectors.critic import check_realism_features, check_realism_selection
 
         resolve_background_sampling("", self.background_sampling)  # raises on a value that is not one
         if self.capture_sampling not in CAPTURE_SAMPLERS:
@@ -324,6 +328,9 @@ class AddedPositives:
             resolve_synthetic_share("", self.synthetic_share)  # raises on any string but BY_COUNT
         resolve_realism_keep("", self.realism_keep)  # raises on a value that is not a fraction in (0, 1]
         check_realism_selection(self.realism_selection)
+        if check_realism_features(self.realism_features) != "hog" and self.realism_selection == "item":
+            raise ValueError(f"realism_selection 'item' scores candidates in HOG features; realism_features "
+                             f"{self.realism_features!r} takes 'seed' or 'set'")
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
@@ -884,7 +891,8 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                                        shape_variation=added.shape_variation,
                                        capture_sampling=added.capture_sampling, effects=effects,
                                        quantize=added.quantize, background_sampling=background_sampling,
-                                       realism_keep=realism_keep, realism_selection=added.realism_selection)
+                                       realism_keep=realism_keep, realism_selection=added.realism_selection,
+                                       realism_features=added.realism_features)
 
         t0 = time.perf_counter()
         syn = draw(params)
@@ -895,6 +903,7 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
             f"{', without ' + ' and '.join(effects_off) if effects_off else ''}{', 8-bit' if added.quantize else ''}"
             f"{where}{f', the {realism_keep:.0%} least synthetic kept' if realism_keep < 1 else ''}"
             f"{' of each seed' if realism_keep < 1 and added.realism_selection == 'seed' else ''}"
+            f"{' (critic in weak-learner features)' if realism_keep < 1 and added.realism_features != 'hog' else ''}"
             f" ({time.perf_counter() - t0:.0f}s)")
     info: dict[str, Any] = {"params": str(params), "mesh": str(mesh), "ratio": synthetic_ratio, "count": n_syn,
                             "pose_sampling": pose_sampling,
@@ -906,7 +915,9 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                             **({"quantize": True} if added.quantize else {}),
                             **({"background_sampling": background_sampling} if background_sampling != "seed" else {}),
                             **({"realism_keep": realism_keep} if realism_keep < 1 else {}),
-                            **({"realism_selection": added.realism_selection} if realism_keep < 1 else {})}
+                            **({"realism_selection": added.realism_selection} if realism_keep < 1 else {}),
+                            **({"realism_features": added.realism_features}
+                               if realism_keep < 1 and added.realism_features != "hog" else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

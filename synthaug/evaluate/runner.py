@@ -51,7 +51,8 @@ from synthaug.detectors.train_cli import (
     synthetic_share_arg,
 )
 from synthaug.detectors.box_calibration import CALIBRATION_FORMS, CALIBRATION_VERSION
-from synthaug.detectors.critic import REALISM_SELECTION, check_realism_selection, realism_variants
+from synthaug.detectors.critic import (REALISM_FEATURES, REALISM_SELECTION, check_realism_features,
+                                       check_realism_selection, realism_variants)
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.video_training import (
     BY_COUNT,
@@ -152,6 +153,8 @@ class Condition:
             are.
         realism_selection: ``AddedPositives``' ``realism_selection`` (``"seed"``, the default, ``"item"``, or ``"set"``,
             which is absent from the key: stop 82's cells keep theirs); ``"set"`` wherever every draw is kept.
+        realism_features: the critic's features (``AddedPositives``' ``realism_features``: ``"hog"``, the default,
+            absent from the key, or ``"weak_learners"``); ``"hog"`` wherever every draw is kept.
     """
 
     name: str
@@ -182,6 +185,7 @@ class Condition:
     object_box_share: float = 1.0
     realism_keep: float | None = None
     realism_selection: str = "seed"
+    realism_features: str = "hog"
 
     def __post_init__(self) -> None:
         off = self.effects_off
@@ -200,6 +204,12 @@ class Condition:
         # a keep of 1 selects nothing: one cell, whatever the selection
         (_, selection), = realism_variants([self.realism_keep], [self.realism_selection])
         object.__setattr__(self, "realism_selection", selection)
+        check_realism_features(self.realism_features)
+        if self.realism_keep == 1:  # no critic: one cell, whatever its features
+            object.__setattr__(self, "realism_features", "hog")
+        elif self.realism_features != "hog" and selection == "item":
+            raise ValueError(f"realism_selection 'item' scores candidates in HOG features; realism_features "
+                             f"{self.realism_features!r} takes 'seed' or 'set'")
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -215,7 +225,8 @@ class Condition:
                 d.pop(k)
         for k, default in (("capture_sampling", "seed"), ("effects_off", ()),  # added later still: the same, with
                            ("dcnn_refit", False), ("quantize", False), ("background_sampling", "seed"),
-                           ("object_box_share", 1.0), ("realism_keep", 1.0), ("realism_selection", "set")):
+                           ("object_box_share", 1.0), ("realism_keep", 1.0), ("realism_selection", "set"),
+                           ("realism_features", "hog")):
             if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
@@ -439,7 +450,8 @@ class ProtocolRunner:
                                  refit=self._refit(condition, seed) if condition.dcnn_refit else None,
                                  quantize=condition.quantize, background_sampling=condition.background_sampling,
                                  realism_keep=condition.realism_keep,
-                                 realism_selection=condition.realism_selection),
+                                 realism_selection=condition.realism_selection,
+                                 realism_features=condition.realism_features),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -718,13 +730,14 @@ def check_dcnn_refit(detectors: Sequence[str], dcnn_refit: Sequence[bool]) -> No
                          f"(run them without it)")
 
 
-def _realism_name(keep: float, selection: str) -> str:
+def _realism_name(keep: float, selection: str, features: str = "hog") -> str:
     """The part of a synthetic condition's name that says what the realism critic keeps."""
     if keep == 1:
         return ""
     if selection == "item":
         return f", the least synthetic of {max(2, round(1 / keep))} candidates per patch"
-    return f", the {keep:.0%} least synthetic of {1 / keep:.3g}x drawn{' of each seed' if selection == 'seed' else ''}"
+    return (f", the {keep:.0%} least synthetic of {1 / keep:.3g}x drawn{' of each seed' if selection == 'seed' else ''}"
+            f"{' to a weak-learner critic' if features == 'weak_learners' else ''}")
 
 
 def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
@@ -744,6 +757,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          background_sampling: Sequence[str | None] = (None,),
                          realism_keep: Sequence[float | None] = (None,),
                          realism_selection: Sequence[str] = ("seed",),
+                         realism_features: str = "hog",
                          synthetic_downscaled: int = 0,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
@@ -781,7 +795,9 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     1, that fraction of them, the least synthetic to a critic in HOG features; None: the family's,
     :class:`Condition`'s ``realism_keep``). ``realism_selection``: each ``realism_keep`` under 1 once per value
     (``"seed"``, ``"set"`` or ``"item"``, :class:`Condition`'s
-    ``realism_selection``). ``synthetic_downscaled``: every synthetic
+    ``realism_selection``). ``realism_features``: the critic's features in every condition that keeps under 1
+    (``"hog"`` or ``"weak_learners"``, :class:`Condition`'s ``realism_features``). ``synthetic_downscaled``: every
+    synthetic
     condition also holds that many downscaled copies of each real seed (the two together, against each alone).
 
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
@@ -814,14 +830,15 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{', d_CNN refit every round' if rf else ''}"
                             f"{', 8-bit' if qz else ''}"
                             f"{'' if bs == 'seed' else ', backgrounds of other seeds'}"
-                            f"{_realism_name(rk, sel)})"
+                            f"{_realism_name(rk, sel, realism_features)})"
                             f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}", kind,
                             seed_count=seed_count, downscaled_copies=int(synthetic_downscaled),
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
                             object_box_share=1.0 if ob is None else float(object_box_share),
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
-                            quantize=qz, background_sampling=bs, realism_keep=rk, realism_selection=sel)
+                            quantize=qz, background_sampling=bs, realism_keep=rk, realism_selection=sel,
+                            realism_features=realism_features if rk < 1 else "hog")
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
                   for cs in capture_sampling for off in offs for rf in refits
                   for qz in rounding for bs in grounds for rk, sel in keeps]
@@ -1017,6 +1034,10 @@ def build_parser() -> argparse.ArgumentParser:
                          "default), set (the least synthetic of the whole draw; a seed may keep none) or item (each "
                          "patch the least synthetic of its own 1/keep candidates, as SyntheticObjectDataset's "
                          "realism_critic draws)")
+    sy.add_argument("--realism-features", choices=list(REALISM_FEATURES), default="hog",
+                    help="the critic's features (for --realism-keep under 1; selections seed and set): hog (the "
+                         "default) or weak_learners (the edge-orientation energies of random rectangles that "
+                         "AdaBoost's stumps threshold)")
     return p
 
 
@@ -1103,6 +1124,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              background_sampling=tuple(None if b == "default" else b for b in args.background_sampling),
                              realism_keep=tuple(None if k == "default" else k for k in args.realism_keep),
                              realism_selection=tuple(args.realism_selection),
+                             realism_features=args.realism_features,
                              out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
