@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 import torch
 
-from synthaug.detectors.critic import fit_logistic, hog_features, least_synthetic, realism_scores, seed_quotas
+from synthaug.detectors.critic import (fit_logistic, hog_features, least_synthetic, realism_scores, seed_quotas,
+                                       weak_learner_features)
 from test_gap import blobs
 
 
@@ -35,6 +36,70 @@ def test_the_critic_keeps_the_patches_drawn_like_the_real_ones(odd):
     assert (keep % 2 == 0).mean() >= 0.7, (keep % 2 == 0).mean()
     scores = realism_scores(real, syn, groups, seed=0)
     assert scores[1::2].mean() > scores[0::2].mean()
+
+
+@pytest.mark.parametrize("odd", [{"speckle": 0.03}, {"stripes": True}])
+def test_the_weak_learner_critic_keeps_the_patches_drawn_like_the_real_ones(odd):
+    real, syn, groups = _mixed(40, 4, 10, **odd)
+    keep = least_synthetic(real, syn, groups, 80, seed=0, features="weak_learners")
+    assert keep.shape == (80,) and keep.dtype == np.int64 and np.all(np.diff(keep) > 0)
+    # the like-the-real half: chance 0.5 (sd 0.056 over 80)
+    assert (keep % 2 == 0).mean() >= 0.7, (keep % 2 == 0).mean()
+    scores = realism_scores(real, syn, groups, seed=0, features="weak_learners")
+    assert scores[1::2].mean() > scores[0::2].mean()
+    assert not np.allclose(scores, realism_scores(real, syn, groups, seed=0))  # HOG's critic is another one
+    with pytest.raises(ValueError, match="features must be one of"):
+        realism_scores(real, syn, groups, features="cnn")
+
+
+def test_weak_learner_features_are_adaboosts_energies_of_random_rectangles():
+    """Hand-computed: a step edge between columns 19 and 20 puts all of a straddling rectangle's gradient in one
+    orientation bin (E = 1 there, 0 in the others, up to eps) and none in a flat one (E = 0 outside bin 0). The
+    rectangles are d_WL^R's (``WeakLearners.random`` with the same generator), and the floor is AdaBoost's:
+    E = G_o / (G + eps + floor · gradient_level(reference) · |R|)."""
+    from synthaug.detectors.adaboost import gradient_level
+    from synthaug.detectors.weak_learners import DEFAULT_EPS, WeakLearners, orientation_integrals
+
+    step = np.zeros((1, 40, 40), np.uint8)
+    step[:, :, 20:] = 200
+    e = weak_learner_features(step, step, n=500, seed=3, floor=0)
+    wl = WeakLearners.random(500, 40, generator=torch.Generator().manual_seed(3))
+    r = wl.rects.numpy()
+    straddles = (r[:, 1] <= 18) & (r[:, 1] + r[:, 3] >= 22)
+    flat = (r[:, 1] + r[:, 3] <= 18) | (r[:, 1] >= 22)
+    assert straddles.sum() > 50 and flat.sum() > 50
+    on = e[0, straddles]
+    assert np.all((on < 1e-6) | (on > 0.999)) and 0 < (on > 0.5).mean() < 1  # one bin of four holds it all (eps)
+    assert len(set(wl.orientations.numpy()[straddles][on > 0.5])) == 1
+    # flat: no gradient but the magnitude's own 1e-6, which the gradient code files under bin 0
+    np.testing.assert_array_equal(e[0, flat & (wl.orientations.numpy() != 0)], 0)
+    tiny = flat & (wl.orientations.numpy() == 0)
+    area = r[tiny, 2] * r[tiny, 3] * 1e-6
+    np.testing.assert_allclose(e[0, tiny], area / (area + DEFAULT_EPS), rtol=1e-9)
+    # the same rectangles as d_WL^R's learners, and their energies at floor 0
+    x = (torch.from_numpy(blobs(6, 70))[:, None] / 255).double()  # float32 values, as detectors read patches
+    np.testing.assert_allclose(weak_learner_features(x, x, n=300, seed=9, floor=0),
+                               wl_energies := WeakLearners.random(300, 40, generator=torch.Generator().manual_seed(9),
+                                                                  ).energies(x).numpy(), rtol=1e-12)
+    # the floor: G and G_o from the orientation integrals, the floor's unit the reference's gradient level
+    ref = (torch.from_numpy(blobs(8, 71))[:, None] / 255).double()
+    floored = weak_learner_features(x, ref, n=300, seed=9, floor=2.0)
+    level = 2.0 * gradient_level(ref)
+    lw = WeakLearners.random(300, 40, generator=torch.Generator().manual_seed(9))
+    ii = orientation_integrals(x, 4).numpy()
+    y0, x0, h, w = (lw.rects.numpy()[:, k] for k in range(4))
+
+    def box(a: np.ndarray) -> np.ndarray:
+        return a[..., y0 + h, x0 + w] - a[..., y0, x0 + w] - a[..., y0 + h, x0] + a[..., y0, x0]
+
+    g_o = box(ii)[:, lw.orientations.numpy(), np.arange(300)]
+    g = box(ii.sum(1))
+    np.testing.assert_allclose(floored, g_o / (g + DEFAULT_EPS + level * h * w), rtol=1e-10, atol=1e-12)
+    assert np.all(floored <= wl_energies + 1e-12) and floored.shape == (6, 300)
+    with pytest.raises(ValueError, match="same size"):
+        weak_learner_features(x, ref[..., :32, :32])
+    with pytest.raises(ValueError, match="n must be"):
+        weak_learner_features(x, ref, n=0)
 
 
 def _hamilton(drawn: np.ndarray, count: int) -> np.ndarray:
@@ -218,6 +283,15 @@ def test_synthetic_positives_keep_the_least_synthetic_of_a_larger_draw(seeds_and
     torch.testing.assert_close(by_set, pool[torch.from_numpy(keep)])
     with pytest.raises(ValueError, match="realism_selection"):
         synthetic_positives(seeds, "quadcopter", fit, 4, realism_keep=0.5, realism_selection="video")
+    # a critic in AdaBoost's features keeps its own least synthetic of the same draw
+    wl, wl_idx = synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, realism_keep=0.4,
+                                     realism_features="weak_learners", return_seed_index=True)
+    keep = least_synthetic(np.asarray(seeds.patches), pool, pool_idx, 12, seed=3, features="weak_learners")
+    torch.testing.assert_close(wl, pool[torch.from_numpy(keep)])
+    np.testing.assert_array_equal(wl_idx, pool_idx[keep])
+    with pytest.raises(ValueError, match="'item' scores candidates"):
+        synthetic_positives(seeds, "quadcopter", fit, 4, realism_keep=0.5, realism_selection="item",
+                            realism_features="weak_learners")
 
 
 def test_a_one_seed_set_cannot_be_filtered(tmp_path):

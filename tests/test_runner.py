@@ -748,6 +748,40 @@ def test_realism_selection_makes_a_condition_per_value_only_where_the_critic_kee
     assert e.value.code == 2 and "--realism-selection" in capsys.readouterr().err
 
 
+def test_realism_features_name_the_critic_and_keep_the_former_keys(ws, monkeypatch, capsys):
+    """``--realism-features weak_learners`` gives every condition that keeps under 1 a critic in AdaBoost's features
+    (``realism_features`` in its key, its name and its training's ``AddedPositives``); HOG's, the default, keeps every
+    former key and name; every draw has no critic, so one key; the lazy selection, which scores in HOG, is refused."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           realism_keep=(1.0, 0.25), realism_features="weak_learners")
+    real, every, wl = made
+    assert "realism_features" not in every.identity() and every.realism_features == "hog"
+    assert wl.identity() == {**R.Condition("x", "adaboost", seed_count=12, params="f{seed}.json",
+                                           synthetic_ratio=20.0, realism_keep=0.25).identity(),
+                             "realism_features": "weak_learners"}
+    assert wl.name == ("adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25, the 25% least synthetic of 4x drawn "
+                       "of each seed to a weak-learner critic)")
+    assert [(a.realism_keep, a.realism_features) for a in _added_positives(ws, monkeypatch, every, wl)] == [
+        (1.0, "hog"), (0.25, "weak_learners")]
+    made.clear()
+    R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           realism_keep=(0.25,))
+    assert "realism_features" not in made[1].identity() and "weak-learner" not in made[1].name
+    with pytest.raises(ValueError, match="realism_features"):
+        R.Condition("x", "hog", seed_count=12, synthetic_ratio=20.0, realism_features="cnn")
+    with pytest.raises(ValueError, match="'item' scores candidates in HOG"):
+        R.Condition("x", "adaboost", seed_count=12, synthetic_ratio=20.0, realism_keep=0.25,
+                    realism_selection="item", realism_features="weak_learners")
+    parse = R.build_parser().parse_args
+    assert parse(["synthetic", "--out", "x"]).realism_features == "hog"
+    assert parse(["synthetic", "--realism-features", "weak_learners", "--out", "x"]).realism_features == "weak_learners"
+    with pytest.raises(SystemExit) as e:
+        parse(["synthetic", "--realism-features", "cnn", "--out", "x"])
+    assert e.value.code == 2 and "--realism-features" in capsys.readouterr().err
+
+
 def test_background_sampling_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkeypatch, capsys):
     """``--background-sampling other`` adds a condition per synthetic ratio whose objects sit on other seeds'
     backgrounds (named so, ``background_sampling`` in its key and in the ``AddedPositives`` its training gets); the

@@ -741,6 +741,16 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
     assert selections == ["set"]
     assert json.loads(out5.with_suffix(".json").read_text())["synthetic"]["realism_selection"] == "set"
     assert syn2["realism_selection"] == "seed"
+    # --realism-features likewise (HOG's, the default, is not in the metadata)
+    features = []
+    monkeypatch.setattr(video_training, "synthetic_positives",
+                        lambda *a, realism_features="?", **k: features.append(realism_features) or fake(*a, **k))
+    out6 = ws["root"] / "runs" / "critic_weak_learners.pt"
+    assert _train(ws, out6, "--detector", "adaboost", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio",
+                  "2", "--mining-rounds", "0", "--realism-keep", "0.5", "--realism-features", "weak_learners") == 0
+    assert features == ["weak_learners"]
+    assert json.loads(out6.with_suffix(".json").read_text())["synthetic"]["realism_features"] == "weak_learners"
+    assert "realism_features" not in syn2
     monkeypatch.setattr(video_training, "synthetic_positives", fake)
     # the family's default (effects_off=None): the CNN's synthetic positives leave the fitted blurs out (only those
     # the fit has), HOG and AdaBoost keep every effect, () keeps every effect for the CNN too
