@@ -1,0 +1,21 @@
+#!/bin/bash
+# Stop 87: the tables of AdaBoost with the weak-learner critic (run.sh's cells), against real only and against stop
+# 86's HOG critic on the same training seeds (../adaboost_critic/). Trains nothing (~1 min).
+# usage (repository root): results/synthetic/adaboost_wl_critic/tables.sh
+O=results/synthetic/adaboost_wl_critic
+H=results/synthetic/adaboost_critic
+T=results/learning_curve/video_diversity/table.py
+export PYTHONPATH=${PYTHONPATH:-.}
+real=adaboost_100_seeds.json
+wl=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
+hogc=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_the_25_least_synthetic_of_4x_drawn_of_each_seed.json
+for sp in val test; do
+  rows=(); w=(); h=()
+  for d in $O/${sp}_w[0-9]*; do
+    [ -f $d/$real ] && rows+=("$d/$real=real only")
+    [ -f $d/$wl ] && w+=("$d/$wl=+ 20x synthetic, weak-learner critic keeps 1/4")
+    s=${d##*_w}; [ -f $H/${sp}_c$s/$hogc ] && h+=("$H/${sp}_c$s/$hogc=+ 20x synthetic, HOG critic keeps 1/4")
+  done
+  python $T "${rows[@]}" "${w[@]}" "${h[@]}" --out $O/${sp}_vs_real.md
+  [ ${#h[@]} -gt 0 ] && python $T "${h[@]}" "${w[@]}" --out $O/${sp}_wl_vs_hog_critic.md
+done
