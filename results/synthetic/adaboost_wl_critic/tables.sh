@@ -9,13 +9,18 @@ export PYTHONPATH=${PYTHONPATH:-.}
 real=adaboost_100_seeds.json
 wl=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
 hogc=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_the_25_least_synthetic_of_4x_drawn_of_each_seed.json
+q8=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
 for sp in val test; do
-  rows=(); w=(); h=()
+  rows=(); w=(); h=(); q=()
   for d in $O/${sp}_w[0-9]*; do
     [ -f $d/$real ] && rows+=("$d/$real=real only")
     [ -f $d/$wl ] && w+=("$d/$wl=+ 20x synthetic, weak-learner critic keeps 1/4")
     s=${d##*_w}; [ -f $H/${sp}_c$s/$hogc ] && h+=("$H/${sp}_c$s/$hogc=+ 20x synthetic, HOG critic keeps 1/4")
   done
-  python $T "${rows[@]}" "${w[@]}" "${h[@]}" --out $O/${sp}_vs_real.md
+  for d in $O/${sp}_q[0-9]*; do
+    [ -f $d/$q8 ] && q+=("$d/$q8=+ 20x synthetic, 8-bit, weak-learner critic keeps 1/4")
+  done
+  python $T "${rows[@]}" "${w[@]}" "${q[@]}" "${h[@]}" --out $O/${sp}_vs_real.md
+  [ ${#q[@]} -gt 0 ] && python $T "${w[@]}" "${q[@]}" --out $O/${sp}_8bit_vs_float.md
   [ ${#h[@]} -gt 0 ] && python $T "${h[@]}" "${w[@]}" --out $O/${sp}_wl_vs_hog_critic.md
 done
