@@ -124,8 +124,9 @@ calibrated, ten training seeds, paired against every draw; ``results/synthetic/r
 each seed's own draws (:class:`AddedPositives`' ``realism_selection="seed"``): at 12 seeds +0.017 [+0.003, +0.033] on
 validation over the whole draw's quarter, at 100 seeds level (+0.001). AdaBoost keeps every draw: with the critic's
 quarter (100 seeds, two training seeds, stop 86; ``results/synthetic/adaboost_critic/``) it was level with real only
-on the validation videos (+0.001 [-0.033, +0.029]) and below it on the test videos (-0.041 [-0.068, -0.013]). The CNN
-was not measured with it."""
+on the validation videos (+0.001 [-0.033, +0.029]) and below it on the test videos (-0.041 [-0.068, -0.013]); with a
+critic in its own features (``realism_features="weak_learners"``, stop 87, ``results/synthetic/adaboost_wl_critic/``)
++0.018 [-0.015, +0.044] on validation and -0.054 [-0.081, -0.032] on test. The CNN was not measured with it."""
 
 
 def resolve_realism_keep(kind: str, realism_keep: float | None, seed_count: int | None = None) -> float:
