@@ -46,9 +46,7 @@ def check_realism_selection(selection: Any, name: str = "realism_selection") -> 
     >>> check_realism_selection("seed")
     'seed'
     """
-    if not isinstance(selection, str) or selection not in REALISM_SELECTION:
-        raise ValueError(f"{name} must be one of {list(REALISM_SELECTION)}, got {selection!r}")
-    return selection
+    return _one_of(selection, REALISM_SELECTION, name)
 
 
 def check_realism_features(features: Any, name: str = "realism_features") -> str:
@@ -57,9 +55,13 @@ def check_realism_features(features: Any, name: str = "realism_features") -> str
     >>> check_realism_features("weak_learners")
     'weak_learners'
     """
-    if not isinstance(features, str) or features not in REALISM_FEATURES:
-        raise ValueError(f"{name} must be one of {list(REALISM_FEATURES)}, got {features!r}")
-    return features
+    return _one_of(features, REALISM_FEATURES, name)
+
+
+def _one_of(value: Any, choices: tuple[str, ...], name: str) -> str:
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{name} must be one of {list(choices)}, got {value!r}")
+    return value
 
 
 def realism_variants(keeps: Any, selections: Any) -> list[tuple[float, str]]:
