@@ -126,7 +126,8 @@ validation over the whole draw's quarter, at 100 seeds level (+0.001). AdaBoost 
 quarter (100 seeds, two training seeds, stop 86; ``results/synthetic/adaboost_critic/``) it was level with real only
 on the validation videos (+0.001 [-0.033, +0.029]) and below it on the test videos (-0.041 [-0.068, -0.013]); with a
 critic in its own features (``realism_features="weak_learners"``, stop 87, ``results/synthetic/adaboost_wl_critic/``)
-+0.018 [-0.015, +0.044] on validation and -0.054 [-0.081, -0.032] on test. The CNN was not measured with it."""
++0.018 [-0.015, +0.044] on validation and -0.054 [-0.081, -0.032] on test; that with 8-bit positives
+(``quantize=True``) +0.020 [-0.005, +0.043] and -0.007 [-0.027, +0.016]. The CNN was not measured with it."""
 
 
 def resolve_realism_keep(kind: str, realism_keep: float | None, seed_count: int | None = None) -> float:
