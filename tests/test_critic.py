@@ -50,6 +50,18 @@ def test_the_weak_learner_critic_keeps_the_patches_drawn_like_the_real_ones(odd)
     assert not np.allclose(scores, realism_scores(real, syn, groups, seed=0))  # HOG's critic is another one
     with pytest.raises(ValueError, match="features must be one of"):
         realism_scores(real, syn, groups, features="cnn")
+    # the lazy selection scores in HOG: refused with another critic's features, wherever it is asked for
+    from synthaug.detectors.critic import check_realism_features
+    from synthaug.detectors.video_training import AddedPositives
+
+    assert check_realism_features("weak_learners", selection="set") == "weak_learners"
+    assert check_realism_features("hog", selection="item") == "hog"
+    with pytest.raises(ValueError, match="'item' scores candidates in HOG features"):
+        check_realism_features("weak_learners", selection="item")
+    with pytest.raises(ValueError, match="'item' scores candidates in HOG features"):
+        AddedPositives(realism_selection="item", realism_features="weak_learners")
+    with pytest.raises(ValueError, match="realism_features must be one of"):
+        AddedPositives(realism_features="cnn")
 
 
 def test_weak_learner_features_are_adaboosts_energies_of_random_rectangles():

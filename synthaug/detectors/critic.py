@@ -49,13 +49,19 @@ def check_realism_selection(selection: Any, name: str = "realism_selection") -> 
     return _one_of(selection, REALISM_SELECTION, name)
 
 
-def check_realism_features(features: Any, name: str = "realism_features") -> str:
-    """``features`` if it is one of :data:`REALISM_FEATURES`, else ``ValueError`` naming ``name``.
+def check_realism_features(features: Any, name: str = "realism_features", selection: str | None = None) -> str:
+    """``features`` if it is one of :data:`REALISM_FEATURES`, else ``ValueError`` naming ``name``; with a
+    ``selection``, also refused where it is ``"item"`` and the features are not HOG's (the lazy selection scores with
+    the dataset's :class:`RealismCritic`, which is in HOG features).
 
-    >>> check_realism_features("weak_learners")
+    >>> check_realism_features("weak_learners", selection="seed")
     'weak_learners'
     """
-    return _one_of(features, REALISM_FEATURES, name)
+    _one_of(features, REALISM_FEATURES, name)
+    if features != "hog" and selection == "item":
+        raise ValueError(f"realism_selection 'item' scores candidates in HOG features (the dataset's RealismCritic); "
+                         f"{name} {features!r} takes 'seed' or 'set'")
+    return features
 
 
 def _one_of(value: Any, choices: tuple[str, ...], name: str) -> str:
@@ -162,13 +168,20 @@ def hog_features(patches: Tensor | np.ndarray, config: Any = None) -> np.ndarray
     Returns:
         float64 ``(N, D)``.
     """
-    from synthaug.detectors.base import to_float_patches
     from synthaug.detectors.hog import DEFAULT_HOG, hog
 
-    x = torch.from_numpy(np.ascontiguousarray(patches)) if isinstance(patches, np.ndarray) else patches
-    x = to_float_patches(x, int(x.shape[-1]) if isinstance(x, Tensor) and x.dim() else 0)
+    x = _float_patches(patches)
     with torch.no_grad():
         return torch.cat([hog(c, config or DEFAULT_HOG) for c in x.split(1024)]).double().numpy()
+
+
+def _float_patches(patches: Tensor | np.ndarray) -> Tensor:
+    """uint8 ``(N, P, P)`` or float ``(N, 1, P, P)`` patches, numpy or torch, as float32 ``(N, 1, P, P)`` in [0, 1]
+    (:func:`~synthaug.detectors.base.to_float_patches`, which names a wrong type or shape)."""
+    from synthaug.detectors.base import to_float_patches
+
+    x = torch.from_numpy(np.ascontiguousarray(patches)) if isinstance(patches, np.ndarray) else patches
+    return to_float_patches(x, int(x.shape[-1]) if isinstance(x, Tensor) and x.dim() else 0)
 
 
 def weak_learner_features(patches: Tensor | np.ndarray, reference: Tensor | np.ndarray, *, n: int = 2000,
@@ -190,14 +203,9 @@ def weak_learner_features(patches: Tensor | np.ndarray, reference: Tensor | np.n
         float64 ``(M, n)``, in [0, 1).
     """
     from synthaug.detectors.adaboost import gradient_level
-    from synthaug.detectors.base import to_float_patches
     from synthaug.detectors.weak_learners import DEFAULT_EPS, edge_orientation_energy, random_candidates
 
-    def as_float(x: Tensor | np.ndarray) -> Tensor:
-        x = torch.from_numpy(np.ascontiguousarray(x)) if isinstance(x, np.ndarray) else x
-        return to_float_patches(x, int(x.shape[-1]) if x.dim() else 0).double()
-
-    x, ref = as_float(patches), as_float(reference)
+    x, ref = _float_patches(patches).double(), _float_patches(reference).double()
     if x.shape[-2:] != ref.shape[-2:]:
         raise ValueError(f"patches and reference must have the same size, got {tuple(x.shape[-2:])} and "
                          f"{tuple(ref.shape[-2:])}")

@@ -343,9 +343,7 @@ def synthetic_positives(
 
     realism_keep = check_realism_keep(realism_keep)
     check_realism_selection(realism_selection)
-    if check_realism_features(realism_features) != "hog" and realism_selection == "item" and realism_keep < 1:
-        raise ValueError(f"realism_selection 'item' scores candidates with the dataset's RealismCritic, in HOG "
-                         f"features; realism_features {realism_features!r} takes 'seed' or 'set'")
+    check_realism_features(realism_features, selection=realism_selection if realism_keep < 1 else None)
     drawn = count if realism_keep == 1 else int(math.ceil(count / realism_keep - 1e-9))
     p = int(seedset.patches.shape[-1])
     if count == 0:

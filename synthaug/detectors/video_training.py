@@ -330,9 +330,7 @@ class AddedPositives:
             resolve_synthetic_share("", self.synthetic_share)  # raises on any string but BY_COUNT
         resolve_realism_keep("", self.realism_keep)  # raises on a value that is not a fraction in (0, 1]
         check_realism_selection(self.realism_selection)
-        if check_realism_features(self.realism_features) != "hog" and self.realism_selection == "item":
-            raise ValueError(f"realism_selection 'item' scores candidates in HOG features; realism_features "
-                             f"{self.realism_features!r} takes 'seed' or 'set'")
+        check_realism_features(self.realism_features, selection=self.realism_selection)
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:

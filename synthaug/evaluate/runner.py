@@ -204,12 +204,9 @@ class Condition:
         # a keep of 1 selects nothing: one cell, whatever the selection
         (_, selection), = realism_variants([self.realism_keep], [self.realism_selection])
         object.__setattr__(self, "realism_selection", selection)
-        check_realism_features(self.realism_features)
+        check_realism_features(self.realism_features, selection=selection if self.realism_keep < 1 else None)
         if self.realism_keep == 1:  # no critic: one cell, whatever its features
             object.__setattr__(self, "realism_features", "hog")
-        elif self.realism_features != "hog" and selection == "item":
-            raise ValueError(f"realism_selection 'item' scores candidates in HOG features; realism_features "
-                             f"{self.realism_features!r} takes 'seed' or 'set'")
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -838,7 +835,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             object_box_share=1.0 if ob is None else float(object_box_share),
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
                             quantize=qz, background_sampling=bs, realism_keep=rk, realism_selection=sel,
-                            realism_features=realism_features if rk < 1 else "hog")
+                            realism_features=realism_features)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
                   for cs in capture_sampling for off in offs for rf in refits
                   for qz in rounding for bs in grounds for rk, sel in keeps]

@@ -1,6 +1,6 @@
 """Stop 87: where the renders' background stops being the seed's own pixels, and what snapping faint coverage to 0
-would do in AdaBoost's eyes (an experiment by monkeypatching the motion and boundary blurs; nothing here is a
-library change).
+would do in AdaBoost's eyes (an experiment by monkeypatching motion blur and the coverage blur inside boundary blur;
+nothing here is a library change).
 
 usage (repository root): python results/synthetic/adaboost_wl_critic/coverage_snap.py TOL   (0: the library's blurs;
   TOL > 0: blurred coverage under TOL set to exactly 0, over 1 - TOL to 1). Seed set 0 of the 100-seed drone runs,
@@ -12,26 +12,19 @@ from synthaug.data.seedset import SeedSet
 from synthaug.detectors.training_sets import synthetic_positives
 from synthaug.detectors.base import load_detector
 tol = float(sys.argv[1])
-_mb, _bb = F.motion_blur, F.boundary_blur
+_mb, _sb = F.motion_blur, F._separable_blur
 def mb(*a, **k):
     color, cov = _mb(*a, **k)
     if tol:
         cov = torch.where(cov < tol, torch.zeros((), dtype=cov.dtype), cov)
         color = torch.where(cov > 0, color, torch.zeros((), dtype=color.dtype))
     return color, cov
-def bb(image, coverage, sigma_s, *, pad):
-    b, c = image.shape[:2]
-    s = F._per_channel(sigma_s, b, c, image, "sigma_s")
-    cov = coverage.expand(b, c, *coverage.shape[2:])
-    if b == 0:
-        return image.clone()
-    blurred, m = F._separable_blur(image, cov, s, pad=pad)
-    m = m.clamp(0.0, 1.0)
+def sb(*a, **k):  # boundary_blur's (blurred image, blurred coverage): the coverage snapped before its band weight
+    blurred, m = _sb(*a, **k)
     if tol:
         m = torch.where(m < tol, 0.0, torch.where(m > 1 - tol, 1.0, m))
-    band = (4.0 * m * (1.0 - m)).clamp(0.0, 1.0)
-    return image + band * (blurred - image)
-F.motion_blur, F.boundary_blur = mb, bb
+    return blurred, m
+F.motion_blur, F._separable_blur = mb, sb
 seed = 0
 ss = SeedSet.load(f"data/runs/ingest_drone_seed{seed}/seedsets/drone_100")
 fit = f"data/runs/fits/drone_100_seed{seed}_hog_quadcopter.json"
