@@ -5,10 +5,11 @@
 # back to score the test split. Real only comes from the cell cache (stop 86's cells, the same key) when it is there.
 # usage (repository root): results/synthetic/adaboost_wl_critic/run.sh TAG SEED [RUNNER FLAGS...]
 #   e.g. run.sh q0 0 --quantize on   (the synthetic positives rounded to 8-bit levels, the critic scoring them so)
-# Run parallel jobs on disjoint seeds (a seed set's fit is not locked).
+# Run parallel jobs on disjoint seeds (a seed set's fit is not locked). RUNNER=".../adaboost_critic/added_only.py" skips
+# the real-only cell (stop 88: seed 2's cells beside its real-only cell, trained by ../adaboost_critic/run2.sh real).
 tag=$1; seed=$2; shift 2
 O=results/synthetic/adaboost_wl_critic
-R="python -m synthaug.evaluate.runner synthetic --protocol configs/protocol/halmstad_v2.json --class drone \
+R="${RUNNER:-python -m synthaug.evaluate.runner} synthetic --protocol configs/protocol/halmstad_v2.json --class drone \
    --detectors adaboost --seed-counts 100 --no-scale-check --no-patches --threads 1 \
    --synthetic-ratios 20 --fit-distance hog --mesh ../shared/data/meshes/quadcopter.glb \
    --realism-keep 0.25 --realism-features weak_learners $*"
