@@ -545,6 +545,28 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err
 
 
+def test_synthetic_comparison_trains_real_only_last_and_lists_it_first(monkeypatch):
+    """Each detector's real-only condition runs after its added ones (a second process training those cells is
+    waited for at the end, not ahead of every added cell), and stays the first row of its groups (every scale)."""
+    made = []
+
+    def run_into(results, runner, c, seeds):
+        made.append(c.name)
+        for group in (c.kind, f"{c.kind} x2"):
+            results.setdefault(group, {})[c.name] = c
+
+    monkeypatch.setattr(R, "_run_into", run_into)
+    res = R.synthetic_comparison(None, detectors=["adaboost", "hog"], seed_count=12, synthetic_ratios=[20],
+                                 params="f{seed}.json", perturb_copies=[2], realism_keep=(1.0,))
+    ada = ["adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25)", "adaboost / 12 seeds + 2x perturbed, share 0.25"]
+    hog = ["hog / 12 seeds + 20x synthetic (f{seed})", "hog / 12 seeds + 2x perturbed"]
+    assert made == [*ada, "adaboost / 12 seeds", *hog, "hog / 12 seeds"]
+    for kind, added in (("adaboost", ada), ("hog", hog)):
+        for group in (kind, f"{kind} x2"):
+            assert list(res[group]) == [f"{kind} / 12 seeds", *added]
+            assert res[group][f"{kind} / 12 seeds"].synthetic_ratio == 0 and not res[group][added[0]].perturb_copies
+
+
 def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effect_left_out(monkeypatch, capsys):
     """The paper's Figs. 10 and 9 under the protocol: ``--capture-sampling`` and ``--effects-off`` each add a
     synthetic condition per value, with keys of their own; at their defaults the keys are the ones cells had."""

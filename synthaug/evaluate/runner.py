@@ -797,8 +797,11 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     synthetic
     condition also holds that many downscaled copies of each real seed (the two together, against each alone).
 
+    The real-only cells run after the added ones, so a real-only cell that another process is training meanwhile is
+    read back when it is done rather than trained twice, and the added cells do not wait on it.
+
     Writes (when ``out``): one JSON per condition and ``comparison.md`` (a :func:`report_table` per
-    detector and scale, paired against real only).
+    detector and scale, paired against real only, its first row).
     """
     results: dict[str, dict[str, ProtocolResult]] = {}
     refits = list(dict.fromkeys(bool(v) for v in dcnn_refit))
@@ -853,8 +856,13 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         conds += [Condition(f"{base} + {c}x {faded}{share}", kind, seed_count=seed_count,
                             synthetic_share=synthetic_share, faded_copies=int(c), faded_contrast=fc)
                   for c in faded_copies]
-        for c in conds:
+        # real only last: a second process training the same seeds' real-only cells (same cache) is then waited for
+        # at the end instead of holding every added cell behind it; its row stays first in every table
+        for c in conds[1:] + conds[:1]:
             _run_into(results, runner, c, seeds)
+        for group, rows in results.items():
+            if base in rows:
+                results[group] = {base: rows[base], **{k: v for k, v in rows.items() if k != base}}
     if out is not None:
         _write_tables(results, Path(out), "comparison.md",
                       "# Real seeds vs + synthetic vs + perturbed (paired against real only)", seed_count)
