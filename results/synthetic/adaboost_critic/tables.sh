@@ -10,9 +10,10 @@ real=adaboost_100_seeds.json
 critic=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_the_25_least_synthetic_of_4x_drawn_of_each_seed.json
 every=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25.json
 for sp in val test; do
-  rows=(); crit=(); evr=()
-  for d in $O/${sp}_[rc][0-9]*; do
-    [ -f $d/$real ] && rows+=("$d/$real=real only")
+  rows=(); crit=(); evr=(); seen=" "
+  for d in $O/${sp}_[rc][0-9]*; do  # one real-only file a seed (stop 88: r2 and c2 both hold seed 2's, one cell)
+    s=${d##*_[rc]}
+    [ -f $d/$real ] && [[ "$seen" != *" $s "* ]] && rows+=("$d/$real=real only") && seen="$seen$s "
   done
   for d in $O/${sp}_c[0-9]*; do [ -f $d/$critic ] && crit+=("$d/$critic=+ 20x synthetic, critic keeps 1/4"); done
   for d in $O/${sp}_a[0-9]*; do [ -f $d/$every ] && evr+=("$d/$every=+ 20x synthetic, every draw"); done

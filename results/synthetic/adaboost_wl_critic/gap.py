@@ -27,7 +27,8 @@ from synthaug.diagnose.gap import measure_gap
 
 # the stored real-only AdaBoost detectors of the runner's cells (drone, 100 seeds, halmstad_v2), by training seed
 DETECTORS = {0: "data/runs/cells/detectors/10d17509b28cd202dc2669c2.pt",
-             1: "data/runs/cells/detectors/15d751e3fa4c2a8b974f0b3b.pt"}
+             1: "data/runs/cells/detectors/15d751e3fa4c2a8b974f0b3b.pt",
+             2: "data/runs/cells/detectors/47b6e311d8f783aedf78deb7.pt"}  # stop 88's real-only cell (run2.sh real r2 2)
 MESH = "../shared/data/meshes/quadcopter.glb"
 
 
