@@ -545,6 +545,19 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err
 
 
+def _record_in_table_order(made):
+    """A stand-in for ``R._run_into`` that lists the conditions in ``made`` as the tables do: each kind's real only
+    first, although ``synthetic_comparison`` runs it after the added ones (the test below checks both orders)."""
+    pending = {}  # each kind's added conditions, listed once its real only (run last) comes
+
+    def run_into(results, runner, c, seeds):
+        if c.name == f"{c.kind} / {c.seed_count} seeds":
+            made.extend([c, *pending.pop(c.kind, [])])
+        else:
+            pending.setdefault(c.kind, []).append(c)
+    return run_into
+
+
 def test_synthetic_comparison_trains_real_only_last_and_lists_it_first(monkeypatch):
     """Each detector's real-only condition runs after its added ones (a second process training those cells is
     waited for at the end, not ahead of every added cell), and stays the first row of its groups (every scale)."""
@@ -571,7 +584,7 @@ def test_synthetic_comparison_makes_one_condition_per_capture_sampling_and_effec
     """The paper's Figs. 10 and 9 under the protocol: ``--capture-sampling`` and ``--effects-off`` each add a
     synthetic condition per value, with keys of their own; at their defaults the keys are the ones cells had."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=100, synthetic_ratios=[20], params="f{seed}.json",
                            capture_sampling=("seed", "uniform"), effects_off=(None, "motion_blur"),
                            realism_keep=(1.0,))  # every draw: the names and keys the cells had
@@ -630,7 +643,7 @@ def test_synthetic_share_default_is_the_familys_and_keeps_the_cells_keys(monkeyp
     the cell of ``--synthetic-share 0.25`` (same key and name), ``count`` keeps the key AdaBoost's cells by count had
     before the default (no share in it); HOG's default is by count (its former key); a real-only cell has no share."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     for share in (None, 0.25, "count"):
         R.synthetic_comparison(None, detectors=["adaboost", "hog"], seed_count=12, synthetic_ratios=[20],
                                params="f{seed}.json", perturb_copies=[5], synthetic_share=share,
@@ -679,7 +692,7 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
     """``--quantize on`` adds an 8-bit condition per synthetic ratio (named so, with ``quantize`` in its key and in the
     ``AddedPositives`` its training gets); off, the default, keeps every former key and name."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                            quantize=(False, True, True))
     real, plain, eight = made
@@ -700,7 +713,7 @@ def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monk
     default is the family's (HOG a quarter, resolved into the key; AdaBoost and the CNN 1); a value out of (0, 1] is
     refused."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                            realism_keep=(1.0, 0.25, None))
     real, plain, kept = made  # None is HOG's 0.25: one condition
@@ -737,7 +750,7 @@ def test_realism_selection_makes_a_condition_per_value_only_where_the_critic_kee
     adds ``realism_selection`` to the key and "of each seed" to the name; both reach the training's
     ``AddedPositives``."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                            realism_keep=(1.0, 0.25), realism_selection=("set", "seed"))
     real, plain, by_set, by_seed = made
@@ -775,7 +788,7 @@ def test_realism_features_name_the_critic_and_keep_the_former_keys(ws, monkeypat
     (``realism_features`` in its key, its name and its training's ``AddedPositives``); HOG's, the default, keeps every
     former key and name; every draw has no critic, so one key; the lazy selection, which scores in HOG, is refused."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                            realism_keep=(1.0, 0.25), realism_features="weak_learners")
     real, every, wl = made
@@ -809,7 +822,7 @@ def test_background_sampling_is_a_condition_of_its_own_and_keeps_the_former_keys
     backgrounds (named so, ``background_sampling`` in its key and in the ``AddedPositives`` its training gets); the
     paper's, the default, keeps every former key and name; a value repeated makes one condition."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                            background_sampling=("seed", "other", "other"), realism_keep=(1.0,))  # the former names
     real, own, other = made
@@ -832,7 +845,7 @@ def test_object_box_share_mixes_the_two_framings_and_keeps_the_former_keys(ws, m
     in its key and in the ``AddedPositives`` its training gets); the paper's framing ignores the share; the default 1
     keeps every former key and name; a share without a framing is a usage error."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                            object_box=(None, "fit"), realism_keep=(1.0,))  # every draw: the former names
     _, paper, framed = made
@@ -868,7 +881,7 @@ def test_synthetic_downscaled_copies_join_each_synthetic_condition(ws, monkeypat
     (named so, both in its key and in the ``AddedPositives`` its training gets), beside the copies alone
     (``--downscaled-copies K``) and the synthetic data alone; 0, the default, keeps every former key and name."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                            realism_keep=(1.0,))  # every draw: the former names
     _, alone = made
@@ -897,7 +910,7 @@ def test_background_sampling_default_is_the_familys_and_resolved_into_the_key(ws
     keeps the paper's key; the CNN with ``seed`` keeps the key its cells had before the default; real-only cells and a
     one-seed set keep their own backgrounds; a value repeated or equal to the default makes one condition."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["cnn", "hog"], seed_count=100, synthetic_ratios=[20],
                            params="f{seed}.json", background_sampling=(None, "seed", "other"))
     syn = [c for c in made if c.synthetic_ratio]
@@ -931,7 +944,7 @@ def test_at_seed_pose_sampling_is_a_condition_of_its_own_and_refuses_an_object_b
     and in the ``AddedPositives`` its training gets); the former names and keys unchanged; with an object box,
     which centres the object itself, a usage error."""
     made = []
-    monkeypatch.setattr(R, "_run_into", lambda results, runner, c, seeds: made.append(c))
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["hog"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
                            pose_sampling=("uniform", "fitted", "uniform_at_seed", "fitted_at_seed"),
                            realism_keep=(1.0,))  # every draw: the former names
