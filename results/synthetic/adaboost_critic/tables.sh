@@ -13,6 +13,7 @@ for sp in val test; do
   rows=(); crit=(); evr=(); seen=" "
   for d in $O/${sp}_[rc][0-9]*; do  # one real-only file a seed (stop 88: r2 and c2 both hold seed 2's, one cell)
     s=${d##*_[rc]}
+    [ -d $O/${sp}_c$s ] || continue  # seeds with a critic cell (r3: real only for ../adaboost_wl_critic's q3)
     [ -f $d/$real ] && [[ "$seen" != *" $s "* ]] && rows+=("$d/$real=real only") && seen="$seen$s "
   done
   for d in $O/${sp}_c[0-9]*; do [ -f $d/$critic ] && crit+=("$d/$critic=+ 20x synthetic, critic keeps 1/4"); done

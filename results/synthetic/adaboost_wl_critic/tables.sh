@@ -1,6 +1,7 @@
 #!/bin/bash
-# Stop 87: the tables of AdaBoost with the weak-learner critic (run.sh's cells), against real only and against stop
-# 86's HOG critic on the same training seeds (../adaboost_critic/). Trains nothing (~1 min).
+# Stop 87 (seeds 2-3 added at stop 88): the tables of AdaBoost with the weak-learner critic (run.sh's cells),
+# against real only and against stop 86's HOG critic on the same training seeds (../adaboost_critic/).
+# Trains nothing (~1 min).
 # usage (repository root): results/synthetic/adaboost_wl_critic/tables.sh
 O=results/synthetic/adaboost_wl_critic
 H=results/synthetic/adaboost_critic
@@ -17,10 +18,17 @@ for sp in val test; do
     [ -f $d/$wl ] && w+=("$d/$wl=+ 20x synthetic, weak-learner critic keeps 1/4")
     s=${d##*_w}; [ -f $H/${sp}_c$s/$hogc ] && h+=("$H/${sp}_c$s/$hogc=+ 20x synthetic, HOG critic keeps 1/4")
   done
-  for d in $O/${sp}_q[0-9]*; do
-    [ -f $d/$q8 ] && q+=("$d/$q8=+ 20x synthetic, 8-bit, weak-learner critic keeps 1/4")
+  for d in $O/${sp}_q[0-9]*; do  # the seeds with a float cell too (the 8-bit cell alone: ${sp}_8bit_vs_real.md)
+    [ -f $d/$q8 ] && [ -d $O/${sp}_w${d##*_q} ] && q+=("$d/$q8=+ 20x synthetic, 8-bit, weak-learner critic keeps 1/4")
   done
   python $T "${rows[@]}" "${w[@]}" "${q[@]}" "${h[@]}" --out $O/${sp}_vs_real.md
   [ ${#q[@]} -gt 0 ] && python $T "${w[@]}" "${q[@]}" --out $O/${sp}_8bit_vs_float.md
+  # stop 88: the 8-bit cell on every seed it has (seed 3 has no float cell), against real only of the same seeds
+  qr=(); qa=()
+  for d in $O/${sp}_q[0-9]*; do
+    s=${d##*_q}; for r in $d $O/${sp}_w$s; do [ -f $r/$real ] && qr+=("$r/$real=real only") && break; done
+    [ -f $d/$q8 ] && qa+=("$d/$q8=+ 20x synthetic, 8-bit, weak-learner critic keeps 1/4")
+  done
+  [ ${#qa[@]} -gt 0 ] && python $T "${qr[@]}" "${qa[@]}" --out $O/${sp}_8bit_vs_real.md
   [ ${#h[@]} -gt 0 ] && python $T "${h[@]}" "${w[@]}" --out $O/${sp}_wl_vs_hog_critic.md
 done
