@@ -571,7 +571,8 @@ def test_synthetic_comparison_trains_real_only_last_and_lists_it_first(monkeypat
     monkeypatch.setattr(R, "_run_into", run_into)
     res = R.synthetic_comparison(None, detectors=["adaboost", "hog"], seed_count=12, synthetic_ratios=[20],
                                  params="f{seed}.json", perturb_copies=[2], realism_keep=(1.0,))
-    ada = ["adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25)", "adaboost / 12 seeds + 2x perturbed, share 0.25"]
+    ada = ["adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25)",
+           "adaboost / 12 seeds + 2x perturbed, share 0.25"]
     hog = ["hog / 12 seeds + 20x synthetic (f{seed})", "hog / 12 seeds + 2x perturbed"]
     assert made == [*ada, "adaboost / 12 seeds", *hog, "hog / 12 seeds"]
     for kind, added in (("adaboost", ada), ("hog", hog)):
