@@ -1,9 +1,10 @@
 """Stop 87: how the real-only AdaBoost detector scores the synthetic positives under each option (median score and
-the share above its decision threshold 0), 2,000 drawn as its training draws them (seed + 2), on seed sets 0 and 1 of
-the 100-seed drone runs with their d_HOG fits and their stored real-only detectors (stop 86's cells); then the
+the share above its decision threshold 0), 2,000 drawn as its training draws them (seed + 2), on seed sets 0-2 of
+the 100-seed drone runs with their d_HOG fits and their stored real-only detectors (stop 86's cells; seed 2 stop 88's,
+added then: seeds 0-1 printed the same to the digit); then the
 median extent of the object (|patch - background| > 0.03) in the real seed patches and in every draw (seed 0).
 
-usage (repository root): python results/synthetic/adaboost_wl_critic/detector_scores.py   (~10 min)
+usage (repository root): python results/synthetic/adaboost_wl_critic/detector_scores.py   (~12 min for three seeds)
 """
 
 from __future__ import annotations

@@ -6,7 +6,8 @@
 # usage (repository root): results/synthetic/adaboost_wl_critic/run.sh TAG SEED [RUNNER FLAGS...]
 #   e.g. run.sh q0 0 --quantize on   (the synthetic positives rounded to 8-bit levels, the critic scoring them so)
 # Run parallel jobs on disjoint seeds (a seed set's fit is not locked). RUNNER=".../adaboost_critic/added_only.py" skips
-# the real-only cell (stop 88: seed 2's cells beside its real-only cell, trained by ../adaboost_critic/run2.sh real).
+# the real-only cell (stop 88's q2, beside ../adaboost_critic/run2.sh real r2 2); since stop 88 the runner trains real
+# only last anyway, so a plain run.sh beside run2.sh real reads it back at its end (q3).
 tag=$1; seed=$2; shift 2
 O=results/synthetic/adaboost_wl_critic
 R="${RUNNER:-python -m synthaug.evaluate.runner} synthetic --protocol configs/protocol/halmstad_v2.json --class drone \
