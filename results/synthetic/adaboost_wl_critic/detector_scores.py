@@ -50,12 +50,13 @@ def main() -> None:
         fit = f"data/runs/fits/drone_100_seed{seed}_hog_quadcopter.json"
         det = load_detector(ckpt)
         real = torch.from_numpy(np.asarray(ss.patches))[:, None].float() / 255
-        print(seed, f"{'the real seed patches':58s} share > 0 {(det.score_patches(real) > 0).float().mean().item():.3f}")
+        accepted = (det.score_patches(real) > 0).float().mean().item()
+        print(seed, f"{'the real seed patches':58s} share > 0 {accepted:.3f}")
         for name, kw in OPTIONS.items():
             syn, idx = synthetic_positives(ss, MESH, fit, 2000, seed=seed + 2, return_seed_index=True, **kw)
             s = det.score_patches(syn)
-            print(seed, f"{name:58s} median score {s.median().item():+.2f}  share > 0 {(s > 0).float().mean().item():.3f}",
-                  flush=True)
+            print(seed, f"{name:58s} median score {s.median().item():+.2f}  "
+                  f"share > 0 {(s > 0).float().mean().item():.3f}", flush=True)
             if seed == 0 and not kw:
                 bg = np.asarray(ss.backgrounds, np.float64) / 255
                 print("   object extent (h, w) px: real", extent(real.numpy()[:, 0].astype(np.float64), bg),
