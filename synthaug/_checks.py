@@ -23,7 +23,23 @@ from typing import Any, Callable, Sequence
 
 __all__ = ["positive_int", "nonneg_int", "positive_float", "nonneg_float", "unit_float", "open_unit_float",
            "finite_float", "float_in", "int_at_least", "check_output_file", "check_output_dir",
-           "check_seedset_dir", "first_line", "add_option", "dataclass_defaults"]
+           "check_seedset_dir", "first_line", "add_option", "dataclass_defaults", "one_of"]
+
+
+def one_of(value: Any, choices: Sequence[str], name: str, *, alternatives: str = "") -> str:
+    """``value`` if it is one of the strings ``choices``; else ``ValueError`` naming ``name``, the choices and any
+    ``alternatives`` the caller accepts besides them (e.g. ``" or None"``, checked by the caller).
+
+    >>> one_of("ns", ("pushpull", "telea", "ns"), "inpaint method")
+    'ns'
+    >>> one_of("x", ("a", "b"), "mode", alternatives=" or None")
+    Traceback (most recent call last):
+    ...
+    ValueError: mode must be one of ['a', 'b'] or None, got 'x'
+    """
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{name} must be one of {list(choices)}{alternatives}, got {value!r}")
+    return value
 
 
 def _number(text: str, kind: type) -> float | int:

@@ -215,3 +215,24 @@ def test_ingest_defaults_are_ingestconfig():
                         ("seed", "seed")]:
         assert cli[dest] == cfg[field], dest
     assert tuple(cli["hard_negative_classes"]) == cfg["hard_negative_classes"]
+
+
+@pytest.mark.parametrize("value", ["x", None, 3, ["fp"]])
+def test_one_of_refuses_anything_but_a_listed_string(value):
+    from synthaug._checks import one_of
+
+    assert one_of("ap", ("fp", "ap"), "mining_select") == "ap"
+    with pytest.raises(ValueError) as err:
+        one_of(value, ("fp", "ap"), "mining_select", alternatives=" or None")
+    assert str(err.value) == f"mining_select must be one of ['fp', 'ap'] or None, got {value!r}"
+
+
+@pytest.mark.parametrize("field, choices, alternatives", [("ada_cascade", "['all', 'real']", ""),
+                                                          ("mining_select", "['fp', 'ap']", " or None"),
+                                                          ("box_model", "['cnn', 'ridge', 'ensemble']", "")])
+def test_train_options_name_the_field_and_its_choices(field, choices, alternatives):
+    from synthaug.detectors.training import TrainOptions
+
+    with pytest.raises(ValueError) as err:
+        TrainOptions(**{field: "nope"})
+    assert str(err.value) == f"{field} must be one of {choices}{alternatives}, got 'nope'"

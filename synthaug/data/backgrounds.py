@@ -41,6 +41,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from synthaug._checks import one_of
+
 __all__ = [
     "BackgroundResult",
     "FrameAligner",
@@ -193,8 +195,7 @@ def inpaint_region(image: np.ndarray, region: np.ndarray, *, radius: int = 5, me
         raise ValueError(f"image must be uint8 (H, W), got {image.dtype} {image.shape}")
     if region.shape != image.shape:
         raise ValueError(f"region shape {region.shape} differs from image shape {image.shape}")
-    if method not in INPAINT_METHODS:
-        raise ValueError(f"inpaint method must be one of {INPAINT_METHODS}, got {method!r}")
+    one_of(method, INPAINT_METHODS, "inpaint method")
     out = image.copy()
     if not region.any():
         return out

@@ -53,6 +53,8 @@ from typing import Any
 
 import numpy as np
 
+from synthaug._checks import one_of
+
 __all__ = ["FORMATS", "export_dataset", "seedset_real_frames", "add_arguments", "main"]
 
 FORMATS = ("coco", "yolo")
@@ -235,8 +237,7 @@ def export_dataset(
     """
     import synthaug
 
-    if fmt not in FORMATS:
-        raise ValueError(f"format must be one of {list(FORMATS)}, got {fmt!r}")
+    one_of(fmt, FORMATS, "format")
     if getattr(dataset, "mode", "frame") != "frame":
         raise ValueError(f"export needs a frame-mode dataset (mode='frame'), got mode={dataset.mode!r}")
     n_items = len(dataset)

@@ -63,6 +63,7 @@ import torch
 from torch.utils.data import Dataset
 from torchvision import tv_tensors
 
+from synthaug._checks import one_of
 from synthaug.data.captures import CAPTURE_SAMPLERS, CaptureSampler
 from synthaug.data.dataset_args import check_arguments, is_integral, legacy_arguments, render_backend
 from synthaug.data.epochs import EpochSampler, item_generator, item_seed
@@ -880,8 +881,7 @@ def _check_realism_critic(critic: Any, mode: str, n_seeds: int) -> Any:
 
 def _check_background_sampling(background_sampling: Any, n_seeds: int) -> str:
     """``background_sampling`` checked against the seeds there are ("other" needs two)."""
-    if background_sampling not in BACKGROUND_SAMPLING:
-        raise ValueError(f"background_sampling must be one of {list(BACKGROUND_SAMPLING)}, got {background_sampling!r}")
+    one_of(background_sampling, BACKGROUND_SAMPLING, "background_sampling")
     if background_sampling == "other" and n_seeds < 2:
         raise ValueError(f"background_sampling='other' puts each object on another seed's background: it needs at "
                          f"least 2 backgrounds, got {n_seeds}")

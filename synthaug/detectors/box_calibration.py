@@ -32,6 +32,7 @@ import torch
 from torch import Tensor
 from torchvision.ops import box_convert, box_iou
 
+from synthaug._checks import one_of
 from synthaug.detectors.boxes import DeltaRegressor, decode_deltas, encode_deltas
 
 __all__ = ["CALIBRATION_FORMS", "CALIBRATION_VERSION", "CalibratedBoxRegressor", "calibrate_boxes", "check_form",
@@ -54,9 +55,7 @@ the regression's lean towards mid sizes happens to undo that."""
 
 def check_form(form: str, name: str = "form") -> str:
     """``form`` if it is one of :data:`CALIBRATION_FORMS`; else a ValueError naming ``name``."""
-    if form not in CALIBRATION_FORMS:
-        raise ValueError(f"{name} must be one of {list(CALIBRATION_FORMS)}, got {form!r}")
-    return form
+    return one_of(form, CALIBRATION_FORMS, name)
 
 
 REFERENCE_SIDE = 32.0

@@ -22,6 +22,8 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from synthaug._checks import one_of
+
 __all__ = ["REALISM_FEATURES", "REALISM_SELECTION", "RealismCritic", "check_realism_features",
            "check_realism_selection", "fit_logistic", "hog_features", "least_synthetic", "realism_scores",
            "realism_variants", "seed_quotas", "standardiser", "weak_learner_features"]
@@ -46,7 +48,7 @@ def check_realism_selection(selection: Any, name: str = "realism_selection") -> 
     >>> check_realism_selection("seed")
     'seed'
     """
-    return _one_of(selection, REALISM_SELECTION, name)
+    return one_of(selection, REALISM_SELECTION, name)
 
 
 def check_realism_features(features: Any, name: str = "realism_features", selection: str | None = None) -> str:
@@ -57,17 +59,11 @@ def check_realism_features(features: Any, name: str = "realism_features", select
     >>> check_realism_features("weak_learners", selection="seed")
     'weak_learners'
     """
-    _one_of(features, REALISM_FEATURES, name)
+    one_of(features, REALISM_FEATURES, name)
     if features != "hog" and selection == "item":
         raise ValueError(f"realism_selection 'item' scores candidates in HOG features (the dataset's RealismCritic); "
                          f"{name} {features!r} takes 'seed' or 'set'")
     return features
-
-
-def _one_of(value: Any, choices: tuple[str, ...], name: str) -> str:
-    if not isinstance(value, str) or value not in choices:
-        raise ValueError(f"{name} must be one of {list(choices)}, got {value!r}")
-    return value
 
 
 def realism_variants(keeps: Any, selections: Any) -> list[tuple[float, str]]:

@@ -47,6 +47,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from synthaug._checks import one_of
 from synthaug.detectors.frames import _as_item
 from synthaug.detectors.mining import mine_hard_negatives, validation_false_positives
 
@@ -341,14 +342,13 @@ class TrainOptions:
             raise ValueError(f"ada_energy_floor must be a finite number >= 0, got {self.ada_energy_floor!r}")
         if not isinstance(self.ada_transfer, bool):
             raise ValueError(f"ada_transfer must be a bool, got {self.ada_transfer!r}")
-        if self.ada_cascade not in ADA_CASCADE:
-            raise ValueError(f"ada_cascade must be one of {list(ADA_CASCADE)}, got {self.ada_cascade!r}")
+        one_of(self.ada_cascade, ADA_CASCADE, "ada_cascade")
         if not 0 <= int(self.cnn_shift) < 20:
             raise ValueError(f"cnn_shift must be in [0, 20) pixels, got {self.cnn_shift}")
         if not 0 < self.val_target_recall <= 1 or not 0 < self.val_iou <= 1:
             raise ValueError(f"val_target_recall and val_iou must be in (0, 1], got {self.val_target_recall}, {self.val_iou}")
-        if self.mining_select is not None and self.mining_select not in MINING_SELECT:
-            raise ValueError(f"mining_select must be one of {list(MINING_SELECT)} or None, got {self.mining_select!r}")
+        if self.mining_select is not None:
+            one_of(self.mining_select, MINING_SELECT, "mining_select", alternatives=" or None")
         # (name, lowest value, None allowed: the family's default)
         for name, low, optional in (("mining_patience", 0, True), ("ada_rounds", 1, True), ("hog_kmeans_restarts", 1, False),
                                      ("cnn_finetune_epochs", 0, False), ("box_calibration", 0, True)):
@@ -357,8 +357,7 @@ class TrainOptions:
                 continue
             if v is None or isinstance(v, bool) or int(v) != v or v < low:
                 raise ValueError(f"{name} must be an integer >= {low}{' or None' if optional else ''}, got {v!r}")
-        if self.box_model not in BOX_MODELS:
-            raise ValueError(f"box_model must be one of {list(BOX_MODELS)}, got {self.box_model!r}")
+        one_of(self.box_model, BOX_MODELS, "box_model")
         from synthaug.detectors.box_calibration import check_form
 
         check_form(self.box_calibration_form, "box_calibration_form")

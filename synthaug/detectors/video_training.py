@@ -31,6 +31,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from synthaug._checks import one_of
 from synthaug._io import atomic_write_bytes, check_header, digest, exclusive_lock, file_fingerprint, sha256_file
 from synthaug.data.video import find_video
 from synthaug.detectors.frames import VideoFrames
@@ -108,10 +109,7 @@ def resolve_background_sampling(kind: str, background_sampling: str | None, seed
     if background_sampling is None:
         chosen = FAMILY_BACKGROUND_SAMPLING.get(kind, "seed")
         return "seed" if chosen == "other" and seed_count is not None and seed_count < 2 else chosen
-    if background_sampling not in BACKGROUND_SAMPLING:
-        raise ValueError(f"background_sampling must be one of {list(BACKGROUND_SAMPLING)} or None, got "
-                         f"{background_sampling!r}")
-    return background_sampling
+    return one_of(background_sampling, BACKGROUND_SAMPLING, "background_sampling", alternatives=" or None")
 
 
 FAMILY_REALISM_KEEP: dict[str, float] = {"hog": 0.25}
@@ -316,10 +314,8 @@ class AddedPositives:
         from synthaug.detectors.critic import check_realism_features, check_realism_selection
 
         resolve_background_sampling("", self.background_sampling)  # raises on a value that is not one
-        if self.capture_sampling not in CAPTURE_SAMPLERS:
-            raise ValueError(f"capture_sampling must be one of {list(CAPTURE_SAMPLERS)}, got {self.capture_sampling!r}")
-        if self.pose_sampling not in POSE_SAMPLING:
-            raise ValueError(f"pose_sampling must be one of {list(POSE_SAMPLING)}, got {self.pose_sampling!r}")
+        one_of(self.capture_sampling, CAPTURE_SAMPLERS, "capture_sampling")
+        one_of(self.pose_sampling, POSE_SAMPLING, "pose_sampling")
         check_placement([self.pose_sampling], [self.object_box])
         check_object_box_share(self.object_box_share, self.object_box)
         if self.effects_off is not None:
