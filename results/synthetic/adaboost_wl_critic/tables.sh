@@ -1,5 +1,5 @@
 #!/bin/bash
-# Stop 87 (seeds 2-3 added at stop 88): the tables of AdaBoost with the weak-learner critic (run.sh's cells),
+# Stop 87 (seeds 2-3 added at stop 88, the pose cell at stop 89): the tables of AdaBoost with the weak-learner critic (run.sh's cells),
 # against real only and against stop 86's HOG critic on the same training seeds (../adaboost_critic/).
 # Trains nothing (~1 min).
 # usage (repository root): results/synthetic/adaboost_wl_critic/tables.sh
@@ -11,6 +11,7 @@ real=adaboost_100_seeds.json
 wl=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
 hogc=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_the_25_least_synthetic_of_4x_drawn_of_each_seed.json
 q8=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
+p8=adaboost_100_seeds_20x_synthetic_hog_quadcopter_fitted_poses_at_the_seeds_offsets_share_0.25_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
 for sp in val test; do
   rows=(); w=(); h=(); q=()
   for d in $O/${sp}_w[0-9]*; do
@@ -31,4 +32,17 @@ for sp in val test; do
   done
   [ ${#qa[@]} -gt 0 ] && python $T "${qr[@]}" "${qa[@]}" --out $O/${sp}_8bit_vs_real.md
   [ ${#h[@]} -gt 0 ] && python $T "${h[@]}" "${w[@]}" --out $O/${sp}_wl_vs_hog_critic.md
+done
+# stop 89: 8-bit + weak-learner critic with rotations around each seed's fitted one at its fitted offset (run.sh pN N
+# --quantize on --pose-sampling fitted_at_seed), on the seeds it has, against real only and the 8-bit cell
+for sp in val test; do
+  pr=(); pq=(); pp=()
+  for d in $O/${sp}_p[0-9]*; do
+    s=${d##*_p}; [ -f $d/$p8 ] && [ -f $O/${sp}_q$s/$q8 ] || continue
+    for r in $d $O/${sp}_q$s $O/${sp}_w$s; do [ -f $r/$real ] && pr+=("$r/$real=real only") && break; done
+    pq+=("$O/${sp}_q$s/$q8=+ 20x synthetic, 8-bit, weak-learner critic keeps 1/4")
+    pp+=("$d/$p8=+ 20x synthetic, 8-bit, weak-learner critic, fitted rotations at the seeds' offsets")
+  done
+  [ ${#pp[@]} -gt 0 ] && python $T "${pr[@]}" "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_real.md
+  [ ${#pp[@]} -gt 0 ] && python $T "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_8bit.md
 done
