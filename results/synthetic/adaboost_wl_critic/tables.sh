@@ -46,3 +46,13 @@ for sp in val test; do
   [ ${#pp[@]} -gt 0 ] && python $T "${pr[@]}" "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_real.md
   [ ${#pp[@]} -gt 0 ] && python $T "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_8bit.md
 done
+# stop 89: the pose cell on every seed it has (seed 4 has no 8-bit cell), against real only of the same seeds
+for sp in val test; do
+  pr=(); pp=()
+  for d in $O/${sp}_p[0-9]*; do
+    s=${d##*_p}; [ -f $d/$p8 ] || continue
+    for r in $d $O/${sp}_q$s $O/${sp}_w$s; do [ -f $r/$real ] && pr+=("$r/$real=real only") && break; done
+    pp+=("$d/$p8=+ 20x synthetic, 8-bit, weak-learner critic, fitted rotations at the seeds' offsets")
+  done
+  [ ${#pp[@]} -gt 0 ] && python $T "${pr[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_real_all_seeds.md
+done
