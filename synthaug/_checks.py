@@ -19,16 +19,17 @@ import math
 import os
 import re
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Collection, Sequence
 
 __all__ = ["positive_int", "nonneg_int", "positive_float", "nonneg_float", "unit_float", "open_unit_float",
            "finite_float", "float_in", "int_at_least", "check_output_file", "check_output_dir",
            "check_seedset_dir", "first_line", "add_option", "dataclass_defaults", "one_of"]
 
 
-def one_of(value: Any, choices: Sequence[str], name: str, *, alternatives: str = "") -> str:
-    """``value`` if it is one of the strings ``choices``; else ``ValueError`` naming ``name``, the choices and any
-    ``alternatives`` the caller accepts besides them (e.g. ``" or None"``, checked by the caller).
+def one_of(value: Any, choices: Collection[str], name: str, *, alternatives: str = "") -> str:
+    """``value`` if it is one of the strings ``choices`` (a tuple, or a dict's keys); else ``ValueError`` naming
+    ``name``, the choices and any ``alternatives`` the caller accepts besides them (e.g. ``" or None"``, checked by
+    the caller).
 
     >>> one_of("ns", ("pushpull", "telea", "ns"), "inpaint method")
     'ns'

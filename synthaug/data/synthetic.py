@@ -318,8 +318,7 @@ class SyntheticObjectDataset(Dataset):
             raise ValueError(f"effects {missing} have no parameters in params (which has {list(self.params.effects)})")
         self._validate_sizes()
         if isinstance(capture_sampling, str):
-            if capture_sampling not in CAPTURE_SAMPLERS:
-                raise ValueError(f"capture_sampling must be 'seed', 'kde' or 'uniform', got {capture_sampling!r}")
+            one_of(capture_sampling, CAPTURE_SAMPLERS, "capture_sampling", alternatives=" or a capture sampler")
         elif not isinstance(capture_sampling, CaptureSampler):
             raise ValueError(f"capture_sampling must be 'seed', 'kde', 'uniform' or a capture sampler (an object with "
                              f"sample(generator, seed_index) and rows(seed_indices, captures)), got {capture_sampling!r}")
