@@ -1,7 +1,7 @@
 #!/bin/bash
-# Stop 87 (seeds 2-3 added at stop 88, the pose cell at stop 89): the tables of AdaBoost with the weak-learner critic (run.sh's cells),
-# against real only and against stop 86's HOG critic on the same training seeds (../adaboost_critic/).
-# Trains nothing (~1 min).
+# Stop 87 (seeds 2-3 added at stop 88, the pose cell at stop 89): the tables of AdaBoost with the weak-learner critic
+# (run.sh's cells), against real only and against stop 86's HOG critic on the same training seeds
+# (../adaboost_critic/). Trains nothing (~1 min).
 # usage (repository root): results/synthetic/adaboost_wl_critic/tables.sh
 O=results/synthetic/adaboost_wl_critic
 H=results/synthetic/adaboost_critic
@@ -12,6 +12,10 @@ wl=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_the_25_least_synth
 hogc=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_the_25_least_synthetic_of_4x_drawn_of_each_seed.json
 q8=adaboost_100_seeds_20x_synthetic_hog_quadcopter_share_0.25_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
 p8=adaboost_100_seeds_20x_synthetic_hog_quadcopter_fitted_poses_at_the_seeds_offsets_share_0.25_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
+Q8="+ 20x synthetic, 8-bit, weak-learner critic keeps 1/4"
+P8="+ 20x synthetic, 8-bit, weak-learner critic, fitted rotations at the seeds' offsets"
+# real_only DIR...: the real-only row from the first of a seed's folders that holds its real-only cell (fails if none)
+real_only() { local r; for r in "$@"; do [ -f $r/$real ] && echo "$r/$real=real only" && return; done; return 1; }
 for sp in val test; do
   rows=(); w=(); h=(); q=()
   for d in $O/${sp}_w[0-9]*; do
@@ -20,39 +24,32 @@ for sp in val test; do
     s=${d##*_w}; [ -f $H/${sp}_c$s/$hogc ] && h+=("$H/${sp}_c$s/$hogc=+ 20x synthetic, HOG critic keeps 1/4")
   done
   for d in $O/${sp}_q[0-9]*; do  # the seeds with a float cell too (the 8-bit cell alone: ${sp}_8bit_vs_real.md)
-    [ -f $d/$q8 ] && [ -d $O/${sp}_w${d##*_q} ] && q+=("$d/$q8=+ 20x synthetic, 8-bit, weak-learner critic keeps 1/4")
+    [ -f $d/$q8 ] && [ -d $O/${sp}_w${d##*_q} ] && q+=("$d/$q8=$Q8")
   done
   python $T "${rows[@]}" "${w[@]}" "${q[@]}" "${h[@]}" --out $O/${sp}_vs_real.md
   [ ${#q[@]} -gt 0 ] && python $T "${w[@]}" "${q[@]}" --out $O/${sp}_8bit_vs_float.md
   # stop 88: the 8-bit cell on every seed it has (seed 3 has no float cell), against real only of the same seeds
   qr=(); qa=()
   for d in $O/${sp}_q[0-9]*; do
-    s=${d##*_q}; for r in $d $O/${sp}_w$s; do [ -f $r/$real ] && qr+=("$r/$real=real only") && break; done
-    [ -f $d/$q8 ] && qa+=("$d/$q8=+ 20x synthetic, 8-bit, weak-learner critic keeps 1/4")
+    s=${d##*_q}; r=$(real_only $d $O/${sp}_w$s) && qr+=("$r")
+    [ -f $d/$q8 ] && qa+=("$d/$q8=$Q8")
   done
   [ ${#qa[@]} -gt 0 ] && python $T "${qr[@]}" "${qa[@]}" --out $O/${sp}_8bit_vs_real.md
   [ ${#h[@]} -gt 0 ] && python $T "${h[@]}" "${w[@]}" --out $O/${sp}_wl_vs_hog_critic.md
 done
 # stop 89: 8-bit + weak-learner critic with rotations around each seed's fitted one at its fitted offset (run.sh pN N
-# --quantize on --pose-sampling fitted_at_seed), on the seeds it has, against real only and the 8-bit cell
+# --quantize on --pose-sampling fitted_at_seed) against real only on every seed it has (seed 4 has no 8-bit cell:
+# *_all_seeds.md), and against real only and the 8-bit cell on the seeds that have both
 for sp in val test; do
-  pr=(); pq=(); pp=()
-  for d in $O/${sp}_p[0-9]*; do
-    s=${d##*_p}; [ -f $d/$p8 ] && [ -f $O/${sp}_q$s/$q8 ] || continue
-    for r in $d $O/${sp}_q$s $O/${sp}_w$s; do [ -f $r/$real ] && pr+=("$r/$real=real only") && break; done
-    pq+=("$O/${sp}_q$s/$q8=+ 20x synthetic, 8-bit, weak-learner critic keeps 1/4")
-    pp+=("$d/$p8=+ 20x synthetic, 8-bit, weak-learner critic, fitted rotations at the seeds' offsets")
-  done
-  [ ${#pp[@]} -gt 0 ] && python $T "${pr[@]}" "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_real.md
-  [ ${#pp[@]} -gt 0 ] && python $T "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_8bit.md
-done
-# stop 89: the pose cell on every seed it has (seed 4 has no 8-bit cell), against real only of the same seeds
-for sp in val test; do
-  pr=(); pp=()
+  ar=(); ap=(); pr=(); pq=(); pp=()
   for d in $O/${sp}_p[0-9]*; do
     s=${d##*_p}; [ -f $d/$p8 ] || continue
-    for r in $d $O/${sp}_q$s $O/${sp}_w$s; do [ -f $r/$real ] && pr+=("$r/$real=real only") && break; done
-    pp+=("$d/$p8=+ 20x synthetic, 8-bit, weak-learner critic, fitted rotations at the seeds' offsets")
+    r=$(real_only $d $O/${sp}_q$s $O/${sp}_w$s) || continue  # no pair without the seed's real only
+    ar+=("$r"); ap+=("$d/$p8=$P8")
+    [ -f $O/${sp}_q$s/$q8 ] || continue
+    pr+=("$r"); pq+=("$O/${sp}_q$s/$q8=$Q8"); pp+=("$d/$p8=$P8")
   done
-  [ ${#pp[@]} -gt 0 ] && python $T "${pr[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_real_all_seeds.md
+  [ ${#ap[@]} -gt 0 ] && python $T "${ar[@]}" "${ap[@]}" --out $O/${sp}_pose_vs_real_all_seeds.md
+  [ ${#pp[@]} -gt 0 ] && python $T "${pr[@]}" "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_real.md
+  [ ${#pp[@]} -gt 0 ] && python $T "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_8bit.md
 done
