@@ -19,4 +19,6 @@ def _added_only(results, runner, condition, seeds, **kw):
 
 
 R._run_into = _added_only
-sys.exit(R.main(sys.argv[1:]))
+
+if __name__ == "__main__":  # the ingest's spawned workers import this file again: they must not run the runner
+    sys.exit(R.main(sys.argv[1:]))
