@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
+import multiprocessing
 import os
 import tempfile
 from collections.abc import Iterator, Mapping
@@ -17,7 +18,18 @@ def exclusive_lock(path: str | os.PathLike) -> Iterator[None]:
 
     Processes that would compute the same file serialise on its lock: the first computes, the others wait
     and then find the file. The lock is released when the block ends or the process dies.
+
+    Raises:
+        RuntimeError: when called by a worker that ``spawn`` is still starting, i.e. while it imports its
+            parent's main script. A script that does its work at import time (no ``if __name__ ==
+            "__main__":``) would otherwise run again in each worker of the ingest's or the fit's process pool
+            and wait forever on the lock its parent holds; raising makes the pool fail at once, naming the fix.
     """
+    if getattr(multiprocessing.current_process(), "_inheriting", False):  # set by spawn while it prepares a child
+        raise RuntimeError(
+            f"exclusive_lock({str(path)!r}) called while a spawned worker process imports its parent's main "
+            "script: the script does its work at import time. Put it under `if __name__ == \"__main__\":` "
+            "(the workers of synthaug's process pools import the main script again).")
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     with open(path, "a+") as f:
         fcntl.flock(f, fcntl.LOCK_EX)

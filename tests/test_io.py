@@ -179,3 +179,47 @@ def test_view_cache_refuses_another_version_and_rebuilds(tmp_path):
     _json(folder / "meta.json", [good])
     with pytest.raises(ValueError, match="is not a synthaug view cache"):  # ViewCache.build rebuilds on ValueError
         ViewCache._load(folder)
+
+
+# ------------------------------------------------------------ exclusive_lock in a spawned worker
+_POOL_SCRIPT = '''
+import multiprocessing as mp
+import sys
+from concurrent.futures import ProcessPoolExecutor
+
+from synthaug._io import exclusive_lock
+
+
+def square(x):
+    return x * x
+
+
+def work():
+    with exclusive_lock(sys.argv[1]):  # the parent holds the lock while its pool works
+        with ProcessPoolExecutor(1, mp_context=mp.get_context("spawn")) as ex:
+            print(list(ex.map(square, [3])))
+
+
+{call}
+'''
+
+
+@pytest.mark.parametrize("guarded", [True, False])
+def test_exclusive_lock_refuses_a_spawned_worker_importing_the_main_script(tmp_path, guarded):
+    """A script without a ``__main__`` guard that takes a lock and starts a spawn pool: each worker imports the
+    script again and reaches the lock its parent holds. Without the check it waits forever (the parent waits on
+    the worker); with it the worker fails at once, the pool breaks and the message names the guard."""
+    import subprocess
+    import sys
+
+    call = 'if __name__ == "__main__":\n    work()' if guarded else "work()"
+    script = tmp_path / "job.py"
+    script.write_text(_POOL_SCRIPT.format(call=call))
+    done = subprocess.run([sys.executable, str(script), str(tmp_path / "cell.lock")], capture_output=True,
+                          text=True, timeout=120, cwd=tmp_path)
+    if guarded:
+        assert done.returncode == 0 and done.stdout.strip() == "[9]", done.stderr
+    else:
+        assert done.returncode != 0 and "BrokenProcessPool" in done.stderr
+        assert "spawned worker process imports its parent's main script" in done.stderr
+        assert 'if __name__ == "__main__":' in done.stderr
