@@ -53,3 +53,17 @@ for sp in val test; do
   [ ${#pp[@]} -gt 0 ] && python $T "${pr[@]}" "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_real.md
   [ ${#pp[@]} -gt 0 ] && python $T "${pq[@]}" "${pp[@]}" --out $O/${sp}_pose_vs_8bit.md
 done
+# stop 90: the pose cell with shapes varied 0.3 around the mesh (run.sh sN N --quantize on --pose-sampling
+# fitted_at_seed --shape-variation 0.3; trained on another machine than the cells above, ../adaboost_where/README.md)
+# against real only and the pose cell of the same seeds
+s8=adaboost_100_seeds_20x_synthetic_hog_quadcopter_fitted_poses_at_the_seeds_offsets_share_0.25_shapes_varied_0.3_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
+for sp in val test; do
+  sr=(); sp8=(); ss=()
+  for d in $O/${sp}_s[0-9]*; do
+    s=${d##*_s}; [ -f $d/$s8 ] && [ -f $O/${sp}_p$s/$p8 ] || continue
+    r=$(real_only $O/${sp}_p$s $O/${sp}_q$s $O/${sp}_w$s) || continue
+    sr+=("$r"); sp8+=("$O/${sp}_p$s/$p8=$P8"); ss+=("$d/$s8=$P8, shapes varied 0.3")
+  done
+  [ ${#ss[@]} -gt 0 ] && python $T "${sr[@]}" "${sp8[@]}" "${ss[@]}" --out $O/${sp}_shapes_vs_real.md
+  [ ${#ss[@]} -gt 0 ] && python $T "${sp8[@]}" "${ss[@]}" --out $O/${sp}_shapes_vs_pose.md
+done
