@@ -66,4 +66,15 @@ for sp in val test; do
   done
   [ ${#ss[@]} -gt 0 ] && python $T "${sr[@]}" "${sp8[@]}" "${ss[@]}" --out $O/${sp}_shapes_vs_real.md
   [ ${#ss[@]} -gt 0 ] && python $T "${sp8[@]}" "${ss[@]}" --out $O/${sp}_shapes_vs_pose.md
+  # the same seeds' real only retrained on the shape cell's machine (../adaboost_critic/run2.sh real eN N): the shape
+  # cell against it, and real only there against real only here (the machine alone)
+  he=(); hs=(); ht=()
+  for d in $O/${sp}_s[0-9]*; do
+    s=${d##*_s}; e=$H/${sp}_e$s/$real; [ -f $d/$s8 ] && [ -f $e ] || continue
+    r=$(real_only $O/${sp}_p$s $O/${sp}_q$s $O/${sp}_w$s) || continue
+    he+=("$e=real only, retrained on the shape cell's machine"); hs+=("$d/$s8=$P8, shapes varied 0.3")
+    ht+=("${r%%=*}=real only, stored (stops 86-89's machine)")
+  done
+  [ ${#he[@]} -gt 0 ] && python $T "${he[@]}" "${hs[@]}" --out $O/${sp}_shapes_vs_real_same_machine.md
+  [ ${#he[@]} -gt 0 ] && python $T "${ht[@]}" "${he[@]}" --out $O/${sp}_real_only_two_machines.md
 done
