@@ -58,23 +58,21 @@ done
 # against real only and the pose cell of the same seeds
 s8=adaboost_100_seeds_20x_synthetic_hog_quadcopter_fitted_poses_at_the_seeds_offsets_share_0.25_shapes_varied_0.3_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
 for sp in val test; do
-  sr=(); sp8=(); ss=()
+  sr=(); sp8=(); ss=(); he=(); hs=(); ht=()
   for d in $O/${sp}_s[0-9]*; do
-    s=${d##*_s}; [ -f $d/$s8 ] && [ -f $O/${sp}_p$s/$p8 ] || continue
+    s=${d##*_s}; [ -f $d/$s8 ] || continue
     r=$(real_only $O/${sp}_p$s $O/${sp}_q$s $O/${sp}_w$s) || continue
-    sr+=("$r"); sp8+=("$O/${sp}_p$s/$p8=$P8"); ss+=("$d/$s8=$P8, shapes varied 0.3")
-  done
-  [ ${#ss[@]} -gt 0 ] && python $T "${sr[@]}" "${sp8[@]}" "${ss[@]}" --out $O/${sp}_shapes_vs_real.md
-  [ ${#ss[@]} -gt 0 ] && python $T "${sp8[@]}" "${ss[@]}" --out $O/${sp}_shapes_vs_pose.md
-  # the same seeds' real only retrained on the shape cell's machine (../adaboost_critic/run2.sh real eN N): the shape
-  # cell against it, and real only there against real only here (the machine alone)
-  he=(); hs=(); ht=()
-  for d in $O/${sp}_s[0-9]*; do
-    s=${d##*_s}; e=$H/${sp}_e$s/$real; [ -f $d/$s8 ] && [ -f $e ] || continue
-    r=$(real_only $O/${sp}_p$s $O/${sp}_q$s $O/${sp}_w$s) || continue
+    if [ -f $O/${sp}_p$s/$p8 ]; then
+      sr+=("$r"); sp8+=("$O/${sp}_p$s/$p8=$P8"); ss+=("$d/$s8=$P8, shapes varied 0.3")
+    fi
+    # the same seed's real only retrained on the shape cell's machine (../adaboost_critic/run2.sh real eN N): the
+    # shape cell against it, and real only there against real only here (the machine alone)
+    e=$H/${sp}_e$s/$real; [ -f $e ] || continue
     he+=("$e=real only, retrained on the shape cell's machine"); hs+=("$d/$s8=$P8, shapes varied 0.3")
     ht+=("${r%%=*}=real only, stored (stops 86-89's machine)")
   done
+  [ ${#ss[@]} -gt 0 ] && python $T "${sr[@]}" "${sp8[@]}" "${ss[@]}" --out $O/${sp}_shapes_vs_real.md
+  [ ${#ss[@]} -gt 0 ] && python $T "${sp8[@]}" "${ss[@]}" --out $O/${sp}_shapes_vs_pose.md
   [ ${#he[@]} -gt 0 ] && python $T "${he[@]}" "${hs[@]}" --out $O/${sp}_shapes_vs_real_same_machine.md
   [ ${#he[@]} -gt 0 ] && python $T "${ht[@]}" "${he[@]}" --out $O/${sp}_real_only_two_machines.md
 done
