@@ -428,6 +428,30 @@ def test_summary_and_report_table() -> None:
     assert "Δ" not in plain.splitlines()[0] and sums["real 100"].ap[0.5].format() in plain
 
 
+def test_report_marks_seeds_trained_on_another_machine() -> None:
+    p = proto(bootstrap={"resamples": 50, "seed": 0, "ci": 0.95})
+    here = {"cpu": "AMD EPYC", "cpu_capability": "AVX512", "torch": "2.14.1", "torch_threads": 1}
+    there = dict(here, cpu_capability="AVX2")
+    base, other = _result(p, "a", [0, 1, 2], 0), _result(p, "b", [0, 1, 2], 1)
+    for s, m in zip((0, 1, 2), (here, here, here)):
+        base.seeds[s].meta["trained_on"] = m
+    for s, m in zip((0, 1, 2), (here, there, dict(there, extra="not recorded by the baseline"))):
+        other.seeds[s].meta["trained_on"] = m
+    other.seeds[0].meta["trained_on"] = dict(here, cpu_family="25/17")  # a field one side lacks is not compared
+    assert sorted(other.trained_elsewhere(base)) == [1, 2] and other.trained_elsewhere(other) == {}
+    assert other.trained_elsewhere(base)[1] == (there, here)
+    sums = summarize_conditions({"a": base, "b": other}, baseline="a")
+    assert sums["b"].other_machine_seeds == [1, 2] and sums["b"].to_json()["other_machine_seeds"] == [1, 2]
+    assert sums["b"].paired.difference.estimate == pytest.approx(other.mean_ap() - base.mean_ap())  # still computed
+    table = report_table({"a": base, "b": other}, baseline="a", summaries=sums)
+    row = table.splitlines()[3]
+    assert row.startswith("| b |") and f"{sums['b'].paired.difference.format(3, signed=True)} †" in row
+    assert "† seeds trained on another machine than the baseline's seeds of the same id (b: 1, 2" in table
+    # no trained_on on a side (results stored before it was recorded): nothing claimed
+    del base.seeds[1].meta["trained_on"], base.seeds[2].meta["trained_on"]
+    assert other.trained_elsewhere(base) == {} and "†" not in report_table({"a": base, "b": other}, baseline="a")
+
+
 def test_report_marks_incomparable_videos() -> None:
     p = proto(bootstrap={"resamples": 50, "seed": 0, "ci": 0.9})
     t = report_table({"a": _result(p, "a", [0, 1, 2], 0), "b": _result(p, "b", [0, 1, 2], 1, n_videos=4)}, baseline="a")

@@ -156,6 +156,35 @@ class ProtocolResult:
                 return [p.stem for p in self.seeds[s].patches]
         return []
 
+    def trained_elsewhere(self, other: "ProtocolResult") -> dict[int, tuple[dict[str, Any], dict[str, Any]]]:
+        """The seeds both results have whose detectors were trained on different machines: seed ->
+        ``(this seed's trained_on, other's)``, from each seed's ``meta["trained_on"]``
+        (:func:`~synthaug.evaluate.runner.machine_info`), compared on the fields both record (seeds without it on
+        either side are not counted).
+
+        A paired difference pairs seeds by id, which pairs the training randomness only when both were trained on
+        one machine: another instruction set (AVX2 vs AVX-512 kernels) changes a float32 fit's last bits, which
+        validation-chosen rounds and hard-negative mining can amplify (AdaBoost at 100 seeds: the same code, seeds
+        and data on another machine moved real-only test AP@0.5 by -0.023 [-0.033, -0.010],
+        results/synthetic/adaboost_where/README.md).
+
+        >>> from synthaug.evaluate.protocol import Protocol, example_protocol_dict
+        >>> p = Protocol.from_dict(example_protocol_dict())
+        >>> a, b = ProtocolResult("a", p), ProtocolResult("b", p)
+        >>> a.add_seed(0, meta={"trained_on": {"cpu_capability": "AVX512"}})
+        >>> b.add_seed(0, meta={"trained_on": {"cpu_capability": "AVX2"}})
+        >>> a.trained_elsewhere(b)
+        {0: ({'cpu_capability': 'AVX512'}, {'cpu_capability': 'AVX2'})}
+        """
+        out = {}
+        for s in self.seed_ids:
+            if s not in other.seeds:
+                continue
+            mine, theirs = self.seeds[s].meta.get("trained_on"), other.seeds[s].meta.get("trained_on")
+            if mine and theirs and any(mine[k] != theirs[k] for k in mine.keys() & theirs.keys()):
+                out[s] = (mine, theirs)
+        return out
+
     def _bucket(self, bucket: SizeBucket | int | None) -> SizeBucket | None:
         if bucket is None or isinstance(bucket, SizeBucket):
             return bucket

@@ -38,6 +38,9 @@ class ConditionSummary:
         paired_seeds: the same difference with the training seeds resampled as well as the videos
             (:func:`~synthaug.evaluate.stats.paired_difference` with ``resample_seeds``): training randomness counted.
         paired_note: why there is no paired difference, when there is none.
+        other_machine_seeds: the paired seeds whose detectors the baseline's and this result's metadata say were
+            trained on different machines (:meth:`~synthaug.evaluate.results.ProtocolResult.trained_elsewhere`):
+            there the seed id pairs the seed set, not the training randomness; the table marks such a Δ with †.
         patch_ap, patch_auc: patch-classification AP and ROC-AUC with intervals (None without patches).
         n_patches: ``{"positive": n, "negative": n}``.
     """
@@ -57,6 +60,7 @@ class ConditionSummary:
     patch_ap: Interval | None = None
     patch_auc: Interval | None = None
     n_patches: dict[str, int] = field(default_factory=dict)
+    other_machine_seeds: list[int] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -69,7 +73,7 @@ class ConditionSummary:
             "paired_seeds": None if self.paired_seeds is None else self.paired_seeds.to_json(),
             "patch_ap": None if self.patch_ap is None else self.patch_ap.to_json(),
             "patch_auc": None if self.patch_auc is None else self.patch_auc.to_json(),
-            "n_patches": self.n_patches,
+            "n_patches": self.n_patches, "other_machine_seeds": self.other_machine_seeds,
         }
 
 
@@ -86,7 +90,7 @@ def summarize(result: ProtocolResult, baseline: ProtocolResult | None = None) ->
             ap[t] = bootstrap_seed_mean(result.pools(t), **kw)
     buckets = {b.label: result.mean_ap(p.main_iou, b) for b in p.size_buckets}
     bucket_objects = {b.label: result.n_objects(b) for b in p.size_buckets}
-    paired, paired_seeds, note = None, None, ""
+    paired, paired_seeds, note, elsewhere = None, None, "", []
     if baseline is not None and baseline is not result:
         if baseline.protocol.fingerprint() != p.fingerprint():
             note = "other protocol"
@@ -99,6 +103,7 @@ def summarize(result: ProtocolResult, baseline: ProtocolResult | None = None) ->
             else:
                 paired = paired_difference(base_pools, pools_main, stems=result.stems, **kw)
                 paired_seeds = paired_difference(base_pools, pools_main, stems=result.stems, resample_seeds=True, **kw)
+                elsewhere = sorted(s for s in result.trained_elsewhere(baseline) if s in paired.seeds)
     patch_ap = patch_auc = None
     n_patches: dict[str, int] = {}
     pp = result.patch_pools()
@@ -110,7 +115,7 @@ def summarize(result: ProtocolResult, baseline: ProtocolResult | None = None) ->
         n_patches = {"positive": npos, "negative": int(sum(x.labels.size for x in first)) - npos}
     return ConditionSummary(result.condition, result.split, result.scale, list(pools_main or pp), result.meets_min_seeds,
                             len(result.stems or result.patch_stems), ap, buckets, bucket_objects, paired, note,
-                            paired_seeds, patch_ap, patch_auc, n_patches)
+                            paired_seeds, patch_ap, patch_auc, n_patches, elsewhere)
 
 
 def summarize_conditions(results: Mapping[str, ProtocolResult], baseline: str | None = None) -> dict[str, ConditionSummary]:
@@ -182,6 +187,8 @@ def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = N
                 d = s.paired.difference.format(digits, signed=True)
                 if len(s.paired.seeds) != len(sums[baseline].seeds) or len(s.paired.seeds) != len(s.seeds):
                     d += f" (on {len(s.paired.seeds)} common seeds)"
+                if s.other_machine_seeds:
+                    d += " †"
                 cs = s.paired_seeds.difference
                 crossed = "–" if math.isnan(cs.low) else f"[{cs.low:+.{digits}f}, {cs.high:+.{digits}f}]"
                 row += [d, s.paired.wins.format(), crossed]
@@ -217,6 +224,12 @@ def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = N
         lines.append("Δ CI, seeds resampled too: the same resamples of the videos with the training seeds resampled "
                      "as well (pairs kept), so that the interval counts training randomness (another seed set, fit "
                      "or draw), which the video bootstrap holds fixed; coarse under 5 seeds.")
+    apart = {n: s.other_machine_seeds for n, s in sums.items() if s.other_machine_seeds}
+    if apart:
+        lines.append("† seeds trained on another machine than the baseline's seeds of the same id ("
+                     + "; ".join(f"{n}: {', '.join(map(str, v))}" for n, v in apart.items()) + ", by each seed's "
+                     "`trained_on`): such pairs share the seed set but not the training randomness, which another "
+                     "instruction set changes in the last bits; retrain both sides on one machine to pair them.")
     if any(not s.meets_min_seeds for s in sums.values()):
         lines.append(f"⚠ fewer than the protocol's {p.min_training_seeds} training seeds.")
     return "\n".join(lines) + "\n"

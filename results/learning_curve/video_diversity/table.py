@@ -47,6 +47,7 @@ def main() -> None:
              f"Δ AP@0.5 vs {base_name} [CI] | Δ AP@0.3 [CI] | videos improved (0.5) | "
              "Δ AP@0.5 CI, seeds resampled too |",
              "|---|---|---|---|---|---|---|---|---|---|"]
+    apart = {}  # row -> seeds trained on another machine than the baseline's of the same id
     for name, r in res.items():
         assert r.protocol.fingerprint() == p.fingerprint() and r.stems == base.stems, name
         pos = [sr.meta.get("positives") for sr in r.seeds.values() if sr.meta.get("positives")]
@@ -59,13 +60,19 @@ def main() -> None:
             d5 = paired_difference(base.pools(0.5), r.pools(0.5), stems=r.stems, **kw)
             d3 = paired_difference(base.pools(0.3), r.pools(0.3), stems=r.stems, **kw)
             ds = paired_difference(base.pools(0.5), r.pools(0.5), stems=r.stems, resample_seeds=True, **kw).difference
-            cells += [_d(d5.difference), _d(d3.difference),
+            apart[name] = sorted(s for s in r.trained_elsewhere(base) if s in d5.seeds)
+            cells += [_d(d5.difference) + (" †" if apart[name] else ""), _d(d3.difference),
                       f"{d5.wins.improved}/{d5.wins.improved + d5.wins.worse + d5.wins.tied}",
                       f"[{ds.low:+.3f}, {ds.high:+.3f}]"]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", f"Protocol `{p.name}` (fingerprint `{p.fingerprint()}`), split `{base.split}`, {len(base.stems)} test "
               f"videos; {p.bootstrap.resamples} bootstrap resamples of the videos (seed {p.bootstrap.seed}); Δ paired "
               "by training seed and resample; the last column resamples the training seeds as well (pairs kept)."]
+    apart = {n: v for n, v in apart.items() if v}
+    if apart:
+        lines.append("† seeds trained on another machine than the baseline's of the same id ("
+                     + "; ".join(f"{n}: {', '.join(map(str, v))}" for n, v in apart.items())
+                     + "): paired by seed set, not by training randomness (`ProtocolResult.trained_elsewhere`).")
     text = "\n".join(lines)
     print(text)
     if a.out:
