@@ -55,6 +55,16 @@ def curve(ws):
 
 
 @pytest.mark.slow
+def test_machine_info_records_the_dispatch_environment(monkeypatch):
+    # an instruction set forced by environment (to reproduce another machine's cells, README) is part of the record
+    for k in R.DISPATCH_ENV:
+        monkeypatch.delenv(k, raising=False)
+    assert R.machine_info()["dispatch_env"] == {}
+    monkeypatch.setenv("ONEDNN_MAX_CPU_ISA", "AVX2")
+    monkeypatch.setenv("SOMETHING_ELSE", "1")
+    assert R.machine_info()["dispatch_env"] == {"ONEDNN_MAX_CPU_ISA": "AVX2"}
+
+
 def test_learning_curve_results_and_files(ws, curve):
     res = curve["results"]
     assert set(res) == {"hog", "hog x0.75"}

@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import os
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -869,6 +870,12 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     return results
 
 
+# environment variables that move a library's kernels to another instruction set: oneDNN's (the box regressor's
+# convolutions; stop 91 located the AdaBoost cells' machine shift there), torch's own, MKL's and numpy's
+DISPATCH_ENV = ("ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA", "ATEN_CPU_CAPABILITY", "MKL_ENABLE_INSTRUCTIONS", "MKL_CBWR",
+                "NPY_DISABLE_CPU_FEATURES")
+
+
 def machine_info() -> dict[str, Any]:
     """Where a cell was computed: the CPU, the instruction set torch dispatches to and the thread count.
 
@@ -879,6 +886,10 @@ def machine_info() -> dict[str, Any]:
     (``meta["machine"]``), and each result's per-seed metadata both (``trained_on``, ``scored_on``), so the results'
     files carry them (stop 78: HOG's 12-seed cells of stops 62/68 did not reproduce on stop 73's machine with the
     same code, the same ingest bytes and a bit-identical box map, and nothing recorded where they were made).
+    ``dispatch_env`` records the environment caps of ``DISPATCH_ENV`` that are set: stop 91 traced AdaBoost's
+    machine shift to oneDNN's kernels in the box regressor's CNN (``ATEN_CPU_CAPABILITY`` does not choose them), and
+    ``ONEDNN_MAX_CPU_ISA=AVX2`` on an AVX-512 machine reproduced an AVX2 machine's cell exactly
+    (results/synthetic/adaboost_where/README.md, section 4).
     """
     import platform
 
@@ -891,7 +902,8 @@ def machine_info() -> dict[str, Any]:
     except OSError:
         pass
     return {"cpu": cpu, "torch": torch.__version__, "cpu_capability": torch.backends.cpu.get_cpu_capability(),
-            "torch_threads": torch.get_num_threads()}
+            "torch_threads": torch.get_num_threads(),
+            "dispatch_env": {k: os.environ[k] for k in DISPATCH_ENV if k in os.environ}}
 
 
 # ------------------------------------------------------------------------------------------ command line

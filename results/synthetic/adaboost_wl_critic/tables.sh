@@ -59,7 +59,7 @@ done
 s8=adaboost_100_seeds_20x_synthetic_hog_quadcopter_fitted_poses_at_the_seeds_offsets_share_0.25_shapes_varied_0.3_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json
 for sp in val test; do
   sr=(); sp8=(); ss=(); he=(); hs=(); ht=()
-  for d in $O/${sp}_s[0-9]*; do
+  for d in $O/${sp}_s[0-2]; do  # stop 90's three seeds (seed 3: the stop-91 block)
     s=${d##*_s}; [ -f $d/$s8 ] || continue
     r=$(real_only $O/${sp}_p$s $O/${sp}_q$s $O/${sp}_w$s) || continue
     if [ -f $O/${sp}_p$s/$p8 ]; then
