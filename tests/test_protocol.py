@@ -433,11 +433,11 @@ def test_report_marks_seeds_trained_on_another_machine() -> None:
     here = {"cpu": "AMD EPYC", "cpu_capability": "AVX512", "torch": "2.14.1", "torch_threads": 1}
     there = dict(here, cpu_capability="AVX2")
     base, other = _result(p, "a", [0, 1, 2], 0), _result(p, "b", [0, 1, 2], 1)
-    for s, m in zip((0, 1, 2), (here, here, here)):
-        base.seeds[s].meta["trained_on"] = m
-    for s, m in zip((0, 1, 2), (here, there, dict(there, extra="not recorded by the baseline"))):
+    for s in (0, 1, 2):
+        base.seeds[s].meta["trained_on"] = here
+    # a field only one side records is not compared (seed 0: the same machine)
+    for s, m in zip((0, 1, 2), (dict(here, cpu_family="25/17"), there, dict(there, extra="not in the baseline"))):
         other.seeds[s].meta["trained_on"] = m
-    other.seeds[0].meta["trained_on"] = dict(here, cpu_family="25/17")  # a field one side lacks is not compared
     assert sorted(other.trained_elsewhere(base)) == [1, 2] and other.trained_elsewhere(other) == {}
     assert other.trained_elsewhere(base)[1] == (there, here)
     sums = summarize_conditions({"a": base, "b": other}, baseline="a")

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 from synthaug.evaluate.results import ProtocolResult
 from synthaug.evaluate.stats import Interval, PairedDifference, bootstrap_seed_mean, paired_difference
 
-__all__ = ["ConditionSummary", "summarize", "summarize_conditions", "report_table"]
+__all__ = ["ConditionSummary", "summarize", "summarize_conditions", "report_table", "other_machine_note"]
 
 
 @dataclass
@@ -144,6 +144,23 @@ def _f(x: float | None, digits: int = 3) -> str:
     return "–" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}f}"
 
 
+def other_machine_note(seeds: Mapping[str, Sequence[int]]) -> str:
+    """The footnote of a table whose paired Δs are marked †: row label -> the seeds trained on another machine than the
+    baseline's of the same id (:meth:`~synthaug.evaluate.results.ProtocolResult.trained_elsewhere`); ``""`` when no
+    row has any.
+
+    >>> other_machine_note({"a": [], "b": [1, 2]})[:60]
+    "† seeds trained on another machine than the baseline's seeds"
+    """
+    apart = {name: list(v) for name, v in seeds.items() if v}
+    if not apart:
+        return ""
+    return ("† seeds trained on another machine than the baseline's seeds of the same id ("
+            + "; ".join(f"{n}: {', '.join(map(str, v))}" for n, v in apart.items()) + ", by each seed's "
+            "`trained_on`): such pairs share the seed set but not the training randomness, which another instruction "
+            "set changes in the last bits; retrain both sides on one machine to pair them.")
+
+
 def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = None, *, digits: int = 3,
                  summaries: Mapping[str, ConditionSummary] | None = None) -> str:
     """A markdown table of conditions measured with one protocol.
@@ -224,12 +241,9 @@ def report_table(results: Mapping[str, ProtocolResult], baseline: str | None = N
         lines.append("Δ CI, seeds resampled too: the same resamples of the videos with the training seeds resampled "
                      "as well (pairs kept), so that the interval counts training randomness (another seed set, fit "
                      "or draw), which the video bootstrap holds fixed; coarse under 5 seeds.")
-    apart = {n: s.other_machine_seeds for n, s in sums.items() if s.other_machine_seeds}
-    if apart:
-        lines.append("† seeds trained on another machine than the baseline's seeds of the same id ("
-                     + "; ".join(f"{n}: {', '.join(map(str, v))}" for n, v in apart.items()) + ", by each seed's "
-                     "`trained_on`): such pairs share the seed set but not the training randomness, which another "
-                     "instruction set changes in the last bits; retrain both sides on one machine to pair them.")
+    note = other_machine_note({n: s.other_machine_seeds for n, s in sums.items()})
+    if note:
+        lines.append(note)
     if any(not s.meets_min_seeds for s in sums.values()):
         lines.append(f"⚠ fewer than the protocol's {p.min_training_seeds} training seeds.")
     return "\n".join(lines) + "\n"

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from synthaug.evaluate.stats import bootstrap_seed_mean, paired_difference
+from synthaug.evaluate.summary import other_machine_note
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "unlabelled_drones"))
 from rescore import load_conditions  # noqa: E402  (one loader of stored results per condition)
@@ -68,11 +69,8 @@ def main() -> None:
     lines += ["", f"Protocol `{p.name}` (fingerprint `{p.fingerprint()}`), split `{base.split}`, {len(base.stems)} test "
               f"videos; {p.bootstrap.resamples} bootstrap resamples of the videos (seed {p.bootstrap.seed}); Δ paired "
               "by training seed and resample; the last column resamples the training seeds as well (pairs kept)."]
-    apart = {n: v for n, v in apart.items() if v}
-    if apart:
-        lines.append("† seeds trained on another machine than the baseline's of the same id ("
-                     + "; ".join(f"{n}: {', '.join(map(str, v))}" for n, v in apart.items())
-                     + "): paired by seed set, not by training randomness (`ProtocolResult.trained_elsewhere`).")
+    if other_machine_note(apart):
+        lines.append(other_machine_note(apart))
     text = "\n".join(lines)
     print(text)
     if a.out:
