@@ -145,8 +145,8 @@ def _f(x: float | None, digits: int = 3) -> str:
 
 
 def other_machine_note(seeds: Mapping[str, Sequence[int]]) -> str:
-    """The footnote of a table whose paired Δs are marked †: row label -> the seeds trained on another machine than the
-    baseline's of the same id (:meth:`~synthaug.evaluate.results.ProtocolResult.trained_elsewhere`); ``""`` when no
+    """The footnote of a table whose paired Δs are marked †: row label -> the seeds trained on another machine than
+    the baseline's of the same id (:meth:`~synthaug.evaluate.results.ProtocolResult.trained_elsewhere`); ``""`` when no
     row has any.
 
     >>> other_machine_note({"a": [], "b": [1, 2]})[:60]

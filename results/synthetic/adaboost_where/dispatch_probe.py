@@ -6,7 +6,7 @@ Run it once as is and once per environment cap, then compare the files (``--comp
 part of the chain that the capped library computes.
 
     PYTHONPATH=. python results/synthetic/adaboost_where/dispatch_probe.py DETECTOR.pt OUT.npz
-    ONEDNN_MAX_CPU_ISA=AVX2 PYTHONPATH=. python results/synthetic/adaboost_where/dispatch_probe.py DETECTOR.pt capped.npz
+    ONEDNN_MAX_CPU_ISA=AVX2 PYTHONPATH=. python results/synthetic/adaboost_where/dispatch_probe.py DET.pt capped.npz
     PYTHONPATH=. python results/synthetic/adaboost_where/dispatch_probe.py --compare OUT.npz capped.npz
 """
 import argparse
