@@ -54,7 +54,6 @@ def curve(ws):
     return {"out": out, "results": res}
 
 
-@pytest.mark.slow
 def test_machine_info_records_the_dispatch_environment(monkeypatch):
     # an instruction set forced by environment (to reproduce another machine's cells, README) is part of the record
     for k in R.DISPATCH_ENV:
@@ -65,6 +64,7 @@ def test_machine_info_records_the_dispatch_environment(monkeypatch):
     assert R.machine_info()["dispatch_env"] == {"ONEDNN_MAX_CPU_ISA": "AVX2"}
 
 
+@pytest.mark.slow
 def test_learning_curve_results_and_files(ws, curve):
     res = curve["results"]
     assert set(res) == {"hog", "hog x0.75"}

@@ -76,15 +76,16 @@ for sp in val test; do
   [ ${#he[@]} -gt 0 ] && python $T "${he[@]}" "${hs[@]}" --out $O/${sp}_shapes_vs_real_same_machine.md
   [ ${#he[@]} -gt 0 ] && python $T "${ht[@]}" "${he[@]}" --out $O/${sp}_real_only_two_machines.md
 done
-# stop 91: the pose cell retrained on the shape cell's machine (run.sh mN N --quantize on --pose-sampling fitted_at_seed),
-# so that real only, the pose cell and the shape cell of a seed all come from one machine; and the pose cell on the two
+# stop 91: the pose cell retrained on the shape cell's machine (run.sh mN N --quantize on --pose-sampling
+# fitted_at_seed), so that real only, the pose cell and the shape cell of a seed all come from one machine; and the pose cell on the two
 # machines (the machine alone, as for real only above)
 for sp in val test; do
   me=(); mp=(); ms=(); ps=(); pm=()
   for d in $O/${sp}_m[0-9]*; do
     s=${d##*_m}; [ -f $d/$p8 ] || continue
     if [ -f $O/${sp}_p$s/$p8 ]; then
-      ps+=("$O/${sp}_p$s/$p8=$P8, stored (stops 86-89's machine)"); pm+=("$d/$p8=$P8, retrained on the shape cell's machine")
+      ps+=("$O/${sp}_p$s/$p8=$P8, stored (stops 86-89's machine)")
+      pm+=("$d/$p8=$P8, retrained on the shape cell's machine")
     fi
     e=$H/${sp}_e$s/$real; [ -f $e ] && [ -f $O/${sp}_s$s/$s8 ] || continue
     me+=("$e=real only"); mp+=("$d/$p8=$P8"); ms+=("$O/${sp}_s$s/$s8=$P8, shapes varied 0.3")
