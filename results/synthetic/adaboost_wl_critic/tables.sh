@@ -94,3 +94,13 @@ for sp in val test; do
   [ ${#me[@]} -gt 0 ] && python $T "${mp[@]}" "${ms[@]}" --out $O/${sp}_shapes_vs_pose_one_machine.md
   [ ${#pm[@]} -gt 0 ] && python $T "${ps[@]}" "${pm[@]}" --out $O/${sp}_pose_two_machines.md
 done
+# stop 92: the shape cell against real only on every seed that has both on the one machine (seeds 4 on: real only by
+# ../adaboost_critic/run2.sh real eN N, the shape cell by run.sh sN N as above; no pose cell trained for them)
+for sp in val test; do
+  ae=(); as=()
+  for d in $O/${sp}_s[0-9]*; do
+    s=${d##*_s}; e=$H/${sp}_e$s/$real; [ -f $d/$s8 ] && [ -f $e ] || continue
+    ae+=("$e=real only"); as+=("$d/$s8=$P8, shapes varied 0.3")
+  done
+  [ ${#as[@]} -gt 0 ] && python $T "${ae[@]}" "${as[@]}" --out $O/${sp}_shapes_one_machine_all_seeds.md
+done
