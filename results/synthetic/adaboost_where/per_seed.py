@@ -46,7 +46,8 @@ def main(argv: list[str]) -> None:
         lo, hi = t.confidence_interval(0.95)
         r = stats.pearsonr(real, shapes)
         print(f"{split}: seeds {' / '.join(map(str, kept))}")
-        print(f"  real only   {' / '.join(f'{x:.3f}' for x in real)}  mean {real.mean():.3f}  sd {real.std(ddof=1):.3f}")
+        print(f"  real only   {' / '.join(f'{x:.3f}' for x in real)}  mean {real.mean():.3f}  "
+              f"sd {real.std(ddof=1):.3f}")
         print(f"  shape cell  {' / '.join(f'{x:.3f}' for x in shapes)}  mean {shapes.mean():.3f}  "
               f"sd {shapes.std(ddof=1):.3f}")
         print(f"  difference  {' '.join(f'{x:+.3f}' for x in d)}  mean {d.mean():+.3f}  "
