@@ -69,8 +69,9 @@ def main() -> None:
     lines += ["", f"Protocol `{p.name}` (fingerprint `{p.fingerprint()}`), split `{base.split}`, {len(base.stems)} test "
               f"videos; {p.bootstrap.resamples} bootstrap resamples of the videos (seed {p.bootstrap.seed}); Δ paired "
               "by training seed and resample; the last column resamples the training seeds as well (pairs kept)."]
-    if other_machine_note(apart):
-        lines.append(other_machine_note(apart))
+    note = other_machine_note(apart)
+    if note:
+        lines.append(note)
     text = "\n".join(lines)
     print(text)
     if a.out:

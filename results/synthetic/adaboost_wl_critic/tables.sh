@@ -77,8 +77,8 @@ for sp in val test; do
   [ ${#he[@]} -gt 0 ] && python $T "${ht[@]}" "${he[@]}" --out $O/${sp}_real_only_two_machines.md
 done
 # stop 91: the pose cell retrained on the shape cell's machine (run.sh mN N --quantize on --pose-sampling
-# fitted_at_seed), so that real only, the pose cell and the shape cell of a seed all come from one machine; and the pose cell on the two
-# machines (the machine alone, as for real only above)
+# fitted_at_seed), so that real only, the pose cell and the shape cell of a seed all come from one machine; and the
+# pose cell on the two machines (the machine alone, as for real only above)
 for sp in val test; do
   me=(); mp=(); ms=(); ps=(); pm=()
   for d in $O/${sp}_m[0-9]*; do
