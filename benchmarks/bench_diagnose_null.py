@@ -198,7 +198,12 @@ def main() -> int:
     ap.add_argument("--floors-from", nargs="+", default=None, metavar="JSON",
                     help="no new cases: pool the null distributions of these earlier outputs (e.g. the tests' fit "
                          "and the demo's fit) and write --write-floors from them")
+    ap.add_argument("--colour-floors-from", nargs="+", default=[], metavar="JSON",
+                    help="with --floors-from: clean colour cases' outputs (--colour, nothing hidden) whose colour "
+                         "channels (distance:colour) are floored too")
     a = ap.parse_args()
+    if a.colour_floors_from and not a.floors_from:
+        ap.error("--colour-floors-from needs --floors-from (the gray floors are written with them)")
     if a.floors_from:
         if not a.write_floors:
             ap.error("--floors-from needs --write-floors")
@@ -301,8 +306,18 @@ def pool_floors(a: argparse.Namespace) -> int:
         refresh = d.get("frame_refresh")  # frame_recalibrate.py's copy: its frame statistics remade without a refit
         sources.append(f"{d['command']} [{d['fit']} fit, {d['cases']} cases"
                        + (f"; frame statistics remade by {refresh['by']}" if refresh else "") + "]")
+    colour_rows, colour_cases, colour_sources = [], 0, []
+    for path in getattr(a, "colour_floors_from", None) or []:
+        r, d = stats_from_output(path)
+        if not d.get("colour") or d.get("hidden"):
+            raise SystemExit(f"{path}: not a clean colour run (--colour, nothing hidden)")
+        colour_rows += r
+        colour_cases += d["cases"]
+        colour_sources.append(f"{d['command']} [{d['fit']} fit, {d['cases']} cases]")
     command = " ".join(["python"] + sys.argv) + " <- " + " + ".join(sources)
-    calibration.write_floors_module(a.write_floors, rows, command=command, n_cases=n_cases, n_seeds=max(seeds))
+    calibration.write_floors_module(
+        a.write_floors, rows, command=command, n_cases=n_cases, n_seeds=max(seeds), colour_stats=colour_rows or None,
+        colour_source={"command": " + ".join(colour_sources), "n_cases": colour_cases} if colour_rows else None)
     print(json.dumps({"wrote": a.write_floors, "cases": n_cases, "from": a.floors_from}))
     return 0
 

@@ -76,3 +76,29 @@ def test_floors_pooled_from_outputs_name_a_frame_refresh(bench_null, tmp_path):
     assert "python bench a.json [converged fit, 12 cases]" in src
     assert "python bench b.json [converged fit, 10 cases; frame statistics remade by python frame_recalibrate.py X]" \
         in src
+
+
+def test_colour_floors_pooled_from_a_clean_colour_output(bench_null, tmp_path):
+    """``--colour-floors-from``: the colour channels' floors from a clean colour run, named in the source; an
+    output that is not a clean colour run is refused."""
+    import argparse
+    import importlib.util as iu
+    import json
+
+    gray = {"command": "python bench gray", "fit": "converged", "cases": 12, "seeds": 60,
+            "null_distributions": {"screen:gamma:distance:pixel": {"gain": {"values": [0.001 * k for k in range(12)]}}}}
+    colour = {"command": "python bench --colour", "fit": "converged", "cases": 11, "seeds": 60, "colour": True,
+              "hidden": None, "null_distributions": {
+                  "screen:haze:distance:colour": {"gain": {"values": [-0.02 + 0.002 * k for k in range(11)]}}}}
+    for name, d in (("g.json", gray), ("c.json", colour), ("h.json", {**colour, "hidden": "haze"})):
+        (tmp_path / name).write_text(json.dumps(d))
+    dest = tmp_path / "nf.py"
+    ns = dict(floors_from=[str(tmp_path / "g.json")], write_floors=str(dest))
+    bench_null.pool_floors(argparse.Namespace(**ns, colour_floors_from=[str(tmp_path / "c.json")]))
+    spec = iu.spec_from_file_location("nf_colour_pooled", dest)
+    mod = iu.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert "haze:distance:colour" in mod.SCREEN and "gamma:distance:pixel" in mod.SCREEN
+    assert mod.SOURCE["colour"]["n_cases"] == 11 and "python bench --colour" in mod.SOURCE["colour"]["command"]
+    with pytest.raises(SystemExit, match="not a clean colour run"):
+        bench_null.pool_floors(argparse.Namespace(**ns, colour_floors_from=[str(tmp_path / "h.json")]))

@@ -770,3 +770,38 @@ def test_a_distance_gain_that_frame_evidence_explains_is_not_accepted_first(monk
         assert (["haze"], {"shot_noise": {"shot_sigma": 0.04}}) in calls  # screened on top of the frames' setting
     else:
         assert order == [("haze", []), ("shot_noise", ["haze"])]
+
+
+def test_object_paint_renders_through_the_renderer_and_is_recovered(tmp_path):
+    """The object's colour read beside the colour channel (issue 20, stop 93): every paint's chroma distance from
+    two renders equals the renderer's own image with the painted albedo (w_d per channel, w solved by numpy's least
+    squares), and the paint the reference camera put on the object is the one read."""
+    from synthaug.diagnose.diagnosis_data import paint_chroma_distances
+    from synthaug.diagnose.nuisances import Nuisances, paint_tint
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+    from synthaug.diagnose.residuals import chroma_distance, load_diagnosis_data, render_rgb
+    from synthaug.diagnose.screening import kfold, object_colour
+    from synthaug.params import CaptureParams
+
+    p = make_measured_seedset(tmp_path / "m", n_seeds=12, colour=True, frame_size=(96, 128), object_px=(18, 22),
+                              view_step_deg=30, sprite_size=48,
+                              nuisances=Nuisances(paint_saturation=0.1, paint_hue_deg=120.0))
+    theta, extra, _ = CaptureParams.load_with_extra(p / "truth.json")
+    theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
+    data = load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
+    tints = np.stack([paint_tint(0.0, 0.0), paint_tint(0.05, 300.0), paint_tint(0.1, 120.0)])
+    fast = paint_chroma_distances(data, None, torch.tensor(tints))
+    n = len(data)
+    real = data.real_rgb.double().numpy().reshape(n, -1)
+    for k, t in enumerate(tints):
+        tw = torch.tensor(t, dtype=torch.float32)
+        i0 = render_rgb(data, None, w_d=torch.zeros(n, 3), clamp=False).double().numpy().reshape(n, -1)
+        i1 = render_rgb(data, None, w_d=tw.expand(n, 3), clamp=False).double().numpy().reshape(n, -1)
+        w = np.array([np.linalg.lstsq((i1 - i0)[i][:, None], (real - i0)[i], rcond=None)[0][0] for i in range(n)])
+        w = np.clip(w, 0.0, 1.0)
+        img = render_rgb(data, None, w_d=torch.tensor(w, dtype=torch.float32)[:, None] * tw)  # clamped
+        np.testing.assert_allclose(fast[k], chroma_distance(data.real_rgb, img), rtol=2e-4, atol=1e-4)
+    assert fast[2].mean() < fast[0].mean() and fast[2].mean() < fast[1].mean()  # the true paint fits best
+    oc = object_colour(data, kfold(n, 3, np.random.default_rng(0)))
+    assert abs((oc["setting"]["paint_hue_deg"] - 120.0 + 180.0) % 360.0 - 180.0) <= 15.0, oc
+    assert 0.05 <= oc["setting"]["paint_saturation"] <= 0.15 and oc["gain"] > 0 and oc["p"] < 0.01

@@ -117,3 +117,39 @@ def test_write_floors_module_round_trip(tmp_path, monkeypatch):
         assert calibration.gain_centre("sharpening", "frame") is None
         del mod.CENTRE
         assert calibration.gain_centre("gamma", "noise_level") is None
+
+
+def test_colour_floors_come_from_colour_cases_only_with_the_colour_cases_count(tmp_path, monkeypatch):
+    """The colour channel's chroma gains are floored from clean colour cases (stop 93), with z for the statistics
+    a colour case holds (the gray ones and the colour ones); a gray row's colour entry is never used, and the gray
+    floors are the same as without colour cases."""
+    rng = np.random.default_rng(3)
+    gray = [{"residual:tone_curve": {"value": float(t)}, "screen:gamma:distance:pixel": {"gain": float(g)},
+             "screen:haze:distance:colour": {"gain": 5.0}}
+            for t, g in zip(rng.normal(-0.2, 0.05, 20), rng.normal(0.0, 0.01, 20))]
+    wb, haze = rng.normal(-0.05, 0.04, 15), rng.normal(-0.01, 0.01, 15)
+    colour = [{"screen:white_balance:distance:colour": {"gain": float(a)},
+               "screen:haze:distance:colour": {"gain": float(b)},
+               "screen:gamma:distance:pixel": {"gain": 9.0}}  # a colour case's gray statistic: not pooled
+              for a, b in zip(wb, haze)]
+    alone, f = derive_floors(gray), derive_floors(gray, colour_stats=colour)
+    assert f["STRUCTURE"] == alone["STRUCTURE"] and f["z_one_sided"] == alone["z_one_sided"]
+    assert f["SCREEN"]["gamma:distance:pixel"] == alone["SCREEN"]["gamma:distance:pixel"]
+    z1c = stats.norm.isf(0.05 / 4)  # 2 gray statistics + 2 colour ones on a colour case
+    assert f["colour"] == {"z_one_sided": pytest.approx(z1c), "n_statistics": 4}
+    for name, v in (("white_balance", wb), ("haze", haze)):
+        want = max(max(v.mean(), 0.0) + z1c * v.std(ddof=1), v.max(), 0.0)
+        assert f["SCREEN"][f"{name}:distance:colour"] == pytest.approx(want)
+        assert f["CENTRE"][f"{name}:distance:colour"] == pytest.approx(v.mean())
+    path = calibration.write_floors_module(tmp_path / "nf.py", gray, command="gray", n_cases=20, n_seeds=60,
+                                          colour_stats=colour, colour_source={"command": "colour", "n_cases": 15})
+    spec = importlib.util.spec_from_file_location("nf_colour", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert mod.SOURCE["colour"] == {"command": "colour", "n_cases": 15, "z_one_sided": round(z1c, 4),
+                                    "n_statistics": 4}
+    with monkeypatch.context() as m:
+        m.setattr(calibration, "_floors", lambda: mod)
+        assert calibration.gain_floor("haze", "distance:colour") == pytest.approx(f["SCREEN"]["haze:distance:colour"])
+        text = calibration.rule_text()
+        assert "15 clean colour cases" in text and "hand-set" not in text

@@ -167,3 +167,50 @@ def test_reference_camera_with_nuisances(tmp_path):
                               **FAST)
     with pytest.raises(ValueError, match="Nuisances record"):
         make_measured_seedset(tmp_path / "x", nuisances={"ambient": 0.3}, **FAST)  # type: ignore[arg-type]
+
+
+def test_paint_tint_keeps_luma_and_has_its_saturation_and_hue():
+    from synthaug.diagnose.nuisances import PAINT_SATURATION, paint_tint
+    from synthaug.effects.camera_functional import LUMA_WEIGHTS
+
+    lw = np.asarray(LUMA_WEIGHTS)
+    hues = np.arange(0.0, 360.0, 15.0)
+    tints = np.stack([paint_tint(0.08, h) for h in hues])
+    np.testing.assert_allclose(tints @ lw, 1.0, atol=1e-12)  # gray data do not see the paint
+    np.testing.assert_allclose(np.linalg.norm(tints - 1, axis=1), 0.08, atol=1e-12)
+    # opposite hues are opposite offsets; 0 degrees is reddish (red up, blue down), 180 bluish
+    np.testing.assert_allclose(paint_tint(0.08, 200.0) - 1, -(paint_tint(0.08, 20.0) - 1), atol=1e-12)
+    red, blue = paint_tint(0.1, 0.0), paint_tint(0.1, 180.0)
+    assert red[0] > 1 > red[2] and blue[2] > 1 > blue[0]
+    # the chroma plane is spanned: offsets at 0 and 90 degrees are orthogonal, and both orthogonal to the luma
+    a, b = paint_tint(1.0, 0.0) - 1, paint_tint(1.0, 90.0) - 1
+    assert abs(a @ b) < 1e-12 and abs(a @ lw) < 1e-12 and abs(b @ lw) < 1e-12
+    many = [Nuisances.draw(np.random.default_rng(k)) for k in range(40)]
+    sat = [n.paint_saturation for n in many]
+    assert PAINT_SATURATION[0] <= min(sat) and max(sat) <= PAINT_SATURATION[1]
+    assert Nuisances().paint_rgb.tolist() == [1.0, 1.0, 1.0]
+    with pytest.raises(ValueError, match="paint_saturation must be in"):
+        Nuisances(paint_saturation=0.8)
+
+
+@pytest.mark.slow
+def test_reference_camera_paints_the_colour_object_and_gray_data_do_not_see_it(tmp_path):
+    from synthaug.data.seedset import SeedSet
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+
+    plain = Nuisances(ambient=0.3, light_spread_deg=20.0)
+    painted = Nuisances(ambient=0.3, light_spread_deg=20.0, paint_saturation=0.3, paint_hue_deg=0.0)
+    gray = [SeedSet.load(make_measured_seedset(tmp_path / f"g{k}", nuisances=n, **FAST))
+            for k, n in enumerate((plain, painted))]
+    np.testing.assert_array_equal(gray[0].patches, gray[1].patches)  # one channel: the paint has unit luma
+    patches, backs = [], []
+    for k, n in enumerate((plain, painted)):
+        make_measured_seedset(tmp_path / f"c{k}", nuisances=n, colour=True, **FAST)
+        with np.load(tmp_path / f"c{k}" / "colour.npz") as z:  # (N, P, P, 3) uint8
+            patches.append(z["patches_rgb"].astype(np.float64))
+            backs.append(z["backgrounds_rgb"].astype(np.float64))
+    np.testing.assert_array_equal(backs[0], backs[1])  # the scene is not painted
+    obj = np.abs(patches[0] - backs[0]).sum(-1) > 12  # the object's pixels
+    red = [p[..., 0][obj].mean() for p in patches]
+    blue = [p[..., 2][obj].mean() for p in patches]
+    assert red[1] > red[0] + 3 and blue[1] < blue[0] - 3  # hue 0: redder, less blue, on the object only

@@ -41,8 +41,10 @@ Besides significance, a distance channel's extension must be worth having: its
 raw relative gain over all seeds must reach ``min_gain`` (2 %,
 :data:`HAND_MIN_GAIN`) — a stated utility choice, not a significance floor.
 
-Statistics the calibration has no null for (the colour channel: the null cases
-are gray; a statistic absent from the file) keep the hand-set floors
+The colour channel's held-out chroma gains (``distance:colour``) have their own clean null: colour cases of the
+reference camera (RGB, a bluish sky, the object painted near-neutral by the nuisances), floors by the same rule
+with z for the statistics a colour case holds (the gray ones and these). Statistics the calibration has no null for
+(a statistic absent from the file) keep the hand-set floors
 (:data:`HAND_FLOORS`, :data:`HAND_MIN_GAIN`, the noise module's slope floor),
 and :func:`describe` says which are which. The floors live in
 :mod:`synthaug.diagnose.null_floors`, written by the benchmark with the command
@@ -154,8 +156,11 @@ def rule_text() -> str:
             f"moving scene drawn at random, nothing hidden): ± {s['z_two_sided']:.2f} σ of the clean values around "
             f"their mean and around 0 (widened to their min/max) for residual measures, μ + {s['z_one_sided']:.2f} σ for a "
             f"candidate's held-out gain, set for a {100 * s['family_rate']:.0f} % false-alarm rate per clean case over "
-            f"{s['n_statistics']} statistics (`{s['command']}`, {s['date']}). Statistics without a clean null "
-            "(colour) keep hand-set floors.")
+            f"{s['n_statistics']} statistics (`{s['command']}`, {s['date']}). "
+            + (f"The colour channel's chroma gains: μ + {s['colour']['z_one_sided']:.2f} σ over "
+               f"{s['colour']['n_cases']} clean colour cases (objects painted near-neutral; "
+               f"{s['colour']['n_statistics']} statistics on a colour case; `{s['colour']['command']}`)."
+               if s.get("colour") else "Statistics without a clean null (colour) keep hand-set floors."))
 
 
 def describe() -> dict[str, Any]:
@@ -191,7 +196,7 @@ def one_sided_floor(values: Sequence[float], z: float) -> float:
 
 
 def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMILY_RATE,
-                  min_cases: int = 10) -> dict[str, Any]:
+                  min_cases: int = 10, colour_stats: Sequence[dict[str, Any]] | None = None) -> dict[str, Any]:
     """Null ranges and floors from clean cases' statistics (``bench_diagnose_null.case_statistics`` rows).
 
     Args:
@@ -199,10 +204,14 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
             {"gain": ..., "slope": ...}}``.
         family_rate: false-alarm rate per case the floors are set for (Bonferroni over the statistics).
         min_cases: a statistic seen in fewer clean cases is not calibrated (keeps its hand-set floor).
+        colour_stats: rows of clean colour cases: their colour channels (``screen:<effect>:distance:colour``)
+            only, floored with z for the statistics a colour case holds (those of ``stats`` and these). The
+            colour channels of ``stats`` are never used: a gray case has none.
 
     Returns:
         ``{"STRUCTURE": {measure: [lo, hi]}, "SCREEN": {"effect:channel": floor}, "CENTRE": {"effect:channel":
-        the clean mean}, "z_two_sided", "z_one_sided", "n_statistics"}``.
+        the clean mean}, "z_two_sided", "z_one_sided", "n_statistics"}``, with ``colour_stats`` also
+        ``"colour": {"z_one_sided", "n_statistics"}``.
 
     Example:
         >>> rows = [{"residual:tone_curve": {"value": v}} for v in (-0.1, 0.0, 0.1, 0.05, -0.05) * 2]
@@ -224,12 +233,19 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
             elif kind[-1] == "noise_level":
                 v = None if row.get("slope") is None else row["slope"] * NOISE_CANDIDATES.get(kind[1], 1)
             elif kind[-1] == "colour":
-                continue  # the null cases are gray: no colour null
+                continue  # colour channels: from colour cases only (colour_stats)
             else:
                 v = row.get("gain")
             if v is not None and math.isfinite(float(v)):
                 values.setdefault(key, []).append(float(v))
+    colour: dict[str, list[float]] = {}
+    for case in colour_stats or ():
+        for key, row in case.items():
+            v = row.get("gain")
+            if key.endswith(":distance:colour") and v is not None and math.isfinite(float(v)):
+                colour.setdefault(key, []).append(float(v))
     keep = {k: np.asarray(v) for k, v in values.items() if len(v) >= min_cases}
+    keep_colour = {k: np.asarray(v) for k, v in colour.items() if len(v) >= min_cases}
     n_two = sum(1 for k in keep if k.startswith("residual:"))
     n_stats = max(len(keep), 1)
     z2 = float(st.norm.isf(family_rate / (2 * n_stats)))
@@ -245,20 +261,35 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
         else:
             screen[key.split(":", 1)[1]] = one_sided_floor(v, z1)
             centre[key.split(":", 1)[1]] = mu
-    return {"STRUCTURE": structure, "SCREEN": screen, "CENTRE": centre, "z_two_sided": z2, "z_one_sided": z1,
-            "n_statistics": n_stats, "n_two_sided": n_two}
+    out = {"STRUCTURE": structure, "SCREEN": screen, "CENTRE": centre, "z_two_sided": z2, "z_one_sided": z1,
+           "n_statistics": n_stats, "n_two_sided": n_two}
+    if keep_colour:
+        n_colour_case = len(keep) + len(keep_colour)  # the statistics a colour case holds
+        z1c = float(st.norm.isf(family_rate / n_colour_case))
+        for key, v in sorted(keep_colour.items()):
+            screen[key.split(":", 1)[1]] = one_sided_floor(v, z1c)
+            centre[key.split(":", 1)[1]] = float(v.mean())
+        out["colour"] = {"z_one_sided": z1c, "n_statistics": n_colour_case}
+    return out
 
 
 def write_floors_module(path: str | Path, stats: Sequence[dict[str, Any]], *, command: str, n_cases: int,
-                        n_seeds: int, family_rate: float = FAMILY_RATE) -> Path:
-    """Write :mod:`synthaug.diagnose.null_floors` (the floors, the command that measured them, its date)."""
+                        n_seeds: int, family_rate: float = FAMILY_RATE,
+                        colour_stats: Sequence[dict[str, Any]] | None = None,
+                        colour_source: dict[str, Any] | None = None) -> Path:
+    """Write :mod:`synthaug.diagnose.null_floors` (the floors, the command that measured them, its date); with
+    ``colour_stats`` (clean colour cases' rows) the colour channels' floors too, ``colour_source`` their
+    ``command`` and ``n_cases``."""
     import json
     import pprint
 
-    f = derive_floors(stats, family_rate=family_rate)
+    f = derive_floors(stats, family_rate=family_rate, colour_stats=colour_stats)
     source = {"command": command, "date": _dt.date.today().isoformat(), "n_cases": int(n_cases),
               "n_seeds": int(n_seeds), "family_rate": family_rate, "z_two_sided": round(f["z_two_sided"], 4),
               "z_one_sided": round(f["z_one_sided"], 4), "n_statistics": f["n_statistics"]}
+    if "colour" in f:
+        source["colour"] = {**(colour_source or {}), "z_one_sided": round(f["colour"]["z_one_sided"], 4),
+                            "n_statistics": f["colour"]["n_statistics"]}
     rnd = lambda x: round(float(x), 6)  # noqa: E731
     structure = {k: [rnd(a), rnd(b)] for k, (a, b) in f["STRUCTURE"].items()}
     screen = {k: rnd(v) for k, v in f["SCREEN"].items()}
@@ -271,8 +302,8 @@ def write_floors_module(path: str | Path, stats: Sequence[dict[str, Any]], *, co
         "# residual structure measure -> [lo, hi]: the range of its value on clean nuisance-varied data\n"
         f"STRUCTURE = {pprint.pformat(structure, width=110, sort_dicts=True)}\n\n"
         "# 'effect:channel' -> floor of its held-out gain (absorbed: held-out R2; noise_level: slope in the\n"
-        "# candidate's direction; frame: the frames' fall-off k, block-grid log ratio or edge ratio) on clean\n"
-        "# nuisance-varied data\n"
+        "# candidate's direction; frame: the frames' fall-off k, block-grid log ratio or edge ratio; distance:colour:\n"
+        "# the chroma gain, from clean colour cases) on clean nuisance-varied data\n"
         f"SCREEN = {pprint.pformat(screen, width=110, sort_dicts=True)}\n\n"
         "# 'effect:channel' -> the mean of that statistic on the clean cases (the 'no effect' value of a statistic\n"
         "# without a physical zero: the frames' edge sharpness)\n"

@@ -22,6 +22,7 @@ __all__ = [
     "load_diagnosis_data",
     "render_with",
     "render_rgb",
+    "paint_chroma_distances",
     "solve_albedo",
     "solve_albedo_rgb",
     "pairwise_distance",
@@ -250,7 +251,8 @@ def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor
         extension: ``{effect: {param: value}}``, a value a scalar (camera-wide), an (N,) tensor (per
             seed) or, with ``rgb``, a (1, 3) camera-wide or (N, 3) per-seed value per channel. Effects
             already in Θ are overridden.
-        w_d: (N,) albedo replacing the fitted w_d (the per-seed nuisance re-solve).
+        w_d: (N,) albedo replacing the fitted w_d (the per-seed nuisance re-solve); with ``rgb`` also (N, 3),
+            a painted object's albedo per channel (:func:`paint_chroma_distances`).
         rgb: render over the RGB backgrounds (:attr:`DiagnosisData.background_rgb`): the fitted (gray)
             Θ on every channel of a neutral object.
 
@@ -266,7 +268,8 @@ def render_with(data: DiagnosisData, extension: dict[str, dict[str, torch.Tensor
     n, c = len(data), (3 if rgb else 1)
     values = {k: v.float()[:, :1].expand(n, c) if v.ndim == 2 else v.float() for k, v in data.theta.as_dict().items()}
     if w_d is not None:
-        values["w_d"] = torch.as_tensor(w_d, dtype=torch.float32).reshape(n, 1).expand(n, c)
+        w = torch.as_tensor(w_d, dtype=torch.float32)
+        values["w_d"] = w if w.shape == (n, c) else w.reshape(n, 1).expand(n, c)
     effects = tuple(data.theta.effects) + tuple(e for e in extension if e not in data.theta.effects)
     for eff, params in extension.items():
         for k, v in params.items():
@@ -304,6 +307,33 @@ def render_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None 
 def solve_albedo_rgb(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None) -> torch.Tensor:
     """Per-seed w_d of a neutral object, one value for all three channels (least squares over RGB)."""
     return solve_albedo(data, extension, rgb=True)
+
+
+@torch.no_grad()
+def paint_chroma_distances(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None,
+                           tints: torch.Tensor) -> np.ndarray:
+    """Per-seed chroma distance (:func:`chroma_distance`) of the object painted with each of ``tints``.
+
+    A paint multiplies the object's albedo per channel: w_d = w · t with the seed's w solved by least squares over
+    RGB (as :func:`solve_albedo_rgb`). The render is affine in each channel's w_d (material, blurs, the colour
+    effects on the object, overlay; unclamped), so two renders, w_d = 0 and 1 on every channel, give every paint's
+    image exactly: ``I0 + w t_c (I1 - I0)``, then clamped to [0, 1] as a render is.
+
+    Shape:
+        tints (P, 3) -> (P, N).
+    """
+    n = len(data)
+    i0 = render_rgb(data, extension, w_d=torch.zeros(n), clamp=False).double()
+    d = render_rgb(data, extension, w_d=torch.ones(n), clamp=False).double() - i0
+    r = data.real_rgb.double()
+    a = ((r - i0) * d).flatten(2).sum(2)  # (N, 3)
+    b = (d * d).flatten(2).sum(2)
+    out = np.empty((len(tints), n))
+    for k, t in enumerate(torch.as_tensor(tints, dtype=torch.float64)):
+        w = ((a * t).sum(1) / (b * t * t).sum(1).clamp_min(1e-9)).clamp(0.0, 1.0)
+        img = (i0 + (w[:, None] * t[None, :])[:, :, None, None] * d).clamp(0.0, 1.0)
+        out[k] = chroma_distance(r, img)
+    return out
 
 
 def chroma_distance(real: torch.Tensor, syn: torch.Tensor) -> np.ndarray:

@@ -48,7 +48,7 @@ from typing import Any, Mapping
 import numpy as np
 import torch
 
-__all__ = ["Nuisances", "SeedNuisance", "shade_object", "smooth_normals", "drift_scene", "MODEL_LIGHT",
+__all__ = ["Nuisances", "SeedNuisance", "shade_object", "smooth_normals", "drift_scene", "paint_tint", "MODEL_LIGHT",
            "MODEL_AMBIENT"]
 
 # The fit's material (synthaug.effects.paper.Material): Lambert, ambient 0.4, light from above and in front.
@@ -70,6 +70,9 @@ DRAW_RANGES: dict[str, tuple[float, float]] = {
     "background_flicker": (0.0, 0.02),
 }
 SMOOTH_NORMALS_PX = (0.7, 2.0)  # smooth shading: the normal map blurred by this (frame px), drawn half the time
+# The object's paint in colour (a chroma offset of its albedo, Rec. 601 luma kept): near-neutral bodies (white, grey,
+# black plastics with a slight cast), drawn after every other field so that the draws before it are unchanged.
+PAINT_SATURATION = (0.0, 0.1)
 MESH_SECTIONS = (16, 24, 32)  # cylinders of the real quadcopter: the model's (16) or finer
 
 
@@ -116,6 +119,10 @@ class Nuisances:
         background_drift_px: each seed's scene moves by up to this (frame px, random direction) between the
             frame and its background estimate (clouds, a panning camera).
         background_flicker: each seed's scene brightness changes by a factor in [1 - f, 1 + f] between them.
+        paint_saturation, paint_hue_deg: the object's paint in colour: its albedo times :func:`paint_tint` per RGB
+            channel (a chroma offset of this length at this hue; 0 the model's neutral grey; hue 0 toward red and
+            away from blue, 180 a bluish cast). The Rec. 601 luma is unchanged, so gray data do not see it; a
+            highlight stays white (a dielectric paint).
     """
 
     ambient: float = MODEL_AMBIENT
@@ -131,6 +138,8 @@ class Nuisances:
     mesh_perturbation: float = 0.0
     background_drift_px: float = 0.0
     background_flicker: float = 0.0
+    paint_saturation: float = 0.0
+    paint_hue_deg: float = 0.0
 
     def __post_init__(self) -> None:
         from synthaug.params import TEXTURE_SCALE_MAX, TEXTURE_SCALE_MIN
@@ -140,7 +149,8 @@ class Nuisances:
             "normal_smoothing_px": (0.0, 5.0), "albedo_texture_amp": (0.0, 0.5),
             "albedo_texture_px": (TEXTURE_SCALE_MIN, TEXTURE_SCALE_MAX), "light_spread_deg": (0.0, 80.0),
             "light_strength_spread": (0.0, 0.5), "rotor_scale": (0.5, 1.5), "mesh_perturbation": (0.0, 0.5),
-            "background_drift_px": (0.0, 5.0), "background_flicker": (0.0, 0.2),
+            "background_drift_px": (0.0, 5.0), "background_flicker": (0.0, 0.2), "paint_saturation": (0.0, 0.5),
+            "paint_hue_deg": (0.0, 360.0),
         }
         for name, (lo, hi) in checks.items():
             v = getattr(self, name)
@@ -158,13 +168,16 @@ class Nuisances:
     @classmethod
     def draw(cls, rng: np.random.Generator) -> "Nuisances":
         """A realistic random case: every nuisance on, each value uniform in :data:`DRAW_RANGES`, smooth
-        normals half the time, the cylinders' sections from :data:`MESH_SECTIONS`."""
+        normals half the time, the cylinders' sections from :data:`MESH_SECTIONS`, the paint's saturation from
+        :data:`PAINT_SATURATION` at a uniform hue (drawn last: the fields before it are those drawn without it)."""
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
         v = {k: float(rng.uniform(lo, hi)) for k, (lo, hi) in DRAW_RANGES.items()}
         smooth = bool(rng.random() < 0.5)
         v["normal_smoothing_px"] = float(rng.uniform(*SMOOTH_NORMALS_PX)) if smooth else 0.0
         v["mesh_sections"] = int(rng.choice(MESH_SECTIONS))
+        v["paint_saturation"] = float(rng.uniform(*PAINT_SATURATION))
+        v["paint_hue_deg"] = float(rng.uniform(0.0, 360.0))
         return cls(**v)
 
     @classmethod
@@ -190,6 +203,11 @@ class Nuisances:
                 and self.albedo_texture_amp == 0 and self.light_spread_deg == 0 and self.light_strength_spread == 0)
 
     @property
+    def paint_rgb(self) -> np.ndarray:
+        """The paint's per-channel factor on the albedo (RGB, unit luma): :func:`paint_tint`."""
+        return paint_tint(self.paint_saturation, self.paint_hue_deg)
+
+    @property
     def mesh_is_model(self) -> bool:
         return self.rotor_scale == 1.0 and self.mesh_sections == 16 and self.mesh_perturbation == 0
 
@@ -212,6 +230,31 @@ class Nuisances:
         return SeedNuisance(light_dir=tuple(float(x) for x in light), light_strength=strength,
                             drift=(r * math.cos(a), r * math.sin(a)), flicker=flick,
                             texture_seed=int(sr.integers(2 ** 62)))
+
+
+def paint_tint(saturation: float, hue_deg: float) -> np.ndarray:
+    """Per-channel RGB factors ``1 + s (cos h · u + sin h · v)``: u, v an orthonormal basis of the chroma plane (the
+    vectors orthogonal to the Rec. 601 luma weights L; u toward red and away from blue), so ``L · tint = 1`` and the
+    offset's length is ``s``.
+
+    Example:
+        >>> from synthaug.effects.camera_functional import LUMA_WEIGHTS
+        >>> t = paint_tint(0.1, 30.0)
+        >>> round(float(np.dot(t, LUMA_WEIGHTS)), 12), round(float(np.linalg.norm(t - 1)), 12)
+        (1.0, 0.1)
+        >>> bool(paint_tint(0.1, 0.0)[0] > 1 > paint_tint(0.1, 0.0)[2]), paint_tint(0.0, 90.0).tolist()
+        (True, [1.0, 1.0, 1.0])
+    """
+    from synthaug.effects.camera_functional import LUMA_WEIGHTS
+
+    lw = np.asarray(LUMA_WEIGHTS, np.float64)
+    x = np.array([1.0, 0.0, -1.0])
+    u = x - (x @ lw) / (lw @ lw) * lw
+    u /= np.linalg.norm(u)
+    v = np.cross(lw, u)
+    v /= np.linalg.norm(v)
+    h = math.radians(hue_deg)
+    return 1.0 + saturation * (math.cos(h) * u + math.sin(h) * v)
 
 
 def _tilt(v: np.ndarray, angle: float, azimuth: float) -> np.ndarray:

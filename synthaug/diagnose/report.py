@@ -240,7 +240,7 @@ def diagnose(
         ``parameter_dependence``, ``realism`` (real-vs-synthetic accuracy).
     """
     from synthaug.diagnose.diagnosis_data import load_diagnosis_data
-    from synthaug.diagnose.screening import CANDIDATE_GRIDS, kfold, offered_candidates, realism_accuracy
+    from synthaug.diagnose.screening import CANDIDATE_GRIDS, kfold, object_colour, offered_candidates, realism_accuracy
 
     t0 = time.perf_counter()
     say = progress or (lambda s: None)
@@ -290,6 +290,7 @@ def diagnose(
                             "indistinguishable"},
         "seconds": time.perf_counter() - t0,
     }
+    report["colour"]["object_colour"] = object_colour(data, folds)
     if gap_report is not None:
         report["gap"] = gap_report
     report = _jsonable(report)
@@ -608,8 +609,8 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                 + (_absorbed_text(f) if f["channel"] == "absorbed" else "")
                 + (f"; held-out chroma (R-G, B-G) gain {100 * g['heldout_colour']:.1f} %"
                    if g.get("heldout_colour") is not None else "")
-                + ("; the colour channel assumes a neutral (grey) object: a coloured paint reads as white balance"
-                   if f["channel"] == "distance:colour" else "")
+                + ("; the colour channel assumes a neutral (grey) object: a coloured paint reads as a colour cast "
+                   "(see the object's colour below)" if f["channel"] == "distance:colour" else "")
                 + (f"; noise level function log-log slope {f['evidence']['noise_level_function']['slope']:+.2f} "
                    f"(flat = read noise only), held-out likelihood gain {g['noise_loglik_per_px']:.4f} nats/px"
                    if f["channel"] == "noise_level" else "")
@@ -675,6 +676,14 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                       f"trend {cb['value']:+.3f} per unit r² over scenes, clean frames ≤ {cb['floor']:.3f}), and the "
                       "lens changes little of an object near the centre of the frame."]
     col = report.get("colour") or {}
+    oc = col.get("object_colour")
+    if oc:
+        lines += ["", f"Object colour (an appearance reading, not a finding): the model's neutral grey object "
+                  f"painted at chroma {oc['setting']['paint_saturation']:.3f}, hue "
+                  f"{oc['setting']['paint_hue_deg']:.0f}° (0° red, 180° blue) fits the seeds best, held-out chroma "
+                  f"gain {100 * oc['gain']:.1f} % (p = {oc['p']:.2g}). On the object alone the camera's white balance "
+                  "reads as a paint along the colour-temperature axis (near 0° or 180°): a white-balance finding "
+                  "there may be the object's own colour, and a slightly coloured object can be named haze."]
     if col and not col.get("screened"):
         skipped = [r["effect"] for r in report["screened"] if r.get("colour_skipped")]
         gone = col.get("not_offered") or []

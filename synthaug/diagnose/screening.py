@@ -90,7 +90,8 @@ from synthaug.diagnose.diagnosis_data import DiagnosisData, pairwise_distance, p
 from synthaug.diagnose.residuals import seed_metadata
 from synthaug.params import EFFECT_PARAM_SPECS
 
-__all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "screen_candidates", "screen_one", "absorption_gain",
+__all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "PAINT_GRID", "object_colour", "screen_candidates",
+           "screen_one", "absorption_gain",
            "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
            "frame_evidence", "frame_channel", "frame_corroboration", "distance_channel"]
 
@@ -144,6 +145,12 @@ LINEAR_ABSORPTION: tuple[str, ...] = ("exposure",)
 # Haze is screened in colour too: its airlight has the sky's colour (aerial perspective: a far object takes
 # on the colour of the air in front of it).
 COLOUR_CANDIDATES: tuple[str, ...] = ("chromatic_aberration", "white_balance", "haze")
+# The object's own colour, read beside the colour channel (an appearance, not a camera effect; object_colour): a
+# chroma offset of the albedo (synthaug.diagnose.nuisances.paint_tint, luma kept) of one of these lengths at any hue,
+# one for the whole seed set. It is not part of the channel's model: on the object alone a paint and a camera's white
+# balance (a gain along the colour-temperature axis) read the same (results/diagnose/README.md, stop 93).
+PAINT_GRID: tuple[tuple[float, float], ...] = ((0.0, 0.0),) + tuple(
+    (s, float(h)) for s in (0.025, 0.05, 0.1, 0.15, 0.2, 0.3) for h in range(0, 360, 15))
 
 # Candidates with evidence on the whole frames (synthaug.diagnose.frame_pattern), fixed in the frame and carried by
 # the background around the object as well: vignetting's radial fall-off (on the object a gain that w_d absorbs),
@@ -183,6 +190,28 @@ def colour_values(data: DiagnosisData, effect: str, setting: Setting) -> dict[st
         out[effect]["haze_airlight"] = (float(setting["haze_airlight"]) * tint).clamp(0.0, 1.0)
         return out
     return {effect: dict(setting)}
+
+
+@torch.no_grad()
+def object_colour(data: DiagnosisData, folds: list[np.ndarray], *, penalty: float = 0.005) -> dict[str, Any] | None:
+    """The object's own colour, an appearance reading (RGB seed sets only; None otherwise): the paint of
+    :data:`PAINT_GRID` that fits best over all seeds, and the held-out chroma gain of painting the model's
+    neutral object (k-fold as the candidates, one-sided t over seeds). A white balance on a neutral object reads
+    as a paint along the colour-temperature axis (hue near 0° or 180°): the two are not told apart here."""
+    from synthaug.diagnose.diagnosis_data import paint_chroma_distances
+    from synthaug.diagnose.nuisances import paint_tint
+
+    if data.real_rgb is None:
+        return None
+    d = paint_chroma_distances(data, None, torch.tensor(np.stack([paint_tint(s, h) for s, h in PAINT_GRID])))
+    if not float(np.mean(d[0])) > 0:
+        return None
+    gains, _ = _cv_gain(d[0], d, folds, penalty * 2)
+    m, t, p = _one_sided(gains)
+    best = int(np.argmin(d.mean(1)))
+    s, h = PAINT_GRID[best]
+    return {"setting": {"paint_saturation": s, "paint_hue_deg": h}, "gain": m, "t": t, "p": p,
+            "raw_gain_all": float((d[0].mean() - d[best].mean()) / d[0].mean())}
 
 
 @torch.no_grad()
@@ -763,10 +792,11 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         if col is not None:
             sc["colour"] = col
             p_adj = min(1.0, col["p"] * n_tests)
+            floor = gain_floor(name, "distance:colour")  # from clean colour cases (None: not calibrated)
             channels.append({"channel": "distance:colour", "p_adjusted": p_adj, "raw_gain_all": col["raw_gain_all"],
-                             "z": _z(col["p"]),
-                             "gain": col["gain"], "significant": bool(p_adj < alpha and col["gain"] > 0
-                                                                      and col["raw_gain_all"] >= min_gain)})
+                             "z": _z(col["p"]), "gain": col["gain"], "floor": floor,
+                             "significant": bool(p_adj < alpha and col["gain"] > max(floor or 0.0, 0.0)
+                                                 and col["raw_gain_all"] >= min_gain)})
         sig = [c for c in channels if c["significant"]]
         sig_dist = [c for c in sig if c["channel"] not in ("absorbed", "frame")]
         best = max(sig_dist, key=lambda c: c["gain"]) if sig_dist else max(sig or channels, key=lambda c: c["z"])

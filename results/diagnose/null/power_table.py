@@ -30,7 +30,10 @@ for f in sorted(Path("results/diagnose/null").glob("power5_*.json")):
         settings = REALISTIC_STRENGTHS[p["hidden"]]
     strength = ", ".join(f"{k} {v}" for k, v in settings.items())
     # the floors the run used: the current null_floors.py's, or an earlier calibration's (a row not rerun since)
-    current = (d.get("floors_in_use") or {}).get("screen") == null_floors.SCREEN
+    # (a gray run has no colour channel: its floors are current when the others are)
+    used = (d.get("floors_in_use") or {}).get("screen") or {}
+    current = {k: v for k, v in used.items() if colour or not k.endswith(":distance:colour")} == \
+        {k: v for k, v in null_floors.SCREEN.items() if colour or not k.endswith(":distance:colour")}
     rows.append(f"| {p['hidden']} | {strength} | {'colour' if colour else 'gray'} | {'current' if current else 'earlier'} | "
                 f"{p['named_first']}/{d['cases']} | {p['misnamed_first']} | {p['missed']} | "
                 f"{lo:.2f}–{hi:.2f} | {', '.join(f'{k} ×{v}' for k, v in said.most_common())} |")

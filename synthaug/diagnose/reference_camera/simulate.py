@@ -300,16 +300,17 @@ def _frame_sigmas(paper: Mapping[str, float], frame_scale: float) -> dict[str, f
 
 
 def _object_radiance(nz: Nuisances, draw: MeasuredSeed, cov: torch.Tensor, nrm: torch.Tensor,
-                     side: int) -> torch.Tensor:
-    """The object's colour before the model's material: the real material under its video's light, or (the
-    fit's own shading) a neutral radiance 0.5 that the ``material`` effect then shades."""
+                     side: int, paint: float = 1.0) -> torch.Tensor:
+    """The object's colour before the model's material in one channel whose albedo the paint scales by ``paint``
+    (:attr:`Nuisances.paint_rgb`; 1 in gray): the real material under its video's light, or (the fit's own shading)
+    a neutral radiance 0.5 that the ``material`` effect then shades (its w_d carries the paint then)."""
     if nz.shading_is_model:
         return Fx.diffuse_material(nrm, cov, torch.tensor([[0.5]], dtype=torch.float64))
     texture = None
     if draw.texture_noise is not None:
         texture = texture_field(draw.texture_noise, torch.tensor([nz.albedo_texture_px], dtype=torch.float64),
                                 (side, side))
-    return shade_object(nrm, cov, draw.paper["w_d"], nz, draw.nuisance, texture=texture)
+    return shade_object(nrm, cov, draw.paper["w_d"] * paint, nz, draw.nuisance, texture=texture)
 
 
 def _object_on_frame(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, cov: torch.Tensor, nrm: torch.Tensor,
@@ -328,12 +329,20 @@ def _object_on_frame(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, cov: 
     obj_names = (() if not nz.shading_is_model else ("material",)) + ("motion_blur",) + tuple(object_effects)
     theta = CaptureParams(values, effects=PAPER_EFFECTS + tuple(object_effects), validate=False).to(torch.float64)
     extras = {} if rotor is None else {"part_rotor": rotor}
+    paint = nz.paint_rgb if shot.shape[1] == 3 else np.ones(1)
+    neutral = bool(np.all(paint == 1.0))
     colour0 = _object_radiance(nz, draw, cov, nrm, side)
     frame_lin = shot.clone()
-    for c in range(shot.shape[1]):  # a neutral object: the same layers over each channel's background
-        state = RenderState(object_color=colour0, coverage=cov, normals=nrm, background=bg_crop[:, c:c + 1],
+    for c in range(shot.shape[1]):  # the same layers over each channel's background; the paint's albedo per channel
+        col, th = colour0, theta
+        if not neutral and nz.shading_is_model:  # the model's material shades w_d: the paint is its channel's w_d
+            th = CaptureParams({**values, "w_d": paper["w_d"] * float(paint[c])}, effects=theta.effects,
+                               validate=False).to(torch.float64)
+        elif not neutral:
+            col = _object_radiance(nz, draw, cov, nrm, side, float(paint[c]))
+        state = RenderState(object_color=col, coverage=cov, normals=nrm, background=bg_crop[:, c:c + 1],
                             extras=extras, fields={"noise": draw.object_noise})
-        state = apply_effects(state, theta, obj_names, clamp=False)
+        state = apply_effects(state, th, obj_names, clamp=False)
         if "interlacing" in cam:
             col, cv = _interlace(state.object_color, state.coverage, cam["interlacing"]["interlace_shift"],
                                  paper["alpha_m"])
@@ -523,7 +532,8 @@ def make_measured_seedset(
             orientation's shading is rendered); a camera effect that w_d
             absorbs then shows *within* a video.
         view_step_deg, sprite_size: the view cache of the real mesh.
-        colour: capture in RGB (a bluish sky per seed, a neutral grey object; the camera acts per
+        colour: capture in RGB (a bluish sky per seed, a neutral grey object unless the nuisances paint it,
+            :attr:`Nuisances.paint_rgb`; the camera acts per
             channel: chromatic aberration displaces red and blue in opposite directions, white
             balance ``wb_gain`` g multiplies red by g and blue by 1/g, haze's airlight has the
             sky's colour). The seed set's patches and
