@@ -2,11 +2,13 @@
 named first and significant, misnamed, or missed over 5 fresh nuisance-varied cases, with Wilson 95 % intervals.
 
     python results/diagnose/null/power_table.py   # from the repository root; prints a Markdown table
+    python results/diagnose/null/power_table.py results/diagnose/null/paint_s93   # another folder's rows
 """
 
 from __future__ import annotations
 
 import json
+import sys
 from collections import Counter
 from pathlib import Path
 
@@ -17,7 +19,8 @@ rows = ["| hidden | strength | data | floors | named first | misnamed first | mi
         "|---|---|---|---|---|---|---|---|---|"]
 tot = Counter()
 ok_by_effect: dict[str, list[bool]] = {}
-for f in sorted(Path("results/diagnose/null").glob("power5_*.json")):
+folder = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("results/diagnose/null")
+for f in sorted(folder.glob("power5_*.json")):
     d = json.loads(f.read_text())
     p = d["power"]
     said = Counter(x for c in d["per_case"] for x in (c["findings"] or ["nothing"]))
