@@ -805,3 +805,32 @@ def test_object_paint_renders_through_the_renderer_and_is_recovered(tmp_path):
     oc = object_colour(data, kfold(n, 3, np.random.default_rng(0)))
     assert abs((oc["setting"]["paint_hue_deg"] - 120.0 + 180.0) % 360.0 - 180.0) <= 15.0, oc
     assert 0.05 <= oc["setting"]["paint_saturation"] <= 0.15 and oc["gain"] > 0 and oc["p"] < 0.01
+
+
+def test_haze_is_credited_only_beyond_the_objects_own_colour(tmp_path):
+    """Stop 93: a slightly bluish object (a paint, an appearance) is most of haze's sky-coloured airlight in chroma.
+    The haze channel must beat the best case-wide paint on held-out seeds; white balance, which a paint reproduces
+    exactly, is not asked to. On a painted clean case haze does not beat the paint; on a hazed neutral object it
+    does."""
+    from synthaug.diagnose.nuisances import Nuisances
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+    from synthaug.diagnose.residuals import load_diagnosis_data
+    from synthaug.diagnose.screening import PAINT_MIMICS, screen_candidates
+    from synthaug.params import CaptureParams
+
+    def colour_channels(name, **kw):
+        p = make_measured_seedset(tmp_path / name, n_seeds=24, colour=True, frame_size=(96, 128), object_px=(18, 22),
+                                  view_step_deg=30, sprite_size=48, seed=11, **kw)
+        theta, extra, _ = CaptureParams.load_with_extra(p / "truth.json")
+        theta.save(tmp_path / f"{name}.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
+        data = load_diagnosis_data(p, tmp_path / f"{name}.json", "quadcopter")
+        rows = screen_candidates(data, ["haze", "white_balance"], k=4, seed=0)
+        return {r["effect"]: next(c for c in r["channels"] if c["channel"] == "distance:colour") for r in rows}
+
+    assert PAINT_MIMICS == ("white_balance",)
+    painted = colour_channels("painted", nuisances=Nuisances(paint_saturation=0.1, paint_hue_deg=150.0))
+    assert painted["haze"]["gain"] > 0  # a bluish paint reads as airlight in chroma ...
+    assert painted["haze"]["over_paint"]["gain"] < 0 and not painted["haze"]["significant"]  # ... but a paint is better
+    assert painted["white_balance"]["over_paint"] is None
+    hazed = colour_channels("hazed", hidden={"haze": {"haze_extinction_px": 15.0, "haze_airlight": 0.85}})
+    assert hazed["haze"]["over_paint"]["gain"] > 0  # the airlight follows each seed's sky and distance

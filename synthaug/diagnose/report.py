@@ -683,7 +683,8 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                   f"{oc['setting']['paint_hue_deg']:.0f}° (0° red, 180° blue) fits the seeds best, held-out chroma "
                   f"gain {100 * oc['gain']:.1f} % (p = {oc['p']:.2g}). On the object alone the camera's white balance "
                   "reads as a paint along the colour-temperature axis (near 0° or 180°): a white-balance finding "
-                  "there may be the object's own colour, and a slightly coloured object can be named haze."]
+                  "there may be the object's own colour. Haze and chromatic aberration are named only where they "
+                  "explain the colour better than such a paint on held-out seeds."]
     if col and not col.get("screened"):
         skipped = [r["effect"] for r in report["screened"] if r.get("colour_skipped")]
         gone = col.get("not_offered") or []
