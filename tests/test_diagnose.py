@@ -611,6 +611,8 @@ def test_gray_rgb_data_skips_colour_statistics_without_runtime_warnings(tmp_path
     md = (tmp_path / "out" / "report.md").read_text()
     assert "Colour statistics skipped (single-channel data" in md
     assert "chromatic_aberration, white_balance not screened (colour-only" in md
+    with pytest.raises(ValueError, match="an object colour needs RGB seed patches"):  # nothing to compare it with
+        diagnose(p, "quadcopter", tmp_path / "fit.json", k=3, plots=False, object_colour=[1.0, 0.9, 0.8])
     # a true colour seed set keeps its colour channel (the same scenes, tinted skies)
     q = make_measured_seedset(tmp_path / "c", n_seeds=12, colour=True, frame_size=(96, 128), object_px=(16, 20),
                               view_step_deg=30, sprite_size=48, seed=4)
@@ -834,3 +836,34 @@ def test_haze_is_credited_only_beyond_the_objects_own_colour(tmp_path):
     assert painted["white_balance"]["over_paint"] is None
     hazed = colour_channels("hazed", hidden={"haze": {"haze_extinction_px": 15.0, "haze_airlight": 0.85}})
     assert hazed["haze"]["over_paint"]["gain"] > 0  # the airlight follows each seed's sky and distance
+
+
+def test_a_known_object_colour_tells_a_white_balance_from_the_paint(tmp_path):
+    """On the object alone a white balance is a paint along the colour-temperature axis (stop 93). Given the
+    object's colour (``diagnose(object_colour=)``, ``--object-colour``), the colour channel compares against it:
+    a bluish paint is no longer a white balance, and a white balance on that painted object still is."""
+    from synthaug.diagnose.diagnosis_data import object_colour_factors
+    from synthaug.diagnose.nuisances import Nuisances, paint_tint
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+    from synthaug.diagnose.residuals import load_diagnosis_data
+    from synthaug.diagnose.screening import screen_candidates
+    from synthaug.params import CaptureParams
+
+    paint = Nuisances(paint_saturation=0.1, paint_hue_deg=180.0)  # bluish, on the white balance's axis
+
+    def white_balance(name, known, **kw):
+        p = make_measured_seedset(tmp_path / name, n_seeds=24, colour=True, frame_size=(96, 128), object_px=(18, 22),
+                                  view_step_deg=30, sprite_size=48, seed=12, nuisances=paint, **kw)
+        theta, extra, _ = CaptureParams.load_with_extra(p / "truth.json")
+        theta.save(tmp_path / f"{name}.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
+        data = load_diagnosis_data(p, tmp_path / f"{name}.json", "quadcopter")
+        data.object_rgb = object_colour_factors(paint.paint_rgb) if known else None
+        row = screen_candidates(data, ["white_balance"], k=4, seed=0)[0]
+        return next(c for c in row["channels"] if c["channel"] == "distance:colour")
+
+    assert white_balance("clean", known=False)["significant"]  # the paint reads as a white balance ...
+    assert not white_balance("clean", known=True)["significant"]  # ... not once the object's colour is known
+    assert white_balance("wb", known=True, hidden={"white_balance": {"wb_gain": 0.8}})["significant"]
+    np.testing.assert_allclose(object_colour_factors(2.0 * paint_tint(0.1, 180.0)), paint_tint(0.1, 180.0))
+    with pytest.raises(ValueError, match="three positive"):
+        object_colour_factors([1.0, 0.0, 1.0])

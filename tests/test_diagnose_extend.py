@@ -331,3 +331,27 @@ def test_with_the_mesh_w_d_is_re_solved_with_the_effect_as_screened(seeds_and_fi
     assert (expected > 0.05).all()  # inside the range: no clamping in this check
     np.testing.assert_allclose(out.w_d[:, 0].numpy(), expected, rtol=0.03)
     assert (out.w_d[:, 0] < kept.w_d[:, 0]).all()  # the airlight's brightness no longer needs the paint's
+
+
+def test_cli_passes_a_known_object_colour_and_refuses_a_bad_one(seeds_and_fit, tmp_path, monkeypatch, capsys):
+    import argparse
+
+    import synthaug.diagnose.report as report_mod
+    from synthaug.diagnose import cli
+
+    seeds, fit = seeds_and_fit
+    seen = {}
+
+    def fake(*a, **k):
+        seen.update(k)
+        return {"significant": False, "seconds": 1.0, "findings": []}
+
+    monkeypatch.setattr(report_mod, "diagnose", fake)
+    p = argparse.ArgumentParser()
+    cli.add_arguments(p)
+    base = ["--seeds", str(seeds), "--fit", str(fit), "--out", str(tmp_path / "d"), "--quiet"]
+    assert cli.main(p.parse_args(base + ["--object-colour", "200", "180", "150"])) == 0
+    assert seen["object_colour"] == [200.0, 180.0, 150.0]
+    capsys.readouterr()
+    assert cli.main(p.parse_args(base + ["--object-colour", "1", "0", "1"])) == 2
+    assert "--object-colour: an object colour is three positive" in capsys.readouterr().err

@@ -37,6 +37,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="add the gap section: real seed patches vs N random-pose synthetic samples per seed "
                              "(and vs the best-fit renders) in each detector's features: classifier two-sample "
                              "accuracy with CI, KID, most separating features (default 0: off)")
+    parser.add_argument("--object-colour", type=float, nargs=3, default=None, metavar=("R", "G", "B"),
+                        help="the object's known colour (three positive values of any scale, e.g. a photo of its "
+                             "paint): the colour channel compares against it instead of a neutral grey object, so "
+                             "a white balance can be told from the object's own colour (RGB seed sets only)")
     parser.add_argument("--gap-detector", action="append", default=[], metavar="FAMILY=CHECKPOINT",
                         help="measure the gap in this trained detector's features (hog, adaboost or cnn; "
                              "repeatable); families not given use HOG settings, random weak learners and an "
@@ -52,6 +56,13 @@ def _validate(args: argparse.Namespace) -> None:
     from synthaug.params import CaptureParams
 
     gap_detectors(args)  # cheap, named first
+    if getattr(args, "object_colour", None) is not None:
+        from synthaug.diagnose.diagnosis_data import object_colour_factors
+
+        try:
+            object_colour_factors(args.object_colour)
+        except ValueError as e:
+            raise ValueError(f"--object-colour: {e}") from None
     if not (math.isfinite(args.alpha) and 0.0 < args.alpha < 1.0):
         raise ValueError(f"--alpha must be in (0, 1), got {args.alpha}")
     if args.folds < 2:
@@ -102,6 +113,7 @@ def main(args: argparse.Namespace) -> int:
                           candidates=args.candidates, k=args.folds, seed=args.seed, alpha=args.alpha,
                           plots=not args.no_plots, gap=getattr(args, "gap", 0),
                           gap_detectors=gap_detectors(args) or None,
+                          object_colour=getattr(args, "object_colour", None),
                           progress=None if args.no_progress else (lambda s: print(s, file=sys.stderr)))
     except (ValueError, FileNotFoundError) as e:
         print(f"synthaug diagnose: {e}", file=sys.stderr)

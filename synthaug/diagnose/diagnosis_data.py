@@ -23,6 +23,8 @@ __all__ = [
     "render_with",
     "render_rgb",
     "paint_chroma_distances",
+    "object_chroma_distance",
+    "object_colour_factors",
     "solve_albedo",
     "solve_albedo_rgb",
     "pairwise_distance",
@@ -66,6 +68,7 @@ class DiagnosisData:
     real_rgb: torch.Tensor | None = None  # (N, 3, P, P) the RGB seed patches, when the seed set has them
     background_rgb: torch.Tensor | None = None  # (N, 3, P, P)
     colour_note: str | None = None  # why there is no colour channel (gray or single-channel data)
+    object_rgb: np.ndarray | None = None  # (3,) the object's known colour (albedo factors, unit luma); None: grey
 
     def __len__(self) -> int:
         return int(self.real.shape[0])
@@ -85,7 +88,8 @@ class DiagnosisData:
             noise_levels=None if self.noise_levels is None else [self.noise_levels[int(i)] for i in idx_t],
             frame_lines=None if self.frame_lines is None else [self.frame_lines[int(i)] for i in idx_t],
             frame_summaries=None if self.frame_summaries is None else [self.frame_summaries[int(i)] for i in idx_t],
-            real_rgb=take(self.real_rgb), background_rgb=take(self.background_rgb), colour_note=self.colour_note)
+            real_rgb=take(self.real_rgb), background_rgb=take(self.background_rgb), colour_note=self.colour_note,
+            object_rgb=self.object_rgb)
 
 
 def _rotor_layers(cache_body: Any, theta: Any, size: int, scale: torch.Tensor, cov: torch.Tensor) -> torch.Tensor:
@@ -334,6 +338,32 @@ def paint_chroma_distances(data: DiagnosisData, extension: dict[str, dict[str, A
         img = (i0 + (w[:, None] * t[None, :])[:, :, None, None] * d).clamp(0.0, 1.0)
         out[k] = chroma_distance(r, img)
     return out
+
+
+def object_chroma_distance(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None) -> np.ndarray:
+    """Per-seed chroma distance of the model (+ ``extension``) over the RGB backgrounds, w_d re-solved: a neutral
+    object, or one of the known colour :attr:`DiagnosisData.object_rgb` (:func:`paint_chroma_distances`)."""
+    if data.object_rgb is None:
+        return chroma_distance(data.real_rgb, render_rgb(data, extension, w_d=solve_albedo_rgb(data, extension)))
+    return paint_chroma_distances(data, extension, torch.as_tensor(data.object_rgb, dtype=torch.float64)[None])[0]
+
+
+def object_colour_factors(rgb: Sequence[float]) -> np.ndarray:
+    """An object's colour given as three positive RGB values (any scale: a measured patch, a paint's sRGB) as
+    per-channel albedo factors of unit Rec. 601 luma: the colour without its brightness, which w_d carries.
+
+    Example:
+        >>> object_colour_factors([200, 200, 200]).tolist()
+        [1.0, 1.0, 1.0]
+        >>> f = object_colour_factors([1.0, 0.9, 0.8]); round(float(f @ [0.299, 0.587, 0.114]), 12)
+        1.0
+    """
+    from synthaug.effects.camera_functional import LUMA_WEIGHTS
+
+    v = np.asarray(rgb, np.float64)
+    if v.shape != (3,) or not np.all(np.isfinite(v)) or not np.all(v > 0):
+        raise ValueError(f"an object colour is three positive finite RGB values, got {list(np.ravel(rgb))}")
+    return v / float(v @ np.asarray(LUMA_WEIGHTS, np.float64))
 
 
 def chroma_distance(real: torch.Tensor, syn: torch.Tensor) -> np.ndarray:

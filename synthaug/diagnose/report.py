@@ -210,6 +210,7 @@ def diagnose(
     max_effects: int = 3,
     gap: int = 0,
     gap_detectors: dict[str, Any] | None = None,
+    object_colour: Sequence[float] | None = None,
 ) -> dict[str, Any]:
     """Diagnose a fitted simulation against its measured seed set.
 
@@ -232,6 +233,9 @@ def diagnose(
             against each seed's best-fit render (``"fitted"``), in each detector family's features.
         gap_detectors: ``{family: detector or checkpoint}`` whose features the gap is measured in
             (default: HOG settings, random weak learners, an untrained seeded CNN).
+        object_colour: the object's known colour, three positive RGB values of any scale (RGB seed sets only):
+            the colour channel's model object takes it instead of a neutral grey, so a colour cast beyond it is
+            the camera's (on the object alone a white balance and a paint read the same).
 
     Returns:
         the report: ``findings`` (ranked; each ``effect`` — a candidate name or
@@ -240,7 +244,8 @@ def diagnose(
         ``parameter_dependence``, ``realism`` (real-vs-synthetic accuracy).
     """
     from synthaug.diagnose.diagnosis_data import load_diagnosis_data
-    from synthaug.diagnose.screening import CANDIDATE_GRIDS, kfold, object_colour, offered_candidates, realism_accuracy
+    from synthaug.diagnose.screening import CANDIDATE_GRIDS, kfold, offered_candidates, realism_accuracy
+    from synthaug.diagnose.screening import object_colour as read_object_colour
 
     t0 = time.perf_counter()
     say = progress or (lambda s: None)
@@ -253,6 +258,12 @@ def diagnose(
         raise ValueError(f"k must be >= 2 folds, got {k}")
     say("loading seeds and fitted layers")
     data = load_diagnosis_data(seeds_dir, fit_path, mesh, distance=distance)
+    if object_colour is not None:
+        from synthaug.diagnose.diagnosis_data import object_colour_factors
+
+        data.object_rgb = object_colour_factors(object_colour)
+        if data.real_rgb is None:
+            raise ValueError(f"an object colour needs RGB seed patches (colour.npz); {data.colour_note or 'none'}")
     names, not_offered = offered_candidates(data, names)  # single-channel data: no colour-only candidate
     if len(data) < 2 * k:
         raise ValueError(f"need at least {2 * k} seeds for {k}-fold screening, got {len(data)}")
@@ -290,7 +301,8 @@ def diagnose(
                             "indistinguishable"},
         "seconds": time.perf_counter() - t0,
     }
-    report["colour"]["object_colour"] = object_colour(data, folds)
+    report["colour"]["object_colour"] = read_object_colour(data, folds)
+    report["colour"]["object_rgb_given"] = None if data.object_rgb is None else [float(v) for v in data.object_rgb]
     if gap_report is not None:
         report["gap"] = gap_report
     report = _jsonable(report)
@@ -683,8 +695,12 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                   f"{oc['setting']['paint_hue_deg']:.0f}° (0° red, 180° blue) fits the seeds best, held-out chroma "
                   f"gain {100 * oc['gain']:.1f} % (p = {oc['p']:.2g}). On the object alone the camera's white balance "
                   "reads as a paint along the colour-temperature axis (near 0° or 180°): a white-balance finding "
-                  "there may be the object's own colour. Haze and chromatic aberration are named only where they "
-                  "explain the colour better than such a paint on held-out seeds."]
+                  "there may be the object's own colour"
+                  + (" (here the object's colour was given: the colour channel's model object has RGB factors "
+                     + ", ".join(f"{v:.3f}" for v in col["object_rgb_given"]) + ")"
+                     if col.get("object_rgb_given") else "; give it (`--object-colour R G B`) to tell them apart")
+                  + ". Haze and chromatic aberration are named only where they explain the colour better than such "
+                  "a paint on held-out seeds."]
     if col and not col.get("screened"):
         skipped = [r["effect"] for r in report["screened"] if r.get("colour_skipped")]
         gone = col.get("not_offered") or []

@@ -231,8 +231,9 @@ def object_colour(data: DiagnosisData, folds: list[np.ndarray], *, penalty: floa
 @torch.no_grad()
 def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], base: np.ndarray, *,
                   penalty: float = 0.005, given: dict[str, Setting] | None = None) -> dict[str, Any] | None:
-    """Held-out gain of ``effect`` in the chroma distance (RGB seed sets only; None otherwise)."""
-    from synthaug.diagnose.diagnosis_data import chroma_distance, render_rgb, solve_albedo_rgb
+    """Held-out gain of ``effect`` in the chroma distance (RGB seed sets only; None otherwise), on the model's
+    object: neutral grey, or the known colour :attr:`DiagnosisData.object_rgb`."""
+    from synthaug.diagnose.diagnosis_data import object_chroma_distance
 
     if effect not in COLOUR_CANDIDATES or data.real_rgb is None or not float(np.mean(base)) > 0:
         return None  # no colour (or a base model that already matches the chroma exactly): nothing to screen
@@ -240,8 +241,7 @@ def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], bas
     ext_all = []
     for setting in grid:
         ext = {**given_values(data, given, rgb=True), **colour_values(data, effect, setting)}
-        w = solve_albedo_rgb(data, ext)
-        ext_all.append(chroma_distance(data.real_rgb, render_rgb(data, ext, w_d=w)))
+        ext_all.append(object_chroma_distance(data, ext))
     e = np.stack(ext_all)
     k = _n_params(effect)
     gains, chosen = _cv_gain(base, e, folds, penalty * k)
@@ -768,11 +768,10 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     frame_ev = frame_evidence(data) if any(c in FRAME_CANDIDATES for c in names) else None
     base_colour, paint_gains = None, None
     if data.real_rgb is not None and any(c in COLOUR_CANDIDATES for c in names):
-        from synthaug.diagnose.diagnosis_data import (chroma_distance, paint_chroma_distances, render_rgb,
-                                                      solve_albedo_rgb)
+        from synthaug.diagnose.diagnosis_data import object_chroma_distance, paint_chroma_distances
 
         gv = given_values(data, given, rgb=True) or None
-        base_colour = chroma_distance(data.real_rgb, render_rgb(data, gv, w_d=solve_albedo_rgb(data, gv)))
+        base_colour = object_chroma_distance(data, gv)
         if any(c in COLOUR_CANDIDATES and c not in PAINT_MIMICS for c in names) and float(np.mean(base_colour)) > 0:
             # the object's own colour as the rival explanation: the best case-wide paint, chosen per fold
             paint_gains = _cv_gain(base_colour, paint_chroma_distances(data, gv, paint_tints()), folds,
