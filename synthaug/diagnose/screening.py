@@ -62,11 +62,12 @@ on the patches: the tone curve the NLF implies (g = 2 / (2 - slope)) is
 rendered on every seed; if it lowers the pixel distance to the real patches
 (the object's tone against its real background), the rise is named ``gamma``,
 else ``shot_noise`` — never both. For seed sets with RGB patches, the
-chroma distance (R - G, B - G) of a neutral object screens
-``chromatic_aberration`` and ``white_balance`` and ``haze``, whose airlight has
-the sky's colour; haze and chromatic aberration must also explain the chroma
-better than the object's own colour would (a case-wide paint,
-:data:`PAINT_MIMICS`), which a white balance cannot be told from. On single-channel data the colour-only candidates
+chroma distance (R - G, B - G) of a neutral object (or of the object's known
+colour, :attr:`DiagnosisData.object_rgb`) screens ``chromatic_aberration`` and
+``white_balance`` and ``haze``, whose airlight has the sky's colour; haze and
+chromatic aberration must also explain the chroma better than a case-wide paint
+of the object would, which a white balance cannot be told from
+(:data:`PAINT_MIMICS`). On single-channel data the colour-only candidates
 (:data:`COLOUR_ONLY`: a lateral colour shift, a colour cast) are not offered
 at all (:func:`offered_candidates`): in gray they are a radial blur and a gain,
 which would only take the name of another effect (lens distortion, exposure).
@@ -93,8 +94,7 @@ from synthaug.diagnose.residuals import seed_metadata
 from synthaug.params import EFFECT_PARAM_SPECS
 
 __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "PAINT_GRID", "PAINT_MIMICS", "object_colour",
-           "screen_candidates",
-           "screen_one", "absorption_gain",
+           "screen_candidates", "screen_one", "absorption_gain",
            "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
            "frame_evidence", "frame_channel", "frame_corroboration", "distance_channel"]
 
