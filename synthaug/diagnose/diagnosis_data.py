@@ -342,10 +342,11 @@ def paint_chroma_distances(data: DiagnosisData, extension: dict[str, dict[str, A
 
 def object_chroma_distance(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None) -> np.ndarray:
     """Per-seed chroma distance of the model (+ ``extension``) over the RGB backgrounds, w_d re-solved: a neutral
-    object, or one of the known colour :attr:`DiagnosisData.object_rgb` (:func:`paint_chroma_distances`)."""
-    if data.object_rgb is None:
-        return chroma_distance(data.real_rgb, render_rgb(data, extension, w_d=solve_albedo_rgb(data, extension)))
-    return paint_chroma_distances(data, extension, torch.as_tensor(data.object_rgb, dtype=torch.float64)[None])[0]
+    object, or one of the known colour :attr:`DiagnosisData.object_rgb` — the paint (1, 1, 1) or that colour of
+    :func:`paint_chroma_distances` (for the neutral object the same distances as :func:`solve_albedo_rgb` and
+    :func:`render_rgb` give, to float rounding, from one render fewer)."""
+    tint = np.ones(3) if data.object_rgb is None else data.object_rgb
+    return paint_chroma_distances(data, extension, torch.as_tensor(tint, dtype=torch.float64)[None])[0]
 
 
 def object_colour_factors(rgb: Sequence[float]) -> np.ndarray:
