@@ -19,6 +19,14 @@ rows = ["| hidden | strength | data | floors | named first | misnamed first | mi
         "|---|---|---|---|---|---|---|---|---|"]
 tot = Counter()
 ok_by_effect: dict[str, list[bool]] = {}
+
+
+def judged(floors: dict[str, float], colour: bool) -> dict[str, float]:
+    """The floors a run is judged by: a gray run has no colour channel, so its floors are current when the others
+    are."""
+    return {k: v for k, v in floors.items() if colour or not k.endswith(":distance:colour")}
+
+
 folder = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("results/diagnose/null")
 for f in sorted(folder.glob("power5_*.json")):
     d = json.loads(f.read_text())
@@ -33,10 +41,7 @@ for f in sorted(folder.glob("power5_*.json")):
         settings = REALISTIC_STRENGTHS[p["hidden"]]
     strength = ", ".join(f"{k} {v}" for k, v in settings.items())
     # the floors the run used: the current null_floors.py's, or an earlier calibration's (a row not rerun since)
-    # (a gray run has no colour channel: its floors are current when the others are)
-    used = (d.get("floors_in_use") or {}).get("screen") or {}
-    current = {k: v for k, v in used.items() if colour or not k.endswith(":distance:colour")} == \
-        {k: v for k, v in null_floors.SCREEN.items() if colour or not k.endswith(":distance:colour")}
+    current = judged((d.get("floors_in_use") or {}).get("screen") or {}, colour) == judged(null_floors.SCREEN, colour)
     rows.append(f"| {p['hidden']} | {strength} | {'colour' if colour else 'gray'} | {'current' if current else 'earlier'} | "
                 f"{p['named_first']}/{d['cases']} | {p['misnamed_first']} | {p['missed']} | "
                 f"{lo:.2f}–{hi:.2f} | {', '.join(f'{k} ×{v}' for k, v in said.most_common())} |")
