@@ -347,6 +347,7 @@ def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str], not_of
     """The report's sections on the base residual, its colour (and the colour-only candidates not offered on
     single-channel data) and the significance rule."""
     from synthaug.diagnose.calibration import describe as describe_floors, rule_text
+    from synthaug.diagnose.screening import RIVAL_RULE
 
     fmap = res["fmap"]
     return {
@@ -358,7 +359,7 @@ def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str], not_of
         "hinted_candidates": hinted,
         "colour": {"screened": data.real_rgb is not None, "note": data.colour_note,
                    "not_offered": list(not_offered)},
-        "significance": {"rule": rule_text(), "calibration": describe_floors()["source"]},
+        "significance": {"rule": f"{rule_text()} {RIVAL_RULE}", "calibration": describe_floors()["source"]},
         "parameter_dependence": [d for d in res["dependence"] if d["significant"]],
     }
 
@@ -670,6 +671,11 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                      f"{100 * (r['gain_feature'] or 0):.2f} % | {100 * (r['gain_pixel'] or 0):.2f} % | "
                      + (f"{100 * gc:.2f} % |" if gc is not None else "|"))
     for r in report["screened"]:
+        for ch in (c for c in r.get("channels") or [] if c.get("explained_better_by")):
+            eb = ch["explained_better_by"]
+            lines += ["", f"{r['effect'].capitalize()}'s {ch['channel']} gain ({100 * ch['gain']:.1f} % held out) "
+                      f"passed its test but does not name it: `{eb['effect']}` explains the same distance better "
+                      f"({100 * eb['gain']:.1f} %), so the evidence does not point at {r['effect']}."]
         ch = next((c for c in r.get("channels") or [] if c.get("radial_veto")), None)
         if ch is not None:
             lines += ["", f"{r['effect'].capitalize()} is not named from the frames: their edges steepen toward the "

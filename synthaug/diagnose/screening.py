@@ -96,7 +96,8 @@ from synthaug.params import EFFECT_PARAM_SPECS
 __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "PAINT_GRID", "PAINT_MIMICS", "object_colour",
            "screen_candidates", "screen_one", "absorption_gain",
            "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
-           "frame_evidence", "frame_channel", "frame_corroboration", "distance_channel"]
+           "frame_evidence", "frame_channel", "frame_corroboration", "distance_channel", "explained_better",
+           "RIVAL_SPACES", "RIVAL_RULE"]
 
 Setting = dict[str, float]
 
@@ -820,17 +821,63 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
                              "significant": bool(p_adj < alpha and col["gain"] > max(floor or 0.0, 0.0)
                                                  and col["raw_gain_all"] >= min_gain
                                                  and (over is None or over["p_adjusted"] < alpha))})
-        sig = [c for c in channels if c["significant"]]
-        sig_dist = [c for c in sig if c["channel"] not in ("absorbed", "frame")]
-        best = max(sig_dist, key=lambda c: c["gain"]) if sig_dist else max(sig or channels, key=lambda c: c["z"])
-        rows.append({"effect": name, "significant": bool(sig), "channel": best["channel"], "score": best["z"],
-                     "p_adjusted": best["p_adjusted"], "gain": best["gain"], "channels": channels,
-                     "screen": sc, "absorption": ab, "noise": nc if nl is not None else None,
+        rows.append({"effect": name, "significant": None, "channel": None, "score": None, "p_adjusted": None,
+                     "gain": None, "channels": channels, "screen": sc, "absorption": ab,
+                     "noise": nc if nl is not None else None,
                      "tone": tone if nl is not None else None,
                      "noise_setting": noise_setting(name, nc) if nl is not None else None,
                      "frame_setting": frame_setting(name, fc)})
+    explained_better([r["effect"] for r in rows], [r["channels"] for r in rows])
+    for r in rows:
+        channels = r["channels"]
+        sig = [c for c in channels if c["significant"]]
+        sig_dist = [c for c in sig if c["channel"] not in ("absorbed", "frame")]
+        best = max(sig_dist, key=lambda c: c["gain"]) if sig_dist else max(sig or channels, key=lambda c: c["z"])
+        r.update({"significant": bool(sig), "channel": best["channel"], "score": best["z"],
+                  "p_adjusted": best["p_adjusted"], "gain": best["gain"]})
     rows.sort(key=_rank)
     return rows
+
+# The distance spaces where a candidate must explain the residual at least as well as every other candidate screened
+# beside it (explained_better). Not the chroma channel: there the rival of every candidate is the object's own colour
+# (PAINT_MIMICS, the channel's over_paint), and a candidate's chroma gain says how much of that colour it happens to
+# absorb as much as how well it explains the camera.
+RIVAL_SPACES: tuple[str, ...] = ("distance:feature", "distance:pixel")
+# ... in the report's words (its significance rule)
+RIVAL_RULE = ("A significant held-out distance gain (the detector's features or pixels) names its effect only where no "
+              "other candidate explains the same distance better on held-out seeds, significant or not.")
+
+
+def explained_better(effects: Sequence[str], channels: Sequence[list[dict[str, Any]]]) -> None:
+    """Un-name a distance gain that another candidate explains better: in each space of :data:`RIVAL_SPACES`, a
+    significant channel whose held-out gain is below another candidate's held-out gain in the same space (significant
+    or not, provided the other space does not get worse with it: ``other_ok``, the validity rule of
+    :func:`distance_channel`) is made not significant, and records ``explained_better_by`` (that candidate and its
+    gain). The
+    ranking's own rule (:func:`_rank`: what explains the most, not the most precisely measured sliver) extended to
+    the candidates that did not pass their test: a significant sliver of a residual that another effect describes
+    better does not name its effect (stop 94: haze at airlight 0.85 was named defocus, pixel gains 4.9 % and 6.5 %).
+    Edits ``channels`` (one list per effect, as :func:`screen_candidates` builds them) in place.
+
+    Example:
+        >>> ch = [[{"channel": "distance:pixel", "gain": 0.049, "significant": True, "other_ok": True}],
+        ...       [{"channel": "distance:pixel", "gain": 0.065, "significant": False, "other_ok": True}]]
+        >>> explained_better(["defocus", "haze"], ch)
+        >>> ch[0][0]["significant"], ch[0][0]["explained_better_by"]
+        (False, {'effect': 'haze', 'gain': 0.065})
+    """
+    for space in RIVAL_SPACES:
+        gains = [next((c["gain"] for c in chs if c["channel"] == space and c["other_ok"] and math.isfinite(c["gain"])),
+                      None) for chs in channels]
+        for i, chs in enumerate(channels):
+            ch = next((c for c in chs if c["channel"] == space), None)
+            rivals = [(g, e) for j, (g, e) in enumerate(zip(gains, effects)) if j != i and g is not None]
+            if ch is None or not ch["significant"] or not rivals:
+                continue
+            g, e = max(rivals)
+            if g > ch["gain"]:
+                ch["significant"] = False
+                ch["explained_better_by"] = {"effect": e, "gain": g}
 
 
 def distance_channel(sc: dict[str, Any], space: str, other: str, *, n_tests: int, alpha: float, penalty: float,
@@ -862,8 +909,8 @@ def distance_channel(sc: dict[str, Any], space: str, other: str, *, n_tests: int
     big = worth and (floor is None or s["gain"] > floor)
     significant = bool(p_adj < alpha and s["gain"] > 0 and big and other_ok)
     return {"channel": f"distance:{space}", "p_adjusted": p_adj, "z": _z(s["p"]), "gain": s["gain"],
-            "other_space_gain": sc[other]["gain"], "raw_gain_all": s["raw_gain_all"], "floor": floor,
-            "significant": significant,
+            "other_space_gain": sc[other]["gain"], "other_ok": bool(other_ok), "raw_gain_all": s["raw_gain_all"],
+            "floor": floor, "significant": significant,
             "corroborated_by": corroboration if significant and s["raw_gain_all"] < min_gain else None}
 
 
