@@ -806,6 +806,10 @@ def test_a_distance_gain_another_candidate_explains_better_does_not_name_its_eff
     alone = [[ch(pix, 0.01, True)], [ch(feat, 0.5, True)]]  # a rival in the other space is no rival
     explained_better(["a", "b"], alone)
     assert alone[0][0]["significant"] and alone[1][0]["significant"]
+    # a gain the whole frames corroborate (a lens whose frames' edges steepen toward the corners) keeps its name
+    lens = [[{**ch(pix, 0.012, True), "corroborated_by": {"statistic": "edge_radial"}}], [ch(pix, 0.0375, False)]]
+    explained_better(["lens_distortion", "defocus"], lens)
+    assert lens[0][0]["significant"] and "explained_better_by" not in lens[0][0]
     # the report says why the significant gain names nothing
     base = {"inputs": {"seeds": "s", "n_seeds": 60, "mesh": "m", "fit": "f", "distance": "hog", "k_folds": 5,
                        "alpha": 0.01}, "findings": [], "residuals": {}, "parameter_dependence": [],

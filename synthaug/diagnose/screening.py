@@ -857,7 +857,9 @@ def explained_better(effects: Sequence[str], channels: Sequence[list[dict[str, A
     ranking's own rule (:func:`_rank`: what explains the most, not the most precisely measured sliver) extended to
     the candidates that did not pass their test: a significant sliver of a residual that another effect describes
     better does not name its effect (stop 94: haze at airlight 0.85 was named defocus, pixel gains 4.9 % and 6.5 %).
-    Edits ``channels`` (one list per effect, as :func:`screen_candidates` builds them) in place.
+    A channel the whole frames corroborate (``corroborated_by``, :func:`frame_corroboration`: a lens whose frames'
+    edges steepen toward the corners) keeps its name: its evidence is more than the distance. Edits ``channels`` (one
+    list per effect, as :func:`screen_candidates` builds them) in place.
 
     Example:
         >>> ch = [[{"channel": "distance:pixel", "gain": 0.049, "significant": True, "other_ok": True}],
@@ -872,7 +874,7 @@ def explained_better(effects: Sequence[str], channels: Sequence[list[dict[str, A
         for i, chs in enumerate(channels):
             ch = next((c for c in chs if c["channel"] == space), None)
             rivals = [(g, e) for j, (g, e) in enumerate(zip(gains, effects)) if j != i and g is not None]
-            if ch is None or not ch["significant"] or not rivals:
+            if ch is None or not ch["significant"] or ch.get("corroborated_by") or not rivals:
                 continue
             g, e = max(rivals)
             if g > ch["gain"]:
