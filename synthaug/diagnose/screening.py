@@ -231,10 +231,14 @@ def object_colour(data: DiagnosisData, folds: list[np.ndarray], *, penalty: floa
 
 @torch.no_grad()
 def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], base: np.ndarray, *,
-                  penalty: float = 0.005, given: dict[str, Setting] | None = None) -> dict[str, Any] | None:
+                  penalty: float = 0.005, given: dict[str, Setting] | None = None,
+                  paints: torch.Tensor | None = None) -> dict[str, Any] | None:
     """Held-out gain of ``effect`` in the chroma distance (RGB seed sets only; None otherwise), on the model's
-    object: neutral grey, or the known colour :attr:`DiagnosisData.object_rgb`."""
-    from synthaug.diagnose.diagnosis_data import object_chroma_distance
+    object: neutral grey, or the known colour :attr:`DiagnosisData.object_rgb`. With ``paints`` (per-channel
+    factors (P, 3), :func:`paint_tints`), also the held-out gain of the effect on a painted object, the setting and
+    the paint chosen together per fold (``joint_per_seed_gain``, penalised for the effect's parameters and the
+    paint's two): the nested model that the object's own colour alone (the same paints) is tested against."""
+    from synthaug.diagnose.diagnosis_data import object_chroma_distance, paint_chroma_distances
 
     if effect not in COLOUR_CANDIDATES or data.real_rgb is None or not float(np.mean(base)) > 0:
         return None  # no colour (or a base model that already matches the chroma exactly): nothing to screen
@@ -248,8 +252,14 @@ def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], bas
     gains, chosen = _cv_gain(base, e, folds, penalty * k)
     m, t, p = _one_sided(gains)
     best = int(np.argmin(e.mean(1)))
-    return {"gain": m, "t": t, "p": p, "settings_per_fold": [grid[c] for c in chosen], "setting": grid[best],
-            "raw_gain_all": float((base.mean() - e[best].mean()) / base.mean()), "per_seed_gain": gains.tolist()}
+    out = {"gain": m, "t": t, "p": p, "settings_per_fold": [grid[c] for c in chosen], "setting": grid[best],
+           "raw_gain_all": float((base.mean() - e[best].mean()) / base.mean()), "per_seed_gain": gains.tolist()}
+    if paints is not None:
+        joint = np.concatenate([paint_chroma_distances(
+            data, {**given_values(data, given, rgb=True), **colour_values(data, effect, setting)}, paints)
+            for setting in grid])  # (G * P, N), setting-major
+        out["joint_per_seed_gain"] = _cv_gain(base, joint, folds, penalty * (k + 2))[0].tolist()
+    return out
 
 
 def _n_params(effect: str) -> int:
@@ -806,15 +816,16 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         fc = frame_channel(name, frame_ev, n_tests, alpha)
         if fc is not None:
             channels.append(fc)
+        rival_paint = paint_gains is not None and name not in PAINT_MIMICS
         col = None if base_colour is None else screen_colour(data, name, folds, base_colour, penalty=penalty,
-                                                            given=given)
+                                                            given=given, paints=paint_tints() if rival_paint else None)
         if col is not None:
             sc["colour"] = col
             p_adj = min(1.0, col["p"] * n_tests)
             floor = gain_floor(name, "distance:colour")  # from clean colour cases (None: not calibrated)
-            over = None  # beyond the object's own colour: the per-seed held-out gain over the best paint's
-            if paint_gains is not None and name not in PAINT_MIMICS:
-                m_o, _, p_o = _one_sided(np.asarray(col["per_seed_gain"]) - paint_gains)
+            over = None  # beyond the object's own colour: the effect on a painted object against the paint alone
+            if rival_paint:
+                m_o, _, p_o = _one_sided(np.asarray(col["joint_per_seed_gain"]) - paint_gains)
                 over = {"gain": m_o, "p_adjusted": min(1.0, p_o * n_tests)}
             channels.append({"channel": "distance:colour", "p_adjusted": p_adj, "raw_gain_all": col["raw_gain_all"],
                              "z": _z(col["p"]), "gain": col["gain"], "floor": floor, "over_paint": over,
