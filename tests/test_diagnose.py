@@ -893,9 +893,9 @@ def test_object_paint_renders_through_the_renderer_and_is_recovered(tmp_path):
 
 def test_haze_is_credited_only_beyond_the_objects_own_colour(tmp_path):
     """Stop 93: a slightly bluish object (a paint, an appearance) is most of haze's sky-coloured airlight in chroma.
-    Haze on a painted object must beat the best case-wide paint alone on held-out seeds; white balance, which a paint reproduces
-    exactly, is not asked to. On a painted clean case haze does not beat the paint; on a hazed neutral object it
-    does."""
+    Haze on a painted object must beat the best case-wide paint alone on held-out seeds; white balance, which a
+    paint reproduces exactly, is not asked to. On a painted clean case haze does not beat the paint; on a hazed
+    neutral object, and on a hazed painted one, it does."""
     from synthaug.diagnose.nuisances import Nuisances
     from synthaug.diagnose.reference_camera import make_measured_seedset
     from synthaug.diagnose.residuals import load_diagnosis_data

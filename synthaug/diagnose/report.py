@@ -705,8 +705,8 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                   + (" (here the object's colour was given: the colour channel's model object has RGB factors "
                      + ", ".join(f"{v:.3f}" for v in col["object_rgb_given"]) + ")"
                      if col.get("object_rgb_given") else "; give it (`--object-colour R G B`) to tell them apart")
-                  + ". Haze and chromatic aberration are named only where they explain the colour better than such "
-                  "a paint on held-out seeds."]
+                  + ". Haze and chromatic aberration are named only where, on a painted object, they explain the "
+                  "colour better than such a paint alone on held-out seeds."]
     if col and not col.get("screened"):
         skipped = [r["effect"] for r in report["screened"] if r.get("colour_skipped")]
         gone = col.get("not_offered") or []

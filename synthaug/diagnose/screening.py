@@ -18,7 +18,9 @@ two distance spaces (the detector's, pixels), decides significance; a
 finding must also exceed its floor measured on clean nuisance-varied data
 (:mod:`synthaug.diagnose.calibration`), reach ``min_gain`` (2 %: worth
 having; a lens's, less where the whole frames show it, :func:`frame_corroboration`)
-and must not make the other space worse on held-out seeds. Both the detector's distance (e.g. HOG) and the
+and must not make the other space worse on held-out seeds; and no other candidate may explain the same
+distance better (:func:`explained_better`: a significant sliver of what another effect describes better names
+nothing). Both the detector's distance (e.g. HOG) and the
 pixel distance are screened: HOG is nearly blind to intensity effects, pixels
 to some shape effects. Every model, base and extended, includes the seed
 patches' known crop-resampling blur (:func:`~synthaug.data.seedset.crop_resampling_sigma`).
@@ -65,9 +67,9 @@ else ``shot_noise`` — never both. For seed sets with RGB patches, the
 chroma distance (R - G, B - G) of a neutral object (or of the object's known
 colour, :attr:`DiagnosisData.object_rgb`) screens ``chromatic_aberration`` and
 ``white_balance`` and ``haze``, whose airlight has the sky's colour; haze and
-chromatic aberration must also explain the chroma better than a case-wide paint
-of the object would, which a white balance cannot be told from
-(:data:`PAINT_MIMICS`). On single-channel data the colour-only candidates
+chromatic aberration on a painted object must also explain the chroma better
+than a case-wide paint of the object alone, which a white balance cannot be
+told from (:data:`PAINT_MIMICS`). On single-channel data the colour-only candidates
 (:data:`COLOUR_ONLY`: a lateral colour shift, a colour cast) are not offered
 at all (:func:`offered_candidates`): in gray they are a radial blur and a gain,
 which would only take the name of another effect (lens distortion, exposure).
@@ -157,8 +159,9 @@ PAINT_GRID: tuple[tuple[float, float], ...] = ((0.0, 0.0),) + tuple(
     (s, float(h)) for s in (0.025, 0.05, 0.1, 0.15, 0.2, 0.3) for h in range(0, 360, 15))
 # The colour candidates a paint reproduces exactly (a case-wide per-channel gain on the object): named from the
 # chroma alone, with the report's caveat. The others (haze's airlight, which follows each seed's sky colour and
-# distance; chromatic aberration's fringes) must also beat the best case-wide paint on held-out seeds: a slightly
-# coloured object is otherwise named haze (18 of 40 clean colour cases, stop 93).
+# distance; chromatic aberration's fringes) must also explain more on a painted object than the best case-wide paint
+# alone, on held-out seeds (the nested comparison since stop 94, setting and paint chosen together per fold): a
+# slightly coloured object is otherwise named haze (18 of 40 clean colour cases, stop 93).
 PAINT_MIMICS: tuple[str, ...] = ("white_balance",)
 
 # Candidates with evidence on the whole frames (synthaug.diagnose.frame_pattern), fixed in the frame and carried by
