@@ -639,21 +639,28 @@ def test_gray_data_never_offers_the_colour_only_candidates():
     assert offered_candidates(colour, names) == (names, [])
 
 
-def test_gray_screening_drops_colour_only_candidates_asked_for(tmp_path):
+def _gray_case_fitted_at_truth(tmp_path, effect: str, setting: dict, n_seeds: int):
+    """A small gray measured seed set (seed 4) with ``effect`` hidden at ``setting``, and its fit: the truth without
+    the hidden effect's parameters (the converged fit, no fitting run); its :class:`DiagnosisData`."""
     from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
     from synthaug.diagnose.residuals import load_diagnosis_data
-    from synthaug.diagnose.screening import n_screening_tests, screen_candidates
     from synthaug.effects.registry import PAPER_EFFECTS
     from synthaug.params import CaptureParams
 
-    p = make_measured_seedset(tmp_path / "m", n_seeds=8, hidden={"lens_distortion": {"distortion_k1": 0.1}},
-                              frame_size=(96, 128), object_px=(16, 20), view_step_deg=30, sprite_size=48, seed=4)
+    p = make_measured_seedset(tmp_path / "m", n_seeds=n_seeds, hidden={effect: setting}, frame_size=(96, 128),
+                              object_px=(16, 20), view_step_deg=30, sprite_size=48, seed=4)
     truth, textra, _ = load_truth(p)
-    theta = CaptureParams({k: v for k, v in truth.as_dict().items() if k != "distortion_k1"}, effects=PAPER_EFFECTS)
+    theta = CaptureParams({k: v for k, v in truth.as_dict().items() if k not in setting}, effects=PAPER_EFFECTS)
     extra = [{"distance": 1.0, "generator_seed": 7 + i, "object_scale": float(e["object_scale"])}
              for i, e in enumerate(textra)]
     theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
-    data = load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
+    return load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
+
+
+def test_gray_screening_drops_colour_only_candidates_asked_for(tmp_path):
+    from synthaug.diagnose.screening import n_screening_tests, screen_candidates
+
+    data = _gray_case_fitted_at_truth(tmp_path, "lens_distortion", {"distortion_k1": 0.1}, n_seeds=8)
     assert data.real_rgb is None
     asked = ["chromatic_aberration", "lens_distortion", "white_balance"]
     rows = screen_candidates(data, asked, k=2)
@@ -824,21 +831,10 @@ def test_a_distance_gain_another_candidate_explains_better_does_not_name_its_eff
 def test_screened_rows_name_no_effect_another_candidate_out_explains(tmp_path):
     """On a screening of measured seeds (defocus hidden, gray): every significant distance channel has the largest
     valid gain of its space, every row's significance is that of its channels, and the rule is in the report."""
-    from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
     from synthaug.diagnose.report import _residual_sections
-    from synthaug.diagnose.residuals import load_diagnosis_data
     from synthaug.diagnose.screening import RIVAL_RULE, RIVAL_SPACES, screen_candidates
-    from synthaug.effects.registry import PAPER_EFFECTS
-    from synthaug.params import CaptureParams
 
-    p = make_measured_seedset(tmp_path / "m", n_seeds=24, hidden={"defocus": {"defocus_sigma": 1.5}},
-                              frame_size=(96, 128), object_px=(16, 20), view_step_deg=30, sprite_size=48, seed=4)
-    truth, textra, _ = load_truth(p)
-    theta = CaptureParams({k: v for k, v in truth.as_dict().items() if k != "defocus_sigma"}, effects=PAPER_EFFECTS)
-    extra = [{"distance": 1.0, "generator_seed": 7 + i, "object_scale": float(e["object_scale"])}
-             for i, e in enumerate(textra)]
-    theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
-    data = load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
+    data = _gray_case_fitted_at_truth(tmp_path, "defocus", {"defocus_sigma": 1.5}, n_seeds=24)
     rows = screen_candidates(data, ["defocus", "haze", "gamma", "rotor_blur"], k=4)
     assert len(rows) == 4 and rows[0]["significant"]  # something to out-explain
     for space in RIVAL_SPACES:
