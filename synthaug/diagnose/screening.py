@@ -852,6 +852,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
     rows.sort(key=_rank)
     return rows
 
+
 # The distance spaces where a candidate must explain the residual at least as well as every other candidate screened
 # beside it (explained_better). Not the chroma channel: there the rival of every candidate is the object's own colour
 # (PAINT_MIMICS, the channel's over_paint), and a candidate's chroma gain says how much of that colour it happens to
@@ -867,13 +868,14 @@ def explained_better(effects: Sequence[str], channels: Sequence[list[dict[str, A
     significant channel whose held-out gain is below another candidate's held-out gain in the same space (significant
     or not, provided the other space does not get worse with it: ``other_ok``, the validity rule of
     :func:`distance_channel`) is made not significant, and records ``explained_better_by`` (that candidate and its
-    gain). The
-    ranking's own rule (:func:`_rank`: what explains the most, not the most precisely measured sliver) extended to
-    the candidates that did not pass their test: a significant sliver of a residual that another effect describes
-    better does not name its effect (stop 94: haze at airlight 0.85 was named defocus, pixel gains 4.9 % and 6.5 %).
-    A channel the whole frames corroborate (``corroborated_by``, :func:`frame_corroboration`: a lens whose frames'
-    edges steepen toward the corners) keeps its name: its evidence is more than the distance. Edits ``channels`` (one
-    list per effect, as :func:`screen_candidates` builds them) in place.
+    gain). The ranking's own rule (:func:`_rank`: what explains the most, not the most precisely measured sliver)
+    extended to the candidates that did not pass their test: a significant sliver of a residual that another effect
+    describes better does not name its effect (stop 94: haze at airlight 0.85 was named defocus, pixel gains 4.9 % and
+    6.5 %). The rivals are the candidates of the same screening: every candidate in forward selection's first round,
+    the still significant ones in a later round. A channel the whole frames corroborate (``corroborated_by``,
+    :func:`frame_corroboration`: a lens whose frames' edges steepen toward the corners) keeps its name: its evidence
+    is more than the distance. Edits ``channels`` (one list per effect, as :func:`screen_candidates` builds them) in
+    place.
 
     Example:
         >>> ch = [[{"channel": "distance:pixel", "gain": 0.049, "significant": True, "other_ok": True}],
