@@ -852,6 +852,37 @@ def test_screened_rows_name_no_effect_another_candidate_out_explains(tmp_path):
     assert sections["significance"]["rule"].endswith(RIVAL_RULE)
 
 
+def test_a_gain_explained_better_is_screened_again_on_top_of_the_better_explanation(monkeypatch):
+    """Two hidden effects (defocus and rotor blur, test_two_hidden_effects_are_both_found): in the first round rotor
+    blur's pixel gain is larger, so defocus's significant gain names nothing (explained_better); once rotor blur is
+    accepted, defocus is screened again on top of it and named if it stands. A candidate neither significant nor
+    out-explained is not screened again."""
+    import synthaug.diagnose.screening as scr
+    from synthaug.diagnose.report import _forward_selection
+
+    def row(effect, significant, beaten_by=None):
+        ch = {"channel": "distance:pixel", "significant": significant, "gain": 0.03}
+        if beaten_by:
+            ch["explained_better_by"] = {"effect": beaten_by, "gain": 0.05}
+        return {"effect": effect, "channel": "distance:pixel", "significant": significant, "score": 3.0,
+                "gain": 0.03, "p_adjusted": 1e-3, "noise_setting": None, "frame_setting": None, "channels": [ch],
+                "screen": {"feature": {"setting": {}}, "pixel": {"setting": {"x": 1.0}}}}
+
+    calls = []
+
+    def fake_screen(data, names, *, given=None, **kw):
+        calls.append((list(names), sorted(given or {})))
+        if not given:
+            return [row("rotor_blur", True), row("defocus", False, beaten_by="rotor_blur"), row("gamma", False)]
+        return [row(n, True) for n in names]
+
+    monkeypatch.setattr(scr, "screen_candidates", fake_screen)
+    _, picked = _forward_selection(None, ["rotor_blur", "defocus", "gamma"], k=5, seed=0, alpha=0.01,
+                                   max_effects=3, say=lambda s: None)
+    assert [(r["effect"], list(given)) for r, given in picked] == [("rotor_blur", []), ("defocus", ["rotor_blur"])]
+    assert calls[1] == (["defocus"], ["rotor_blur"])  # gamma, never significant, is not screened again
+
+
 def test_object_paint_renders_through_the_renderer_and_is_recovered(tmp_path):
     """The object's colour read beside the colour channel (issue 20, stop 93): every paint's chroma distance from
     two renders equals the renderer's own image with the painted albedo (w_d per channel, w solved by numpy's least

@@ -146,7 +146,9 @@ def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha:
                        say: Callable[[str], None], asked: Sequence[str] | None = None
                        ) -> tuple[list[dict[str, Any]], list[tuple[dict, dict]]]:
     """Screen every candidate, accept the best significant one, re-screen the other significant ones on top
-    of it (their conditional gain), and so on: an effect whose gain another one already explains drops out.
+    of it (their conditional gain), and so on: an effect whose gain another one already explains drops out. A
+    significant gain that another candidate explained better (:func:`~synthaug.diagnose.screening.explained_better`)
+    is re-screened too, with that candidate: once the better explanation is accepted, it may stand on its own.
 
     The best significant one is the first by :func:`~synthaug.diagnose.screening._rank` (distance gains first),
     unless its distance gain is explained by a significant effect whose evidence comes from the whole frames
@@ -185,7 +187,12 @@ def _forward_selection(data: Any, order: list[str], *, k: int, seed: int, alpha:
                 break
         picked.append((top, dict(accepted)))
         accepted[top["effect"]] = _setting(top)
-        rest = [r["effect"] for r in sig if r is not top]
+        # screened again on top of it: the significant ones, and a gain another candidate explained better with
+        # that candidate (screening.explained_better: with the better explanation accepted, the rest may stand)
+        again_too = {e for r in rows for c in r.get("channels") or [] if c.get("explained_better_by")
+                     for e in (r["effect"], c["explained_better_by"]["effect"])}
+        rest = [r["effect"] for r in rows if r is not top and r["effect"] not in accepted
+                and (r["significant"] or r["effect"] in again_too)]
         if not rest:
             break
         say(f"re-screening {rest} on top of {list(accepted)}")
