@@ -826,6 +826,8 @@ def test_a_distance_gain_another_candidate_explains_better_does_not_name_its_eff
     md = write_markdown({**base, "screened": [row]})
     assert ("Defocus's distance:pixel gain (4.9 % held out) passed its test but does not name it: `haze` explains "
             "the same distance better (6.5 %)") in md
+    assert "names nothing: see below" in md and "names nothing" not in write_markdown(
+        {**base, "screened": [{**row, "channels": [channels[1][0]]}]})
 
 
 def test_screened_rows_name_no_effect_another_candidate_out_explains(tmp_path):

@@ -611,8 +611,12 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
     if report.get("significance"):
         lines += [report["significance"]["rule"], ""]
     if not report["findings"]:
+        beaten = any(c.get("explained_better_by") for r in report.get("screened") or []
+                     for c in r.get("channels") or [])
         lines += ["**Nothing significant**: the residual between the real seeds and their fitted synthetic images "
-                  "reads as fitting noise, and no candidate effect improves held-out seeds.", ""]
+                  "reads as fitting noise, and no candidate effect improves held-out seeds significantly"
+                  + (" (a significant gain that another candidate explains better names nothing: see below)."
+                     if beaten else "."), ""]
     else:
         lines += ["## Findings", ""]
         for i, f in enumerate(report["findings"], 1):
