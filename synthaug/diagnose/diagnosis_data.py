@@ -24,6 +24,7 @@ __all__ = [
     "render_rgb",
     "paint_chroma_distances",
     "object_chroma_distance",
+    "object_tint",
     "object_colour_factors",
     "solve_albedo",
     "solve_albedo_rgb",
@@ -340,13 +341,19 @@ def paint_chroma_distances(data: DiagnosisData, extension: dict[str, dict[str, A
     return out
 
 
+def object_tint(data: DiagnosisData) -> torch.Tensor:
+    """The model object's per-channel albedo factors, (1, 3): the paint (1, 1, 1) of a neutral object, or the known
+    colour :attr:`DiagnosisData.object_rgb`."""
+    tint = np.ones(3) if data.object_rgb is None else data.object_rgb
+    return torch.as_tensor(tint, dtype=torch.float64)[None]
+
+
 def object_chroma_distance(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None) -> np.ndarray:
     """Per-seed chroma distance of the model (+ ``extension``) over the RGB backgrounds, w_d re-solved: a neutral
-    object, or one of the known colour :attr:`DiagnosisData.object_rgb` — the paint (1, 1, 1) or that colour of
+    object, or one of the known colour :attr:`DiagnosisData.object_rgb` — :func:`object_tint` through
     :func:`paint_chroma_distances` (for the neutral object the same distances as :func:`solve_albedo_rgb` and
     :func:`render_rgb` give, to float rounding, from one render fewer)."""
-    tint = np.ones(3) if data.object_rgb is None else data.object_rgb
-    return paint_chroma_distances(data, extension, torch.as_tensor(tint, dtype=torch.float64)[None])[0]
+    return paint_chroma_distances(data, extension, object_tint(data))[0]
 
 
 def object_colour_factors(rgb: Sequence[float]) -> np.ndarray:

@@ -241,15 +241,18 @@ def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], bas
     factors (P, 3), :func:`paint_tints`), also the held-out gain of the effect on a painted object, the setting and
     the paint chosen together per fold (``joint_per_seed_gain``, penalised for the effect's parameters and the
     paint's two): the nested model that the object's own colour alone (the same paints) is tested against."""
-    from synthaug.diagnose.diagnosis_data import object_chroma_distance, paint_chroma_distances
+    from synthaug.diagnose.diagnosis_data import object_tint, paint_chroma_distances
 
     if effect not in COLOUR_CANDIDATES or data.real_rgb is None or not float(np.mean(base)) > 0:
         return None  # no colour (or a base model that already matches the chroma exactly): nothing to screen
     grid = CANDIDATE_GRIDS[effect]
-    ext_all = []
-    for setting in grid:
-        ext = {**given_values(data, given, rgb=True), **colour_values(data, effect, setting)}
-        ext_all.append(object_chroma_distance(data, ext))
+    tints = object_tint(data) if paints is None else torch.cat([object_tint(data), torch.as_tensor(paints)])
+    ext_all, joint = [], []
+    for setting in grid:  # one pair of renders per setting gives the model's object and every paint
+        d = paint_chroma_distances(data, {**given_values(data, given, rgb=True),
+                                          **colour_values(data, effect, setting)}, tints)
+        ext_all.append(d[0])
+        joint.append(d[1:])  # (P, N); empty without paints
     e = np.stack(ext_all)
     k = _n_params(effect)
     gains, chosen = _cv_gain(base, e, folds, penalty * k)
@@ -257,11 +260,8 @@ def screen_colour(data: DiagnosisData, effect: str, folds: list[np.ndarray], bas
     best = int(np.argmin(e.mean(1)))
     out = {"gain": m, "t": t, "p": p, "settings_per_fold": [grid[c] for c in chosen], "setting": grid[best],
            "raw_gain_all": float((base.mean() - e[best].mean()) / base.mean()), "per_seed_gain": gains.tolist()}
-    if paints is not None:
-        joint = np.concatenate([paint_chroma_distances(
-            data, {**given_values(data, given, rgb=True), **colour_values(data, effect, setting)}, paints)
-            for setting in grid])  # (G * P, N), setting-major
-        out["joint_per_seed_gain"] = _cv_gain(base, joint, folds, penalty * (k + 2))[0].tolist()
+    if paints is not None:  # (G * P, N), setting-major
+        out["joint_per_seed_gain"] = _cv_gain(base, np.concatenate(joint), folds, penalty * (k + 2))[0].tolist()
     return out
 
 
@@ -780,16 +780,20 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         if tone is None:
             tone = tone_evidence(data, nc, base[1], given=given)
     frame_ev = frame_evidence(data) if any(c in FRAME_CANDIDATES for c in names) else None
-    base_colour, paint_gains = None, None
+    base_colour, paint_gains, tints = None, None, None
     if data.real_rgb is not None and any(c in COLOUR_CANDIDATES for c in names):
-        from synthaug.diagnose.diagnosis_data import object_chroma_distance, paint_chroma_distances
+        from synthaug.diagnose.diagnosis_data import object_tint, paint_chroma_distances
 
         gv = given_values(data, given, rgb=True) or None
-        base_colour = object_chroma_distance(data, gv)
-        if any(c in COLOUR_CANDIDATES and c not in PAINT_MIMICS for c in names) and float(np.mean(base_colour)) > 0:
+        rival = any(c in COLOUR_CANDIDATES and c not in PAINT_MIMICS for c in names)
+        tints = paint_tints() if rival else None
+        # one pair of renders: the model's object, and (for a candidate a paint does not mimic) every paint
+        d = paint_chroma_distances(data, gv, object_tint(data) if tints is None
+                                   else torch.cat([object_tint(data), tints]))
+        base_colour = d[0]
+        if rival and float(np.mean(base_colour)) > 0:
             # the object's own colour as the rival explanation: the best case-wide paint, chosen per fold
-            paint_gains = _cv_gain(base_colour, paint_chroma_distances(data, gv, paint_tints()), folds,
-                                   penalty * 2)[0]
+            paint_gains = _cv_gain(base_colour, d[1:], folds, penalty * 2)[0]
     rows = []
     for name in names:
         if progress:
@@ -821,7 +825,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
             channels.append(fc)
         rival_paint = paint_gains is not None and name not in PAINT_MIMICS
         col = None if base_colour is None else screen_colour(data, name, folds, base_colour, penalty=penalty,
-                                                            given=given, paints=paint_tints() if rival_paint else None)
+                                                            given=given, paints=tints if rival_paint else None)
         if col is not None:
             sc["colour"] = col
             p_adj = min(1.0, col["p"] * n_tests)
