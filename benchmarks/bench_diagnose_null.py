@@ -112,6 +112,14 @@ def make_case(work: Path, k: int, a: argparse.Namespace) -> tuple[Path, Path, di
 OUTSIDE_STRUCTURE = {"interlacing": "periodic_rows", "column_pattern": "column_pattern"}
 
 
+def explained_better(report: dict[str, Any]) -> list[str]:
+    """The significant distance gains of ``report``'s screening that named nothing because another candidate
+    explained the same distance better (:func:`synthaug.diagnose.screening.explained_better`), as
+    ``"defocus (distance:pixel) < haze"``: which cases the rule touched, without rerunning them."""
+    return [f"{r['effect']} ({c['channel']}) < {c['explained_better_by']['effect']}"
+            for r in report.get("screened") or [] for c in r.get("channels") or [] if c.get("explained_better_by")]
+
+
 def _first_name(findings: list[str], hidden: str | None) -> str | None:
     """The name a case's findings give first: the first finding's effect; for an effect outside the candidates,
     the effect itself when an "unexplained" finding lists its structure (a candidate named before it is not a
@@ -233,7 +241,7 @@ def main() -> int:
                  else "unexplained: " + ", ".join(f["structure"]) for f in rep["findings"]]
         cases.append({"case": k, "findings": found, "diagnosis_seconds": diag_s[-1],
                       "settings": [f.get("setting") for f in rep["findings"] if f["effect"] != "unexplained"],
-                      "nuisances": info["key"]["nuisances"]})
+                      "explained_better": explained_better(rep), "nuisances": info["key"]["nuisances"]})
         print(f"case {k}: {found or 'nothing'} ({diag_s[-1]:.0f} s diagnosis, {prep:.0f} s data+fit)",
               file=sys.stderr, flush=True)
     n_alarm = sum(bool(c["findings"]) for c in cases)

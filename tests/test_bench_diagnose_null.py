@@ -102,3 +102,15 @@ def test_colour_floors_pooled_from_a_clean_colour_output(bench_null, tmp_path):
     assert mod.SOURCE["colour"]["n_cases"] == 11 and "python bench --colour" in mod.SOURCE["colour"]["command"]
     with pytest.raises(SystemExit, match="not a clean colour run"):
         bench_null.pool_floors(argparse.Namespace(**ns, colour_floors_from=[str(tmp_path / "h.json")]))
+
+
+def test_a_case_records_the_gains_another_candidate_explained_better(bench_null):
+    from synthaug.diagnose.screening import explained_better
+
+    ch = [[{"channel": "distance:pixel", "gain": 0.049, "significant": True, "other_ok": True}],
+          [{"channel": "distance:pixel", "gain": 0.065, "significant": False, "other_ok": True}],
+          [{"channel": "distance:feature", "gain": 0.03, "significant": True, "other_ok": True}]]
+    explained_better(["defocus", "haze", "gamma"], ch)  # the screening's own rule marks the channels
+    report = {"screened": [{"effect": e, "channels": c} for e, c in zip(["defocus", "haze", "gamma"], ch)]}
+    assert bench_null.explained_better(report) == ["defocus (distance:pixel) < haze"]
+    assert bench_null.explained_better({"screened": []}) == []
