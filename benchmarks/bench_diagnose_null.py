@@ -291,12 +291,15 @@ def stats_from_output(path: str | Path) -> tuple[list[dict[str, Any]], dict[str,
     rows: list[dict[str, Any]] = []
     for name, entry in d["null_distributions"].items():
         fields = ("value",) if name.startswith("residual:") else ("slope",) if name.endswith("noise_level") \
-            else ("gain",)
+            else ("gain", "rho") if name.endswith(":absorbed") else ("gain",)  # rho: the dependence's sign
+        lengths = {len((entry.get(f) or {}).get("values", [])) for f in fields}
+        if len(lengths) > 1:
+            raise ValueError(f"{path}: {name}'s {' and '.join(fields)} values do not pair up ({sorted(lengths)})")
         for field in fields:
             for i, v in enumerate((entry.get(field) or {}).get("values", [])):
                 while len(rows) <= i:
                     rows.append({})
-                rows[i][name] = {field: v}
+                rows[i].setdefault(name, {})[field] = v
     return rows, d
 
 

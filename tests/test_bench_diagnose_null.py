@@ -114,3 +114,20 @@ def test_a_case_records_the_gains_another_candidate_explained_better(bench_null)
     report = {"screened": [{"effect": e, "channels": c} for e, c in zip(["defocus", "haze", "gamma"], ch)]}
     assert bench_null.explained_better(report) == ["defocus (distance:pixel) < haze"]
     assert bench_null.explained_better({"screened": []}) == []
+
+
+def test_an_outputs_absorbed_gains_come_back_with_their_sign(bench_null, tmp_path):
+    import json
+
+    out = {"null_distributions": {
+        "screen:exposure:absorbed": {"gain": {"values": [0.1, 0.243]}, "rho": {"values": [-0.3, 0.5]}},
+        "screen:gamma:distance:pixel": {"gain": {"values": [0.01, 0.02]}, "rho": {"values": [9.0, 9.0]}}}}
+    (tmp_path / "a.json").write_text(json.dumps(out))
+    rows, _ = bench_null.stats_from_output(tmp_path / "a.json")
+    ab, px = "screen:exposure:absorbed", "screen:gamma:distance:pixel"
+    assert rows == [{ab: {"gain": 0.1, "rho": -0.3}, px: {"gain": 0.01}},
+                    {ab: {"gain": 0.243, "rho": 0.5}, px: {"gain": 0.02}}]
+    out["null_distributions"]["screen:exposure:absorbed"]["rho"]["values"] = [-0.3]
+    (tmp_path / "b.json").write_text(json.dumps(out))
+    with pytest.raises(ValueError, match="do not pair up"):
+        bench_null.stats_from_output(tmp_path / "b.json")

@@ -49,6 +49,28 @@ def test_derive_floors_by_hand():
     assert f["CENTRE"] == {"gamma:distance:pixel": pytest.approx(gain.mean())}
 
 
+def test_an_absorbed_dependence_of_the_wrong_sign_sets_no_floor():
+    """The absorbed channel names its effect only for the sign the effect predicts (auto-exposure: w_d falls with
+    the frame's brightness, sign -1), so a clean case whose w_d rises with it is no gain: counted as -|R²|."""
+    from synthaug.diagnose.screening import ABSORPTION
+
+    assert ABSORPTION["exposure"][2] == -1
+    rng = np.random.default_rng(1)
+    r2 = rng.normal(-0.01, 0.04, 30)
+    rho = rng.choice([-0.3, 0.3], 30)
+    r2[7], rho[7] = 0.5, +0.7  # the largest clean R² has the wrong sign
+    rows = [{"screen:exposure:absorbed": {"gain": float(g), "rho": float(r)}} for g, r in zip(r2, rho)]
+    f = derive_floors(rows)
+    signed = np.where(rho < 0, r2, -np.abs(r2))  # by hand
+    z1 = stats.norm.isf(0.05 / 1)
+    assert f["SCREEN"]["exposure:absorbed"] == pytest.approx(
+        max(max(signed.mean(), 0.0) + z1 * signed.std(ddof=1), signed.max()))
+    assert f["SCREEN"]["exposure:absorbed"] < 0.5 and f["CENTRE"]["exposure:absorbed"] == pytest.approx(signed.mean())
+    # without the sign (an older output), the value counts as it is
+    f0 = derive_floors([{"screen:exposure:absorbed": {"gain": float(g)}} for g in r2])
+    assert f0["SCREEN"]["exposure:absorbed"] == pytest.approx(0.5)
+
+
 def test_floors_hold_the_family_false_alarm_rate_on_fresh_null_cases():
     """Monte Carlo: 12 statistics with shifted normal nulls, floors from 30 clean cases, then fresh clean cases:
     the share with any statistic outside its floor is about the 5 % the rule is set for (<= 10 % here, as 30

@@ -22,7 +22,8 @@ channels):
    ``[min(min(μ, 0) - zσ, min), max(max(μ, 0) + zσ, max)]`` for a residual
    measure (either sign is a finding) and ``max(max(μ, 0) + zσ, max)`` for a
    candidate channel's held-out gain (distance channels: the penalised held-out
-   relative gain; absorbed: the held-out R²; noise level: the log-log slope in
+   relative gain; absorbed: the held-out R², counted as −|R²| where the dependence has the wrong sign, since
+   only the sign the effect predicts can name it; noise level: the log-log slope in
    the candidate's direction; frame: the frames' radial fall-off k for vignetting, the log ratio of their steps
    across the 8x8 grid's lines to those inside the blocks beside them, median over lines, the smaller of columns
    and rows, for compression, their edges' step at ±2 px over that at ±4 px for sharpening), μ and
@@ -155,7 +156,8 @@ def rule_text() -> str:
             f"nuisance-varied reference-camera seed sets of {s['n_seeds']} seeds (material, light, mesh and a "
             f"moving scene drawn at random, nothing hidden): ± {s['z_two_sided']:.2f} σ of the clean values around "
             f"their mean and around 0 (widened to their min/max) for residual measures, μ + {s['z_one_sided']:.2f} σ for a "
-            f"candidate's held-out gain, set for a {100 * s['family_rate']:.0f} % false-alarm rate per clean case over "
+            f"candidate's held-out gain (an absorbed parameter's dependence in the direction its effect predicts; "
+            f"the other direction counts as no gain), set for a {100 * s['family_rate']:.0f} % false-alarm rate per clean case over "
             f"{s['n_statistics']} statistics (`{s['command']}`, {s['date']}). "
             + (f"The colour channel's chroma gains: μ + {s['colour']['z_one_sided']:.2f} σ over "
                f"{s['colour']['n_cases']} clean colour cases (objects painted near-neutral; "
@@ -223,6 +225,7 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
     from scipy import stats as st
 
     from synthaug.diagnose.noise import NOISE_CANDIDATES
+    from synthaug.diagnose.screening import ABSORPTION
 
     values: dict[str, list[float]] = {}
     for case in stats:
@@ -234,6 +237,13 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
                 v = None if row.get("slope") is None else row["slope"] * NOISE_CANDIDATES.get(kind[1], 1)
             elif kind[-1] == "colour":
                 continue  # colour channels: from colour cases only (colour_stats)
+            elif kind[-1] == "absorbed" and kind[1] in ABSORPTION and row.get("rho") is not None \
+                    and row.get("gain") is not None:
+                # one-sided, as the channel's test (sign_ok): a dependence of the sign the effect does not predict
+                # never names it, so it is no gain (stop 95: one clean case's w_d rising with the frame's
+                # brightness, R² 0.243, had set auto-exposure's floor, whose dependence falls)
+                g = float(row["gain"])
+                v = g if float(row["rho"]) * ABSORPTION[kind[1]][2] > 0 else -abs(g)
             else:
                 v = row.get("gain")
             if v is not None and math.isfinite(float(v)):
