@@ -164,6 +164,52 @@ def test_a_rising_noise_level_goes_to_gamma_or_shot_noise_by_the_signals_tone():
     assert "tone" not in noise_level_channel("gamma", falling, 30, 0.01, None)
 
 
+def _tone_frames(rng: np.random.Generator, g: float, *, n: int = 12, hw: tuple[int, int] = (120, 160)
+                 ) -> list[dict[str, np.ndarray]]:
+    """NLFs of ``n`` frames with read noise changing from frame to frame, then a tone curve x^g after the sensor."""
+    out = []
+    for _ in range(n):
+        b = _scene(rng, *hw) * rng.uniform(0.7, 1.1)
+        lin = b ** (1.0 / g)  # the linear scene whose tone-mapped look is b
+        out.append(frame_noise_levels(np.clip(lin + rng.uniform(0.003, 0.008) * rng.normal(size=b.shape), 0, 1) ** g,
+                                      b))
+    return out
+
+
+def test_a_rising_noise_levels_shape_tells_a_tone_curve_from_shot_noise():
+    """Stop 95: on fresh cases the patches' tone gave gamma 1.4 to shot noise in 2 of 5. The NLF's shape tells
+    them apart: read noise through x^1.4 gives a power law var ∝ I^0.57 (straight in log-log), shot noise over
+    read noise var = a + b·I (flat, then rising). Held-out seeds pick the generating shape; a shape gaining under
+    5 % of the NLF's own gain (weak shot noise here: 2 %) or shot noise far above the read noise (a ≈ 0, the two
+    shapes coincide) leaves the verdict to the patches' tone."""
+    from synthaug.diagnose.noise import nlf_shape
+    from synthaug.diagnose.screening import shape_verdict
+
+    rng = np.random.default_rng(3)
+    folds = [np.arange(i, 24, 4) for i in range(4)]
+    for g in (1.25, 1.4):
+        tone = _tone_frames(rng, g, n=24)
+        sh, nc = nlf_shape(tone, folds), noise_channel(tone, folds)
+        assert nc["slope"] > 0 and sh["gain"] > 0 and shape_verdict(sh, nc["gain"], 0.01) == "gamma"
+    weak = _shot_frames(rng, 0.012, n=24)  # shot noise comparable to the read noise: curved
+    sh, nc = nlf_shape(weak, folds), noise_channel(weak, folds)
+    assert nc["slope"] > 0 and sh["gain"] < 0 and shape_verdict(sh, nc["gain"], 0.01) != "gamma"
+    strong = _shot_frames(rng, 0.08, n=24)  # far above the read noise: var ≈ b·I, a power law of slope 1 too
+    sh, nc = nlf_shape(strong, folds), noise_channel(strong, folds)
+    assert shape_verdict(sh, nc["gain"], 0.01) != "gamma"
+    # the channel follows a conclusive shape over the patches' tone, and the tone where the shape is not conclusive
+    from synthaug.diagnose.screening import noise_level_channel
+
+    rising = {"slope": 0.55, "t": 40.0, "p": 1e-30, "n_seeds": 60, "gain": 0.004, "fitted_slope": 0.55}
+    added_noise = {"implied_gamma_g": 1.38, "gain": -0.006, "t": -1.6, "explains": "shot_noise"}
+    power = {**rising, "shape": {"gain": 0.001, "p": 1e-7, "positive": 55, "n": 60, "per_seed": []}}
+    sig = lambda e, nc, tone: noise_level_channel(e, nc, 30, 0.01, tone)["significant"]  # noqa: E731
+    assert sig("gamma", power, added_noise) and not sig("shot_noise", power, added_noise)
+    assert noise_level_channel("gamma", power, 30, 0.01, added_noise)["shape"]["explains"] == "gamma"
+    tiny = {**rising, "shape": {"gain": 1e-5, "p": 0.009, "positive": 38, "n": 60, "per_seed": []}}  # 0.25 % of the NLF's gain
+    assert sig("shot_noise", tiny, added_noise) and not sig("gamma", tiny, added_noise)
+
+
 def _shot_frames(rng: np.random.Generator, sigma: float, *, n: int = 8, background_sd: float = 0.0,
                  hw: tuple[int, int] = (120, 160)) -> list[dict[str, np.ndarray]]:
     """NLFs of ``n`` frames with read noise changing from frame to frame (the gain) and shot noise ``sigma``;

@@ -591,7 +591,14 @@ def _tone_text(f: dict[str, Any]) -> str:
     """A noise-level finding's tone evidence (a rising NLF: tone curve or shot noise), for the markdown."""
     if f.get("channel") != "noise_level":
         return ""
-    tone = next((c.get("tone") for c in f["evidence"]["channels"] if c.get("channel") == "noise_level"), None)
+    ch = next((c for c in f["evidence"]["channels"] if c.get("channel") == "noise_level"), {})
+    tone, shape = ch.get("tone"), ch.get("shape")
+    if shape and shape.get("explains"):
+        what = ("a power law (a tone curve after the sensor)" if shape["explains"] == "gamma"
+                else "a linear rise over a floor (shot noise over read noise)")
+        return (f"; the rise's shape decides: {what} fits the held-out seeds' noise better "
+                f"({shape['gain']:+.5f} nats per pixel; {shape['positive']} of {shape['n']} seeds prefer the power "
+                f"law, p = {shape['p']:.1g})")
     if not tone:
         return ""
     return (f"; the tone curve this rise implies (g = {tone['implied_gamma_g']:.2f}) "

@@ -90,7 +90,7 @@ import numpy as np
 import torch
 
 from synthaug.diagnose.calibration import HAND_MIN_GAIN, gain_centre, gain_floor
-from synthaug.diagnose.noise import NOISE_CANDIDATES, SLOPE_FLOOR, noise_channel
+from synthaug.diagnose.noise import NOISE_CANDIDATES, SHAPE_MIN_SHARE, SLOPE_FLOOR, noise_channel
 from synthaug.diagnose.diagnosis_data import DiagnosisData, pairwise_distance, pixel_distance, render_with, solve_albedo
 from synthaug.diagnose.residuals import seed_metadata
 from synthaug.params import EFFECT_PARAM_SPECS
@@ -99,7 +99,7 @@ __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "PAINT_GRID", "PAINT_
            "screen_candidates", "screen_one", "absorption_gain",
            "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
            "frame_evidence", "frame_channel", "frame_corroboration", "distance_channel", "explained_better",
-           "RIVAL_SPACES", "RIVAL_RULE"]
+           "RIVAL_SPACES", "RIVAL_RULE", "shape_verdict"]
 
 Setting = dict[str, float]
 
@@ -491,10 +491,13 @@ def noise_level_channel(effect: str, nc: dict[str, Any] | None, n_tests: int, al
     """The noise-level-function channel of ``effect``, from :func:`synthaug.diagnose.noise.noise_channel`.
 
     Shot noise: the NLF rises with brightness. A tone curve x^g: it falls (g < 1, compressive) or rises (g > 1,
-    expansive). A rising NLF is given to one of the two by ``tone`` (:func:`tone_evidence`): to ``gamma`` when
-    the tone curve it implies lowers the pixel distance to the real patches (``tone["gain"] > 0``), else to
-    ``shot_noise``; without ``tone`` a rising NLF is shot noise's. The slope's floor is the calibrated clean
-    range in the direction tested (:func:`slope_floor`).
+    expansive). A rising NLF is given to one of the two by its shape where that is conclusive (``nc["shape"]``,
+    :func:`synthaug.diagnose.noise.nlf_shape`: the power law of a tone curve or shot noise's affine NLF fits the
+    held-out seeds better at p < ``alpha``, by at least :data:`~synthaug.diagnose.noise.SHAPE_MIN_SHARE` of the
+    power law's gain over a flat NLF), else by ``tone`` (:func:`tone_evidence`): to ``gamma`` when the tone curve it
+    implies lowers the pixel distance to the real patches (``tone["gain"] > 0``), else to ``shot_noise``; with
+    neither a rising NLF is shot noise's. The slope's floor is the calibrated clean range in the direction tested
+    (:func:`slope_floor`).
     """
     if effect not in NOISE_CANDIDATES or nc is None or nc["n_seeds"] < 3:
         return None
@@ -510,14 +513,38 @@ def noise_level_channel(effect: str, nc: dict[str, Any] | None, n_tests: int, al
     # which of the two a rising NLF is: the patches' tone decides (tone curve: the implied g helps; shot noise:
     # the signal's tone is untouched, so the implied g hurts)
     named = True
+    shape = nc.get("shape") if rising else None
+    by_shape = shape_verdict(shape, nc["gain"], alpha)
     if rising:
-        named = (tone is not None and tone["gain"] > 0) if effect == "gamma" else (tone is None or tone["gain"] <= 0)
+        tone_curve = by_shape == "gamma" if by_shape is not None else (tone is not None and tone["gain"] > 0)
+        named = tone_curve if effect == "gamma" else not tone_curve
     out = {"channel": "noise_level", "p_adjusted": p_adj, "z": z, "gain": nc["gain"], "slope": nc["slope"],
            "floor": floor if floor is not None else SLOPE_FLOOR,
            "significant": bool(p_adj < alpha and nc["slope"] * sign > 0 and big and nc["gain"] > 0 and named)}
     if rising and tone is not None:
         out["tone"] = {k: tone[k] for k in ("implied_gamma_g", "gain", "t", "explains")}
+    if shape is not None:
+        out["shape"] = {k: shape[k] for k in ("gain", "p", "positive", "n")} | {"explains": by_shape}
     return out
+
+
+def shape_verdict(shape: dict[str, Any] | None, nlf_gain: float, alpha: float) -> str | None:
+    """What a rising NLF's shape (:func:`synthaug.diagnose.noise.nlf_shape`) names: ``"gamma"`` (the power law fits
+    the held-out seeds better), ``"shot_noise"`` (the affine NLF does), or None where it is not conclusive: its
+    two-sided p at least ``alpha``, or its gain under :data:`~synthaug.diagnose.noise.SHAPE_MIN_SHARE` of the power
+    law's held-out gain over a flat NLF (``nlf_gain``; the shapes coincide when shot noise dominates).
+
+    Example:
+        >>> shape_verdict({"gain": 0.001, "p": 2e-7}, 0.0034, 0.01)
+        'gamma'
+        >>> shape_verdict({"gain": 1e-5, "p": 0.009}, 0.012, 0.01) is None   # a negligible share
+        True
+        >>> shape_verdict({"gain": -0.0006, "p": 3e-5}, 0.004, 0.01)
+        'shot_noise'
+    """
+    if shape is None or not shape["p"] < alpha or not nlf_gain > 0 or abs(shape["gain"]) < SHAPE_MIN_SHARE * nlf_gain:
+        return None
+    return "gamma" if shape["gain"] > 0 else "shot_noise"
 
 
 @torch.no_grad()
