@@ -279,9 +279,17 @@ def main() -> int:
         Path(a.out).write_text(text)
     if a.write_floors:
         calibration.write_floors_module(a.write_floors, stats, command=result["command"], n_cases=len(cases),
-                                        n_seeds=a.seeds)
+                                        n_seeds=a.seeds, directions=absorbed_directions())
     print(json.dumps({k: v for k, v in result.items() if k not in ("per_case", "null_distributions")}))
     return 0
+
+
+def absorbed_directions() -> dict[str, int]:
+    """The sign of the dependence each absorbed channel's effect predicts (``screening.ABSORPTION``), keyed as the
+    floors are: what ``calibration.derive_floors`` counts a clean absorbed value by."""
+    from synthaug.diagnose.screening import ABSORPTION
+
+    return {f"{effect}:absorbed": sign for effect, (_, _, sign) in ABSORPTION.items()}
 
 
 def stats_from_output(path: str | Path) -> tuple[list[dict[str, Any]], dict[str, Any]]:
@@ -328,7 +336,8 @@ def pool_floors(a: argparse.Namespace) -> int:
     command = " ".join(["python"] + sys.argv) + " <- " + " + ".join(sources)
     calibration.write_floors_module(
         a.write_floors, rows, command=command, n_cases=n_cases, n_seeds=max(seeds), colour_stats=colour_rows or None,
-        colour_source={"command": " + ".join(colour_sources), "n_cases": colour_cases} if colour_rows else None)
+        colour_source={"command": " + ".join(colour_sources), "n_cases": colour_cases} if colour_rows else None,
+        directions=absorbed_directions())
     print(json.dumps({"wrote": a.write_floors, "cases": n_cases, "from": a.floors_from}))
     return 0
 

@@ -131,3 +131,11 @@ def test_an_outputs_absorbed_gains_come_back_with_their_sign(bench_null, tmp_pat
     (tmp_path / "b.json").write_text(json.dumps(out))
     with pytest.raises(ValueError, match="do not pair up"):
         bench_null.stats_from_output(tmp_path / "b.json")
+
+
+def test_the_floors_count_each_absorbed_dependence_in_its_effects_direction(bench_null):
+    from synthaug.diagnose.screening import ABSORPTION
+
+    d = bench_null.absorbed_directions()
+    assert d["exposure:absorbed"] == -1 and d["sharpening:absorbed"] == +1  # auto-exposure darkens w_d; sharpening
+    assert set(d) == {f"{e}:absorbed" for e in ABSORPTION}

@@ -60,15 +60,17 @@ def test_an_absorbed_dependence_of_the_wrong_sign_sets_no_floor():
     rho = rng.choice([-0.3, 0.3], 30)
     r2[7], rho[7] = 0.5, +0.7  # the largest clean R² has the wrong sign
     rows = [{"screen:exposure:absorbed": {"gain": float(g), "rho": float(r)}} for g, r in zip(r2, rho)]
-    f = derive_floors(rows)
+    f = derive_floors(rows, directions={"exposure:absorbed": ABSORPTION["exposure"][2]})
     signed = np.where(rho < 0, r2, -np.abs(r2))  # by hand
     z1 = stats.norm.isf(0.05 / 1)
     assert f["SCREEN"]["exposure:absorbed"] == pytest.approx(
         max(max(signed.mean(), 0.0) + z1 * signed.std(ddof=1), signed.max()))
     assert f["SCREEN"]["exposure:absorbed"] < 0.5 and f["CENTRE"]["exposure:absorbed"] == pytest.approx(signed.mean())
-    # without the sign (an older output), the value counts as it is
-    f0 = derive_floors([{"screen:exposure:absorbed": {"gain": float(g)}} for g in r2])
+    # without the sign (an older output) or without the directions, the value counts as it is
+    f0 = derive_floors([{"screen:exposure:absorbed": {"gain": float(g)}} for g in r2],
+                       directions={"exposure:absorbed": -1})
     assert f0["SCREEN"]["exposure:absorbed"] == pytest.approx(0.5)
+    assert derive_floors(rows)["SCREEN"]["exposure:absorbed"] == pytest.approx(0.5)
 
 
 def test_floors_hold_the_family_false_alarm_rate_on_fresh_null_cases():

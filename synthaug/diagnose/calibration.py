@@ -198,7 +198,8 @@ def one_sided_floor(values: Sequence[float], z: float) -> float:
 
 
 def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMILY_RATE,
-                  min_cases: int = 10, colour_stats: Sequence[dict[str, Any]] | None = None) -> dict[str, Any]:
+                  min_cases: int = 10, colour_stats: Sequence[dict[str, Any]] | None = None,
+                  directions: dict[str, int] | None = None) -> dict[str, Any]:
     """Null ranges and floors from clean cases' statistics (``bench_diagnose_null.case_statistics`` rows).
 
     Args:
@@ -209,6 +210,10 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
         colour_stats: rows of clean colour cases: their colour channels (``screen:<effect>:distance:colour``)
             only, floored with z for the statistics a colour case holds (those of ``stats`` and these). The
             colour channels of ``stats`` are never used: a gray case has none.
+        directions: ``{"effect:absorbed": sign}``, the sign of the dependence each absorbed channel's effect
+            predicts (:data:`synthaug.diagnose.screening.ABSORPTION`'s third field, which the benchmark passes):
+            a clean value whose ``rho`` has the other sign counts as ``-|gain|``, since the channel's test
+            (``sign_ok``) never names its effect from it. Without it, or without ``rho``, the value counts as it is.
 
     Returns:
         ``{"STRUCTURE": {measure: [lo, hi]}, "SCREEN": {"effect:channel": floor}, "CENTRE": {"effect:channel":
@@ -225,7 +230,6 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
     from scipy import stats as st
 
     from synthaug.diagnose.noise import NOISE_CANDIDATES
-    from synthaug.diagnose.screening import ABSORPTION
 
     values: dict[str, list[float]] = {}
     for case in stats:
@@ -237,13 +241,13 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
                 v = None if row.get("slope") is None else row["slope"] * NOISE_CANDIDATES.get(kind[1], 1)
             elif kind[-1] == "colour":
                 continue  # colour channels: from colour cases only (colour_stats)
-            elif kind[-1] == "absorbed" and kind[1] in ABSORPTION and row.get("rho") is not None \
-                    and row.get("gain") is not None:
+            elif kind[-1] == "absorbed" and f"{kind[1]}:absorbed" in (directions or {}) \
+                    and row.get("rho") is not None and row.get("gain") is not None:
                 # one-sided, as the channel's test (sign_ok): a dependence of the sign the effect does not predict
                 # never names it, so it is no gain (stop 95: one clean case's w_d rising with the frame's
                 # brightness, R² 0.243, had set auto-exposure's floor, whose dependence falls)
                 g = float(row["gain"])
-                v = g if float(row["rho"]) * ABSORPTION[kind[1]][2] > 0 else -abs(g)
+                v = g if float(row["rho"]) * directions[f"{kind[1]}:absorbed"] > 0 else -abs(g)
             else:
                 v = row.get("gain")
             if v is not None and math.isfinite(float(v)):
@@ -286,14 +290,15 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
 def write_floors_module(path: str | Path, stats: Sequence[dict[str, Any]], *, command: str, n_cases: int,
                         n_seeds: int, family_rate: float = FAMILY_RATE,
                         colour_stats: Sequence[dict[str, Any]] | None = None,
-                        colour_source: dict[str, Any] | None = None) -> Path:
+                        colour_source: dict[str, Any] | None = None, directions: dict[str, int] | None = None
+                        ) -> Path:
     """Write :mod:`synthaug.diagnose.null_floors` (the floors, the command that measured them, its date); with
     ``colour_stats`` (clean colour cases' rows) the colour channels' floors too, ``colour_source`` their
     ``command`` and ``n_cases``."""
     import json
     import pprint
 
-    f = derive_floors(stats, family_rate=family_rate, colour_stats=colour_stats)
+    f = derive_floors(stats, family_rate=family_rate, colour_stats=colour_stats, directions=directions)
     source = {"command": command, "date": _dt.date.today().isoformat(), "n_cases": int(n_cases),
               "n_seeds": int(n_seeds), "family_rate": family_rate, "z_two_sided": round(f["z_two_sided"], 4),
               "z_one_sided": round(f["z_one_sided"], 4), "n_statistics": f["n_statistics"]}
