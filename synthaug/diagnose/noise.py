@@ -15,9 +15,12 @@ gives the *noise level function* (NLF) var(I) of the camera (Liu et al.,
   curve x^g (g < 1) makes the NLF *fall* with brightness (slope
   2(g - 1)/g with read noise only) — the noise-based radiometric
   calibration of Matsushita & Lin (CVPR 2007); an expansive one (g > 1)
-  makes it *rise*, as shot noise does: the NLF alone cannot tell them
-  apart, the signal's tone can (the tone curve changes it, shot noise does
-  not; :func:`synthaug.diagnose.screening.tone_evidence`).
+  makes it *rise*, as shot noise does. Their shapes differ: read noise
+  through x^g is a power law (straight in log-log), shot noise over read
+  noise is affine (flat, then rising; :func:`nlf_shape`); where the two
+  coincide (shot noise far above the read noise) the signal's tone tells
+  them apart (the tone curve changes it, shot noise does not;
+  :func:`synthaug.diagnose.screening.tone_evidence`).
 
 Per seed the log-log slope of the NLF is measured on flat background pixels
 (textured pixels, where an aligned median carries registration error, and a
@@ -57,8 +60,9 @@ __all__ = ["frame_noise_levels", "nlf_slope", "seed_noise_levels", "aligned_neig
            "shot_noise_sigma", "nlf_shape", "NOISE_CANDIDATES", "HIGH_PASS_VAR", "SHAPE_MIN_SHARE"]
 
 # Candidates the noise level function can testify for, with the sign of the log-log slope they produce (gamma:
-# its compressive case, g < 1; an expansive curve, g > 1, rises like shot noise, and the patches' tone tells the
-# two apart: synthaug.diagnose.screening.tone_evidence). The signs also orient the slope's calibrated floors.
+# its compressive case, g < 1; an expansive curve, g > 1, rises like shot noise, and the NLF's shape or the
+# patches' tone tells the two apart: nlf_shape, synthaug.diagnose.screening.shape_verdict and tone_evidence). The
+# signs also orient the slope's calibrated floors.
 NOISE_CANDIDATES: dict[str, int] = {"shot_noise": +1, "gamma": -1}
 # A rising NLF's shape names its cause (:func:`nlf_shape`) only where the held-out log-likelihood it gains over the
 # other shape is at least this share of the power law's own gain over a flat NLF: with shot noise far above the

@@ -510,8 +510,8 @@ def noise_level_channel(effect: str, nc: dict[str, Any] | None, n_tests: int, al
     z = _z(p_one)
     floor = slope_floor(sign)  # calibrated: the slope in the tested direction on clean data
     big = nc["slope"] * sign > floor if floor is not None else abs(nc["slope"]) >= SLOPE_FLOOR
-    # which of the two a rising NLF is: the patches' tone decides (tone curve: the implied g helps; shot noise:
-    # the signal's tone is untouched, so the implied g hurts)
+    # which of the two a rising NLF is: its shape where conclusive, else the patches' tone (tone curve: the implied
+    # g helps; shot noise: the signal's tone is untouched, so the implied g hurts)
     named = True
     shape = nc.get("shape") if rising else None
     by_shape = shape_verdict(shape, nc["gain"], alpha)
