@@ -307,14 +307,12 @@ def _affine_fit(nlfs: Sequence[dict[str, np.ndarray]], iterations: int = 3, posi
     return float(coef[-1])
 
 
-def _heldout_loglik_affine(n: dict[str, np.ndarray], b: float) -> float:
-    """Mean Gaussian log-likelihood per pixel of a held-out frame's binned noise under ``var = a + b · I``, its
-    constant ``a`` its own maximum-likelihood value (bounded so that the variance stays positive)."""
+def _heldout_loglik_affine(s: np.ndarray, v: np.ndarray, c: np.ndarray, b: float) -> float:
+    """Mean Gaussian log-likelihood per pixel of a held-out frame's binned noise (signal ``s``, variance ``v``, count
+    ``c``: :func:`_normalised`) under ``var = a + b · I``, its constant ``a`` its own maximum-likelihood value
+    (bounded so that the variance stays positive)."""
     from scipy.optimize import minimize_scalar
 
-    s, v, c = _normalised(n)
-    if len(s) < 2:
-        return float("nan")
     lo = max(-b * float(s.min()), -b * float(s.max()), 0.0) + 1e-12
 
     def nll(a: float) -> float:
@@ -348,18 +346,17 @@ def nlf_shape(nlfs: Sequence[dict[str, np.ndarray]], folds: Sequence[np.ndarray]
         (True, True)
     """
     n = len(nlfs)
-    if sum(1 for x in nlfs if len(_normalised(x)[0]) >= 2) < 3:
-        return None
     d = np.full(n, np.nan)
     for held in folds:
         train = [nlfs[j] for j in np.setdiff1d(np.arange(n), held)]
         s, b = float(_fit_model(train, "power")[0]), _affine_fit(train, positive_signal=True)
-        if b is None:
+        if b is None:  # fewer than 3 training seeds with a measurable NLF
             continue
         for j in held:
             sj, vj, cj = _normalised(nlfs[j])
             if len(sj) >= 2:
-                d[j] = _heldout_loglik({"signal": sj, "var": vj, "count": cj}, s) - _heldout_loglik_affine(nlfs[j], b)
+                d[j] = (_heldout_loglik({"signal": sj, "var": vj, "count": cj}, s)
+                        - _heldout_loglik_affine(sj, vj, cj, b))
     ok = d[np.isfinite(d)]
     if len(ok) < 3:
         return None
