@@ -323,8 +323,10 @@ def pool_floors(a: argparse.Namespace) -> int:
         n_cases += d["cases"]
         seeds.add(d["seeds"])
         refresh = d.get("frame_refresh")  # frame_recalibrate.py's copy: its frame statistics remade without a refit
+        remade = d.get("structure_refresh")  # periodic_s96/recalibrate.py's copy: periodic measures remade
         sources.append(f"{d['command']} [{d['fit']} fit, {d['cases']} cases"
-                       + (f"; frame statistics remade by {refresh['by']}" if refresh else "") + "]")
+                       + (f"; frame statistics remade by {refresh['by']}" if refresh else "")
+                       + (f"; {', '.join(remade['statistics'])} remade by {remade['by']}" if remade else "") + "]")
     colour_rows, colour_cases, colour_sources = [], 0, []
     for path in getattr(a, "colour_floors_from", None) or []:
         r, d = stats_from_output(path)

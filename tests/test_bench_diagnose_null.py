@@ -38,7 +38,8 @@ def test_wilson_interval_matches_the_formula_by_hand(bench_null):
 def test_floors_pooled_from_outputs_name_a_frame_refresh(bench_null, tmp_path):
     """``--floors-from`` pools the outputs' null values per statistic (the floors are ``derive_floors``' of the
     pooled values, the rule by hand for one) and its source names an output whose frame statistics were remade
-    without a refit (``frame_recalibrate.py``'s ``frame_refresh``), and says nothing of one that was not."""
+    without a refit (``frame_recalibrate.py``'s ``frame_refresh``) or whose periodic measures were
+    (``periodic_s96/recalibrate.py``'s ``structure_refresh``), and says nothing of one that was not."""
     import argparse
     import importlib.util as iu
     import json
@@ -49,32 +50,37 @@ def test_floors_pooled_from_outputs_name_a_frame_refresh(bench_null, tmp_path):
 
     rng = np.random.default_rng(4)
     outs = []
-    for name, n, refresh in (("a.json", 12, None), ("b.json", 10, {"by": "python frame_recalibrate.py X"})):
+    for name, n, refresh in (("a.json", 12, None), ("b.json", 10, {"by": "python frame_recalibrate.py X"}),
+                             ("c.json", 9, "structure")):
         gains = [round(float(v), 6) for v in np.abs(rng.normal(0.005, 0.004, n))]
         d = {"command": f"python bench {name}", "fit": "converged", "cases": n, "seeds": 60,
              "null_distributions": {"screen:lens_distortion:frame": {"gain": {"values": gains}},
                                     "screen:gamma:noise_level": {"slope": {"values": gains}}}}
-        if refresh:
+        if refresh == "structure":
+            d["structure_refresh"] = {"by": "python recalibrate.py Y", "statistics": ["residual:periodic_rows"]}
+        elif refresh:
             d["frame_refresh"] = refresh
         (tmp_path / name).write_text(json.dumps(d))
         outs.append(gains)
     dest = tmp_path / "nf.py"
-    bench_null.pool_floors(argparse.Namespace(floors_from=[str(tmp_path / "a.json"), str(tmp_path / "b.json")],
+    bench_null.pool_floors(argparse.Namespace(floors_from=[str(tmp_path / f) for f in ("a.json", "b.json", "c.json")],
                                               write_floors=str(dest)))
     spec = iu.spec_from_file_location("nf_pooled", dest)
     mod = iu.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    pooled = np.array(outs[0] + outs[1])
+    pooled = np.array(outs[0] + outs[1] + outs[2])
     f = derive_floors([{"screen:lens_distortion:frame": {"gain": v}} for v in pooled]
                       + [{"screen:gamma:noise_level": {"slope": v}} for v in pooled])
     assert mod.SCREEN["lens_distortion:frame"] == pytest.approx(f["SCREEN"]["lens_distortion:frame"], abs=1e-6)
     z1 = float(mod.SOURCE["z_one_sided"])
     by_hand = max(max(pooled.mean(), 0.0) + z1 * pooled.std(ddof=1), pooled.max())
     assert mod.SCREEN["lens_distortion:frame"] == pytest.approx(by_hand, abs=1e-4)
-    assert mod.SOURCE["n_cases"] == 22
+    assert mod.SOURCE["n_cases"] == 31
     src = mod.SOURCE["command"]
     assert "python bench a.json [converged fit, 12 cases]" in src
     assert "python bench b.json [converged fit, 10 cases; frame statistics remade by python frame_recalibrate.py X]" \
+        in src
+    assert "python bench c.json [converged fit, 9 cases; residual:periodic_rows remade by python recalibrate.py Y]" \
         in src
 
 

@@ -986,3 +986,31 @@ def test_a_known_object_colour_tells_a_white_balance_from_the_paint(tmp_path):
     np.testing.assert_allclose(object_colour_factors(2.0 * paint_tint(0.1, 180.0)), paint_tint(0.1, 180.0))
     with pytest.raises(ValueError, match="three positive"):
         object_colour_factors([1.0, 0.0, 1.0])
+
+
+def test_the_periodic_peak_is_sought_in_frame_frequencies_above_the_shape_band():
+    # per-seed row/column spectra of a 64-px patch: every seed carries a comb at 0.45 cycles per frame px (log
+    # ratio 1), and the large-scale seeds (4 px of frame per 3 patch px) a stronger anisotropy at 0.2 cycles per
+    # frame px, below PERIODIC_MIN_FREQUENCY (an object's shape): the peak is the comb; the log ratios are numpy's
+    # interpolation of each seed's patch spectrum at the frame frequency, by hand
+    from synthaug.diagnose.residuals import PERIODIC_MIN_FREQUENCY, periodic_peak
+
+    n, p = 40, 64
+    f = np.fft.rfftfreq(p)
+    fs = np.where(np.arange(n) < 12, 4 / 3, 1.0)  # 12 of 40 seeds reach 0.2 / (4/3) = 0.15 frame cycles
+    a, b = np.ones((n, f.size)), np.ones((n, f.size))
+    for i in range(n):
+        a[i] *= np.exp(np.interp(f / fs[i], [0.43, 0.45, 0.47], [0.0, 1.0, 0.0], left=0.0, right=0.0))
+        if fs[i] > 1:
+            a[i] *= np.exp(3.0 * np.exp(-0.5 * ((f / fs[i] - 0.2) / 0.01) ** 2))
+    freq, lr, m = periodic_peak(a, b, fs)
+    assert freq == pytest.approx(0.45)
+    assert np.isfinite(lr).tolist() == (fs == 1).tolist()  # the large-scale seeds' patches end at 0.375 frame cycles
+    want = [np.interp(0.45, f[f >= 0.2] / fs[i], np.log(a[i, f >= 0.2]), right=np.nan) for i in range(n)]
+    np.testing.assert_allclose(lr, want, rtol=1e-12)
+    grid = np.round(np.arange(PERIODIC_MIN_FREQUENCY, 0.5 + 1e-9, 0.0125), 4)
+    reach = [int(((0.2 / fs <= g) & (g <= 0.5 / fs)).sum()) for g in grid]  # the seeds whose patch band holds g
+    assert m == sum(c >= max(5, n // 4) for c in reach)  # the Bonferroni count: the frequencies enough seeds reach
+    # searched from 0.15, the shape band's anisotropy (exp(3) on 12 seeds) would have been the peak
+    low, _, _ = periodic_peak(a, b, fs, min_frequency=0.1)
+    assert low == pytest.approx(0.2, abs=0.0125)

@@ -4,21 +4,32 @@ The rule that uses them: :mod:`synthaug.diagnose.calibration`.
 """
 
 SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
-            'results/diagnose/null/frame_refresh/calibration_set_hand.json '
-            'results/diagnose/null/frame_refresh/full_fit_calibrated.json --write-floors '
+            'results/diagnose/null/periodic_s96/calibration/calibration_set_hand.json '
+            'results/diagnose/null/periodic_s96/calibration/full_fit_calibrated.json --write-floors '
             'synthaug/diagnose/null_floors.py <- python benchmarks/bench_diagnose_null.py --cases 24 --rules '
             'hand --out results/diagnose/null/calibration_set_hand.json [converged fit, 24 cases; frame '
             'statistics remade by python results/diagnose/null/frame_recalibrate.py --calibration '
             'clean:2000:24=results/diagnose/null/calibration_set_hand.json '
             'clean:4000:20:full=results/diagnose/null/full_fit_calibrated.json --write-dir '
-            'results/diagnose/null/frame_refresh --out results/diagnose/null/frame_recalibrate.json] + '
-            'python benchmarks/bench_diagnose_null.py --cases 20 --base-seed 4000 --fit full --budget 800 '
-            '--step-deg 10 --sprite-size 64 --workdir outputs/bench_diagnose_null_full --out '
-            'results/diagnose/null/full_fit_calibrated.json [full fit, 20 cases; frame statistics remade by '
-            'python results/diagnose/null/frame_recalibrate.py --calibration '
-            'clean:2000:24=results/diagnose/null/calibration_set_hand.json '
+            'results/diagnose/null/frame_refresh --out results/diagnose/null/frame_recalibrate.json; '
+            'residual:periodic_columns, residual:periodic_rows remade by python '
+            'results/diagnose/null/periodic_s96/recalibrate.py --calibration '
+            'clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
+            'full4000=results/diagnose/null/frame_refresh/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
+            '--write-dir results/diagnose/null/periodic_s96/calibration --out '
+            'results/diagnose/null/periodic_s96/recalibrate.json] + python benchmarks/bench_diagnose_null.py '
+            '--cases 20 --base-seed 4000 --fit full --budget 800 --step-deg 10 --sprite-size 64 --workdir '
+            'outputs/bench_diagnose_null_full --out results/diagnose/null/full_fit_calibrated.json [full '
+            'fit, 20 cases; frame statistics remade by python results/diagnose/null/frame_recalibrate.py '
+            '--calibration clean:2000:24=results/diagnose/null/calibration_set_hand.json '
             'clean:4000:20:full=results/diagnose/null/full_fit_calibrated.json --write-dir '
-            'results/diagnose/null/frame_refresh --out results/diagnose/null/frame_recalibrate.json]',
+            'results/diagnose/null/frame_refresh --out results/diagnose/null/frame_recalibrate.json; '
+            'residual:periodic_columns, residual:periodic_rows remade by python '
+            'results/diagnose/null/periodic_s96/recalibrate.py --calibration '
+            'clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
+            'full4000=results/diagnose/null/frame_refresh/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
+            '--write-dir results/diagnose/null/periodic_s96/calibration --out '
+            'results/diagnose/null/periodic_s96/recalibrate.json]',
  'date': '2026-12-05',
  'family_rate': 0.05,
  'n_cases': 44,
@@ -36,8 +47,8 @@ STRUCTURE = {'background_bias': [-0.002495, 0.001976],
  'interior_bias': [-0.028596, 0.028321],
  'motion_direction': [-0.85368, 0.670645],
  'noise_vs_signal': [-0.012297, 0.019111],
- 'periodic_columns': [-0.36728, 0.532024],
- 'periodic_rows': [-0.418556, 0.576943],
+ 'periodic_columns': [-0.250366, 0.355366],
+ 'periodic_rows': [-0.253582, 0.34942],
  'radial': [-0.506516, 0.512673],
  'rotor_parts': [-0.047099, 0.050745],
  'row_pattern': [-0.128693, 0.118591],
