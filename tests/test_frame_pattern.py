@@ -336,6 +336,56 @@ def test_edge_ratio_rises_with_sharpening_falls_with_blur_and_ignores_the_noise_
     assert ratio(usm(0.0), noise=0.03, same_look=True) > r[0] + 0.05
 
 
+@pytest.mark.parametrize("g", [0.75, 1.4])
+def test_a_known_tone_curve_is_undone_before_the_edges_are_read(g):
+    # the closed-form edges of _step_frame through a camera's tone curve x^g (both looks): the ratio moves off
+    # (2 Φ(2/σ) - 1) / (2 Φ(4/σ) - 1); read through the inverse curve it is back; a summary without looks reads NaN
+    from synthaug.diagnose.frame_pattern import edge_ratio, tone_undone
+
+    sigma = 1.2
+    f, out = _step_frame(sigma, lo=0.1, c=0.8)  # contrasty edges: a curve bends them most
+    want = (2 * stats.norm.cdf(2 / sigma) - 1) / (2 * stats.norm.cdf(4 / sigma) - 1)
+    bent, bent_b = f ** g, (f + 1e-3) ** g
+    assert abs(edge_ratio(bent, bent_b, outside=out) - want) > 0.005
+    s = {"edge_ratio": edge_ratio(bent, bent_b, outside=out), "looks": (bent, bent_b, out)}  # frame_summary's keys
+    (u,) = tone_undone([s], g)
+    assert u["edge_ratio"] == pytest.approx(want, abs=1e-5)
+    assert np.isnan(tone_undone([{**s, "looks": None}], g)[0]["edge_ratio"])
+    with pytest.raises(ValueError, match="exponent"):
+        tone_undone([s], 0.0)
+
+
+def test_sharpening_is_read_through_an_accepted_tone_curve():
+    # six blocky scenes of three videos through the optics (1.5-px blur), a camera's gamma 1.4 on both looks:
+    # the frames' edge ratio over scenes rises above the unbent frames'; given the accepted gamma, the frame
+    # evidence reads it back where the unbent frames are
+    from scipy import ndimage
+
+    from synthaug.diagnose.frame_pattern import frame_summary
+    from synthaug.diagnose.screening import frame_evidence
+
+    rng = np.random.default_rng(7)
+    scenes = [ndimage.gaussian_filter(ndimage.zoom(0.1 + 0.8 * rng.random((12, 20)), 8, order=0), 1.5)
+              for _ in range(6)]
+
+    class Frames:  # what frame_evidence reads of the diagnosis data
+        def __init__(self, g):
+            self.frame_summaries = [frame_summary(s ** g, background=(s + 0.004 * rng.standard_normal(s.shape)) ** g,
+                                                  keep_looks=True) for s in scenes]
+            self.records = [{"video": i // 2} for i in range(len(scenes))]
+
+        def __len__(self):
+            return len(self.records)
+
+    plain, bent = Frames(1.0), Frames(1.4)
+    r0 = frame_evidence(plain)["sharpening"]["ratio"]
+    r1 = frame_evidence(bent)["sharpening"]["ratio"]
+    ev = frame_evidence(bent, {"gamma": {"gamma_g": 1.4}})["sharpening"]
+    assert r1 > r0 + 0.01
+    assert ev["ratio"] == pytest.approx(r0, abs=0.003) and ev["tone_undone"] == 1.4
+    assert "tone_undone" not in frame_evidence(bent, {"defocus": {"defocus_sigma": 1.0}})["sharpening"]
+
+
 def test_sharp_edges_tests_scenes_against_the_clean_centre():
     from synthaug.diagnose.frame_pattern import sharp_edges
 

@@ -580,7 +580,8 @@ def tone_evidence(data: DiagnosisData, nc: dict[str, Any] | None, base_pixel: np
             "explains": "gamma" if m > 0 else "shot_noise"}
 
 
-def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | None:
+def frame_evidence(data: DiagnosisData, given: dict[str, Setting] | None = None
+                   ) -> dict[str, dict[str, Any] | None] | None:
     """The whole frames' evidence of each frame candidate, tested over scenes: ``{"vignetting":``
     :func:`~synthaug.diagnose.frame_pattern.radial_falloff`, ``"compression":``
     :func:`~synthaug.diagnose.frame_pattern.block_grid` with ``"quality"``, the JPEG quality its DCT steps read
@@ -588,9 +589,10 @@ def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | No
     :func:`~synthaug.diagnose.frame_pattern.sharp_edges` against the calibrated clean mean, ``"lens_distortion":``
     :func:`~synthaug.diagnose.frame_pattern.lens_flow` ``}`` (a value None with fewer than 3 scenes; sharpening's
     and the lens's also without independent background frames, the lens's without a scene that moved between the
-    two looks); None without frames."""
+    two looks); None without frames. With an accepted tone curve in ``given`` (``gamma``), sharpening's edges are
+    read through its inverse (:func:`~synthaug.diagnose.frame_pattern.tone_undone`): the curve bends every edge."""
     from synthaug.diagnose.frame_pattern import (block_grid, jpeg_quality, lens_flow, radial_falloff, sharp_edges,
-                                                 sharpening_setting)
+                                                 sharpening_setting, tone_undone)
 
     if data.frame_summaries is None:
         return None
@@ -600,10 +602,14 @@ def frame_evidence(data: DiagnosisData) -> dict[str, dict[str, Any] | None] | No
         jq = jpeg_quality(data.frame_summaries)
         grid = {**grid, "quality": None if jq is None else jq["quality"]}
     centre, floor = gain_centre("sharpening", "frame"), gain_floor("sharpening", "frame")
-    sharp = sharp_edges(data.frame_summaries, groups, centre=centre)
+    g = float((given or {}).get("gamma", {}).get("gamma_g", 1.0))
+    edges = data.frame_summaries if g == 1.0 else tone_undone(data.frame_summaries, g)
+    sharp = sharp_edges(edges, groups, centre=centre)
+    if sharp is not None and g != 1.0:
+        sharp = {**sharp, "tone_undone": g}
     if sharp is not None and centre is not None and floor is not None and sharp["ratio"] > floor:
         # sharper than clean frames: the setting whose inverse brings them back (read only then: 12 x N ratios)
-        read = sharpening_setting(data.frame_summaries, CANDIDATE_GRIDS["sharpening"], centre)
+        read = sharpening_setting(edges, CANDIDATE_GRIDS["sharpening"], centre)
         sharp = {**sharp, "setting": None if read is None else read["setting"]}
     return {"vignetting": radial_falloff(data.frame_summaries, groups), "compression": grid, "sharpening": sharp,
             "lens_distortion": lens_flow(data.frame_summaries, groups)}
@@ -806,7 +812,7 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         nc = noise_channel(data.noise_levels, folds)
         if tone is None:
             tone = tone_evidence(data, nc, base[1], given=given)
-    frame_ev = frame_evidence(data) if any(c in FRAME_CANDIDATES for c in names) else None
+    frame_ev = frame_evidence(data, given) if any(c in FRAME_CANDIDATES for c in names) else None
     base_colour, paint_gains, tints = None, None, None
     if data.real_rgb is not None and any(c in COLOUR_CANDIDATES for c in names):
         from synthaug.diagnose.diagnosis_data import object_tint, paint_chroma_distances
