@@ -3,6 +3,7 @@ named first and significant, misnamed, or missed over 5 fresh nuisance-varied ca
 
     python results/diagnose/null/power_table.py   # from the repository root; prints a Markdown table
     python results/diagnose/null/power_table.py results/diagnose/null/paint_s93   # another folder's rows
+    python results/diagnose/null/power_table.py A B   # A's rows, each replaced by B's row of the same name if any
 """
 
 from __future__ import annotations
@@ -27,8 +28,9 @@ def judged(floors: dict[str, float], colour: bool) -> dict[str, float]:
     return {k: v for k, v in floors.items() if colour or not k.endswith(":distance:colour")}
 
 
-folder = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("results/diagnose/null")
-for f in sorted(folder.glob("power5_*.json")):
+folders = [Path(a) for a in sys.argv[1:]] or [Path("results/diagnose/null")]
+latest = {f.name: f for folder in folders for f in sorted(folder.glob("power5_*.json"))}  # a later folder's row wins
+for f in (latest[name] for name in sorted(latest)):
     d = json.loads(f.read_text())
     p = d["power"]
     said = Counter(x for c in d["per_case"] for x in (c["findings"] or ["nothing"]))
