@@ -269,7 +269,8 @@ PERIODIC_MIN_FREQUENCY = 0.25
 """Cycles per frame px from which the ``periodic_*`` measures seek their peak (periods up to 4 frame px: interlaced
 fields, a sensor's line banding, the 8-px block grid's harmonics from 4 px down). Below it an object of 20-30 px
 has its shape's own anisotropy: on the 24 clean nuisance-varied calibration cases (seed base 2000) the seeds' mean
-row/column log ratio reaches 0.5-2.1 at 0.15-0.2 cycles per frame px and stays within ±0.2 from 0.25 up (stop 96,
+row/column log ratio reaches |0.50| below 0.25 cycles per frame px (median case 0.25) and |0.30| from 0.25 up
+(median 0.17); the clean range of ``periodic_rows`` went from [-0.42, 0.58] to [-0.25, 0.35] (stop 96,
 ``results/diagnose/null/periodic_s96/``)."""
 
 

@@ -14,10 +14,11 @@ regenerates the floors. ``--fresh NAME=WORKDIR`` groups are measured only (their
 
 Usage::
 
-    PYTHONPATH=. python results/diagnose/null/periodic_s96/recalibrate.py \\
-        --calibration clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 \\
-                      full4000=results/diagnose/null/frame_refresh/full_fit_calibrated.json=outputs/bench_diagnose_null_full \\
-        --write-dir results/diagnose/null/periodic_s96/calibration --out results/diagnose/null/periodic_s96/recalibrate.json
+    PYTHONPATH=. python results/diagnose/null/periodic_s96/recalibrate.py --calibration \\
+        clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 \\
+        full4000=results/diagnose/null/frame_refresh/full_fit_calibrated.json=outputs/bench_diagnose_null_full \\
+        --write-dir results/diagnose/null/periodic_s96/calibration \\
+        --out results/diagnose/null/periodic_s96/recalibrate.json
 """
 
 from __future__ import annotations
