@@ -274,18 +274,36 @@ row/column log ratio reaches |0.50| below 0.25 cycles per frame px (median case 
 ``results/diagnose/null/periodic_s96/``)."""
 
 
-def periodic_peak(a: np.ndarray, b: np.ndarray, frame_scale: np.ndarray, *,
-                  min_frequency: float = PERIODIC_MIN_FREQUENCY, step: float = 0.0125) -> tuple[float, np.ndarray, int]:
-    """The frequency where spectrum ``a`` most exceeds spectrum ``b`` over the seeds, in frame pixels.
+def periodic_profile(a: np.ndarray, b: np.ndarray, frame_scale: np.ndarray, *,
+                     min_frequency: float = PERIODIC_MIN_FREQUENCY, step: float = 0.0125
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Each seed's log ratio of spectrum ``a`` over spectrum ``b`` on a common grid of frame frequencies.
 
-    A camera's periodic structure (fields, banding) is periodic in FRAME pixels: each seed's log ratio
-    log(a / b) over patch frequencies >= 0.2 cycles per patch px is put on a common grid of frame frequencies
-    (patch frequency / ``frame_scale``) from ``min_frequency`` to 0.5; the peak is the grid frequency with the
-    largest mean log ratio among those at least a quarter of the seeds (and >= 5) measure.
+    A camera's periodic structure (fields, banding) is periodic in FRAME pixels: each seed's log(a / b) over patch
+    frequencies >= 0.2 cycles per patch px is put on the grid from ``min_frequency`` to 0.5 cycles per frame px
+    (patch frequency / ``frame_scale``; NaN where the seed's patch band does not reach a grid frequency).
 
     Args:
         a, b: (N, P//2+1) power spectra per seed (``_line_spectrum``), P the patch size.
         frame_scale: (N,) frame px per patch px (``DiagnosisData.frame_scale``: the crop side over the patch size).
+
+    Returns:
+        (the grid (F,), the log ratios (N, F)).
+    """
+    n, n_f = a.shape
+    freqs = np.fft.rfftfreq(2 * (n_f - 1))
+    hi = np.nonzero(freqs >= 0.2)[0]
+    grid = np.round(np.arange(min_frequency, 0.5 + 1e-9, step), 4)
+    lr = np.log((a[:, hi] + 1e-12) / (b[:, hi] + 1e-12))
+    return grid, np.stack([np.interp(grid, freqs[hi] / frame_scale[i], lr[i], left=np.nan, right=np.nan)
+                           for i in range(n)])
+
+
+def periodic_peak(a: np.ndarray, b: np.ndarray, frame_scale: np.ndarray, *,
+                  min_frequency: float = PERIODIC_MIN_FREQUENCY, step: float = 0.0125) -> tuple[float, np.ndarray, int]:
+    """The frequency where spectrum ``a`` most exceeds spectrum ``b`` over the seeds, in frame pixels: of
+    :func:`periodic_profile`'s grid (arguments as there), the frequency with the largest mean log ratio among those
+    at least a quarter of the seeds (and >= 5) measure.
 
     Returns:
         (peak frequency in cycles per frame px, (N,) each seed's log ratio there (NaN where the seed does not
@@ -297,15 +315,9 @@ def periodic_peak(a: np.ndarray, b: np.ndarray, frame_scale: np.ndarray, *,
         >>> round(freq, 3), round(float(lr.mean()), 2)
         (0.4, 1.32)
     """
-    n, n_f = a.shape
-    freqs = np.fft.rfftfreq(2 * (n_f - 1))
-    hi = np.nonzero(freqs >= 0.2)[0]
-    grid = np.round(np.arange(min_frequency, 0.5 + 1e-9, step), 4)
-    lr = np.log((a[:, hi] + 1e-12) / (b[:, hi] + 1e-12))
-    lr_f = np.stack([np.interp(grid, freqs[hi] / frame_scale[i], lr[i], left=np.nan, right=np.nan)
-                     for i in range(n)])
+    grid, lr_f = periodic_profile(a, b, frame_scale, min_frequency=min_frequency, step=step)
     cnt = np.isfinite(lr_f).sum(0)
-    enough = cnt >= max(5, n // 4)
+    enough = cnt >= max(5, len(lr_f) // 4)
     score = np.where(enough, np.nansum(lr_f, 0) / np.maximum(cnt, 1), -np.inf)
     j = int(np.argmax(score))
     return float(grid[j]), lr_f[:, j], int(enough.sum())
@@ -329,7 +341,7 @@ def structure_measures(data: DiagnosisData, syn: torch.Tensor, *, rng: np.random
     """
     real = data.real
     res = real - syn
-    n, _, p, _ = res.shape
+    n = res.shape[0]
     m = region_masks(data.coverage)
     obj = data.coverage > 0.5
     meta = seed_metadata(data)

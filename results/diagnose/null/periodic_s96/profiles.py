@@ -12,34 +12,26 @@ base 11000 peak at 0.40-0.46 with 0.54-0.86.
 import json
 import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import torch
 
-from synthaug.diagnose.diagnosis_data import load_diagnosis_data
-from synthaug.diagnose.residuals import _line_spectrum, region_masks
-from synthaug.diagnose.screening import base_render
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from recalibrate import residual_spectra  # noqa: E402  (the case's residual spectra, as recalibrate.py reads them)
+
+from synthaug.diagnose.residuals import periodic_profile  # noqa: E402
 
 CUT = 0.25
 
 
 def profile(case: str) -> dict:
-    data = load_diagnosis_data(f"{case}/seeds", f"{case}/fit.json", "quadcopter")
-    syn, _ = base_render(data)
-    res = data.real - syn
-    n, _, p, _ = res.shape
-    m = region_masks(data.coverage)
-    wobj = (m["interior"] | m["boundary"]).float()
-    a, b = _line_spectrum(res, wobj, -2), _line_spectrum(res, wobj, -1)
-    freqs = np.fft.rfftfreq(p)
-    hi = np.nonzero(freqs >= 0.2)[0]
-    fs = data.frame_scale.double().numpy()
-    grid = np.round(np.arange(0.1, 0.5 + 1e-9, 0.0125), 4)
-    out = {"grid": grid.tolist()}
-    for label, x, y in (("rows", a, b), ("columns", b, a)):
-        lr = np.log((x[:, hi] + 1e-12) / (y[:, hi] + 1e-12))
-        out[label] = np.stack([np.interp(grid, freqs[hi] / fs[i], lr[i], left=np.nan, right=np.nan)
-                               for i in range(n)]).tolist()
+    _, _, rows, cols, fs = residual_spectra(case)
+    out = {}
+    for label, x, y in (("rows", rows, cols), ("columns", cols, rows)):
+        grid, lr = periodic_profile(x, y, fs, min_frequency=0.1)
+        out["grid"], out[label] = grid.tolist(), lr.tolist()
     return out
 
 

@@ -39,20 +39,27 @@ from benchmarks.bench_diagnose_null import summarise  # noqa: E402  (null distri
 NAMES = ("periodic_rows", "periodic_columns")
 
 
-def case_values(case: Path) -> dict[str, dict[str, Any]]:
-    """The case's two periodic measures as the diagnosis measures them, and their value over the old band."""
+def residual_spectra(case: Path) -> tuple[Any, Any, np.ndarray, np.ndarray, np.ndarray]:
+    """A cached case's seeds and base render, and its object residual's row and column spectra (per seed; not
+    divided by the object's weight, whose norm cancels in their ratio) with the seeds' frame scale."""
     from synthaug.diagnose.diagnosis_data import load_diagnosis_data
-    from synthaug.diagnose.residuals import _line_spectrum, periodic_peak, region_masks, structure_measures
+    from synthaug.diagnose.residuals import _line_spectrum, region_masks
     from synthaug.diagnose.screening import base_render
 
-    data = load_diagnosis_data(case / "seeds", case / "fit.json", "quadcopter")
+    data = load_diagnosis_data(Path(case) / "seeds", Path(case) / "fit.json", "quadcopter")
     syn, _ = base_render(data)
-    s = structure_measures(data, syn, rng=np.random.default_rng(0))
     m = region_masks(data.coverage)
     wobj = (m["interior"] | m["boundary"]).float()
     res = data.real - syn
-    rows, cols = _line_spectrum(res, wobj, -2), _line_spectrum(res, wobj, -1)  # the weight's norm cancels
-    fs = data.frame_scale.double().numpy()
+    return data, syn, _line_spectrum(res, wobj, -2), _line_spectrum(res, wobj, -1), data.frame_scale.double().numpy()
+
+
+def case_values(case: Path) -> dict[str, dict[str, Any]]:
+    """The case's two periodic measures as the diagnosis measures them, and their value over the old band."""
+    from synthaug.diagnose.residuals import periodic_peak, structure_measures
+
+    data, syn, rows, cols, fs = residual_spectra(case)
+    s = structure_measures(data, syn, rng=np.random.default_rng(0))
     out = {}
     for name, a, b in (("periodic_rows", rows, cols), ("periodic_columns", cols, rows)):
         f_old, lr_old, _ = periodic_peak(a, b, fs, min_frequency=0.1)
