@@ -324,10 +324,12 @@ def test_train_options_key_fields_leave_the_later_fields_out_at_their_defaults()
     ada = TrainOptions().key_fields("adaboost")
     assert (ada["ada_rounds"], ada["mining_select"], ada["mining_patience"]) == (300, "ap", 1)
     assert TrainOptions(mining_select="fp", mining_patience=0, ada_rounds=100, ada_energy_floor=0,
-                        ada_cascade="all").key_fields("adaboost") \
+                        ada_cascade="all", box_calibration=0).key_fields("adaboost") \
         == {k: v for k, v in not_hog.items() if k not in ("cnn_finetune_epochs", "box_calibration")}
-    # the box calibration (stop 73) is HOG's and the CNN's default, off for AdaBoost: at 0 the keys of before it
-    assert "box_calibration" not in TrainOptions(box_calibration=0).key_fields("hog") and "box_calibration" not in ada
+    # the box calibration: every family's default (HOG and the CNN since stop 73, AdaBoost since stop 97); at 0 the
+    # keys of before it, so AdaBoost's default cells have new keys and its uncalibrated cells keep theirs
+    assert "box_calibration" not in TrainOptions(box_calibration=0).key_fields("hog") and ada["box_calibration"] == 20
+    assert "box_calibration" not in TrainOptions(box_calibration=0).key_fields("adaboost")
     # the floor and the real-positive cascade changed AdaBoost's training: its default cells have new keys
     assert (ada["ada_energy_floor"], ada["ada_cascade"]) == (1.0, "real")
 
@@ -460,7 +462,7 @@ def test_family_defaults_reach_the_training(monkeypatch: pytest.MonkeyPatch) -> 
     assert TrainOptions().for_family("cnn") == TrainOptions(ada_rounds=100, mining_select="fp", mining_patience=0,
                                                             box_calibration=20)
     assert TrainOptions().for_family("adaboost") == TrainOptions(ada_rounds=300, mining_select="ap", mining_patience=1,
-                                                                 box_calibration=0)
+                                                                 box_calibration=20)
     assert TrainOptions(box_calibration=5).for_family("adaboost").box_calibration == 5  # a value given is kept
     assert TrainOptions().for_family("some_plugin") == TrainOptions().for_family("hog")
     with pytest.raises(ValueError, match="ada_rounds"):

@@ -244,8 +244,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "mean of both (ensemble)")
     parser.add_argument("--box-calibration", type=int_at_least(0), default=d["box_calibration"], metavar="STRIDE",
                         help="after training, correct the boxes by the detector's own errors on every STRIDE-th labelled "
-                             "frame of its training videos (0: off; default: the family's, 20 for HOG and the CNN, 0 for "
-                             "AdaBoost)")
+                             "frame of its training videos (0: off; default: the family's, 20 for every family)")
     parser.add_argument("--box-calibration-form", choices=list(CALIBRATION_FORMS), default=d["box_calibration_form"],
                         help="how the calibration's size term is fitted: the labelled size on the detected one "
                              "(regression) or the detected size on the labelled one, inverted (inverse: −0.137 "

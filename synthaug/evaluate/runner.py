@@ -953,8 +953,8 @@ def _common_arguments(q: argparse.ArgumentParser) -> None:
     q.add_argument("--threads", type=int, default=1, help="torch threads")
     q.add_argument("--box-calibration", type=int_at_least(0), default=TrainOptions.box_calibration, metavar="STRIDE",
                    help="correct each trained detector's boxes by its own errors on every STRIDE-th labelled frame of "
-                        "its training videos before scoring (0: off; default: the family's, 20 for HOG and the CNN, "
-                        "0 for AdaBoost; part of the cell's key, not the detector's)")
+                        "its training videos before scoring (0: off; default: the family's, 20 for every family; part "
+                        "of the cell's key, not the detector's)")
     q.add_argument("--box-calibration-form", choices=list(CALIBRATION_FORMS), default=TrainOptions.box_calibration_form,
                    help="how the calibration's size term is fitted: the labelled size on the detected one (regression) "
                         "or the detected size on the labelled one, inverted (inverse: unbiased whatever the training "
