@@ -41,7 +41,8 @@ for folder in sorted(O.glob("cal_test_*/")):
                 per_video[cell][r.stems[v]][1] += int((here & pool.is_positive[:k]).sum())
 for cell, rows in totals.items():
     rows.sort()
-    print(f"IoU {IOU:g}, {cell}: false positives above recall 0.5 per seed " + ", ".join(f"{s}: {f}/{k}" for s, f, k in rows)
+    print(f"IoU {IOU:g}, {cell}: false positives above recall 0.5 per seed "
+          + ", ".join(f"{s}: {f}/{k}" for s, f, k in rows)
           + f"; mean {np.mean([f for _, f, _ in rows]):.1f}")
 print("\n| test video | real only: FPs / TPs above recall 0.5 (all seeds) | shape cell |")
 print("|---|---|---|")

@@ -40,7 +40,8 @@ t0 = time.perf_counter()
 ps = patch_eval_set(VIDEOS, LABELS, split, proto, split_file="configs/splits/halmstad.json", class_name="drone")
 P = proto.patch.patch_size
 rng = np.random.default_rng(0)
-keep = np.nonzero((ps.labels == 1) | (rng.random(len(ps.labels)) < 0.25))[0]  # every positive, a quarter of the negatives
+# every positive, a quarter of the negatives
+keep = np.nonzero((ps.labels == 1) | (rng.random(len(ps.labels)) < 0.25))[0]
 labels = ps.labels[keep]
 offsets = [(dx, dy, s) for s in SIDES for dy in SHIFTS for dx in SHIFTS]
 jit = np.zeros((len(keep), len(offsets), P, P), np.uint8)

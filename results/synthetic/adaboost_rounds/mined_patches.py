@@ -49,4 +49,5 @@ for (cell, split), pool in sorted(pools.items()):
         iv = d.difference
         print(json.dumps({"paired": cell, "split": split, "seeds": sorted(d.seeds), "resampled": d.resampled,
                           "delta_ap": round(iv.estimate, 4), "ci": [round(iv.low, 4), round(iv.high, 4)],
-                          "videos_up": f"{d.wins.improved}/{d.wins.improved + d.wins.worse + d.wins.tied}"}), flush=True)
+                          "videos_up": f"{d.wins.improved}/{d.wins.improved + d.wins.worse + d.wins.tied}"}),
+              flush=True)

@@ -20,6 +20,7 @@ for name, per in by.items():
     for split in ("val", "test"):
         d = [per[s][f"{split}_ap"] - real[s][f"{split}_ap"] for s in seeds]
         cols += [" / ".join(f"{v:+.3f}" for v in d), f"{np.mean(d):+.3f}"]
-    print(f"| {name} | {per[seeds[0]]['added']} | {','.join(map(str, seeds))} | {cols[0]} | {cols[1]} | {cols[2]} | {cols[3]} |")
+    print(f"| {name} | {per[seeds[0]]['added']} | {','.join(map(str, seeds))} | "
+          f"{cols[0]} | {cols[1]} | {cols[2]} | {cols[3]} |")
 print("\nreal only (per seed): validation " + " / ".join(f"{real[s]['val_ap']:.3f}" for s in sorted(real))
       + ", test " + " / ".join(f"{real[s]['test_ap']:.3f}" for s in sorted(real)))
