@@ -1,0 +1,80 @@
+"""Do the fitted blurs make AdaBoost's synthetic positives look like the sky's soft blobs? A cheap probe.
+
+Hard background windows: seed 0's stored real-only detector (mined) over every 5th frame of the five test videos
+whose background outranks drones (section 6: V_DRONE_109, 111-114), raw windows overlapping no drone (IoU < 0.3),
+its best ``HARD`` of them cut at the window (the detector's own framing). Positives: the same videos' objects as the
+patch protocol crops them. Then AdaBoost is trained as ``probe_variants.py`` does (seed 0, no mining, 300 rounds) with
+real only, + 20x synthetic (the library's AdaBoost defaults), the same without the fitted boundary and motion blur,
+and 8-bit + the seeds' fitted poses, and each is scored on positives against those hard windows (ROC-AUC, and the
+share of hard windows above the positives' median score). ≈ 8 min.
+
+    PYTHONPATH=. python results/synthetic/adaboost_rounds/puff_probe.py > results/synthetic/adaboost_rounds/puff_probe.txt
+"""
+from pathlib import Path
+
+import numpy as np
+import torch
+from torchvision.ops import box_convert, box_iou
+
+from synthaug.data.seedset import SeedSet, crop_patch
+from synthaug.data.video import read_video_with_labels
+from synthaug.detectors.adaboost import gradient_level, train_adaboost
+from synthaug.detectors.base import load_detector
+from synthaug.detectors.sliding import detect_multiscale
+from synthaug.detectors.training_sets import negative_pool, real_positives, synthetic_positives
+from synthaug.detectors.video_training import share_weights
+from synthaug.evaluate.patches import _find_video, patch_eval_set
+from synthaug.evaluate.protocol import load_protocol
+from synthaug.params import CaptureParams
+
+STEMS = ("V_DRONE_109", "V_DRONE_111", "V_DRONE_112", "V_DRONE_113", "V_DRONE_114")
+HARD, MESH, SEED = 400, "../shared/data/meshes/quadcopter.glb", 0
+torch.set_num_threads(1)
+real_det = load_detector("data/runs/cells/detectors/10d17509b28cd202dc2669c2.pt")
+P = int(real_det.window)
+hard = []
+for stem in STEMS:
+    frames, labs, _ = read_video_with_labels(_find_video(Path("../shared/data/halmstad/videos"), stem),
+                                             f"../shared/data/halmstad/labels/{stem}.json")
+    for f in range(0, len(labs.boxes), 5):
+        if labs.boxes[f] is None:
+            continue
+        gt = np.asarray(labs.boxes[f], dtype=np.float64).reshape(-1, 4)
+        d = detect_multiscale(real_det, torch.from_numpy(frames[f]).float()[None] / 255, max_detections=10,
+                              refine_boxes=False)
+        if not len(d):
+            continue
+        xyxy = box_convert(d[:, :4], "xywh", "xyxy")
+        iou = box_iou(xyxy, torch.as_tensor(np.c_[gt[:, :2], gt[:, :2] + gt[:, 2:]], dtype=torch.float32)).max(1).values
+        for (x, y, w, h), score, v in zip(d[:, :4].tolist(), d[:, 4].tolist(), iou.tolist()):
+            if v < 0.3:
+                hard.append((score, crop_patch(frames[f], crop=[x + w / 2, y + h / 2, max(w, h)], patch_size=P)[0]))
+hard.sort(key=lambda t: -t[0])
+neg_hard = torch.from_numpy(np.stack([c for _, c in hard[:HARD]])).float()[:, None] / 255
+proto = load_protocol("configs/protocol/halmstad_v2.json")
+ps = patch_eval_set("../shared/data/halmstad/videos", "../shared/data/halmstad/labels", "test", proto,
+                    videos=list(STEMS))
+pos_test = torch.from_numpy(ps.patches[ps.labels == 1]).float()[:, None] / 255
+print(f"{len(hard)} background windows, the best {len(neg_hard)} kept; {len(pos_test)} objects", flush=True)
+
+ss = SeedSet.load(f"data/runs/ingest_drone_seed{SEED}/seedsets/drone_100")
+fit = f"data/runs/fits/drone_100_seed{SEED}_hog_quadcopter.json"
+effects = CaptureParams.load_with_extra(fit)[0].effects
+pos, neg = real_positives(ss), negative_pool(ss, seed=SEED)
+floor = gradient_level(neg)
+variants = {"real only": None, "+ synthetic (AdaBoost's defaults)": {},
+            "+ synthetic without boundary and motion blur":
+                {"effects": [e for e in effects if e not in ("boundary_blur", "motion_blur")]},
+            "+ synthetic, 8-bit, fitted poses at the seeds' offsets":
+                {"quantize": True, "pose_sampling": "fitted_at_seed"}}
+print(f"fitted effects: {list(effects)}")
+for name, kw in variants.items():
+    added = pos[:0] if kw is None else synthetic_positives(ss, MESH, fit, 20 * len(ss), seed=SEED + 2, **kw)
+    p = torch.cat([pos, added])
+    det = train_adaboost(p, neg, n_rounds=300, candidates=2000, seed=SEED, energy_floor=floor,
+                         positive_weights=share_weights(len(pos), len(p), 0.25),
+                         cascade_positives=len(pos) if len(added) else None)
+    sp, sn = det.score_patches(pos_test).double().numpy(), det.score_patches(neg_hard).double().numpy()
+    auc = float((sp[:, None] > sn[None]).mean() + 0.5 * (sp[:, None] == sn[None]).mean())
+    print(f"{name}: ROC-AUC objects vs hard windows {auc:.3f}; hard windows above the objects' median score "
+          f"{float((sn > np.median(sp)).mean()):.3f}", flush=True)
