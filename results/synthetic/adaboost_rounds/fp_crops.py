@@ -20,9 +20,10 @@ from synthaug.data.video import read_video_with_labels
 from synthaug.detectors.base import load_detector
 from synthaug.detectors.sliding import detect_multiscale
 from synthaug.evaluate.patches import _find_video
+from stored import stored_detectors  # this folder's (the script's directory is on sys.path)
 
-DETECTORS = {"real only": "data/runs/cells/detectors/10d17509b28cd202dc2669c2.pt",
-             "shape cell": "data/runs/cells/detectors/107c129d608a1fb7c648f6ab.pt"}
+SEED0 = {cell: ckpt for _, cell, ckpt in stored_detectors((0,))}
+DETECTORS = {"real only": SEED0["real"], "shape cell": SEED0["shape"]}
 N, P = 16, 48
 torch.set_num_threads(1)
 out, stems = sys.argv[1], sys.argv[2:]

@@ -12,9 +12,7 @@ scoring to ≈ 1.5 min; SEEDS restricts the detectors to those training seeds. T
 
     python results/synthetic/adaboost_rounds/jitter_patches.py test [SEED ...] > results/synthetic/adaboost_rounds/jitter_test.jsonl
 """
-import glob
 import json
-import os
 import sys
 import time
 from pathlib import Path
@@ -27,6 +25,7 @@ from synthaug.data.video import read_video_with_labels
 from synthaug.detectors.base import load_detector
 from synthaug.evaluate.patches import _find_video, patch_eval_set, patch_metrics
 from synthaug.evaluate.protocol import load_protocol
+from stored import stored_detectors  # this folder's (the script's directory is on sys.path)
 
 VIDEOS, LABELS = "../shared/data/halmstad/videos", "../shared/data/halmstad/labels"
 SHIFTS = (-2.0, 0.0, 2.0)  # patch px
@@ -59,19 +58,13 @@ assert np.array_equal(jit[:, centre], ps.patches[keep]), "the centred re-crop mu
 print(json.dumps({"split": split, "patches": len(keep), "positives": int(labels.sum()), "offsets": len(offsets),
                   "build_s": round(time.perf_counter() - t0, 1)}), flush=True)
 pick = rng.integers(0, len(offsets), len(keep))
-for f in sorted(glob.glob("data/runs/cells/detectors/*.json")):
-    c = json.load(open(f))["identity"]
-    seed, c = c["seed"], c["condition"]
-    if c.get("kind") != "adaboost" or c.get("seed_count") != 100 or not os.path.exists(f[:-5] + ".pt") \
-            or (seeds and seed not in seeds):
-        continue
-    cell = "real" if not c.get("synthetic_ratio") else ("shape" if c.get("shape_variation") else "pose")
-    det = load_detector(f[:-5] + ".pt")
+for seed, cell, ckpt in stored_detectors(seeds):
+    det = load_detector(ckpt)
     scores = np.zeros(jit.shape[:2])
     for a in range(0, len(jit), 512):
         x = torch.from_numpy(jit[a:a + 512].reshape(-1, 1, P, P)).float() / 255
         scores[a:a + 512] = det.score_patches(x).double().numpy().reshape(-1, len(offsets))
-    row = {"seed": seed, "cell": cell, "detector": os.path.basename(f)[:-5]}
+    row = {"seed": seed, "cell": cell, "detector": Path(ckpt).stem}
     for name, s in (("centred", scores[:, centre]), ("random", scores[np.arange(len(pick)), pick]),
                     ("best", scores.max(1))):
         m = patch_metrics(s, labels)

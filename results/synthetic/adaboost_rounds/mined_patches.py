@@ -8,9 +8,8 @@ beside the frame-level one; then each synthetic cell minus real only as the prot
 
     python results/synthetic/adaboost_rounds/mined_patches.py > results/synthetic/adaboost_rounds/mined_patches.jsonl
 """
-import glob
 import json
-import os
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -19,6 +18,7 @@ from synthaug.detectors.base import load_detector
 from synthaug.evaluate.patches import patch_eval_set, patch_metrics, score_patch_set
 from synthaug.evaluate.protocol import load_protocol
 from synthaug.evaluate.stats import PooledRanking, paired_difference
+from stored import stored_detectors  # this folder's (the script's directory is on sys.path)
 
 torch.set_num_threads(1)
 proto = load_protocol("configs/protocol/halmstad_v2.json")
@@ -26,17 +26,12 @@ sets = {split: patch_eval_set("../shared/data/halmstad/videos", "../shared/data/
                               split_file="configs/splits/halmstad.json", class_name="drone")
         for split in ("val", "test")}
 pools = {}  # (cell, split) -> seed -> the seed's detector's per-video rankings
-for f in sorted(glob.glob("data/runs/cells/detectors/*.json")):
-    ident = json.load(open(f))["identity"]
-    c = ident["condition"]
-    if c.get("kind") != "adaboost" or c.get("seed_count") != 100 or not os.path.exists(f[:-5] + ".pt"):
-        continue
-    cell = "real" if not c.get("synthetic_ratio") else ("shape" if c.get("shape_variation") else "pose")
-    det = load_detector(f[:-5] + ".pt")
-    row = {"seed": ident["seed"], "cell": cell, "detector": os.path.basename(f)[:-5]}
+for seed, cell, ckpt in stored_detectors():
+    det = load_detector(ckpt)
+    row = {"seed": seed, "cell": cell, "detector": Path(ckpt).stem}
     for split, ps in sets.items():
         vs = score_patch_set(det, ps)
-        pools.setdefault((cell, split), {})[ident["seed"]] = PooledRanking([v.ranking() for v in vs])
+        pools.setdefault((cell, split), {})[seed] = PooledRanking([v.ranking() for v in vs])
         m = patch_metrics(np.concatenate([v.scores for v in vs]), np.concatenate([v.labels for v in vs]))
         row[f"{split}_ap"] = round(m.ap.estimate, 4)
         row[f"{split}_auc"] = round(m.roc_auc.estimate, 4)

@@ -23,14 +23,15 @@ from synthaug.detectors.base import load_detector
 from synthaug.detectors.sliding import detect_multiscale
 from synthaug.detectors.training_sets import negative_pool, real_positives, synthetic_positives
 from synthaug.detectors.video_training import share_weights
-from synthaug.evaluate.patches import _find_video, patch_eval_set
+from synthaug.evaluate.patches import _find_video, patch_eval_set, patch_metrics
 from synthaug.evaluate.protocol import load_protocol
 from synthaug.params import CaptureParams
+from stored import stored_detectors  # this folder's (the script's directory is on sys.path)
 
 STEMS = ("V_DRONE_109", "V_DRONE_111", "V_DRONE_112", "V_DRONE_113", "V_DRONE_114")
 HARD, MESH, SEED = 400, "../shared/data/meshes/quadcopter.glb", 0
 torch.set_num_threads(1)
-real_det = load_detector("data/runs/cells/detectors/10d17509b28cd202dc2669c2.pt")
+real_det = load_detector({cell: ckpt for _, cell, ckpt in stored_detectors((SEED,))}["real"])
 P = int(real_det.window)
 hard = []
 for stem in STEMS:
@@ -75,6 +76,6 @@ for name, kw in variants.items():
                          positive_weights=share_weights(len(pos), len(p), 0.25),
                          cascade_positives=len(pos) if len(added) else None)
     sp, sn = det.score_patches(pos_test).double().numpy(), det.score_patches(neg_hard).double().numpy()
-    auc = float((sp[:, None] > sn[None]).mean() + 0.5 * (sp[:, None] == sn[None]).mean())
+    auc = patch_metrics(np.r_[sp, sn], np.r_[np.ones(len(sp)), np.zeros(len(sn))].astype(int)).roc_auc.estimate
     print(f"{name}: ROC-AUC objects vs hard windows {auc:.3f}; hard windows above the objects' median score "
           f"{float((sn > np.median(sp)).mean()):.3f}", flush=True)
