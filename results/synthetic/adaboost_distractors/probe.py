@@ -29,24 +29,21 @@ from pathlib import Path
 import numpy as np
 import torch
 import trimesh
-from torchvision.ops import box_convert, box_iou
 
-from synthaug.data.seedset import SeedSet, crop_patch
-from synthaug.data.video import read_video_with_labels
+from synthaug.data.seedset import SeedSet
 from synthaug.detectors.adaboost import gradient_level, train_adaboost
 from synthaug.detectors.base import load_detector, save_detector
-from synthaug.detectors.sliding import detect_multiscale
 from synthaug.detectors.training_sets import negative_pool, real_positives, synthetic_positives
 from synthaug.detectors.video_training import share_weights
-from synthaug.evaluate.patches import _find_video, patch_eval_set, patch_metrics, score_patch_set
+from synthaug.evaluate.patches import patch_eval_set, patch_metrics, score_patch_set
 from synthaug.evaluate.protocol import load_protocol
 from synthaug.params import CaptureParams
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "adaboost_rounds"))
+from hard_windows import STEMS, hardest_windows  # noqa: E402  (../adaboost_rounds/hard_windows.py)
 from stored import stored_detectors  # noqa: E402  (../adaboost_rounds/stored.py)
 
 MESH = "../shared/data/meshes/quadcopter.glb"
-STEMS = ("V_DRONE_109", "V_DRONE_111", "V_DRONE_112", "V_DRONE_113", "V_DRONE_114")
 HARD = 400
 SHAPE_CELL = {"quantize": True, "pose_sampling": "fitted_at_seed", "shape_variation": 0.3, "realism_keep": 0.25,
               "realism_features": "weak_learners"}
@@ -83,28 +80,7 @@ def hard_windows(seed, store):
         ckpt, which = store / f"seed{seed}_real.pt", "unmined"
         if not ckpt.exists():
             return None, None
-    det = load_detector(ckpt)
-    hard = []
-    for stem in STEMS:
-        frames, labs, _ = read_video_with_labels(_find_video(Path("../shared/data/halmstad/videos"), stem),
-                                                 f"../shared/data/halmstad/labels/{stem}.json")
-        for f in range(0, len(labs.boxes), 5):
-            if labs.boxes[f] is None:
-                continue
-            gt = np.asarray(labs.boxes[f], dtype=np.float64).reshape(-1, 4)
-            d = detect_multiscale(det, torch.from_numpy(frames[f]).float()[None] / 255, max_detections=10,
-                                  refine_boxes=False)
-            if not len(d):
-                continue
-            xyxy = box_convert(d[:, :4], "xywh", "xyxy")
-            gtx = torch.as_tensor(np.c_[gt[:, :2], gt[:, :2] + gt[:, 2:]], dtype=torch.float32)
-            iou = box_iou(xyxy, gtx).max(1).values
-            for (x, y, w, h), score, v in zip(d[:, :4].tolist(), d[:, 4].tolist(), iou.tolist()):
-                if v < 0.3:
-                    hard.append((score, crop_patch(frames[f], crop=[x + w / 2, y + h / 2, max(w, h)],
-                                                   patch_size=int(det.window))[0]))
-    hard.sort(key=lambda t: -t[0])
-    return torch.from_numpy(np.stack([c for _, c in hard[:HARD]])).float()[:, None] / 255, which
+    return hardest_windows(load_detector(ckpt), HARD)[0], which
 
 
 def main():

@@ -10,53 +10,29 @@ share of hard windows above the positives' median score). ≈ 8 min.
 
     PYTHONPATH=. python results/synthetic/adaboost_rounds/puff_probe.py > results/synthetic/adaboost_rounds/puff_probe.txt
 """
-from pathlib import Path
-
 import numpy as np
 import torch
-from torchvision.ops import box_convert, box_iou
 
-from synthaug.data.seedset import SeedSet, crop_patch
-from synthaug.data.video import read_video_with_labels
+from synthaug.data.seedset import SeedSet
 from synthaug.detectors.adaboost import gradient_level, train_adaboost
 from synthaug.detectors.base import load_detector
-from synthaug.detectors.sliding import detect_multiscale
 from synthaug.detectors.training_sets import negative_pool, real_positives, synthetic_positives
 from synthaug.detectors.video_training import share_weights
-from synthaug.evaluate.patches import _find_video, patch_eval_set, patch_metrics
+from synthaug.evaluate.patches import patch_eval_set, patch_metrics
 from synthaug.evaluate.protocol import load_protocol
 from synthaug.params import CaptureParams
-from stored import stored_detectors  # this folder's (the script's directory is on sys.path)
+from hard_windows import STEMS, hardest_windows  # this folder's (the script's directory is on sys.path)
+from stored import stored_detectors
 
-STEMS = ("V_DRONE_109", "V_DRONE_111", "V_DRONE_112", "V_DRONE_113", "V_DRONE_114")
 HARD, MESH, SEED = 400, "../shared/data/meshes/quadcopter.glb", 0
 torch.set_num_threads(1)
 real_det = load_detector({cell: ckpt for _, cell, ckpt in stored_detectors((SEED,))}["real"])
-P = int(real_det.window)
-hard = []
-for stem in STEMS:
-    frames, labs, _ = read_video_with_labels(_find_video(Path("../shared/data/halmstad/videos"), stem),
-                                             f"../shared/data/halmstad/labels/{stem}.json")
-    for f in range(0, len(labs.boxes), 5):
-        if labs.boxes[f] is None:
-            continue
-        gt = np.asarray(labs.boxes[f], dtype=np.float64).reshape(-1, 4)
-        d = detect_multiscale(real_det, torch.from_numpy(frames[f]).float()[None] / 255, max_detections=10,
-                              refine_boxes=False)
-        if not len(d):
-            continue
-        xyxy = box_convert(d[:, :4], "xywh", "xyxy")
-        iou = box_iou(xyxy, torch.as_tensor(np.c_[gt[:, :2], gt[:, :2] + gt[:, 2:]], dtype=torch.float32)).max(1).values
-        for (x, y, w, h), score, v in zip(d[:, :4].tolist(), d[:, 4].tolist(), iou.tolist()):
-            if v < 0.3:
-                hard.append((score, crop_patch(frames[f], crop=[x + w / 2, y + h / 2, max(w, h)], patch_size=P)[0]))
-hard.sort(key=lambda t: -t[0])
-neg_hard = torch.from_numpy(np.stack([c for _, c in hard[:HARD]])).float()[:, None] / 255
+neg_hard, n_windows = hardest_windows(real_det, HARD)
 proto = load_protocol("configs/protocol/halmstad_v2.json")
 ps = patch_eval_set("../shared/data/halmstad/videos", "../shared/data/halmstad/labels", "test", proto,
                     videos=list(STEMS))
 pos_test = torch.from_numpy(ps.patches[ps.labels == 1]).float()[:, None] / 255
-print(f"{len(hard)} background windows, the best {len(neg_hard)} kept; {len(pos_test)} objects", flush=True)
+print(f"{n_windows} background windows, the best {len(neg_hard)} kept; {len(pos_test)} objects", flush=True)
 
 ss = SeedSet.load(f"data/runs/ingest_drone_seed{SEED}/seedsets/drone_100")
 fit = f"data/runs/fits/drone_100_seed{SEED}_hog_quadcopter.json"
