@@ -291,6 +291,32 @@ def test_edge_ratio_of_blurred_steps_against_the_normal_cdf(sigma):
     assert edge_ratio(f * gain, b * gain, outside=out) == pytest.approx(want, abs=0.01)
 
 
+@pytest.mark.parametrize("sigma", [0.8, 1.2, 2.0])
+def test_edge_ratio_under_a_column_pattern_with_a_saturated_sky(sigma):
+    # a 4 % column pattern before the 8-bit clip, over a sky that rises through white: where a column's gain lifts it
+    # past 1 the pixel holds the clip, not the gain. The gains are read on the unclipped pixels only and the edges
+    # kept off the clipped ones, so the steps below the sky read their closed form as without the pattern; read on
+    # every pixel (the code before stop 99) the sky's clipped columns set the gains and stripe the rest of the frame
+    from synthaug.diagnose.frame_pattern import destripe, edge_ratio
+
+    f, out = _step_frame(sigma)
+    x = np.arange(f.shape[1])
+    frame = np.concatenate([f, np.tile(0.97 + 0.06 * x / x[-1], (60, 1))])
+    out = np.concatenate([out, np.ones((60, f.shape[1]), bool)])
+    out[110:130] = False  # the seam between the steps and the sky is no camera edge
+    gain = 1 + 0.04 * np.random.default_rng(5).standard_normal(f.shape[1])
+    fg, bg = np.clip(frame * gain, 0, 1), np.clip((frame + 1e-3) * gain, 0, 1)
+    assert 0.1 < float((bg >= 1).mean()) < 0.2
+    want = (2 * stats.norm.cdf(2 / sigma) - 1) / (2 * stats.norm.cdf(4 / sigma) - 1)
+    assert edge_ratio(fg, bg, outside=out) == pytest.approx(want, abs=0.003)
+    # what the mask is for: with every pixel read, the steps' rows keep column steps of about 1 % (masked: 0.2 %)
+    rows = slice(0, 100)
+    for valid, lo, hi in ((None, 0.0, 0.003), (np.ones(fg.shape, bool), 0.006, 1.0)):
+        _, b = destripe(fg, bg, valid=valid)
+        left = np.log(b[rows] / (frame[rows] + 1e-3))
+        assert lo <= float(np.diff(np.median(left, 0)).std()) < hi
+
+
 def test_edge_ratio_is_not_applicable_without_an_independent_look_or_edges():
     from synthaug.diagnose.frame_pattern import edge_ratio
 
