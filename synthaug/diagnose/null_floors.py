@@ -4,16 +4,17 @@ The rule that uses them: :mod:`synthaug.diagnose.calibration`.
 """
 
 SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
-            'results/diagnose/null/periodic_s96/calibration/calibration_set_hand.json '
-            'results/diagnose/null/periodic_s96/calibration/full_fit_calibrated.json --write-floors '
+            'results/diagnose/null/clip_s99/calibration/calibration_set_hand.json '
+            'results/diagnose/null/clip_s99/calibration/full_fit_calibrated.json --write-floors '
             'synthaug/diagnose/null_floors.py <- python benchmarks/bench_diagnose_null.py --cases 24 --rules '
             'hand --out results/diagnose/null/calibration_set_hand.json [converged fit, 24 cases; frame '
             'statistics remade by python results/diagnose/null/frame_recalibrate.py --calibration '
-            'clean:2000:24=results/diagnose/null/calibration_set_hand.json '
-            'clean:4000:20:full=results/diagnose/null/full_fit_calibrated.json --write-dir '
-            'results/diagnose/null/frame_refresh --out results/diagnose/null/frame_recalibrate.json; '
-            'residual:periodic_columns, residual:periodic_rows remade by python '
-            'results/diagnose/null/periodic_s96/recalibrate.py --calibration '
+            'clean:2000:24=results/diagnose/null/periodic_s96/calibration/calibration_set_hand.json '
+            'clean:4000:20:full=results/diagnose/null/periodic_s96/calibration/full_fit_calibrated.json '
+            '--write-dir results/diagnose/null/clip_s99/calibration --out '
+            'results/diagnose/null/clip_s99/frame_recalibrate.json; residual:periodic_columns, '
+            'residual:periodic_rows remade by python results/diagnose/null/periodic_s96/recalibrate.py '
+            '--calibration '
             'clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
             'full4000=results/diagnose/null/frame_refresh/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
             '--write-dir results/diagnose/null/periodic_s96/calibration --out '
@@ -21,16 +22,18 @@ SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
             '--cases 20 --base-seed 4000 --fit full --budget 800 --step-deg 10 --sprite-size 64 --workdir '
             'outputs/bench_diagnose_null_full --out results/diagnose/null/full_fit_calibrated.json [full '
             'fit, 20 cases; frame statistics remade by python results/diagnose/null/frame_recalibrate.py '
-            '--calibration clean:2000:24=results/diagnose/null/calibration_set_hand.json '
-            'clean:4000:20:full=results/diagnose/null/full_fit_calibrated.json --write-dir '
-            'results/diagnose/null/frame_refresh --out results/diagnose/null/frame_recalibrate.json; '
-            'residual:periodic_columns, residual:periodic_rows remade by python '
-            'results/diagnose/null/periodic_s96/recalibrate.py --calibration '
+            '--calibration '
+            'clean:2000:24=results/diagnose/null/periodic_s96/calibration/calibration_set_hand.json '
+            'clean:4000:20:full=results/diagnose/null/periodic_s96/calibration/full_fit_calibrated.json '
+            '--write-dir results/diagnose/null/clip_s99/calibration --out '
+            'results/diagnose/null/clip_s99/frame_recalibrate.json; residual:periodic_columns, '
+            'residual:periodic_rows remade by python results/diagnose/null/periodic_s96/recalibrate.py '
+            '--calibration '
             'clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
             'full4000=results/diagnose/null/frame_refresh/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
             '--write-dir results/diagnose/null/periodic_s96/calibration --out '
             'results/diagnose/null/periodic_s96/recalibrate.json]',
- 'date': '2026-12-05',
+ 'date': '2026-12-06',
  'family_rate': 0.05,
  'n_cases': 44,
  'n_seeds': 60,
@@ -81,7 +84,7 @@ SCREEN = {'compression:distance:feature': 0.031781,
  'sharpening:absorbed': 0.207789,
  'sharpening:distance:feature': 0.012362,
  'sharpening:distance:pixel': 0.010182,
- 'sharpening:frame': 0.64681,
+ 'sharpening:frame': 0.647943,
  'shot_noise:distance:feature': 0.005942,
  'shot_noise:distance:pixel': 0.00237,
  'shot_noise:noise_level': 0.039994,
@@ -118,7 +121,7 @@ CENTRE = {'compression:distance:feature': -0.038248,
  'sharpening:absorbed': -0.015283,
  'sharpening:distance:feature': -0.021276,
  'sharpening:distance:pixel': -0.034363,
- 'sharpening:frame': 0.634244,
+ 'sharpening:frame': 0.634752,
  'shot_noise:distance:feature': -0.007846,
  'shot_noise:distance:pixel': -0.006651,
  'shot_noise:noise_level': -0.006365,
