@@ -480,7 +480,9 @@ def sharpening_setting(summaries: Sequence[dict[str, Any]], grid: Sequence[dict[
     ratios = []
     for g in grid:
         a, sg = float(g["sharpen_amount"]), float(g["sharpen_sigma"])
-        r = [edge_ratio(unsharp_inverse(fr, a, sg), unsharp_inverse(bg, a, sg), outside=out) for fr, bg, out in looks]
+        # the captures' clipped pixels, which ``out`` leaves out (frame_summary), not those of the filtered looks
+        r = [edge_ratio(unsharp_inverse(fr, a, sg), unsharp_inverse(bg, a, sg), outside=out, unclipped=out)
+             for fr, bg, out in looks]
         ratios.append(float(np.nanmean(r)) if np.isfinite(r).any() else float("nan"))
     err = np.abs(np.asarray(ratios) - centre)
     if not np.isfinite(err).any():
@@ -489,7 +491,7 @@ def sharpening_setting(summaries: Sequence[dict[str, Any]], grid: Sequence[dict[
 
 
 def edge_steps(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray | None = None,
-               offsets: tuple[int, int] = EDGE_OFFSETS) -> dict[str, Any] | None:
+               offsets: tuple[int, int] = EDGE_OFFSETS, unclipped: np.ndarray | None = None) -> dict[str, Any] | None:
     """Each edge :func:`edge_ratio` reads, and its steps across it: the edges found, oriented and kept on
     ``background``, the steps read on ``frame`` (arguments as :func:`edge_ratio`).
 
@@ -505,7 +507,8 @@ def edge_steps(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
         return None
     f, b, ok = looks
     h, w = f.shape
-    valid = _unclipped(f) & _unclipped(b)  # a clipped pixel's step is the 8-bit end's, and it holds no line gain
+    # a clipped pixel's step is the 8-bit end's, and it holds no line gain
+    valid = _unclipped(f) & _unclipped(b) if unclipped is None else np.asarray(unclipped, bool)
     f, b = destripe(f, b, valid=valid)  # a fixed line pattern is in both looks: it would choose the edges it is read on
     gs = ndimage.gaussian_filter(b, 1.0)
     gx, gy = ndimage.sobel(gs, 1), ndimage.sobel(gs, 0)
@@ -532,7 +535,7 @@ def edge_steps(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
 
 
 def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray | None = None,
-               offsets: tuple[int, int] = EDGE_OFFSETS) -> float:
+               offsets: tuple[int, int] = EDGE_OFFSETS, unclipped: np.ndarray | None = None) -> float:
     """The sharpness of a frame's edges: ``A(o1) / A(o2)`` of the mean antisymmetric edge profile (module docstring).
 
     Args:
@@ -542,6 +545,8 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
         outside: (H, W) bool, where edges may lie (the object's crop left out); None: everywhere. Edges are kept off
             the pixels clipped at either 8-bit end in either look as well.
         offsets: (o1, o2) px from the edge's centre.
+        unclipped: (H, W) bool, the pixels off the 8-bit ends in both looks; None: found on the looks given. Looks
+            that were filtered after the capture (an unsharp mask's inverse) pass their captures' own.
 
     Returns:
         The ratio, or NaN with fewer than :data:`MIN_EDGES` edges, frames of different shapes, or a background
@@ -556,7 +561,7 @@ def edge_ratio(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
         >>> edge_ratio(look(sharp), look(sharp)) > edge_ratio(look(scene), look(scene)) + 0.1
         True
     """
-    return _steps_ratio(edge_steps(frame, background, outside=outside, offsets=offsets))
+    return _steps_ratio(edge_steps(frame, background, outside=outside, offsets=offsets, unclipped=unclipped))
 
 
 def _steps_ratio(steps: dict[str, Any] | None) -> float:
@@ -1066,7 +1071,7 @@ def tone_undone(summaries: Sequence[dict[str, Any]], exponent: float) -> list[di
             continue
         frame, background, outside = looks
         undone = [np.clip(np.asarray(x, np.float64), 0.0, 1.0) ** (1.0 / exponent) for x in (frame, background)]
-        steps = edge_steps(undone[0], undone[1], outside=outside)
+        steps = edge_steps(undone[0], undone[1], outside=outside, unclipped=outside)
         out.append({**f, "edge_ratio": _steps_ratio(steps), "edge_radial": edge_radial(steps),
                     "looks": (undone[0].astype(np.float32), undone[1].astype(np.float32), outside)})
     return out
