@@ -866,14 +866,14 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
     repeat, edges, radial, looks = float("nan"), float("nan"), float("nan"), None
     flow = {"k": float("nan"), "drift": float("nan")}
     if background is not None:
-        blog, _ = _gray_log(background)
+        blog, b_unclipped = _gray_log(background)
         if blog.shape == log.shape:
             repeat = _corr(tex, _texture(blog, step))
             fg, bg = _gray(frame), _gray(background)  # once: the ratio and the kept looks read the same gray frames
             steps = edge_steps(fg, bg, outside=outside)
             edges, radial = _steps_ratio(steps), edge_radial(steps)
             if keep_looks and math.isfinite(edges):  # the clipped pixels kept out of the looks' later reads
-                looks = (fg.astype(np.float32), bg.astype(np.float32), outside & _unclipped(fg) & _unclipped(bg))
+                looks = (fg.astype(np.float32), bg.astype(np.float32), outside & unclipped & b_unclipped)
             flow = radial_flow(fg, bg, outside=outside)
     return {"log_slope": slope, "blockiness": blockiness, "dct": dct, "texture": tex, "repeat": repeat,
             "edge_ratio": edges, "edge_radial": radial, "looks": looks, "flow_k": flow["k"],
