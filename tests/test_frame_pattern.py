@@ -745,6 +745,49 @@ def test_lens_flow_tests_scenes_two_sided():
     assert lens_flow(frames[:12], groups[:12]) is None
 
 
+def test_lens_flow_weighs_frames_by_their_precision():
+    """Frames whose scene moved little read k with a large error (the distortion's share of the motion is k times
+    the shift): lens_flow's inverse-variance weighting keeps them from setting the estimate, its test is the weighted
+    least-squares t of a constant over scenes (checked against the regression itself), and its p is uniform under
+    no lens when the errors it is given are right only up to a common factor."""
+    from synthaug.diagnose.frame_pattern import lens_flow
+
+    rng = np.random.default_rng(15)
+
+    def case(k1: float, scale: float = 1.0):
+        frames, groups = [], []
+        for v in range(20):
+            tex, se = rng.standard_normal((12, 16)), rng.choice([0.004, 0.01, 0.1])  # shifts of ~1, 0.4, 0.04 px
+            frames.append({"flow_k": k1 + scale * se * rng.standard_normal(), "flow_k_se": se, "repeat": 0.9,
+                           "shape": (48, 64), "texture": tex})
+            groups.append(f"v{v}")
+        return frames, groups
+
+    ps, weighted, plain = [], [], []
+    for _ in range(300):
+        frames, groups = case(0.0, scale=2.5)  # the errors 2.5x the stated ones (a lower bound, as radial_flow's)
+        out = lens_flow(frames, groups)
+        ps.append(out["p"])
+        weighted.append(out["k"])
+        plain.append(np.mean([f["flow_k"] for f in frames]))
+    assert stats.kstest(ps, "uniform").pvalue > 0.01
+    assert np.std(weighted) < 0.3 * np.std(plain)
+    # the weighted least-squares fit of a constant, by the regression on sqrt(w)-scaled rows
+    k, w = np.array([f["flow_k"] for f in frames]), np.array([f["flow_k_se"] ** -2.0 for f in frames])
+    x, y = np.sqrt(w)[:, None], np.sqrt(w) * k
+    (coef,), res, *_ = np.linalg.lstsq(x, y, rcond=None)
+    se_coef = np.sqrt(res[0] / (len(k) - 1) / float((x.T @ x)[0, 0]))
+    assert out["k"] == pytest.approx(coef, rel=1e-9)
+    assert out["t"] == pytest.approx(coef / se_coef, rel=1e-9)
+    assert out["p"] == pytest.approx(2 * stats.t.sf(abs(coef / se_coef), len(k) - 1), rel=1e-9)
+    frames, groups = case(-0.15)
+    out = lens_flow(frames, groups)
+    assert out["p"] < 1e-6 and out["k"] == pytest.approx(-0.15, abs=0.01)
+    # a frame without a usable error is left out, as one without a reading
+    bad = [{**frames[0], "flow_k_se": float("nan")}] + frames[1:]
+    assert lens_flow(bad, groups)["frames"] == len(frames) - 1
+
+
 def test_lens_frame_channel_uses_the_size_of_k_and_sets_the_signed_k(monkeypatch):
     from synthaug.diagnose import screening
 

@@ -88,7 +88,7 @@ sways); through an undistorted lens that motion is one shift over the whole fram
 distortion (Fitzgibbon 2001). On the object (20-30 px, within r² < 0.4 of the centre) the same lens is a
 stretch of a few percent that the fitted pose absorbs. The reading needs a shift of at least :data:`MIN_DRIFT_PX`
 and an independent look (an ingested video's background frame is the frame itself); :func:`lens_flow` tests it
-over scenes, two-sided.
+over scenes, two-sided, each frame weighed by the precision of its reading (a small shift reads k noisily).
 """
 
 from __future__ import annotations
@@ -137,7 +137,13 @@ FLOW_ITERS = 10  # at most this many damped Gauss-Newton steps a stage (radial_f
 FLOW_MARGIN = 6  # frame px left out at the frame's edges (a shifted look's border has no partner)
 FLOW_MAX_K = 0.3  # |k| beyond the parameter's range: the motion fit has diverged (no reading)
 FLOW_MAX_DRIFT_PX = 8.0  # a larger motion between the looks is not a drift the fit can follow (no reading)
-MIN_DRIFT_PX = 0.3  # a shift smaller than this (frame px) cannot tell a lens's k (radial_flow)
+MIN_DRIFT_PX = 0.15
+"""A shift smaller than this (frame px) cannot tell a lens's k (:func:`radial_flow` gives none). The distortion's
+share of the motion is ``k`` times the shift, so a small shift's reading is noisy but not wrong: :func:`lens_flow`
+weighs each frame by its inverse variance. Measured on the 44 clean calibration cases (stop 100,
+``results/diagnose/null/centre_s100/flow_small_drift.py``): with that weighting the clean cases' ``|k|`` stays at
+most 0.016 down to 0.15 px (0.011 at 0.2, 0.015 at 0.3), and falls apart below it (0.048 at 0.1: a case with three
+frames that moved more, one of which reads k −0.15 on a clean lens)."""
 
 
 def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
@@ -694,8 +700,7 @@ def radial_flow(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarra
         shift ``drift`` (frame px) and ``pixels`` used. ``k`` is NaN when the looks cannot tell it: a background
         that is the frame itself (no second look), other shapes, fewer than 1,000 usable pixels, a fit that
         diverges or moves more than :data:`FLOW_MAX_DRIFT_PX`, or a shift under
-        :data:`MIN_DRIFT_PX` (the distortion's share of the motion is ``k`` times the shift: measured on the
-        reference camera, clean frames that moved 0.12-0.15 px read k -0.04 … -0.08).
+        :data:`MIN_DRIFT_PX` (the distortion's share of the motion is ``k`` times the shift).
 
     Example:
         >>> from scipy import ndimage
@@ -838,9 +843,9 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
         the band-passed block log image), ``repeat`` (its correlation with the background's texture; NaN without
         one), ``edge_ratio`` (:func:`edge_ratio` against the background frame; NaN without an independent one),
         ``edge_radial`` (:func:`edge_radial` of the same edges; NaN likewise),
-        ``looks`` (with ``keep_looks``, else None), ``flow_k`` and ``flow_drift`` (:func:`radial_flow` against the
-        background frame: the lens's k and the scene's shift between the looks; NaN without an independent one or
-        too small a shift) and ``shape`` (H, W).
+        ``looks`` (with ``keep_looks``, else None), ``flow_k``, ``flow_k_se`` and ``flow_drift`` (:func:`radial_flow`
+        against the background frame: the lens's k, its standard error and the scene's shift between the looks; NaN
+        without an independent one or too small a shift) and ``shape`` (H, W).
 
     Example:
         >>> h, w = 96, 128
@@ -864,7 +869,7 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
     dct = _block_dct(lin * 255.0, outside & unclipped)
     tex = _texture(log, step)
     repeat, edges, radial, looks = float("nan"), float("nan"), float("nan"), None
-    flow = {"k": float("nan"), "drift": float("nan")}
+    flow = {"k": float("nan"), "k_se": float("nan"), "drift": float("nan")}
     if background is not None:
         blog, b_unclipped = _gray_log(background)
         if blog.shape == log.shape:
@@ -877,7 +882,7 @@ def frame_summary(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
             flow = radial_flow(fg, bg, outside=outside)
     return {"log_slope": slope, "blockiness": blockiness, "dct": dct, "texture": tex, "repeat": repeat,
             "edge_ratio": edges, "edge_radial": radial, "looks": looks, "flow_k": flow["k"],
-            "flow_drift": flow["drift"],
+            "flow_k_se": flow["k_se"], "flow_drift": flow["drift"],
             "shape": (int(h), int(w))}
 
 
@@ -1107,26 +1112,51 @@ def sharp_edges(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *, c
 
 def lens_flow(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
               same: float = SAME_SCENE) -> dict[str, Any] | None:
-    """A lens's radial distortion over the frames (their ``flow_k``, :func:`radial_flow`), tested over scenes as
-    :func:`radial_falloff`, two-sided (barrel or pincushion).
+    """A lens's radial distortion over the frames (their ``flow_k``, :func:`radial_flow`), tested over scenes,
+    two-sided (barrel or pincushion), each frame weighed by its inverse variance (``1 / flow_k_se²``; equal weights
+    where a summary has no ``flow_k_se``).
+
+    A frame's k is the distortion's share of the scene's motion divided by the motion, so its error grows as the
+    shift shrinks: an unweighted mean over scenes is set by the frames that moved least (stop 100: it needed a shift of
+    0.3 px to keep the clean cases' ``|k|`` under 0.027, and a case whose scene moved less had no reading at all).
+    Each scene's k is its frames' inverse-variance mean, weighed by the sum of their weights; the scenes' weighted
+    mean is tested by the weighted t over scenes (its variance the weighted spread of the scenes' k about it, so a
+    ``flow_k_se`` that is only a lower bound sets the weights, not the test's scale), ``S - 1`` degrees of freedom.
 
     Returns:
         None with fewer than 3 scenes that have a reading (the scene did not move between the looks, or there is
-        no independent background frame); else ``k`` (the mean over scenes), ``t``, ``p`` (two-sided), ``scenes``,
-        ``frames``.
+        no independent background frame); else ``k`` (the weighted mean over scenes), ``t``, ``p`` (two-sided),
+        ``scenes``, ``frames``.
 
     Example:
         >>> rng = np.random.default_rng(0)
-        >>> f = [{"flow_k": -0.15 + 0.03 * rng.standard_normal(), "texture": rng.standard_normal((24, 32)),
-        ...       "repeat": 0.9, "shape": (96, 128)} for _ in range(10)]
+        >>> se = rng.uniform(0.01, 0.1, 10)  # frames that moved more read k more precisely
+        >>> f = [{"flow_k": -0.15 + s * rng.standard_normal(), "flow_k_se": s, "texture": rng.standard_normal((24, 32)),
+        ...       "repeat": 0.9, "shape": (96, 128)} for s in se]
         >>> out = lens_flow(f, [None] * 10)
         >>> out["scenes"], out["p"] < 1e-6, abs(out["k"] + 0.15) < 0.03
         (10, True, True)
     """
-    r = _over_scenes(summaries, groups, "flow_k", same, two_sided=True)
-    if r is None:
+    from scipy import stats
+
+    keep = [i for i, f in enumerate(summaries) if math.isfinite(f.get("flow_k", float("nan")))
+            and (f.get("flow_k_se") is None or (math.isfinite(f["flow_k_se"]) and f["flow_k_se"] > 0))]
+    if not keep:
         return None
-    return {"k": r["mean"], "t": r["t"], "p": r["p"], "scenes": r["scenes"], "frames": r["frames"]}
+    lab = scene_clusters([summaries[i] for i in keep], [groups[i] for i in keep], same=same)
+    k = np.array([summaries[i]["flow_k"] for i in keep], np.float64)
+    se = [summaries[i].get("flow_k_se") for i in keep]
+    w = np.array([1.0 if s is None else 1.0 / (s * s) for s in se], np.float64)
+    w_s = np.array([w[lab == c].sum() for c in range(int(lab.max()) + 1)])
+    k_s = np.array([np.sum(w[lab == c] * k[lab == c]) for c in range(int(lab.max()) + 1)]) / w_s
+    n = len(k_s)
+    if n < 3:
+        return None
+    mean = float(np.sum(w_s * k_s) / w_s.sum())
+    var = float(np.sum(w_s * (k_s - mean) ** 2) / ((n - 1) * w_s.sum()))
+    t = mean / math.sqrt(var) if var > 0 else math.copysign(math.inf, mean) if mean else 0.0
+    p = float(2.0 * stats.t.sf(abs(t), n - 1))
+    return {"k": mean, "t": float(t), "p": p, "scenes": int(n), "frames": len(keep)}
 
 
 def _step_of(coef: np.ndarray, max_step: int = 64, min_values: int = 30) -> tuple[int, float]:

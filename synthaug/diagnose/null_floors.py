@@ -4,15 +4,15 @@ The rule that uses them: :mod:`synthaug.diagnose.calibration`.
 """
 
 SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
-            'results/diagnose/null/clip_s99/calibration/calibration_set_hand.json '
-            'results/diagnose/null/clip_s99/calibration/full_fit_calibrated.json --write-floors '
+            'results/diagnose/null/centre_s100/calibration/calibration_set_hand.json '
+            'results/diagnose/null/centre_s100/calibration/full_fit_calibrated.json --write-floors '
             'synthaug/diagnose/null_floors.py <- python benchmarks/bench_diagnose_null.py --cases 24 --rules '
             'hand --out results/diagnose/null/calibration_set_hand.json [converged fit, 24 cases; frame '
             'statistics remade by python results/diagnose/null/frame_recalibrate.py --calibration '
-            'clean:2000:24=results/diagnose/null/periodic_s96/calibration/calibration_set_hand.json '
-            'clean:4000:20:full=results/diagnose/null/periodic_s96/calibration/full_fit_calibrated.json '
-            '--write-dir results/diagnose/null/clip_s99/calibration --out '
-            'results/diagnose/null/clip_s99/frame_recalibrate.json; residual:periodic_columns, '
+            'clean:2000:24=results/diagnose/null/clip_s99/calibration/calibration_set_hand.json '
+            'clean:4000:20:full=results/diagnose/null/clip_s99/calibration/full_fit_calibrated.json '
+            '--write-dir results/diagnose/null/centre_s100/calibration --out '
+            'results/diagnose/null/centre_s100/frame_recalibrate.json; residual:periodic_columns, '
             'residual:periodic_rows remade by python results/diagnose/null/periodic_s96/recalibrate.py '
             '--calibration '
             'clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
@@ -23,10 +23,10 @@ SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
             'outputs/bench_diagnose_null_full --out results/diagnose/null/full_fit_calibrated.json [full '
             'fit, 20 cases; frame statistics remade by python results/diagnose/null/frame_recalibrate.py '
             '--calibration '
-            'clean:2000:24=results/diagnose/null/periodic_s96/calibration/calibration_set_hand.json '
-            'clean:4000:20:full=results/diagnose/null/periodic_s96/calibration/full_fit_calibrated.json '
-            '--write-dir results/diagnose/null/clip_s99/calibration --out '
-            'results/diagnose/null/clip_s99/frame_recalibrate.json; residual:periodic_columns, '
+            'clean:2000:24=results/diagnose/null/clip_s99/calibration/calibration_set_hand.json '
+            'clean:4000:20:full=results/diagnose/null/clip_s99/calibration/full_fit_calibrated.json '
+            '--write-dir results/diagnose/null/centre_s100/calibration --out '
+            'results/diagnose/null/centre_s100/frame_recalibrate.json; residual:periodic_columns, '
             'residual:periodic_rows remade by python results/diagnose/null/periodic_s96/recalibrate.py '
             '--calibration '
             'clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
@@ -76,7 +76,7 @@ SCREEN = {'compression:distance:feature': 0.031781,
  'haze:distance:pixel': 0.01511,
  'lens_distortion:distance:feature': 0.008726,
  'lens_distortion:distance:pixel': 0.010808,
- 'lens_distortion:frame': 0.026454,
+ 'lens_distortion:frame': 0.015984,
  'rolling_shutter:distance:feature': 0.032085,
  'rolling_shutter:distance:pixel': 0.046691,
  'rotor_blur:distance:feature': 0.049188,
@@ -113,7 +113,7 @@ CENTRE = {'compression:distance:feature': -0.038248,
  'haze:distance:pixel': -0.010743,
  'lens_distortion:distance:feature': -0.00858,
  'lens_distortion:distance:pixel': -0.007101,
- 'lens_distortion:frame': 0.00573,
+ 'lens_distortion:frame': 0.003304,
  'rolling_shutter:distance:feature': -0.032792,
  'rolling_shutter:distance:pixel': -0.037513,
  'rotor_blur:distance:feature': -0.019857,
