@@ -747,42 +747,61 @@ def test_lens_flow_tests_scenes_two_sided():
 
 def test_lens_flow_weighs_frames_by_their_precision():
     """Frames whose scene moved little read k with a large error (the distortion's share of the motion is k times
-    the shift): lens_flow's inverse-variance weighting keeps them from setting the estimate, its test is the weighted
-    least-squares t of a constant over scenes (checked against the regression itself), and its p is uniform under
-    no lens when the errors it is given are right only up to a common factor."""
+    the shift): lens_flow's weights keep them from setting the estimate. Its estimate is the random-effects mean
+    (DerSimonian-Laird's excess spread added to each stated error) and its test the Hartung-Knapp t, both checked
+    against the textbook formulas and the weighted regression; its p is uniform under no lens when the stated errors
+    are right (conservative when they are too small by a common factor), and frames whose errors are understated (a block codec's fixed grid) do not
+    take the estimate over."""
     from synthaug.diagnose.frame_pattern import lens_flow
 
     rng = np.random.default_rng(15)
 
-    def case(k1: float, scale: float = 1.0):
+    def case(k1: float, scale: float = 1.0, bad: int = 0):
         frames, groups = [], []
         for v in range(20):
             tex, se = rng.standard_normal((12, 16)), rng.choice([0.004, 0.01, 0.1])  # shifts of ~1, 0.4, 0.04 px
-            frames.append({"flow_k": k1 + scale * se * rng.standard_normal(), "flow_k_se": se, "repeat": 0.9,
+            err = scale * se
+            if v < bad:  # a frame whose stated error is ten times too small
+                se, err = 0.01, 0.1
+            frames.append({"flow_k": k1 + err * rng.standard_normal(), "flow_k_se": se, "repeat": 0.9,
                            "shape": (48, 64), "texture": tex})
             groups.append(f"v{v}")
         return frames, groups
 
     ps, weighted, plain = [], [], []
     for _ in range(300):
-        frames, groups = case(0.0, scale=2.5)  # the errors 2.5x the stated ones (a lower bound, as radial_flow's)
+        frames, groups = case(0.0)
         out = lens_flow(frames, groups)
         ps.append(out["p"])
         weighted.append(out["k"])
         plain.append(np.mean([f["flow_k"] for f in frames]))
     assert stats.kstest(ps, "uniform").pvalue > 0.01
     assert np.std(weighted) < 0.3 * np.std(plain)
-    # the weighted least-squares fit of a constant, by the regression on sqrt(w)-scaled rows
+    # the errors 2.5x the stated ones (a lower bound, as radial_flow's): the test errs on the safe side
+    understated = [lens_flow(*case(0.0, scale=2.5))["p"] for _ in range(300)]
+    assert np.mean(np.array(understated) < 0.05) <= 0.05
+    # DerSimonian-Laird's tau^2, then the weighted regression of a constant on sqrt(w)-scaled rows
     k, w = np.array([f["flow_k"] for f in frames]), np.array([f["flow_k_se"] ** -2.0 for f in frames])
+    q = np.sum(w * (k - np.sum(w * k) / w.sum()) ** 2)
+    tau2 = max(0.0, (q - (len(k) - 1)) / (w.sum() - np.sum(w ** 2) / w.sum()))
+    w = 1.0 / (1.0 / w + tau2)
     x, y = np.sqrt(w)[:, None], np.sqrt(w) * k
     (coef,), res, *_ = np.linalg.lstsq(x, y, rcond=None)
     se_coef = np.sqrt(res[0] / (len(k) - 1) / float((x.T @ x)[0, 0]))
+    assert out["tau"] == pytest.approx(np.sqrt(tau2), rel=1e-9, abs=1e-12)
     assert out["k"] == pytest.approx(coef, rel=1e-9)
     assert out["t"] == pytest.approx(coef / se_coef, rel=1e-9)
     assert out["p"] == pytest.approx(2 * stats.t.sf(abs(coef / se_coef), len(k) - 1), rel=1e-9)
     frames, groups = case(-0.15)
     out = lens_flow(frames, groups)
     assert out["p"] < 1e-6 and out["k"] == pytest.approx(-0.15, abs=0.01)
+    # six frames of twenty with errors ten times their stated ones: the excess spread flattens the weights
+    ks, alarms = [], 0
+    for _ in range(200):
+        out = lens_flow(*case(0.0, bad=6))
+        ks.append(out["k"])
+        alarms += out["p"] < 0.01
+    assert np.sqrt(np.mean(np.square(ks))) < 0.02 and alarms <= 6
     # a frame without a usable error is left out, as one without a reading
     bad = [{**frames[0], "flow_k_se": float("nan")}] + frames[1:]
     assert lens_flow(bad, groups)["frames"] == len(frames) - 1

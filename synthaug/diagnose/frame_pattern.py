@@ -88,7 +88,8 @@ sways); through an undistorted lens that motion is one shift over the whole fram
 distortion (Fitzgibbon 2001). On the object (20-30 px, within r² < 0.4 of the centre) the same lens is a
 stretch of a few percent that the fitted pose absorbs. The reading needs a shift of at least :data:`MIN_DRIFT_PX`
 and an independent look (an ingested video's background frame is the frame itself); :func:`lens_flow` tests it
-over scenes, two-sided, each frame weighed by the precision of its reading (a small shift reads k noisily).
+over scenes, two-sided, each frame weighed by the precision of its reading (a small shift reads k noisily), the
+scenes' spread beyond their stated errors added to every error (a random-effects mean).
 """
 
 from __future__ import annotations
@@ -140,10 +141,10 @@ FLOW_MAX_DRIFT_PX = 8.0  # a larger motion between the looks is not a drift the 
 MIN_DRIFT_PX = 0.15
 """A shift smaller than this (frame px) cannot tell a lens's k (:func:`radial_flow` gives none). The distortion's
 share of the motion is ``k`` times the shift, so a small shift's reading is noisy but not wrong: :func:`lens_flow`
-weighs each frame by its inverse variance. Measured on the 44 clean calibration cases (stop 100,
-``results/diagnose/null/centre_s100/flow_small_drift.py``): with that weighting the clean cases' ``|k|`` stays at
-most 0.016 down to 0.15 px (0.011 at 0.2, 0.015 at 0.3), and falls apart below it (0.048 at 0.1: a case with three
-frames that moved more, one of which reads k −0.15 on a clean lens)."""
+weighs each frame by its precision. Measured on the 44 clean calibration cases (stop 100,
+``results/diagnose/null/centre_s100/flow_small_drift.py``): with those weights the clean cases' ``|k|`` stays at
+most 0.033 down to 0.15 px (0.016 at 0.2, 0.025 at 0.3), where the lens's realistic strengths read 0.09-0.16, and
+falls apart below it (0.14 at 0.1 px: a case with three frames that moved more)."""
 
 
 def line_profiles(frame: np.ndarray, *, exclude: Sequence[float] | None = None,
@@ -1113,20 +1114,23 @@ def sharp_edges(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *, c
 def lens_flow(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
               same: float = SAME_SCENE) -> dict[str, Any] | None:
     """A lens's radial distortion over the frames (their ``flow_k``, :func:`radial_flow`), tested over scenes,
-    two-sided (barrel or pincushion), each frame weighed by its inverse variance (``1 / flow_k_se²``; equal weights
-    where a summary has no ``flow_k_se``).
+    two-sided (barrel or pincushion), as a random-effects meta-analysis of the scenes' readings: each frame weighed
+    by its precision, ``1 / (flow_k_se² + τ²)`` (equal weights where a summary has no ``flow_k_se``).
 
     A frame's k is the distortion's share of the scene's motion divided by the motion, so its error grows as the
     shift shrinks: an unweighted mean over scenes is set by the frames that moved least (stop 100: it needed a shift of
-    0.3 px to keep the clean cases' ``|k|`` under 0.027, and a case whose scene moved less had no reading at all).
-    Each scene's k is its frames' inverse-variance mean, weighed by the sum of their weights; the scenes' weighted
-    mean is tested by the weighted t over scenes (its variance the weighted spread of the scenes' k about it, so a
-    ``flow_k_se`` that is only a lower bound sets the weights, not the test's scale), ``S - 1`` degrees of freedom.
+    0.3 px to keep the clean cases' ``|k|`` under 0.027, and a case whose scene moved less had no reading). But
+    ``flow_k_se`` treats the pixels as independent, which a scene under a block codec is not (JPEG's fixed grid: frames
+    read k ±0.2 with errors of 0.02-0.05), and weights taken at their word then let a few such frames set the answer
+    (a compressed clean camera read k 0.10, p_adj 0.002). So the scenes' excess spread ``τ²`` (DerSimonian-Laird: the
+    spread beyond what the stated errors allow) is added to every error first, which brings the weights back toward
+    equal where the errors are not to be trusted, and the weighted mean is tested by the Hartung-Knapp t (its
+    variance the weighted spread of the scenes' k about it, ``S - 1`` degrees of freedom).
 
     Returns:
         None with fewer than 3 scenes that have a reading (the scene did not move between the looks, or there is
         no independent background frame); else ``k`` (the weighted mean over scenes), ``t``, ``p`` (two-sided),
-        ``scenes``, ``frames``.
+        ``tau`` (the excess spread, k units), ``scenes``, ``frames``.
 
     Example:
         >>> rng = np.random.default_rng(0)
@@ -1147,16 +1151,20 @@ def lens_flow(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
     k = np.array([summaries[i]["flow_k"] for i in keep], np.float64)
     se = [summaries[i].get("flow_k_se") for i in keep]
     w = np.array([1.0 if s is None else 1.0 / (s * s) for s in se], np.float64)
-    w_s = np.array([w[lab == c].sum() for c in range(int(lab.max()) + 1)])
+    w_s = np.array([w[lab == c].sum() for c in range(int(lab.max()) + 1)])  # a scene: its frames' precision mean
     k_s = np.array([np.sum(w[lab == c] * k[lab == c]) for c in range(int(lab.max()) + 1)]) / w_s
     n = len(k_s)
     if n < 3:
         return None
-    mean = float(np.sum(w_s * k_s) / w_s.sum())
-    var = float(np.sum(w_s * (k_s - mean) ** 2) / ((n - 1) * w_s.sum()))
+    fixed = np.sum(w_s * k_s) / w_s.sum()
+    q = float(np.sum(w_s * (k_s - fixed) ** 2))
+    tau2 = max(0.0, (q - (n - 1)) / float(w_s.sum() - np.sum(w_s ** 2) / w_s.sum()))
+    v = 1.0 / (1.0 / w_s + tau2)
+    mean = float(np.sum(v * k_s) / v.sum())
+    var = float(np.sum(v * (k_s - mean) ** 2) / ((n - 1) * v.sum()))
     t = mean / math.sqrt(var) if var > 0 else math.copysign(math.inf, mean) if mean else 0.0
     p = float(2.0 * stats.t.sf(abs(t), n - 1))
-    return {"k": mean, "t": float(t), "p": p, "scenes": int(n), "frames": len(keep)}
+    return {"k": mean, "t": float(t), "p": p, "tau": math.sqrt(tau2), "scenes": int(n), "frames": len(keep)}
 
 
 def _step_of(coef: np.ndarray, max_step: int = 64, min_values: int = 30) -> tuple[int, float]:

@@ -5,7 +5,9 @@ names, under the floors in use, for every hidden effect and the clean cases.
 
 Usage::
 
-    PYTHONPATH=. python results/diagnose/null/centre_s100/frame_rows.py 13000 --out OUT.json
+    PYTHONPATH=. python results/diagnose/null/centre_s100/frame_rows.py 13000 [ROW...] --out OUT.json
+
+(ROW: the rows' names after ``fresh<BASE>_``, e.g. ``clean compression_alt``; none: every cached row.)
 """
 
 from __future__ import annotations
@@ -27,13 +29,15 @@ def main() -> int:
 
     ap = argparse.ArgumentParser()
     ap.add_argument("base")
+    ap.add_argument("rows", nargs="*", help="row names (fresh<BASE>_<row>); none: every cached row")
     ap.add_argument("--root", default="outputs")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
     t0 = time.perf_counter()
     out = {"floors_in_use": dict(null_floors.SOURCE), "lens_frame_floor": null_floors.SCREEN["lens_distortion:frame"],
            "rows": {}}
-    for row in sorted(Path(a.root).glob(f"fresh{a.base}_*")):
+    rows = [Path(a.root) / f"fresh{a.base}_{r}" for r in a.rows] or sorted(Path(a.root).glob(f"fresh{a.base}_*"))
+    for row in rows:
         cases = []
         for case in sorted(row.glob("case_*")):
             seeds = SeedSet.load(case / "seeds")
