@@ -47,6 +47,9 @@ def test_derive_floors_by_hand():
     assert f["SCREEN"]["gamma:distance:pixel"] == pytest.approx(max(0.0 + z1 * gain.std(ddof=1), gain.max()))
     # the clean mean of each candidate statistic: the "no effect" value of one without a physical zero
     assert f["CENTRE"] == {"gamma:distance:pixel": pytest.approx(gain.mean())}
+    # where the clean values stay, not clamped at 0 as the floor is (the mean here is negative)
+    assert f["UPPER"] == {"gamma:distance:pixel": pytest.approx(max(gain.mean() + z1 * gain.std(ddof=1), gain.max()))}
+    assert f["UPPER"]["gamma:distance:pixel"] < f["SCREEN"]["gamma:distance:pixel"]
 
 
 def test_an_absorbed_dependence_of_the_wrong_sign_sets_no_floor():
@@ -139,8 +142,11 @@ def test_write_floors_module_round_trip(tmp_path, monkeypatch):
         m.setattr(calibration, "_floors", lambda: mod)
         assert calibration.gain_centre("gamma", "noise_level") == pytest.approx(slopes.mean(), abs=1e-6)
         assert calibration.gain_centre("sharpening", "frame") is None
-        del mod.CENTRE
+        upper = max(slopes.mean() + z1 * slopes.std(ddof=1), slopes.max())
+        assert calibration.gain_upper("gamma", "noise_level") == pytest.approx(upper, abs=1e-6)
+        del mod.CENTRE, mod.UPPER
         assert calibration.gain_centre("gamma", "noise_level") is None
+        assert calibration.gain_upper("gamma", "noise_level") is None
 
 
 def test_colour_floors_come_from_colour_cases_only_with_the_colour_cases_count(tmp_path, monkeypatch):

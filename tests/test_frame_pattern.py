@@ -750,8 +750,8 @@ def test_lens_flow_weighs_frames_by_their_precision():
     the shift): lens_flow's weights keep them from setting the estimate. Its estimate is the random-effects mean
     (DerSimonian-Laird's excess spread added to each stated error) and its test the Hartung-Knapp t, both checked
     against the textbook formulas and the weighted regression; its p is uniform under no lens when the stated errors
-    are right (conservative when they are too small by a common factor), and frames whose errors are understated (a block codec's fixed grid) do not
-    take the estimate over."""
+    are right (conservative when they are too small by a common factor), and frames whose errors are understated (a
+    block codec's fixed grid) do not take the estimate over."""
     from synthaug.diagnose.frame_pattern import lens_flow
 
     rng = np.random.default_rng(15)

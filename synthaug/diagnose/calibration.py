@@ -342,7 +342,7 @@ def write_floors_module(path: str | Path, stats: Sequence[dict[str, Any]], *, co
         "# without a physical zero: the frames' edge sharpness)\n"
         f"CENTRE = {pprint.pformat(centre, width=110, sort_dicts=True)}\n\n"
         "# 'effect:channel' -> max(mean + z sd, max) of that statistic on the clean cases, not clamped at 0: what a\n"
-        "# clean case's value stays under (a sharpening the frames show must not leave the objects' fit as clean ones)\n"
+        "# clean case's value stays under (a sharpening the frames show must fit the objects better than that)\n"
         f"UPPER = {pprint.pformat(upper, width=110, sort_dicts=True)}\n"
     )
     json.dumps(source)  # the source must stay JSON-able (the report quotes it)
