@@ -441,6 +441,20 @@ def test_lens_distortion_on_a_nuisance_varied_camera_is_named_from_the_scenes_mo
     assert "barrel" in (tmp_path / "out" / "report.md").read_text()
 
 
+def _diagnosed_bench_case(tmp_path, bench_null, base: int, k: int, hidden: str, strength: str) -> dict:
+    """Case ``k`` of the power table's seed base ``base`` (``bench_diagnose_null.py``'s seeds, nuisances and hidden
+    setting), fitted as the bench's converged fit and diagnosed: the report."""
+    from synthaug.diagnose.nuisances import Nuisances
+    from synthaug.diagnose.report import diagnose
+
+    seeds = tmp_path / "seeds"
+    bench_null.case_seedset(seeds, k, base_seed=base, n_seeds=60,
+                            nuisances=Nuisances.draw(np.random.default_rng([base, k])), hidden=hidden,
+                            strength=strength)
+    return diagnose(seeds, "quadcopter", converged_fit(seeds, tmp_path / "fit.json"), out_dir=None, plots=False,
+                    seed=0)
+
+
 @pytest.mark.slow
 def test_a_pincushion_lens_on_a_still_scene_is_named_from_the_objects_with_the_frames_edge_trend(tmp_path, bench_null):
     # lens k1 +0.1 (its second realistic strength) on the power table's case 4 (bench_diagnose_null.py's seeds and
@@ -449,17 +463,11 @@ def test_a_pincushion_lens_on_a_still_scene_is_named_from_the_objects_with_the_f
     # floor passed, the 2 % utility rule not), and the frames' edges steepen toward the corners beyond every clean
     # frame's: named first from the objects, at its setting, with the report saying why, and not as sharpening
     from synthaug.diagnose.frame_pattern import EDGE_RADIAL_FLOOR
-    from synthaug.diagnose.nuisances import Nuisances
-    from synthaug.diagnose.report import diagnose, write_markdown
+    from synthaug.diagnose.report import write_markdown
 
     k1 = bench_null.hidden_settings("lens_distortion", "alt")["lens_distortion"]["distortion_k1"]
     assert k1 == pytest.approx(0.1)
-    seeds = tmp_path / "seeds"
-    bench_null.case_seedset(seeds, 4, base_seed=8000, n_seeds=60,
-                            nuisances=Nuisances.draw(np.random.default_rng([8000, 4])),
-                            hidden="lens_distortion", strength="alt")
-    report = diagnose(seeds, "quadcopter", converged_fit(seeds, tmp_path / "fit.json"), out_dir=None, plots=False,
-                      seed=0)
+    report = _diagnosed_bench_case(tmp_path, bench_null, 8000, 4, "lens_distortion", "alt")
     first = report["findings"][0]
     assert (first["effect"], first["channel"]) == ("lens_distortion", "distance:pixel"), report["findings"]
     assert first["setting"]["distortion_k1"] == pytest.approx(k1, abs=0.02)
@@ -480,15 +488,9 @@ def test_a_pincushion_lens_whose_scene_does_not_move_is_not_named_sharpening(tmp
     # it sharpening from the frames. A camera's sharpening filters the objects too; here rendering it fits them no
     # better than it fits clean ones, in either space: the frames' finding is withheld, and the report says why
     from synthaug.diagnose.calibration import gain_upper
-    from synthaug.diagnose.nuisances import Nuisances
-    from synthaug.diagnose.report import diagnose, write_markdown
+    from synthaug.diagnose.report import write_markdown
 
-    seeds = tmp_path / "seeds"
-    bench_null.case_seedset(seeds, 0, base_seed=11000, n_seeds=60,
-                            nuisances=Nuisances.draw(np.random.default_rng([11000, 0])),
-                            hidden="lens_distortion", strength="alt")
-    report = diagnose(seeds, "quadcopter", converged_fit(seeds, tmp_path / "fit.json"), out_dir=None, plots=False,
-                      seed=0)
+    report = _diagnosed_bench_case(tmp_path, bench_null, 11000, 0, "lens_distortion", "alt")
     assert "sharpening" not in [f["effect"] for f in report["findings"]], report["findings"]
     row = next(r for r in report["screened"] if r["effect"] == "sharpening")
     frame = next(c for c in row["channels"] if c["channel"] == "frame")

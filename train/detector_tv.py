@@ -466,20 +466,24 @@ class SyntheticFramesDataModule(L.LightningDataModule):
         self.val_set = RealFrames(Subset(frames, val)) if val else None
 
     def train_dataloader(self) -> DataLoader:
+        from synthaug._procs import loader_worker_init
         from synthaug.data.synthetic import EpochSampler, collate_detection
 
         w = self.hparams.num_workers
         return DataLoader(self.train_set, batch_size=self.hparams.batch_size,
                           sampler=EpochSampler(self.train_set, shuffle=True, seed=self.hparams.seed),
-                          collate_fn=collate_detection, num_workers=w, persistent_workers=w > 0)
+                          collate_fn=collate_detection, num_workers=w, persistent_workers=w > 0,
+                          worker_init_fn=loader_worker_init())
 
     def val_dataloader(self) -> DataLoader | list:
+        from synthaug._procs import loader_worker_init
         from synthaug.data.synthetic import collate_detection
 
         if self.val_set is None:
             return []
         return DataLoader(self.val_set, batch_size=self.hparams.batch_size, shuffle=False,
-                          collate_fn=collate_detection, num_workers=self.hparams.num_workers)
+                          collate_fn=collate_detection, num_workers=self.hparams.num_workers,
+                          worker_init_fn=loader_worker_init())
 
 
 # ------------------------------------------------------------------ CLI

@@ -39,6 +39,7 @@ def run_render(mode: str, args: argparse.Namespace) -> dict:
     import torch
     from torch.utils.data import DataLoader
 
+    from synthaug._procs import loader_worker_init
     from synthaug.data.procedural import sky_backgrounds
     from synthaug.data.synthetic import SyntheticObjectDataset
 
@@ -56,7 +57,7 @@ def run_render(mode: str, args: argparse.Namespace) -> dict:
     setup_s = time.perf_counter() - t0
     loader = DataLoader(ds, batch_size=bs, num_workers=args.workers, shuffle=False,
                         collate_fn=(lambda b: b) if mode == "frame" else None,
-                        persistent_workers=args.workers > 0)
+                        persistent_workers=args.workers > 0, worker_init_fn=loader_worker_init())
     rates = []
     for rep in range(args.repeats + 1):  # first pass warms workers up
         ds.set_epoch(rep)

@@ -45,6 +45,7 @@ import torch
 from torch import Tensor, nn
 from torch.utils.data import ConcatDataset, DataLoader, Dataset
 
+from synthaug._procs import loader_worker_init
 from synthaug.detectors.base import check_weights, save_detector
 from synthaug.detectors.cnn import CNNDetector, PatchCNN, load_patch_cnn
 
@@ -386,12 +387,14 @@ class PatchDataModule(L.LightningDataModule):
         # the shuffle order is drawn from an explicit generator (Lightning's DDP sampler re-seeds it per epoch);
         # fixed patches: the workers may live across epochs
         return DataLoader(self.train_set, batch_size=self.batch_size, shuffle=True, num_workers=self.num_workers,
-                          generator=torch.Generator().manual_seed(self.seed), persistent_workers=self.num_workers > 0)
+                          generator=torch.Generator().manual_seed(self.seed), persistent_workers=self.num_workers > 0,
+                          worker_init_fn=loader_worker_init())
 
     def val_dataloader(self) -> DataLoader | list:
         if self.val_set is None:
             return []
-        return DataLoader(self.val_set, batch_size=self.batch_size, shuffle=False, num_workers=self.num_workers)
+        return DataLoader(self.val_set, batch_size=self.batch_size, shuffle=False, num_workers=self.num_workers,
+                          worker_init_fn=loader_worker_init())
 
 
 def fit_patch_detector(

@@ -41,6 +41,7 @@ import lightning as L
 import torch
 from torch.utils.data import ConcatDataset, DataLoader, Dataset
 
+from synthaug._procs import loader_worker_init
 from synthaug.detectors.lightning_module import PatchDataModule
 
 
@@ -178,7 +179,7 @@ class SyntheticPatchDataModule(PatchDataModule):
         # ConcatDataset (integer indices), so EpochSampler (which carries the epoch in the index) is not used here.
         return DataLoader(self.train_set, batch_size=self.batch_size, shuffle=True, num_workers=self.num_workers,
                           generator=torch.Generator().manual_seed(self.seed + 7919 * self._epoch()),
-                          persistent_workers=False)
+                          persistent_workers=False, worker_init_fn=loader_worker_init())
 
     def _epoch(self) -> int:
         trainer = getattr(self, "trainer", None)
