@@ -865,7 +865,7 @@ def test_screened_rows_name_no_effect_another_candidate_out_explains(tmp_path):
     """On a screening of measured seeds (defocus hidden, gray): every significant distance channel has the largest
     valid gain of its space, every row's significance is that of its channels, and the rule is in the report."""
     from synthaug.diagnose.report import _residual_sections
-    from synthaug.diagnose.screening import RIVAL_RULE, RIVAL_SPACES, screen_candidates
+    from synthaug.diagnose.screening import OBJECTS_RULE, RIVAL_RULE, RIVAL_SPACES, screen_candidates
 
     data = _gray_case_fitted_at_truth(tmp_path, "defocus", {"defocus_sigma": 1.5}, n_seeds=24)
     rows = screen_candidates(data, ["defocus", "haze", "gamma", "rotor_blur"], k=4)
@@ -883,6 +883,7 @@ def test_screened_rows_name_no_effect_another_candidate_out_explains(tmp_path):
         assert r["significant"] == any(c["significant"] for c in r["channels"])
     sections = _residual_sections(data, {"structure": {}, "fmap": None, "dependence": []}, [])
     assert sections["significance"]["rule"].endswith(RIVAL_RULE)
+    assert OBJECTS_RULE in sections["significance"]["rule"]  # one rule, written where it applies
 
 
 def test_a_gain_explained_better_is_screened_again_on_top_of_the_better_explanation(monkeypatch):

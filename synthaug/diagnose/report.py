@@ -354,7 +354,7 @@ def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str], not_of
     """The report's sections on the base residual, its colour (and the colour-only candidates not offered on
     single-channel data) and the significance rule."""
     from synthaug.diagnose.calibration import describe as describe_floors, rule_text
-    from synthaug.diagnose.screening import RIVAL_RULE
+    from synthaug.diagnose.screening import OBJECTS_RULE, RIVAL_RULE
 
     fmap = res["fmap"]
     return {
@@ -366,7 +366,8 @@ def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str], not_of
         "hinted_candidates": hinted,
         "colour": {"screened": data.real_rgb is not None, "note": data.colour_note,
                    "not_offered": list(not_offered)},
-        "significance": {"rule": f"{rule_text()} {RIVAL_RULE}", "calibration": describe_floors()["source"]},
+        "significance": {"rule": f"{rule_text()} {OBJECTS_RULE} {RIVAL_RULE}",
+                         "calibration": describe_floors()["source"]},
         "parameter_dependence": [d for d in res["dependence"] if d["significant"]],
     }
 

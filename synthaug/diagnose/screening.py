@@ -99,7 +99,7 @@ __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "PAINT_GRID", "PAINT_
            "screen_candidates", "screen_one", "absorption_gain",
            "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
            "frame_evidence", "frame_channel", "frame_corroboration", "distance_channel", "explained_better",
-           "RIVAL_SPACES", "RIVAL_RULE", "shape_verdict"]
+           "RIVAL_SPACES", "RIVAL_RULE", "OBJECTS_SHOW", "OBJECTS_RULE", "objects_agree", "shape_verdict"]
 
 Setting = dict[str, float]
 
@@ -688,6 +688,9 @@ def frame_corroboration(effect: str, ev: dict[str, dict[str, Any] | None] | None
 # frame, the object's included, so rendering it must fit the objects better than it fits clean ones. (Not vignetting,
 # whose objects stay near the centre; not the lens, which changes a 20-30 px object's scale by a few per cent.)
 OBJECTS_SHOW: tuple[str, ...] = ("sharpening",)
+# ... in the report's words (its significance rule)
+OBJECTS_RULE = ("A sharpening the whole frames show is named from them only where rendering it also fits the objects "
+                "better than it fits clean data's objects (in the detector's features or in pixels).")
 
 
 def objects_agree(effect: str, channels: Sequence[dict[str, Any]]) -> dict[str, Any] | None:
