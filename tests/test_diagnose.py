@@ -495,7 +495,7 @@ def test_a_pincushion_lens_whose_scene_does_not_move_is_not_named_sharpening(tmp
     row = next(r for r in report["screened"] if r["effect"] == "sharpening")
     frame = next(c for c in row["channels"] if c["channel"] == "frame")
     assert frame["gain"] > frame["floor"] and frame["p_adjusted"] < 0.01 and not frame["radial_veto"]
-    assert not frame["significant"] and not frame["objects"]["agree"]
+    assert not frame["significant"] and not frame["objects"]["agree"] and frame["objects_veto"]
     for c in row["channels"]:
         if c["channel"] in ("distance:feature", "distance:pixel"):  # the objects as clean ones
             assert c["gain"] <= gain_upper("sharpening", c["channel"]) == frame["objects"]["spaces"][c["channel"]][

@@ -701,8 +701,7 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                       f"corners (edge sharpness trend {ch['radial']:+.3f} per unit r² over scenes, clean frames ≤ "
                       f"{ch['radial_floor']:.3f}), a change of the image's scale with the distance from the centre "
                       "as a lens gives, where a sharpening steepens every edge alike."]
-        ch = next((c for c in r.get("channels") or [] if c.get("objects") and not c["objects"]["agree"]
-                   and c["p_adjusted"] < 1.0 and c["gain"] > (c.get("floor") or -math.inf)), None)
+        ch = next((c for c in r.get("channels") or [] if c.get("objects_veto")), None)
         if ch is not None:
             obj = ", ".join(f"{k.split(':')[1]} {100 * v['gain']:+.1f} % (clean cases up to "
                             f"{100 * v['clean_upper']:+.1f} %)" for k, v in ch["objects"]["spaces"].items())

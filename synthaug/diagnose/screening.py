@@ -896,8 +896,10 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         if fc is not None:
             if name in OBJECTS_SHOW:  # a filter of the whole image: the objects must not fit as clean ones do
                 fc["objects"] = objects_agree(name, channels)
-                if fc["objects"] is not None and not fc["objects"]["agree"]:
-                    fc["significant"] = False
+                # objects_veto says it withheld a finding the frames made (as radial_veto does; the report's reason)
+                fc["objects_veto"] = bool(fc["significant"] and fc["objects"] is not None
+                                          and not fc["objects"]["agree"])
+                fc["significant"] = fc["significant"] and not fc["objects_veto"]
             channels.append(fc)
         rival_paint = paint_gains is not None and name not in PAINT_MIMICS
         col = None if base_colour is None else screen_colour(data, name, folds, base_colour, penalty=penalty,
