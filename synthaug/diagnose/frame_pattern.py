@@ -1151,8 +1151,8 @@ def lens_flow(summaries: Sequence[dict[str, Any]], groups: Sequence[Any], *,
     k = np.array([summaries[i]["flow_k"] for i in keep], np.float64)
     se = [summaries[i].get("flow_k_se") for i in keep]
     w = np.array([1.0 if s is None else 1.0 / (s * s) for s in se], np.float64)
-    w_s = np.array([w[lab == c].sum() for c in range(int(lab.max()) + 1)])  # a scene: its frames' precision mean
-    k_s = np.array([np.sum(w[lab == c] * k[lab == c]) for c in range(int(lab.max()) + 1)]) / w_s
+    w_s = np.bincount(lab, weights=w)  # a scene: its frames' precision-weighted mean, weighed by their sum
+    k_s = np.bincount(lab, weights=w * k) / w_s
     n = len(k_s)
     if n < 3:
         return None
