@@ -64,7 +64,7 @@ from typing import Any, Iterator, Sequence
 
 __all__ = ["HAND_FLOORS", "HAND_MIN_GAIN", "structure_significant", "gain_floor", "gain_centre", "gain_upper",
            "rule_text",
-           "one_sided_floor",
+           "one_sided_floor", "clean_upper",
            "describe", "derive_floors", "write_floors_module", "FAMILY_RATE", "hand_set"]
 
 # The floors set by hand before the calibration (and the fallback for statistics without a null).
@@ -210,6 +210,20 @@ def one_sided_floor(values: Sequence[float], z: float) -> float:
     return max(max(mu, 0.0) + z * sd, float(v.max()), 0.0)
 
 
+def clean_upper(values: Sequence[float], z: float) -> float:
+    """Where a statistic's clean values stay: ``max(μ + zσ, max)`` (ddof 1), :func:`one_sided_floor` without its clamp
+    at 0 (``UPPER`` of the calibration).
+
+    Example:
+        >>> round(clean_upper([-0.3, -0.1], 0.5), 4), round(one_sided_floor([-0.3, -0.1], 0.5), 4)
+        (-0.1, 0.0707)
+    """
+    import numpy as np
+
+    v = np.asarray(values, np.float64)
+    return max(float(v.mean()) + z * float(v.std(ddof=1)), float(v.max()))
+
+
 def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMILY_RATE,
                   min_cases: int = 10, colour_stats: Sequence[dict[str, Any]] | None = None,
                   directions: dict[str, int] | None = None) -> dict[str, Any]:
@@ -289,7 +303,7 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
         else:
             screen[key.split(":", 1)[1]] = one_sided_floor(v, z1)
             centre[key.split(":", 1)[1]] = mu
-            upper[key.split(":", 1)[1]] = max(mu + z1 * sd, float(v.max()))
+            upper[key.split(":", 1)[1]] = clean_upper(v, z1)
     out = {"STRUCTURE": structure, "SCREEN": screen, "CENTRE": centre, "UPPER": upper, "z_two_sided": z2,
            "z_one_sided": z1,
            "n_statistics": n_stats, "n_two_sided": n_two}
@@ -299,7 +313,7 @@ def derive_floors(stats: Sequence[dict[str, Any]], *, family_rate: float = FAMIL
         for key, v in sorted(keep_colour.items()):
             screen[key.split(":", 1)[1]] = one_sided_floor(v, z1c)
             centre[key.split(":", 1)[1]] = float(v.mean())
-            upper[key.split(":", 1)[1]] = max(float(v.mean()) + z1c * float(v.std(ddof=1)), float(v.max()))
+            upper[key.split(":", 1)[1]] = clean_upper(v, z1c)
         out["colour"] = {"z_one_sided": z1c, "n_statistics": n_colour_case}
     return out
 

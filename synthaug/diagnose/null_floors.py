@@ -133,7 +133,7 @@ CENTRE = {'compression:distance:feature': -0.038248,
  'vignetting:frame': -0.008776}
 
 # 'effect:channel' -> max(mean + z sd, max) of that statistic on the clean cases, not clamped at 0: what a
-# clean case's value stays under (a sharpening the frames show must not leave the objects' fit as clean ones)
+# clean case's value stays under (a sharpening the frames show must fit the objects better than that)
 UPPER = {'compression:distance:feature': -0.006467,
  'compression:distance:pixel': 0.008695,
  'compression:frame': -0.003544,
