@@ -74,6 +74,26 @@ def group_cases(group: str, workdir: str | Path):
         yield k, seeds, seed_geometry(seeds)
 
 
+def run_groups(groups, workdir: str | Path, case_row, *, key: str = "k", show=None, out_path: str | None = None,
+               t0: float | None = None) -> dict:
+    """The scripts' loop over the groups' cases: ``{"groups": {group: [{key: k, **case_row(seeds, geo)}, ...]}}``,
+    each row printed as it comes (``show(group, row)``, or the row itself); with ``out_path`` the JSON written after
+    every group (:func:`write_out`, wall time since ``t0``)."""
+    out: dict = {"groups": {}}
+    for group in groups:
+        rows = []
+        for k, seeds, geo in group_cases(group, workdir):
+            rows.append({key: k, **case_row(seeds, geo)})
+            if show is None:
+                print(group, rows[-1], flush=True)
+            else:
+                show(group, rows[-1])
+        out["groups"][group] = rows
+        if out_path:
+            write_out(out, out_path, t0)
+    return out
+
+
 def write_out(out: dict, path: str | None, t0: float) -> int:
     """The scripts' last step: the wall time since ``t0`` into ``out``, ``out`` as JSON at ``path`` (if given)."""
     import time

@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from edge_radial import group_cases, groups_parser, write_out  # noqa: E402  (stop 45's case maker)
+from edge_radial import groups_parser, run_groups, write_out  # noqa: E402  (stop 45's case maker)
 
 
 def case_row(seeds, geo) -> dict:
@@ -48,13 +48,7 @@ def main() -> int:
 
     a = groups_parser().parse_args()
     t0 = time.perf_counter()
-    out: dict = {"groups": {}}
-    for group in a.groups:
-        rows = []
-        for k, seeds, geo in group_cases(group, a.workdir):
-            rows.append({"k": k, **case_row(seeds, geo)})
-            print(group, rows[-1], flush=True)
-        out["groups"][group] = rows
+    out = run_groups(a.groups, a.workdir, case_row)
     clean = [r["radial"] for g, rows in out["groups"].items() if g.startswith("clean") for r in rows
              if r["radial"] is not None and np.isfinite(r["radial"])]
     if len(clean) >= 3:

@@ -22,7 +22,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from edge_radial import group_cases, groups_parser, write_out  # noqa: E402  (stop 45's case maker)
+from edge_radial import groups_parser, run_groups, write_out  # noqa: E402  (stop 45's case maker)
 
 INNER_R2 = 0.25
 
@@ -60,8 +60,7 @@ def case_row(seeds, geo) -> dict:
     for key in ("edge_ratio", "edge_radial", "edge_a", "edge_inner"):
         r = fp._over_scenes(summaries, groups, key, fp.SAME_SCENE, two_sided=True)
         row[key] = None if r is None else r["mean"]
-        row[key + "_sd"] = None
-        if r is not None:  # the scenes' spread, for a t over scenes
+        if r is not None:
             row["scenes"] = r["scenes"]
     return row
 
@@ -69,15 +68,7 @@ def case_row(seeds, geo) -> dict:
 def main() -> int:
     a = groups_parser().parse_args()
     t0 = time.perf_counter()
-    out: dict = {"groups": {}}
-    for group in a.groups:
-        rows = []
-        for k, seeds, geo in group_cases(group, a.workdir):
-            rows.append({"k": k, **case_row(seeds, geo)})
-            print(group, rows[-1], flush=True)
-        out["groups"][group] = rows
-        write_out(out, a.out, t0)
-    return write_out(out, a.out, t0)
+    return write_out(run_groups(a.groups, a.workdir, case_row, out_path=a.out, t0=t0), a.out, t0)
 
 
 if __name__ == "__main__":

@@ -18,7 +18,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from edge_radial import group_cases, groups_parser, write_out  # noqa: E402  (stop 45's case maker)
+from edge_radial import groups_parser, run_groups, write_out  # noqa: E402  (stop 45's case maker)
 
 
 def case_row(seeds, geo) -> dict:
@@ -45,16 +45,12 @@ def main() -> int:
     fp.MIN_DRIFT_PX = 0.0
     a = groups_parser().parse_args()
     t0 = time.perf_counter()
-    out: dict = {"groups": {}}
-    for group in a.groups:
-        rows = []
-        for k, seeds, geo in group_cases(group, a.workdir):
-            rows.append({"case": k, **case_row(seeds, geo)})
-            d, kk = np.array(rows[-1]["drift"], float), np.array(rows[-1]["k"], float)
-            print(group, k, f"max drift {np.nanmax(d):.2f}", f"k(drift<0.3) {np.nanmean(kk[d < 0.3]):+.3f}",
-                  f"k(drift>=0.3) {np.nanmean(kk[d >= 0.3]) if (d >= 0.3).any() else float('nan'):+.3f}", flush=True)
-        out["groups"][group] = rows
-        write_out(out, a.out, t0)
+    def show(group: str, row: dict) -> None:
+        d, kk = np.array(row["drift"], float), np.array(row["k"], float)
+        print(group, row["case"], f"max drift {np.nanmax(d):.2f}", f"k(drift<0.3) {np.nanmean(kk[d < 0.3]):+.3f}",
+              f"k(drift>=0.3) {np.nanmean(kk[d >= 0.3]) if (d >= 0.3).any() else float('nan'):+.3f}", flush=True)
+
+    out = run_groups(a.groups, a.workdir, case_row, key="case", show=show, out_path=a.out, t0=t0)
     return write_out(out, a.out, t0)
 
 
