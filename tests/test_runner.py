@@ -718,6 +718,35 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
     assert [a.quantize for a in _added_positives(ws, monkeypatch, plain, eight)] == [False, True]
 
 
+def test_distractors_join_every_synthetic_condition_and_keep_the_former_keys(ws, monkeypatch, capsys):
+    """``--distractor-ratio K``: every synthetic condition (not real only, not the perturbed baseline) adds K rendered
+    distractors per seed, named so, ``distractor_ratio`` in its key and its training's ``AddedPositives``; 0, the
+    default, keeps every former key and name; a condition without synthetic positives and a negative ratio are
+    refused."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
+    R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           perturb_copies=[5])
+    real, plain, perturbed = made
+    made.clear()
+    R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           perturb_copies=[5], distractor_ratio=5)
+    real2, dist, perturbed2 = made
+    assert "distractor_ratio" not in plain.identity() and dist.identity()["distractor_ratio"] == 5.0
+    assert {k: v for k, v in dist.identity().items() if k != "distractor_ratio"} == plain.identity()
+    assert (real2.identity(), perturbed2.identity()) == (real.identity(), perturbed.identity())
+    assert dist.name == "adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25) + 5x rendered distractors"
+    assert [a.distractor_ratio for a in _added_positives(ws, monkeypatch, plain, dist)] == [0.0, 5.0]
+    with pytest.raises(ValueError, match="distractor_ratio"):
+        R.Condition("x", "adaboost", seed_count=12, perturb_copies=5, distractor_ratio=5.0)
+    parse = R.build_parser().parse_args
+    assert parse(["synthetic", "--out", "x"]).distractor_ratio == 0.0
+    assert parse(["synthetic", "--distractor-ratio", "2.5", "--out", "x"]).distractor_ratio == 2.5
+    with pytest.raises(SystemExit) as e:
+        parse(["synthetic", "--distractor-ratio", "-1", "--out", "x"])
+    assert e.value.code == 2 and "--distractor-ratio" in capsys.readouterr().err
+
+
 def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monkeypatch, capsys):
     """``--realism-keep 1 0.25`` makes a condition per value (named with the fraction kept and the draw,
     ``realism_keep`` in its key and its training's ``AddedPositives``); 1 keeps every former key and name; the

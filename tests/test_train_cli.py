@@ -868,3 +868,58 @@ def test_the_cnn_family_puts_its_synthetic_objects_on_other_seeds_backgrounds(ws
     base = ["--detector", "cnn", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o"]
     assert parser.parse_args(base).background_sampling is None
     assert parser.parse_args([*base, "--background-sampling", "seed"]).background_sampling == "seed"
+
+
+def test_distractors_are_drawn_as_the_synthetic_positives_and_join_the_negatives(
+        ws: dict[str, Path], trained: dict[str, Any], monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """``--distractor-ratio K``: K rendered distractors per real seed go to the negatives (not the positives), drawn
+    with the synthetic positives' fit, poses, effects and 8 bits, at their own seed; recorded in the metadata; refused
+    without synthetic positives and below 0."""
+    import argparse
+
+    import synthaug.detectors.video_training as video_training
+    from synthaug.detectors.train_cli import add_arguments
+    from synthaug.detectors.video_training import AddedPositives, TrainingInputError, _check_options
+    from synthaug.params import CaptureParams
+
+    drawn: list[tuple[str, int, int, dict[str, Any]]] = []
+
+    def record(what: str) -> Any:
+        def draw(seedset: Any, *args: Any, seed: int = 0, **kw: Any) -> torch.Tensor:
+            count = args[-1]
+            drawn.append((what, count, seed, {k: kw.get(k) for k in ("pose_sampling", "effects", "quantize")}))
+            return torch.full((count, 1, 40, 40), 0.5)
+        return draw
+
+    monkeypatch.setattr(video_training, "synthetic_positives", record("positives"))
+    monkeypatch.setattr(video_training, "distractor_negatives", record("distractors"))
+    fit = ws["root"] / "fit8_distractors.json"
+    theta = CaptureParams.sample(8, generator=torch.Generator().manual_seed(0))
+    theta.save(fit)
+    seedset = trained["meta"]["positives"]["seedset"]
+    common = ["--detector", "adaboost", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
+              "--pose-sampling", "fitted_at_seed", "--effects-off", "motion_blur", "--quantize", "--mining-rounds", "0"]
+    out0, out1 = ws["root"] / "runs" / "ada_no_distractors.pt", ws["root"] / "runs" / "ada_distractors.pt"
+    assert _train(ws, out0, *common) == 0
+    assert [d[0] for d in drawn] == ["positives"]
+    assert _train(ws, out1, *common, "--distractor-ratio", "1.5") == 0
+    (_, n_pos, s_pos, how_pos), (_, n_dist, s_dist, how_dist) = drawn[1:]
+    kept = [e for e in theta.effects if e != "motion_blur"]
+    assert (n_pos, n_dist) == (16, 12) and s_dist != s_pos
+    assert how_dist == how_pos == {"pose_sampling": "fitted_at_seed", "effects": kept, "quantize": True}
+    m0, m1 = (json.loads(o.with_suffix(".json").read_text()) for o in (out0, out1))
+    assert m1["negatives"]["initial"] == m0["negatives"]["initial"] + 12
+    assert m1["synthetic"]["distractors"] == {"ratio": 1.5, "count": 12} and "distractors" not in m0["synthetic"]
+    assert m1["synthetic"]["count"] == m0["synthetic"]["count"] == 16
+    # refused: no synthetic positives to draw them as, a negative ratio (the command line and the dataclass)
+    for added, match in ((AddedPositives(params=fit, distractor_ratio=1.0), "drawn as the synthetic positives"),
+                         (AddedPositives(params=fit, synthetic_ratio=1.0, distractor_ratio=-1.0), ">= 0")):
+        with pytest.raises(TrainingInputError, match=f"--distractor-ratio.*{match}"):
+            _check_options("adaboost", added, frame_step=1, all_frames=False, seedset=None, seed_count=8)
+    parser = argparse.ArgumentParser(prog="synthaug train")
+    add_arguments(parser)
+    with pytest.raises(SystemExit) as e:
+        parser.parse_args(["--detector", "hog", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o",
+                           "--distractor-ratio", "-2"])
+    assert e.value.code == 2 and "--distractor-ratio" in capsys.readouterr().err

@@ -182,6 +182,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--realism-features", choices=list(REALISM_FEATURES), default="hog",
                         help="the critic's features (selections seed and set): hog (the default) or weak_learners "
                              "(the edge-orientation energies of random rectangles that AdaBoost's stumps threshold)")
+    parser.add_argument("--distractor-ratio", type=nonneg_float, default=0.0, metavar="K",
+                        help="add K rendered distractors per real seed to the negatives: drawn as the synthetic "
+                             "positives are (their fit, poses, effects, 8 bits), an ellipsoid in place of the object "
+                             "(domain randomisation's distractors); needs --synthetic-ratio; default 0: none")
     parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own); "
@@ -330,7 +334,8 @@ def main(args: argparse.Namespace) -> int:
                                  faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                                  quantize=args.quantize, background_sampling=args.background_sampling,
                                  realism_keep=args.realism_keep, realism_selection=args.realism_selection,
-                                 realism_features=args.realism_features),
+                                 realism_features=args.realism_features,
+                                 distractor_ratio=args.distractor_ratio),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

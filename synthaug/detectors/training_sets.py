@@ -7,7 +7,8 @@ object's contrast against its own background lowered (:func:`faded_positives`), 
 patches generated from a capture-parameter fit (:func:`synthetic_positives`), or
 every labelled frame of some videos (:func:`frames_training_set`). Negatives: the
 seed set's plus object-free crops of its seed frames (:func:`negative_pool`),
-look-alike crops of negative-class videos (:func:`bird_hard_negatives`), and the
+rendered distractors (:func:`distractor_negatives`: blobs drawn as the synthetic
+positives are, the object swapped for an ellipsoid), look-alike crops of negative-class videos (:func:`bird_hard_negatives`), and the
 seed frames HOG mines on its own (:func:`mining_frames`). All patches are float
 ``(N, 1, P, P)`` in [0, 1].
 """
@@ -31,6 +32,9 @@ __all__ = [
     "faded_positives",
     "check_realism_keep",
     "synthetic_positives",
+    "DISTRACTOR_AXES",
+    "distractor_meshes",
+    "distractor_negatives",
     "negative_pool",
     "mining_frames",
     "frames_training_set",
@@ -382,6 +386,53 @@ def synthetic_positives(
                                selection=realism_selection, features=realism_features)
         patches, groups = patches[torch.from_numpy(keep)], groups[keep]
     return (patches, groups) if return_seed_index else patches
+
+
+DISTRACTOR_AXES: tuple[tuple[float, float, float], ...] = (
+    (1.0, 1.0, 1.0), (1.0, 0.5, 0.5), (1.0, 0.3, 0.3), (1.0, 1.0, 0.35), (1.0, 1.0, 0.6), (1.0, 0.55, 0.3),
+    (1.0, 0.75, 0.45), (1.0, 0.4, 0.2))
+"""The distractors' shapes: ellipsoids by their axes (x, y, z; a sphere, cigars, discs, flattened cigars), each
+normalised to a unit longest side as every mesh is (results/synthetic/adaboost_distractors/, stop 98)."""
+
+
+def distractor_meshes() -> list[Any]:
+    """One :class:`trimesh.Trimesh` ellipsoid per :data:`DISTRACTOR_AXES` entry (an icosphere of 642 vertices,
+    stretched)."""
+    import trimesh
+
+    out = []
+    for axes in DISTRACTOR_AXES:
+        blob = trimesh.creation.icosphere(subdivisions=3)
+        blob.apply_scale(axes)
+        out.append(blob)
+    return out
+
+
+def distractor_negatives(seedset: Any, fit_file: str | Path, count: int, *, seed: int = 0,
+                         **draw: Any) -> Tensor:
+    """``count`` rendered distractors: negatives drawn as :func:`synthetic_positives` draws its patches (each
+    seed's fitted capture parameters and background, its poses and placement, ``draw``'s options) with an
+    ellipsoid of :func:`distractor_meshes` in place of the object, split evenly over the shapes (the first ones
+    take the remainder), the shape ``k`` drawn with the dataset seed ``seed + k``.
+
+    Domain randomisation's flying distractors: where a detector learns "looks rendered" as the class cue, a
+    rendered blob that is not the object tells it to look at the shape instead. ``draw`` may not ask for a
+    realism critic or shape variation (a distractor is no object: neither applies).
+
+    Returns:
+        Float patches ``(count, 1, P, P)`` in [0, 1], the shapes in :data:`DISTRACTOR_AXES` order.
+    """
+    if count < 0:
+        raise ValueError(f"count must be >= 0, got {count}")
+    for key, off in (("realism_keep", 1.0), ("shape_variation", 0.0)):
+        if draw.get(key, off) != off:
+            raise ValueError(f"distractors are drawn without {key} (got {draw[key]!r})")
+    meshes = distractor_meshes()
+    per, extra = divmod(count, len(meshes))
+    counts = [per + (k < extra) for k in range(len(meshes))]
+    parts = [synthetic_positives(seedset, m, fit_file, c, seed=seed + k, **draw)  # the first one even when empty
+             for k, (m, c) in enumerate(zip(meshes, counts)) if c or k == 0]
+    return torch.cat(parts)
 
 
 def negative_pool(seedset: Any, extra: int = 3000, *, seed: int = 0) -> Tensor:

@@ -39,6 +39,7 @@ from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mini
 from synthaug.detectors.training_sets import (
     bird_hard_negatives,
     check_realism_keep,
+    distractor_negatives,
     frames_training_set,
     mining_frames,
     negative_pool,
@@ -283,6 +284,10 @@ class AddedPositives:
             AdaBoost 0.25, the others by count). HOG: the SVM's per-sample cost; CNN: the BCE loss's per-sample
             weight (kept through the flip doubling, the split and the mining rounds); AdaBoost: the positives' starting
             weights (every mining round).
+        distractor_ratio: rendered distractors per real seed added to the negatives: drawn as the synthetic
+            positives are (their fit, poses, placement, effects and 8 bits), an ellipsoid in place of the object
+            (:func:`~synthaug.detectors.training_sets.distractor_negatives`; domain randomisation's distractors).
+            Needs synthetic positives. 0 (the default): none.
     """
 
     params: str | Path | Callable[[Path], str | Path] | None = None
@@ -306,6 +311,7 @@ class AddedPositives:
     realism_keep: float | None = None
     realism_selection: str = "seed"
     realism_features: str = "hog"
+    distractor_ratio: float = 0.0
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
@@ -667,6 +673,11 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
     if added.realism_keep is not None and added.realism_keep < 1 and synthetic_ratio <= 0:
         raise TrainingInputError("--realism-keep", "there are no synthetic positives to filter: give --params (and a "
                                                    "--synthetic-ratio above 0)")
+    if added.distractor_ratio < 0:
+        raise TrainingInputError("--distractor-ratio", f"must be >= 0, got {added.distractor_ratio}")
+    if added.distractor_ratio > 0 and synthetic_ratio <= 0:
+        raise TrainingInputError("--distractor-ratio", "distractors are drawn as the synthetic positives are, and there "
+                                                       "are none: give --params (and a --synthetic-ratio above 0)")
     if added.quantize and synthetic_ratio <= 0:
         raise TrainingInputError("--quantize", "there are no synthetic positives to round: give --params (and a "
                                                "--synthetic-ratio above 0)")
@@ -880,15 +891,15 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
     where = ", on other seeds' backgrounds" if background_sampling == "other" else ""
     # the family's, for the synthetic positives only
     realism_keep = resolve_realism_keep(kind, added.realism_keep, len(ss)) if synthetic_ratio > 0 else 1.0
+    # how the synthetic patches are drawn, shared by the positives and the distractors
+    how = dict(pose_sampling=pose_sampling, object_box=added.object_box, object_box_share=added.object_box_share,
+               capture_sampling=added.capture_sampling, effects=effects, quantize=added.quantize,
+               background_sampling=background_sampling)
     if n_syn:
         def draw(fit: str | Path) -> Tensor:
-            return synthetic_positives(ss, mesh, fit, n_syn, seed=seed + 2, pose_sampling=pose_sampling,
-                                       object_box=added.object_box, object_box_share=added.object_box_share,
-                                       shape_variation=added.shape_variation,
-                                       capture_sampling=added.capture_sampling, effects=effects,
-                                       quantize=added.quantize, background_sampling=background_sampling,
+            return synthetic_positives(ss, mesh, fit, n_syn, seed=seed + 2, shape_variation=added.shape_variation,
                                        realism_keep=realism_keep, realism_selection=added.realism_selection,
-                                       realism_features=added.realism_features)
+                                       realism_features=added.realism_features, **how)
 
         t0 = time.perf_counter()
         syn = draw(params)
@@ -914,6 +925,12 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                             **({"realism_selection": added.realism_selection} if realism_keep < 1 else {}),
                             **({"realism_features": added.realism_features}
                                if realism_keep < 1 and added.realism_features != "hog" else {})}
+    n_dist = int(round(added.distractor_ratio * len(ss))) if n_syn else 0
+    if n_dist:
+        t0 = time.perf_counter()
+        ts.negatives = torch.cat([ts.negatives, distractor_negatives(ss, params, n_dist, seed=seed + 100, **how)])
+        say(f"distractors: {n_dist} rendered ellipsoids added to the negatives ({time.perf_counter() - t0:.0f}s)")
+        info["distractors"] = {"ratio": added.distractor_ratio, "count": n_dist}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

@@ -156,6 +156,8 @@ class Condition:
             which is absent from the key: stop 82's cells keep theirs); ``"set"`` wherever every draw is kept.
         realism_features: the critic's features (``AddedPositives``' ``realism_features``: ``"hog"``, the default,
             absent from the key, or ``"weak_learners"``); ``"hog"`` wherever every draw is kept.
+        distractor_ratio: rendered distractors per real seed added to the negatives (``AddedPositives``'
+            ``distractor_ratio``; synthetic cells only; absent from the key at 0).
     """
 
     name: str
@@ -187,8 +189,12 @@ class Condition:
     realism_keep: float | None = None
     realism_selection: str = "seed"
     realism_features: str = "hog"
+    distractor_ratio: float = 0.0
 
     def __post_init__(self) -> None:
+        if self.distractor_ratio and not self.synthetic_ratio:
+            raise ValueError("distractor_ratio: distractors are drawn as the synthetic positives are; this condition "
+                             "has none")
         off = self.effects_off
         object.__setattr__(self, "effects_off", () if off is None and not self.synthetic_ratio
                            else resolve_effects_off(self.kind, off))
@@ -224,7 +230,7 @@ class Condition:
         for k, default in (("capture_sampling", "seed"), ("effects_off", ()),  # added later still: the same, with
                            ("dcnn_refit", False), ("quantize", False), ("background_sampling", "seed"),
                            ("object_box_share", 1.0), ("realism_keep", 1.0), ("realism_selection", "set"),
-                           ("realism_features", "hog")):
+                           ("realism_features", "hog"), ("distractor_ratio", 0.0)):
             if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
@@ -449,7 +455,8 @@ class ProtocolRunner:
                                  quantize=condition.quantize, background_sampling=condition.background_sampling,
                                  realism_keep=condition.realism_keep,
                                  realism_selection=condition.realism_selection,
-                                 realism_features=condition.realism_features),
+                                 realism_features=condition.realism_features,
+                                 distractor_ratio=condition.distractor_ratio),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -757,6 +764,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          realism_selection: Sequence[str] = ("seed",),
                          realism_features: str = "hog",
                          synthetic_downscaled: int = 0,
+                         distractor_ratio: float = 0.0,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -797,6 +805,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     (``"hog"`` or ``"weak_learners"``, :class:`Condition`'s ``realism_features``). ``synthetic_downscaled``: every
     synthetic
     condition also holds that many downscaled copies of each real seed (the two together, against each alone).
+    ``distractor_ratio``: every synthetic condition also adds that many rendered distractors per real seed to its
+    negatives (:class:`Condition`'s ``distractor_ratio``).
 
     The real-only cells run after the added ones, so a real-only cell that another process is training meanwhile is
     read back when it is done rather than trained twice, and the added cells do not wait on it.
@@ -832,14 +842,15 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{', 8-bit' if qz else ''}"
                             f"{'' if bs == 'seed' else ', backgrounds of other seeds'}"
                             f"{_realism_name(rk, sel, realism_features)})"
-                            f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}", kind,
+                            f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}"
+                            f"{f' + {distractor_ratio:g}x rendered distractors' if distractor_ratio else ''}", kind,
                             seed_count=seed_count, downscaled_copies=int(synthetic_downscaled),
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
                             object_box_share=1.0 if ob is None else float(object_box_share),
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
                             quantize=qz, background_sampling=bs, realism_keep=rk, realism_selection=sel,
-                            realism_features=realism_features)
+                            realism_features=realism_features, distractor_ratio=float(distractor_ratio))
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
                   for cs in capture_sampling for off in offs for rf in refits
                   for qz in rounding for bs in grounds for rk, sel in keeps]
@@ -999,6 +1010,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--synthetic-downscaled-copies", type=int_at_least(0), default=0, metavar="K",
                     help="every synthetic condition also trains on K downscaled copies of each real seed (the two "
                          "together; compare with --downscaled-copies K, the copies alone)")
+    sy.add_argument("--distractor-ratio", type=nonneg_float, default=0.0, metavar="K",
+                    help="every synthetic condition also adds K rendered distractors per real seed to its negatives: "
+                         "drawn as its synthetic positives are, an ellipsoid in place of the object")
     sy.add_argument("--downscaled-copies", type=int_at_least(1), nargs="*", default=[],
                     help="copies of every real seed shown as a smaller, farther object (longest side 16-24 px), cut "
                          "the way the pyramid sees it; one condition per count")
@@ -1128,6 +1142,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds,
                              synthetic_share=args.synthetic_share, downscaled_copies=args.downscaled_copies,
                              synthetic_downscaled=args.synthetic_downscaled_copies,
+                             distractor_ratio=args.distractor_ratio,
                              faded_copies=args.faded_copies,
                              faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                              object_box=tuple(None if b == "none" else b for b in args.object_box),
