@@ -36,7 +36,7 @@ def test_distractors_split_evenly_over_the_shapes_each_at_its_own_seed(monkeypat
     assert [c[0] for c in calls] == [tuple(a) for a in DISTRACTOR_AXES]
     assert all(c[3] == {"quantize": True, "pose_sampling": "fitted_at_seed"} for c in calls)
     assert out.shape == (19, 1, 8, 8)
-    assert out[:, 0, 0, 0].tolist() == [1.0] * 3 + [2.0] * 3 + [3.0] * 3 + sum(([float(k)] * 2 for k in range(4, 9)), [])
+    assert out[:, 0, 0, 0].tolist() == [float(k + 1) for k, c in enumerate([3, 3, 3, 2, 2, 2, 2, 2]) for _ in range(c)]
     calls.clear()
     assert distractor_negatives(None, "fit.json", 0).shape == (0, 1, 8, 8)  # the patch size of an empty draw
     assert distractor_negatives(None, "fit.json", 3).shape[0] == 3
