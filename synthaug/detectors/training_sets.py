@@ -9,8 +9,9 @@ every labelled frame of some videos (:func:`frames_training_set`). Negatives: th
 seed set's plus object-free crops of its seed frames (:func:`negative_pool`),
 rendered distractors (:func:`distractor_negatives`: blobs drawn as the synthetic
 positives are, the object swapped for an ellipsoid), look-alike crops of
-negative-class videos (:func:`bird_hard_negatives`), and the seed frames HOG mines on its own (:func:`mining_frames`). All patches are float
-``(N, 1, P, P)`` in [0, 1].
+negative-class videos (:func:`bird_hard_negatives`), and the seed frames HOG
+mines on its own (:func:`mining_frames`). All patches are float ``(N, 1, P, P)``
+in [0, 1].
 """
 
 from __future__ import annotations
