@@ -19,6 +19,10 @@ The resource tracker exits by itself once the parent and every worker are gone
 their parent only between batches (every 5 s while idle), so a worker busy
 rendering a batch outlived a ``kill -9`` of ``train/fit.py`` by over 10 s on a
 loaded machine (stop 100: ``tests/test_kill_safe.py`` in a full suite run).
+A user's own ``DataLoader`` has no such ``worker_init_fn``:
+:class:`~synthaug.data.synthetic.SyntheticObjectDataset` calls
+:func:`guard_loader_worker` on every batch, which does the same once per
+worker process.
 """
 
 from __future__ import annotations
@@ -31,9 +35,10 @@ import threading
 import time
 from typing import Any, Callable
 
-__all__ = ["die_with_parent", "pool_kwargs", "worker_initializer", "loader_worker_init"]
+__all__ = ["die_with_parent", "pool_kwargs", "worker_initializer", "loader_worker_init", "guard_loader_worker"]
 
 PR_SET_PDEATHSIG = 1
+_guarded_pid: int | None = None  # the process whose guard is set (a forked child inherits the parent's value)
 
 
 def _set_pdeathsig(sig: int = signal.SIGKILL) -> bool:
@@ -56,7 +61,9 @@ def die_with_parent(parent_pid: int | None = None, *, poll_s: float = 1.0) -> No
             the parent: a parent that died before this call is caught too).
         poll_s: the watchdog thread's polling period (seconds).
     """
+    global _guarded_pid
     parent = os.getppid() if parent_pid is None else int(parent_pid)
+    _guarded_pid = os.getpid()
     _set_pdeathsig()
     if os.getppid() != parent:  # the parent died before the prctl
         os._exit(1)
@@ -97,3 +104,15 @@ def loader_worker_init() -> Callable[[int], None]:
     """
     return functools.partial(_loader_worker, os.getpid())
 
+
+def guard_loader_worker() -> None:
+    """In a ``DataLoader`` worker, :func:`die_with_parent` (the parent: the process iterating the loader), once per
+    worker process; nothing elsewhere, nor where the loader's ``worker_init_fn`` (:func:`loader_worker_init`)
+    already did it. :class:`~synthaug.data.synthetic.SyntheticObjectDataset` calls it on each batch, so that a user's
+plain ``DataLoader`` gets it too."""
+    if _guarded_pid == os.getpid():
+        return
+    import torch.utils.data
+
+    if torch.utils.data.get_worker_info() is not None:
+        die_with_parent()

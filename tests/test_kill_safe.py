@@ -41,9 +41,9 @@ def _spawned_worker(cmdline: str) -> bool:
     return "spawn_main" in cmdline and "resource_tracker" not in cmdline
 
 
-def _kill_when(cmd, ready, *, timeout=60.0, is_worker=_spawned_worker):
+def _kill_when(cmd, ready, *, timeout=60.0, is_worker=_spawned_worker, grace=10.0):
     """Start ``cmd`` in its own session, wait until it has two workers (``is_worker(cmdline)``) and ``ready()``,
-    SIGKILL it; return the pids of the children it had, and whether they were all gone within 10 s."""
+    SIGKILL it; return the pids of the children it had, and those still alive ``grace`` s later."""
     proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), start_new_session=True,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     children: set[int] = set()
@@ -65,7 +65,7 @@ def _kill_when(cmd, ready, *, timeout=60.0, is_worker=_spawned_worker):
         assert len(children) >= 2, children
         proc.send_signal(signal.SIGKILL)
         proc.wait()
-        gone_by = time.time() + 10
+        gone_by = time.time() + grace
         while time.time() < gone_by and any(_alive(p) for p in children):
             time.sleep(0.1)
         survivors = [p for p in children if _alive(p)]
@@ -213,3 +213,42 @@ def test_kill_9_of_train_fit_leaves_no_dataloader_or_render_worker(tmp_path):
     assert len(children) >= 2, children
     print(f"killed train/fit.py with {len(children)} children")
     assert survivors == [], f"children still running 10 s after the kill: {survivors}"
+
+
+_PLAIN_LOADER = """
+import sys
+from torch.utils.data import DataLoader
+import synthaug.data.synthetic
+from synthaug import SyntheticObjectDataset
+from synthaug.data.seedset import SeedSet
+
+if sys.argv[2] == "unguarded":  # the control: the dataset's guard switched off (forked workers inherit it)
+    synthaug.data.synthetic.guard_loader_worker = lambda: None
+ds = SyntheticObjectDataset("quadcopter", SeedSet.load(sys.argv[1]), None, length=10 ** 6, patch_size=40)
+for batch in DataLoader(ds, batch_size=20000, num_workers=2):  # a batch renders for tens of seconds
+    pass
+"""
+
+
+@pytest.mark.slow
+def test_kill_9_of_a_users_plain_dataloader_leaves_no_worker(tmp_path):
+    """A user's own ``DataLoader`` over :class:`SyntheticObjectDataset` (no ``worker_init_fn``), SIGKILLed while its
+    two forked workers render a long batch: both are gone within 3 s (the dataset's ``guard_loader_worker``); with
+    the guard switched off (the control) a worker is still rendering 3 s after the kill, as PyTorch's workers look
+    for their parent only between batches."""
+    seeds = _seedset(tmp_path)
+    script = tmp_path / "plain_loader.py"
+    script.write_text(_PLAIN_LOADER)
+    survivors = {}
+    for mode in ("guarded", "unguarded"):
+        seen: list[float] = []  # when both workers were first seen: killed 3 s into their first batch
+
+        def rendering() -> bool:
+            seen.append(time.time())
+            return seen[-1] - seen[0] > 3
+
+        children, survivors[mode] = _kill_when([sys.executable, str(script), str(seeds), mode], rendering,
+                                               timeout=120, is_worker=lambda c: "plain_loader.py" in c, grace=3.0)
+        assert len(children) >= 2, (mode, children)
+    assert survivors["guarded"] == [], f"workers still running 3 s after the kill: {survivors['guarded']}"
+    assert survivors["unguarded"], "the control's workers died by themselves: the test cannot tell the guard's work"

@@ -64,6 +64,7 @@ from torch.utils.data import Dataset
 from torchvision import tv_tensors
 
 from synthaug._checks import one_of
+from synthaug._procs import guard_loader_worker
 from synthaug.data.captures import CAPTURE_SAMPLERS, CaptureSampler
 from synthaug.data.dataset_args import check_arguments, is_integral, legacy_arguments, render_backend
 from synthaug.data.epochs import EpochSampler, item_generator, item_seed
@@ -476,6 +477,7 @@ class SyntheticObjectDataset(Dataset):
 
     def __getitems__(self, indices: Sequence[Any]) -> list[tuple[torch.Tensor, dict[str, torch.Tensor]]]:
         """Items of a batch; each index is an int (the dataset's epoch) or an ``(epoch, index)`` pair."""
+        guard_loader_worker()  # a DataLoader worker, even a user's plain one, dies with the process iterating it
         keys = []
         for i in indices:
             if isinstance(i, (tuple, list)):
