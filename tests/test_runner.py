@@ -684,6 +684,13 @@ def test_synthetic_share_default_is_the_familys_and_keeps_the_cells_keys(monkeyp
         R.Condition("x", "adaboost", synthetic_ratio=20.0, synthetic_share="half")
 
 
+def _refused(parse, argv, option, capsys):
+    """``parse(argv)`` exits with argparse's usage error (2), its message naming ``option``."""
+    with pytest.raises(SystemExit) as e:
+        parse(argv)
+    assert e.value.code == 2 and option in capsys.readouterr().err
+
+
 def _added_positives(ws, monkeypatch, *conditions):
     """The ``AddedPositives`` each condition's training gets from the runner (seed 0; stopped before any training)."""
     seen = []
@@ -742,9 +749,7 @@ def test_distractors_join_every_synthetic_condition_and_keep_the_former_keys(ws,
     parse = R.build_parser().parse_args
     assert parse(["synthetic", "--out", "x"]).distractor_ratio == 0.0
     assert parse(["synthetic", "--distractor-ratio", "2.5", "--out", "x"]).distractor_ratio == 2.5
-    with pytest.raises(SystemExit) as e:
-        parse(["synthetic", "--distractor-ratio", "-1", "--out", "x"])
-    assert e.value.code == 2 and "--distractor-ratio" in capsys.readouterr().err
+    _refused(parse, ["synthetic", "--distractor-ratio", "-1", "--out", "x"], "--distractor-ratio", capsys)
 
 
 def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monkeypatch, capsys):
@@ -939,9 +944,8 @@ def test_synthetic_downscaled_copies_join_each_synthetic_condition(ws, monkeypat
     parse = R.build_parser().parse_args
     assert parse(["synthetic", "--out", "x"]).synthetic_downscaled_copies == 0
     assert parse(["synthetic", "--synthetic-downscaled-copies", "5", "--out", "x"]).synthetic_downscaled_copies == 5
-    with pytest.raises(SystemExit) as e:
-        parse(["synthetic", "--synthetic-downscaled-copies", "-1", "--out", "x"])
-    assert e.value.code == 2 and "--synthetic-downscaled-copies" in capsys.readouterr().err
+    _refused(parse, ["synthetic", "--synthetic-downscaled-copies", "-1", "--out", "x"], "--synthetic-downscaled-copies",
+             capsys)
 
 
 def test_background_sampling_default_is_the_familys_and_resolved_into_the_key(ws, monkeypatch):

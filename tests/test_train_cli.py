@@ -31,6 +31,21 @@ def ws(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     return {"root": root, "videos": root / "videos", "labels": root / "labels"}
 
 
+def _refused_by_train_parser(extra: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """``synthaug train``'s parser exits on ``extra`` (after the required options) with a usage error naming
+    ``message``."""
+    import argparse
+
+    from synthaug.detectors.train_cli import add_arguments
+
+    parser = argparse.ArgumentParser(prog="synthaug train")
+    add_arguments(parser)
+    with pytest.raises(SystemExit) as e:
+        parser.parse_args(["--detector", "hog", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o",
+                           *extra])
+    assert e.value.code == 2 and message in capsys.readouterr().err
+
+
 def _train(ws: dict[str, Path], out: Path, *extra: str) -> int:
     return cli_main(["train", "--class", "drone", "--videos", str(ws["videos"]), "--labels", str(ws["labels"]),
                      "--out", str(out), *FAST, *extra])
@@ -793,20 +808,8 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
         AddedPositives(effects_off="motion_blur")  # type: ignore[arg-type]
     assert AddedPositives(effects_off=["material"]).effects_off == ("material",)  # type: ignore[arg-type]
     # a name that is no registered effect is refused when the command line is parsed, before any ingest
-    import argparse
-
-    from synthaug.detectors.train_cli import add_arguments
-
-    parser = argparse.ArgumentParser(prog="synthaug train")
-    add_arguments(parser)
-    with pytest.raises(SystemExit) as e:
-        parser.parse_args(["--detector", "hog", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o",
-                           "--effects-off", "speckle"])
-    assert e.value.code == 2 and "unknown effect 'speckle'" in capsys.readouterr().err
-    with pytest.raises(SystemExit) as e:
-        parser.parse_args(["--detector", "hog", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o",
-                           "--realism-keep", "0"])
-    assert e.value.code == 2 and "--realism-keep: must be in (0, 1], got '0'" in capsys.readouterr().err
+    _refused_by_train_parser(["--effects-off", "speckle"], "unknown effect 'speckle'", capsys)
+    _refused_by_train_parser(["--realism-keep", "0"], "--realism-keep: must be in (0, 1], got '0'", capsys)
 
 
 def test_the_cnn_family_puts_its_synthetic_objects_on_other_seeds_backgrounds(ws: dict[str, Path],
@@ -876,10 +879,7 @@ def test_distractors_are_drawn_as_the_synthetic_positives_and_join_the_negatives
     """``--distractor-ratio K``: K rendered distractors per real seed go to the negatives (not the positives), drawn
     with the synthetic positives' fit, poses, effects and 8 bits, at their own seed; recorded in the metadata; refused
     without synthetic positives and below 0."""
-    import argparse
-
     import synthaug.detectors.video_training as video_training
-    from synthaug.detectors.train_cli import add_arguments
     from synthaug.detectors.video_training import AddedPositives, TrainingInputError, _check_options
     from synthaug.params import CaptureParams
 
@@ -917,9 +917,4 @@ def test_distractors_are_drawn_as_the_synthetic_positives_and_join_the_negatives
                          (AddedPositives(params=fit, synthetic_ratio=1.0, distractor_ratio=-1.0), ">= 0")):
         with pytest.raises(TrainingInputError, match=f"--distractor-ratio.*{match}"):
             _check_options("adaboost", added, frame_step=1, all_frames=False, seedset=None, seed_count=8)
-    parser = argparse.ArgumentParser(prog="synthaug train")
-    add_arguments(parser)
-    with pytest.raises(SystemExit) as e:
-        parser.parse_args(["--detector", "hog", "--class", "drone", "--videos", "v", "--labels", "l", "--out", "o",
-                           "--distractor-ratio", "-2"])
-    assert e.value.code == 2 and "--distractor-ratio" in capsys.readouterr().err
+    _refused_by_train_parser(["--distractor-ratio", "-2"], "--distractor-ratio", capsys)
