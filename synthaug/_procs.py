@@ -108,8 +108,8 @@ def loader_worker_init() -> Callable[[int], None]:
 def guard_loader_worker() -> None:
     """In a ``DataLoader`` worker, :func:`die_with_parent` (the parent: the process iterating the loader), once per
     worker process; nothing elsewhere, nor where the loader's ``worker_init_fn`` (:func:`loader_worker_init`)
-    already did it. :class:`~synthaug.data.synthetic.SyntheticObjectDataset` calls it on each batch, so that a user's
-plain ``DataLoader`` gets it too."""
+    already did it. :class:`~synthaug.data.synthetic.SyntheticObjectDataset` calls it on each batch, so that a
+    user's plain ``DataLoader`` gets it too."""
     if _guarded_pid == os.getpid():
         return
     import torch.utils.data
