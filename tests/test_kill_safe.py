@@ -133,6 +133,31 @@ def test_kill_9_of_fit_leaves_no_process_and_the_rerun_gives_the_uninterrupted_f
 
 
 @pytest.mark.slow
+def test_two_fits_into_one_output_take_turns_and_both_give_the_file(tmp_path):
+    """Two ``synthaug fit`` runs into the same ``--out`` at once (e.g. two cells of one seed set in two processes),
+    the second started once the first has fitted a seed: both succeed, with the same bytes. Before the output's
+    lock, the second took the first's parts as done, the first removed them when it finished, and the second failed
+    reading them (stop 101; a budget that keeps the first busy while the second starts)."""
+    seeds = _seedset(tmp_path, n=4)
+    out = tmp_path / "fit.json"
+    parts = tmp_path / ".fit.json.parts"
+    cmd = _cli("fit", "--seeds", seeds, "--out", out, "--budget", 6000, "--step-deg", 30, "--sprite-size", 48,
+               "--lockstep", 1, "--no-progress")
+    first = subprocess.Popen(cmd, cwd=REPO, env=_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    deadline = time.time() + 120
+    while time.time() < deadline and first.poll() is None and not list(parts.glob("seed_*.json")):
+        time.sleep(0.05)
+    assert first.poll() is None and list(parts.glob("seed_*.json")), "the first run's parts never landed"
+    second = subprocess.Popen(cmd, cwd=REPO, env=_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    err = first.communicate(timeout=300)[1].decode()
+    assert first.returncode == 0, err
+    made_first = out.read_text()
+    err = second.communicate(timeout=300)[1].decode()
+    assert second.returncode == 0, err
+    assert out.read_text() == made_first and not parts.exists()
+
+
+@pytest.mark.slow
 def test_kill_9_of_ingest_leaves_no_process_and_the_rerun_gives_the_uninterrupted_seed_set(tmp_path):
     from synthaug.data.seedset import SeedSet
     from synthaug.data.synthvideo import make_panning_video

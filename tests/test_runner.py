@@ -378,6 +378,39 @@ def test_runner_fits_one_file_per_mesh_and_refuses_a_stored_fit_of_another_mesh(
     assert runner.params_for(plain, 1)(tmp_path) == fits / "drone_6_seed1_eucl.json"
 
 
+def test_cells_of_one_seed_set_make_its_fit_once(ws, tmp_path, monkeypatch):
+    """Two cells needing the same missing fit at once (two runner processes; here two threads, each with its own
+    lock file handle): one makes it, the other waits and reads it, and neither fails (stop 101: two processes
+    fitting into one file had crashed one of them)."""
+    import threading
+    import time
+
+    import torch
+
+    import synthaug.fit.fitting as fitting
+    from synthaug.params import CaptureParams
+
+    made = []
+
+    def slow_fit(seedset, mesh, out, cfg):
+        made.append(out)
+        time.sleep(0.5)
+        CaptureParams.sample(6, generator=torch.Generator().manual_seed(0)).save(out, metadata={"mesh": mesh})
+        return out
+
+    monkeypatch.setattr(fitting, "fit_seedset", slow_fit)
+    runner = R.ProtocolRunner(ws["proto"], "drone", dataclasses.replace(ws["paths"], work_dir=str(tmp_path)),
+                              log=lambda m: None, options=FAST, scales=(1.0, 0.8))
+    cond = R.Condition("s", "hog", seed_count=6, synthetic_ratio=2.0, fit_distance="eucl")
+    got = []
+    threads = [threading.Thread(target=lambda: got.append(runner.params_for(cond, 0)(tmp_path))) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert got == [tmp_path / "fits" / "drone_6_seed0_eucl.json"] * 2 and made == got[:1]
+
+
 def test_runner_scales_option_parses_and_refuses_a_non_positive_factor(capsys):
     """``--scales`` (the pyramid of mining, validation and scoring; part of a cell's key) for both subcommands."""
     args = R.build_parser().parse_args(["learning-curve", "--scales", "1.25", "0.33", "--out", "x"])

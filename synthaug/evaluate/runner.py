@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from synthaug._checks import add_option, float_in, int_at_least, nonneg_float, positive_float
+from synthaug._io import exclusive_lock
 from synthaug.data.captures import CAPTURE_SAMPLERS
 from synthaug.data.items import BACKGROUND_SAMPLING
 from synthaug.data.poses import POSE_SAMPLING
@@ -364,9 +365,11 @@ class ProtocolRunner:
             return path
 
         def make(seedset_path: Path) -> Path:
-            if path.is_file():
-                _check_fit_mesh(path, condition.mesh or "quadcopter")
-            else:
+            # cells of one seed set in two processes make its fit once: the second waits, then reads it
+            with exclusive_lock(path.with_name(f".{path.name}.make.lock")):
+                if path.is_file():
+                    _check_fit_mesh(path, condition.mesh or "quadcopter")
+                    return path
                 from synthaug.fit.fitting import FitConfig, fit_seedset
 
                 t0 = time.perf_counter()

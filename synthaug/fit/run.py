@@ -27,7 +27,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import torch
 
-from synthaug._io import digest
+from synthaug._io import digest, exclusive_lock
 from synthaug.fit.config import FitConfig, _cfg_json, _warm_cache, build_distance
 from synthaug.fit.fingerprint import _check_parts, fit_inputs
 from synthaug.fit.worker import _context, _fit_indices, _groups
@@ -99,20 +99,22 @@ def fit_seedset(
     cache = _warm_cache(mesh, cfg)  # checks step_deg / sprite_size; sprites built once before workers load them
     client = _dask_client(dask_address) if isinstance(dask_address, str) else dask_address  # a dead one fails now
     parts = out.parent / f".{out.name}.parts"
-    fresh = not parts.exists()
-    try:
-        parts.mkdir(parents=True, exist_ok=True)
-        _fit_parts(seeds, seeds_path, mesh, cfg, distance, parts, out, fingerprint, todo_all, cache, workers=workers,
-             dask_address=client, progress=progress, lockstep=lockstep)
-    except BaseException:
-        if fresh and not any(parts.glob("seed_*.json")):  # nothing to resume: leave nothing behind
+    # two runs into one output take turns (the second would otherwise assemble from parts the first has removed)
+    with exclusive_lock(out.parent / f".{out.name}.lock"):
+        fresh = not parts.exists()
+        try:
+            parts.mkdir(parents=True, exist_ok=True)
+            _fit_parts(seeds, seeds_path, mesh, cfg, distance, parts, out, fingerprint, todo_all, cache,
+                       workers=workers, dask_address=client, progress=progress, lockstep=lockstep)
+        except BaseException:
+            if fresh and not any(parts.glob("seed_*.json")):  # nothing to resume: leave nothing behind
+                shutil.rmtree(parts, ignore_errors=True)
+            raise
+        finally:
+            if client is not None and client is not dask_address:
+                client.close()
+        if indices is None:
             shutil.rmtree(parts, ignore_errors=True)
-        raise
-    finally:
-        if client is not None and client is not dask_address:
-            client.close()
-    if indices is None:
-        shutil.rmtree(parts, ignore_errors=True)
     return out
 
 
