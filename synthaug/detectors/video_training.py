@@ -676,8 +676,9 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
     if added.distractor_ratio < 0:
         raise TrainingInputError("--distractor-ratio", f"must be >= 0, got {added.distractor_ratio}")
     if added.distractor_ratio > 0 and synthetic_ratio <= 0:
-        raise TrainingInputError("--distractor-ratio", "distractors are drawn as the synthetic positives are, and "
-                                                       "there are none: give --params (and a --synthetic-ratio above 0)")
+        raise TrainingInputError("--distractor-ratio", "distractors are drawn as the synthetic positives are, "
+                                                       "and there are none: give --params and a --synthetic-ratio "
+                                                       "above 0")
     if added.quantize and synthetic_ratio <= 0:
         raise TrainingInputError("--quantize", "there are no synthetic positives to round: give --params (and a "
                                                "--synthetic-ratio above 0)")

@@ -9,7 +9,8 @@
 k=$1; seed=$2; out=$3; shift 3
 export PYTHONPATH=${PYTHONPATH:-.} OMP_NUM_THREADS=1 PYOPENGL_PLATFORM=egl
 # 8 shapes of the drone + 8 blobs: the default 1 GB sprite cache would evict them in turn
-export SYNTHAUG_CACHE=${SYNTHAUG_CACHE:-data/sprite_cache_distractors} SYNTHAUG_CACHE_MAX_MB=${SYNTHAUG_CACHE_MAX_MB:-8000}
+export SYNTHAUG_CACHE=${SYNTHAUG_CACHE:-data/sprite_cache_distractors}
+export SYNTHAUG_CACHE_MAX_MB=${SYNTHAUG_CACHE_MAX_MB:-8000}
 s0=$(date +%s)
 python -m synthaug.evaluate.runner synthetic --protocol configs/protocol/halmstad_v2.json --class drone \
    --detectors adaboost --seed-counts 100 --no-scale-check --no-patches --threads 1 \
