@@ -783,6 +783,20 @@ def test_distractors_join_every_synthetic_condition_and_keep_the_former_keys(ws,
     assert parse(["synthetic", "--out", "x"]).distractor_ratio == 0.0
     assert parse(["synthetic", "--distractor-ratio", "2.5", "--out", "x"]).distractor_ratio == 2.5
     _refused(parse, ["synthetic", "--distractor-ratio", "-1", "--out", "x"], "--distractor-ratio", capsys)
+    # --distractor-style soft: its own cell and name; the drawn style (the default) keeps the key above
+    made.clear()
+    R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
+                           distractor_ratio=5, distractor_style="soft")
+    soft = made[1]
+    assert soft.identity() == {**dist.identity(), "distractor_style": "soft"}
+    assert soft.name == dist.name.replace("5x rendered", "5x soft rendered")
+    assert [a.distractor_style for a in _added_positives(ws, monkeypatch, dist, soft)] == ["drawn", "soft"]
+    assert R.Condition("x", "adaboost", seed_count=12, distractor_style="soft").identity() == real.identity()
+    with pytest.raises(ValueError, match="distractor_style"):
+        R.Condition("x", "adaboost", seed_count=12, synthetic_ratio=20, distractor_ratio=5, distractor_style="cloudy")
+    assert parse(["synthetic", "--out", "x"]).distractor_style == "drawn"
+    assert parse(["synthetic", "--distractor-style", "soft", "--out", "x"]).distractor_style == "soft"
+    _refused(parse, ["synthetic", "--distractor-style", "cloudy", "--out", "x"], "--distractor-style", capsys)
 
 
 def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monkeypatch, capsys):

@@ -884,11 +884,13 @@ def test_distractors_are_drawn_as_the_synthetic_positives_and_join_the_negatives
     from synthaug.params import CaptureParams
 
     drawn: list[tuple[str, int, int, dict[str, Any]]] = []
+    styles: list[str | None] = []
 
     def record(what: str) -> Any:
         def draw(seedset: Any, *args: Any, seed: int = 0, **kw: Any) -> torch.Tensor:
             count = args[-1]
             drawn.append((what, count, seed, {k: kw.get(k) for k in ("pose_sampling", "effects", "quantize")}))
+            styles.append(kw.get("style"))
             return torch.full((count, 1, 40, 40), 0.5)
         return draw
 
@@ -918,3 +920,17 @@ def test_distractors_are_drawn_as_the_synthetic_positives_and_join_the_negatives
         with pytest.raises(TrainingInputError, match=f"--distractor-ratio.*{match}"):
             _check_options("adaboost", added, frame_step=1, all_frames=False, seedset=None, seed_count=8)
     _refused_by_train_parser(["--distractor-ratio", "-2"], "--distractor-ratio", capsys)
+    # --distractor-style soft: the same draw, passed the style, recorded in the metadata; refused without distractors
+    out2 = ws["root"] / "runs" / "ada_soft_distractors.pt"
+    assert _train(ws, out2, *common, "--distractor-ratio", "1.5", "--distractor-style", "soft") == 0
+    assert styles[1:] == [None, "drawn", None, "soft"] and drawn[-1][:2] == ("distractors", 12)
+    m2 = json.loads(out2.with_suffix(".json").read_text())
+    assert m2["synthetic"]["distractors"] == {"ratio": 1.5, "count": 12, "style": "soft"}
+    with pytest.raises(TrainingInputError, match="--distractor-style.*--distractor-ratio"):
+        _check_options("adaboost", AddedPositives(params=fit, synthetic_ratio=1.0, distractor_style="soft"),
+                       frame_step=1, all_frames=False, seedset=None, seed_count=8)
+    with pytest.raises(TrainingInputError, match="--distractor-style.*cloudy"):
+        _check_options("adaboost", AddedPositives(params=fit, synthetic_ratio=1.0, distractor_ratio=1.0,
+                                                  distractor_style="cloudy"),
+                       frame_step=1, all_frames=False, seedset=None, seed_count=8)
+    _refused_by_train_parser(["--distractor-style", "cloudy"], "--distractor-style", capsys)

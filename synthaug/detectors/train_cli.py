@@ -130,6 +130,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from synthaug.detectors.box_calibration import CALIBRATION_FORMS
     from synthaug.detectors.critic import REALISM_FEATURES, REALISM_SELECTION
     from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
+    from synthaug.detectors.training_sets import DISTRACTOR_STYLES
 
     d = dataclass_defaults(TrainOptions)  # the training budgets' defaults are TrainOptions'
     parser.add_argument("--detector", required=True, help=f"detector family: {' | '.join(_DETECTORS)}")
@@ -186,6 +187,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="add K rendered distractors per real seed to the negatives: drawn as the synthetic "
                              "positives are (their fit, poses, effects, 8 bits), an ellipsoid in place of the object "
                              "(domain randomisation's distractors); needs --synthetic-ratio; default 0: none")
+    parser.add_argument("--distractor-style", choices=list(DISTRACTOR_STYLES), default="drawn",
+                        help="how the distractors look: drawn (the default: as the object is drawn) or soft (each "
+                             "faint and blurred against its background, like a cloud puff); needs --distractor-ratio")
     parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own); "
@@ -335,7 +339,8 @@ def main(args: argparse.Namespace) -> int:
                                  quantize=args.quantize, background_sampling=args.background_sampling,
                                  realism_keep=args.realism_keep, realism_selection=args.realism_selection,
                                  realism_features=args.realism_features,
-                                 distractor_ratio=args.distractor_ratio),
+                                 distractor_ratio=args.distractor_ratio,
+                                 distractor_style=args.distractor_style),
             options=options, work_dir=args.work, ingest_seed=args.ingest_seed,
             ingest_workers=args.workers, negative_classes=tuple(args.negative_classes), val_fraction=args.val_fraction,
             extra_negatives=args.extra_negatives, log=log,

@@ -35,6 +35,10 @@ __all__ = [
     "synthetic_positives",
     "DISTRACTOR_AXES",
     "distractor_meshes",
+    "DISTRACTOR_STYLES",
+    "SOFT_DISTRACTOR_CONTRAST",
+    "SOFT_DISTRACTOR_BLUR_PX",
+    "soften",
     "distractor_negatives",
     "negative_pool",
     "mining_frames",
@@ -409,7 +413,55 @@ def distractor_meshes() -> list[Any]:
     return out
 
 
-def distractor_negatives(seedset: Any, fit_file: str | Path, count: int, *, seed: int = 0,
+DISTRACTOR_STYLES: tuple[str, ...] = ("drawn", "soft")
+"""How :func:`distractor_negatives` draws its blobs: ``"drawn"`` as the object is (its seed's capture parameters),
+``"soft"`` faint and blurred like the cloud puffs AdaBoost takes for drones (stop 97)."""
+SOFT_DISTRACTOR_CONTRAST: tuple[float, float] = (0.15, 0.5)
+"""``|c|`` of a soft distractor, log-uniform: its difference from the background scaled by ``±c``."""
+SOFT_DISTRACTOR_BLUR_PX: tuple[float, float] = (1.0, 3.0)
+"""σ (px of the patch) of the Gaussian a soft distractor's difference from its background is blurred by, uniform."""
+
+
+def soften(patches: Tensor, backgrounds: Tensor, *, rng: np.random.Generator,
+           contrast: tuple[float, float] = SOFT_DISTRACTOR_CONTRAST,
+           blur_px: tuple[float, float] = SOFT_DISTRACTOR_BLUR_PX) -> tuple[Tensor, dict[str, np.ndarray]]:
+    """Each patch made a faint, soft version of itself against its background: ``B + c · (G_σ * (I - B))``.
+
+    ``|c|`` is drawn log-uniform in ``contrast``, its sign + or - with equal odds (a dark blob also shown brighter than
+    its background, as a cloud is), σ uniform in ``blur_px`` (``kornia.filters.gaussian_blur2d``, replicated border:
+    ``I - B`` is 0 away from the object); the result is clipped to [0, 1].
+
+    Args:
+        patches: float ``(N, C, P, P)`` in [0, 1].
+        backgrounds: float ``(N, C, P, P)``: each patch's background without its object.
+        rng: the draws' generator.
+
+    Returns:
+        ``(patches, {"contrast": (N,), "sigma": (N,)})``.
+    """
+    from kornia.filters import gaussian_blur2d
+
+    a, b = (float(v) for v in contrast)
+    lo, hi = (float(v) for v in blur_px)
+    if not (0 < a <= b <= 1):
+        raise ValueError(f"contrast must be 0 < low <= high <= 1, got {contrast}")
+    if not (0 < lo <= hi):
+        raise ValueError(f"blur_px must be 0 < low <= high, got {blur_px}")
+    if patches.shape != backgrounds.shape:
+        raise ValueError(f"patches {tuple(patches.shape)} and backgrounds {tuple(backgrounds.shape)} differ")
+    n = int(patches.shape[0])
+    c = np.exp(rng.uniform(np.log(a), np.log(b), n)) * rng.choice((-1.0, 1.0), n)
+    sigma = rng.uniform(lo, hi, n)
+    if n == 0:
+        return patches.clone(), {"contrast": c, "sigma": sigma}
+    k = 2 * math.ceil(3 * hi) + 1
+    sig = torch.as_tensor(np.stack([sigma, sigma], 1), dtype=patches.dtype)
+    blurred = gaussian_blur2d(patches - backgrounds, (k, k), sig, border_type="replicate")
+    out = backgrounds + torch.as_tensor(c, dtype=patches.dtype)[:, None, None, None] * blurred
+    return out.clamp(0.0, 1.0), {"contrast": c, "sigma": sigma}
+
+
+def distractor_negatives(seedset: Any, fit_file: str | Path, count: int, *, seed: int = 0, style: str = "drawn",
                          **draw: Any) -> Tensor:
     """``count`` rendered distractors: negatives drawn as :func:`synthetic_positives` draws its patches (each
     seed's fitted capture parameters and background, its poses and placement, ``draw``'s options) with an
@@ -420,19 +472,43 @@ def distractor_negatives(seedset: Any, fit_file: str | Path, count: int, *, seed
     rendered blob that is not the object tells it to look at the shape instead. ``draw`` may not ask for a
     realism critic or shape variation (a distractor is no object: neither applies).
 
+    ``style`` (:data:`DISTRACTOR_STYLES`): ``"drawn"`` (the default) keeps each blob as its seed's capture draws it;
+    ``"soft"`` makes each one faint and soft against its seed's background (:func:`soften`, its draws from
+    ``numpy.random.default_rng(seed + k)`` for the shape ``k``; before the 8-bit rounding when ``draw`` asks for
+    it): the look of a low-contrast cloud puff rather than of the object. ``"soft"`` needs each blob on its own
+    seed's background (``background_sampling="seed"``).
+
     Returns:
         Float patches ``(count, 1, P, P)`` in [0, 1], the shapes in :data:`DISTRACTOR_AXES` order.
     """
     if count < 0:
         raise ValueError(f"count must be >= 0, got {count}")
+    if style not in DISTRACTOR_STYLES:
+        raise ValueError(f"style must be one of {DISTRACTOR_STYLES}, got {style!r}")
     for key, off in (("realism_keep", 1.0), ("shape_variation", 0.0)):
         if draw.get(key, off) != off:
             raise ValueError(f"distractors are drawn without {key} (got {draw[key]!r})")
+    if style == "soft" and draw.get("background_sampling", "seed") != "seed":
+        raise ValueError("soft distractors are faded against their own seed's background: background_sampling "
+                         f"must be 'seed', got {draw['background_sampling']!r}")
     meshes = distractor_meshes()
     per, extra = divmod(count, len(meshes))
     counts = [per + (k < extra) for k in range(len(meshes))]
-    parts = [synthetic_positives(seedset, m, fit_file, c, seed=seed + k, **draw)  # the first one even when empty
-             for k, (m, c) in enumerate(zip(meshes, counts)) if c or k == 0]
+    if style == "drawn":
+        parts = [synthetic_positives(seedset, m, fit_file, c, seed=seed + k, **draw)  # the first one even when empty
+                 for k, (m, c) in enumerate(zip(meshes, counts)) if c or k == 0]
+        return torch.cat(parts)
+    from synthaug.effects.camera_functional import quantize_levels
+
+    backgrounds = _as_float_patches(seedset.backgrounds)
+    parts = []
+    for k, (m, c) in enumerate(zip(meshes, counts)):
+        if not c and k:
+            continue
+        blobs, idx = synthetic_positives(seedset, m, fit_file, c, seed=seed + k, return_seed_index=True,
+                                         **{**draw, "quantize": False})
+        faint, _ = soften(blobs, backgrounds[torch.from_numpy(idx)], rng=np.random.default_rng(seed + k))
+        parts.append(quantize_levels(faint) if draw.get("quantize") else faint)
     return torch.cat(parts)
 
 

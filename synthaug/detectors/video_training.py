@@ -39,6 +39,7 @@ from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mini
 from synthaug.detectors.training_sets import (
     bird_hard_negatives,
     check_realism_keep,
+    DISTRACTOR_STYLES,
     distractor_negatives,
     frames_training_set,
     mining_frames,
@@ -288,6 +289,9 @@ class AddedPositives:
             positives are (their fit, poses, placement, effects and 8 bits), an ellipsoid in place of the object
             (:func:`~synthaug.detectors.training_sets.distractor_negatives`; domain randomisation's distractors).
             Needs synthetic positives. 0 (the default): none.
+        distractor_style: how the distractors look (:data:`~synthaug.detectors.training_sets.DISTRACTOR_STYLES`):
+            ``"drawn"`` (the default: as the object is drawn) or ``"soft"`` (each faint and blurred against its
+            background, like a cloud puff).
     """
 
     params: str | Path | Callable[[Path], str | Path] | None = None
@@ -312,6 +316,7 @@ class AddedPositives:
     realism_selection: str = "seed"
     realism_features: str = "hog"
     distractor_ratio: float = 0.0
+    distractor_style: str = "drawn"
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
@@ -675,6 +680,12 @@ def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_fra
                                                    "--synthetic-ratio above 0)")
     if added.distractor_ratio < 0:
         raise TrainingInputError("--distractor-ratio", f"must be >= 0, got {added.distractor_ratio}")
+    if added.distractor_style not in DISTRACTOR_STYLES:
+        raise TrainingInputError("--distractor-style", f"must be one of {', '.join(DISTRACTOR_STYLES)}, "
+                                                       f"got {added.distractor_style!r}")
+    if added.distractor_style != "drawn" and added.distractor_ratio <= 0:
+        raise TrainingInputError("--distractor-style", "there are no distractors to draw: give --distractor-ratio "
+                                                       "above 0")
     if added.distractor_ratio > 0 and synthetic_ratio <= 0:
         raise TrainingInputError("--distractor-ratio", "distractors are drawn as the synthetic positives are, "
                                                        "and there are none: give --params and a --synthetic-ratio "
@@ -929,9 +940,12 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
     n_dist = int(round(added.distractor_ratio * len(ss))) if n_syn else 0
     if n_dist:
         t0 = time.perf_counter()
-        ts.negatives = torch.cat([ts.negatives, distractor_negatives(ss, params, n_dist, seed=seed + 100, **how)])
-        say(f"distractors: {n_dist} rendered ellipsoids added to the negatives ({time.perf_counter() - t0:.0f}s)")
-        info["distractors"] = {"ratio": added.distractor_ratio, "count": n_dist}
+        ts.negatives = torch.cat([ts.negatives, distractor_negatives(ss, params, n_dist, seed=seed + 100,
+                                                                     style=added.distractor_style, **how)])
+        soft = " soft" if added.distractor_style == "soft" else ""
+        say(f"distractors: {n_dist}{soft} rendered ellipsoids added to the negatives ({time.perf_counter() - t0:.0f}s)")
+        info["distractors"] = {"ratio": added.distractor_ratio, "count": n_dist,
+                               **({"style": added.distractor_style} if added.distractor_style != "drawn" else {})}
     n_cp = int(round(copy_paste_ratio * len(ss)))
     if n_cp:
         from synthaug.data.copypaste import copy_paste_positives

@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from synthaug._checks import add_option, float_in, int_at_least, nonneg_float, positive_float
+from synthaug._checks import add_option, float_in, int_at_least, nonneg_float, one_of, positive_float
 from synthaug._io import exclusive_lock
 from synthaug.data.captures import CAPTURE_SAMPLERS
 from synthaug.data.items import BACKGROUND_SAMPLING
@@ -56,6 +56,7 @@ from synthaug.detectors.box_calibration import CALIBRATION_FORMS, CALIBRATION_VE
 from synthaug.detectors.critic import (REALISM_FEATURES, REALISM_SELECTION, check_realism_features,
                                        check_realism_selection, realism_variants)
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
+from synthaug.detectors.training_sets import DISTRACTOR_STYLES
 from synthaug.detectors.video_training import (
     BY_COUNT,
     AddedPositives,
@@ -159,6 +160,8 @@ class Condition:
             absent from the key, or ``"weak_learners"``); ``"hog"`` wherever every draw is kept.
         distractor_ratio: rendered distractors per real seed added to the negatives (``AddedPositives``'
             ``distractor_ratio``; synthetic cells only; absent from the key at 0).
+        distractor_style: how they look (``AddedPositives``' ``distractor_style``: ``"drawn"``, the default, absent
+            from the key, or ``"soft"``); ``"drawn"`` wherever there are none.
     """
 
     name: str
@@ -191,11 +194,15 @@ class Condition:
     realism_selection: str = "seed"
     realism_features: str = "hog"
     distractor_ratio: float = 0.0
+    distractor_style: str = "drawn"
 
     def __post_init__(self) -> None:
         if self.distractor_ratio and not self.synthetic_ratio:
             raise ValueError("distractor_ratio: distractors are drawn as the synthetic positives are; this condition "
                              "has none")
+        one_of(self.distractor_style, DISTRACTOR_STYLES, "distractor_style")
+        if not self.distractor_ratio:  # no distractors: one cell, whatever their style
+            object.__setattr__(self, "distractor_style", "drawn")
         off = self.effects_off
         object.__setattr__(self, "effects_off", () if off is None and not self.synthetic_ratio
                            else resolve_effects_off(self.kind, off))
@@ -231,7 +238,7 @@ class Condition:
         for k, default in (("capture_sampling", "seed"), ("effects_off", ()),  # added later still: the same, with
                            ("dcnn_refit", False), ("quantize", False), ("background_sampling", "seed"),
                            ("object_box_share", 1.0), ("realism_keep", 1.0), ("realism_selection", "set"),
-                           ("realism_features", "hog"), ("distractor_ratio", 0.0)):
+                           ("realism_features", "hog"), ("distractor_ratio", 0.0), ("distractor_style", "drawn")):
             if d[k] == default:                                                  # their own defaults
                 d.pop(k)
         return d
@@ -459,7 +466,8 @@ class ProtocolRunner:
                                  realism_keep=condition.realism_keep,
                                  realism_selection=condition.realism_selection,
                                  realism_features=condition.realism_features,
-                                 distractor_ratio=condition.distractor_ratio),
+                                 distractor_ratio=condition.distractor_ratio,
+                                 distractor_style=condition.distractor_style),
             options=options,
             work_dir=Path(self.paths.work_dir) / f"ingest_{self.class_name}_seed{seed}", ingest_seed=seed,
             log=lambda m: self.log(f"    {m}"))
@@ -748,6 +756,13 @@ def _realism_name(keep: float, selection: str, features: str = "hog") -> str:
             f"{' to a weak-learner critic' if features == 'weak_learners' else ''}")
 
 
+def _distractor_name(ratio: float, style: str) -> str:
+    """The part of a synthetic condition's name that says which distractors its negatives hold."""
+    if not ratio:
+        return ""
+    return f" + {ratio:g}x{' soft' if style == 'soft' else ''} rendered distractors"
+
+
 def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
                          synthetic_ratios: Sequence[float] = (), fit_distance: str | Mapping[str, str] | None = None,
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
@@ -768,6 +783,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          realism_features: str = "hog",
                          synthetic_downscaled: int = 0,
                          distractor_ratio: float = 0.0,
+                         distractor_style: str = "drawn",
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -809,7 +825,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     synthetic
     condition also holds that many downscaled copies of each real seed (the two together, against each alone).
     ``distractor_ratio``: every synthetic condition also adds that many rendered distractors per real seed to its
-    negatives (:class:`Condition`'s ``distractor_ratio``).
+    negatives (:class:`Condition`'s ``distractor_ratio``), drawn in ``distractor_style`` (``"drawn"`` or ``"soft"``).
 
     The real-only cells run after the added ones, so a real-only cell that another process is training meanwhile is
     read back when it is done rather than trained twice, and the added cells do not wait on it.
@@ -846,14 +862,15 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{'' if bs == 'seed' else ', backgrounds of other seeds'}"
                             f"{_realism_name(rk, sel, realism_features)})"
                             f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}"
-                            f"{f' + {distractor_ratio:g}x rendered distractors' if distractor_ratio else ''}", kind,
+                            f"{_distractor_name(distractor_ratio, distractor_style)}", kind,
                             seed_count=seed_count, downscaled_copies=int(synthetic_downscaled),
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
                             object_box_share=1.0 if ob is None else float(object_box_share),
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
                             quantize=qz, background_sampling=bs, realism_keep=rk, realism_selection=sel,
-                            realism_features=realism_features, distractor_ratio=float(distractor_ratio))
+                            realism_features=realism_features, distractor_ratio=float(distractor_ratio),
+                            distractor_style=distractor_style)
                   for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
                   for cs in capture_sampling for off in offs for rf in refits
                   for qz in rounding for bs in grounds for rk, sel in keeps]
@@ -1016,6 +1033,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--distractor-ratio", type=nonneg_float, default=0.0, metavar="K",
                     help="every synthetic condition also adds K rendered distractors per real seed to its negatives: "
                          "drawn as its synthetic positives are, an ellipsoid in place of the object")
+    sy.add_argument("--distractor-style", choices=list(DISTRACTOR_STYLES), default="drawn",
+                    help="how the distractors look: drawn (the default: as the object is drawn) or soft (each faint "
+                         "and blurred against its background, like a cloud puff)")
     sy.add_argument("--downscaled-copies", type=int_at_least(1), nargs="*", default=[],
                     help="copies of every real seed shown as a smaller, farther object (longest side 16-24 px), cut "
                          "the way the pyramid sees it; one condition per count")
@@ -1145,7 +1165,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds,
                              synthetic_share=args.synthetic_share, downscaled_copies=args.downscaled_copies,
                              synthetic_downscaled=args.synthetic_downscaled_copies,
-                             distractor_ratio=args.distractor_ratio,
+                             distractor_ratio=args.distractor_ratio, distractor_style=args.distractor_style,
                              faded_copies=args.faded_copies,
                              faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                              object_box=tuple(None if b == "none" else b for b in args.object_box),

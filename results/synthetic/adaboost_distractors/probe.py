@@ -19,6 +19,9 @@ Each trained detector is kept in ``data/runs/distractor_probe/`` and read back b
 scores it.
 
     PYTHONPATH=. python results/synthetic/adaboost_distractors/probe.py SEED VARIANT [VARIANT ...]
+
+Stop 102 added ``shape_d2`` (2x drawn) and the soft distractors ``shape_s5`` / ``shape_s2``: the library's
+``distractor_negatives(style="soft")`` (the same blobs, each faint and blurred against its own background).
 """
 import json
 import sys
@@ -33,7 +36,7 @@ import trimesh
 from synthaug.data.seedset import SeedSet
 from synthaug.detectors.adaboost import gradient_level, train_adaboost
 from synthaug.detectors.base import load_detector, save_detector
-from synthaug.detectors.training_sets import negative_pool, real_positives, synthetic_positives
+from synthaug.detectors.training_sets import distractor_negatives, negative_pool, real_positives, synthetic_positives
 from synthaug.detectors.video_training import share_weights
 from synthaug.evaluate.patches import patch_eval_set, patch_metrics, score_patch_set
 from synthaug.evaluate.protocol import load_protocol
@@ -54,7 +57,9 @@ BLOBS = ((1.0, 1.0, 1.0), (1.0, 0.5, 0.5), (1.0, 0.3, 0.3), (1.0, 1.0, 0.35), (1
 # name -> (synthetic positives per seed, distractor negatives per seed, fitted effects left out of the positives)
 VARIANTS = {"real": (0, 0, ()), "shape": (20, 0, ()), "shape_d5": (20, 5, ()), "shape_d20": (20, 20, ()),
             "d5": (0, 5, ()), "shape_noblur": (20, 0, ("boundary_blur", "motion_blur")),
-            "shape_nonoise": (20, 0, ("object_noise",))}
+            "shape_nonoise": (20, 0, ("object_noise",)),
+            # stop 102: 2x drawn; soft distractors (the library's distractor_negatives(style="soft"), faint and blurred)
+            "shape_d2": (20, 2, ()), "shape_s5": (20, 5, (), "soft"), "shape_s2": (20, 2, (), "soft")}
 
 
 def distractors(ss, fit, per_seed, seed, folder):
@@ -107,7 +112,8 @@ def main():
     hard, hard_from = hard_windows(seed, store)
     with tempfile.TemporaryDirectory() as tmp:
         for name in names:
-            n_syn, n_dist, off = VARIANTS[name]
+            n_syn, n_dist, off, *style = VARIANTS[name]
+            style = style[0] if style else "drawn"
             ckpt = store / f"seed{seed}_{name}.pt"
             t0 = time.perf_counter()
             if ckpt.exists():
@@ -117,10 +123,13 @@ def main():
                     kept = [e for e in effects if e not in off] if off else None
                     synth[n_syn, off] = synthetic_positives(ss, MESH, fit, n_syn * len(ss), seed=seed + 2,
                                                             effects=kept, **SHAPE_CELL)
-                if n_dist and n_dist not in dist:
-                    dist[n_dist] = distractors(ss, fit, n_dist, seed, tmp)
+                if n_dist and (n_dist, style) not in dist:
+                    dist[n_dist, style] = (distractors(ss, fit, n_dist, seed, tmp) if style == "drawn" else
+                                           distractor_negatives(ss, fit, n_dist * len(ss), seed=seed + 100,
+                                                                style=style, quantize=True,
+                                                                pose_sampling="fitted_at_seed"))
                 added = synth[n_syn, off] if n_syn else pos[:0]
-                negs = torch.cat([neg, dist[n_dist]]) if n_dist else neg
+                negs = torch.cat([neg, dist[n_dist, style]]) if n_dist else neg
                 t_add = round(time.perf_counter() - t0, 1)
                 p = torch.cat([pos, added])
                 t0 = time.perf_counter()
@@ -130,6 +139,7 @@ def main():
                 t_train = round(time.perf_counter() - t0, 1)
                 save_detector(det, ckpt)
             row = {"seed": seed, "variant": name, "synthetic_per_seed": n_syn, "distractors_per_seed": n_dist,
+                   "distractor_style": style,
                    "effects_off": list(off), "add_s": t_add, "train_s": t_train}
             for split, ps in sets.items():
                 vs = score_patch_set(det, ps)
