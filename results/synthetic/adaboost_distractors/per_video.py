@@ -4,7 +4,8 @@ seed's stored cells side by side (stop 101; nothing is retrained), and the video
     PYTHONPATH=. python results/synthetic/adaboost_distractors/per_video.py DIST_FOLDER [SEED ...]
 
 DIST_FOLDER holds seed<N>/ with the distractor cell's JSON; real only and the shape cell are read from
-intel_cal_test/seed<N>/ (seeds 0, 1, stop 98) or, where absent there, from DIST_FOLDER/seed<N>/ itself.
+intel_cal_test/seed<N>/ (seeds 0, 1, stop 98) or, where absent there, from DIST_FOLDER/seed<N>/ itself or
+frame_s101/seed<N>/ (seed 2, stop 101).
 """
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ SMALL = ("V_DRONE_109", "V_DRONE_111", "V_DRONE_112", "V_DRONE_113", "V_DRONE_11
 
 def cells(folder: Path, seed: int) -> dict[str, ProtocolResult]:
     out = {}
-    for where in (HERE / "intel_cal_test" / f"seed{seed}", folder / f"seed{seed}"):
+    for where in (HERE / "intel_cal_test" / f"seed{seed}", folder / f"seed{seed}", HERE / "frame_s101" / f"seed{seed}"):
         for f in sorted(where.glob("*.json")) if where.is_dir() else []:
             tag = "dist" if "distractors" in f.name else "shape" if "synthetic" in f.name else "real"
             out.setdefault(tag, ProtocolResult.load(f))
