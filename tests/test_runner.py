@@ -797,6 +797,7 @@ def test_distractors_join_every_synthetic_condition_and_keep_the_former_keys(ws,
     assert parse(["synthetic", "--out", "x"]).distractor_style == "drawn"
     assert parse(["synthetic", "--distractor-style", "soft", "--out", "x"]).distractor_style == "soft"
     _refused(parse, ["synthetic", "--distractor-style", "cloudy", "--out", "x"], "--distractor-style", capsys)
+    _refused(R.main, ["synthetic", "--distractor-style", "soft", "--out", "x"], "--distractor-ratio", capsys)
 
 
 def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monkeypatch, capsys):

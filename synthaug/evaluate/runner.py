@@ -1141,6 +1141,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.object_box_share < 1 and all(b == "none" for b in args.object_box):
             parser.error(f"--object-box-share {args.object_box_share:g} is the share of the objects a framing frames: "
                          "give --object-box seed or fit")
+        if args.distractor_style != "drawn" and not args.distractor_ratio:
+            parser.error(f"--distractor-style {args.distractor_style}: there are no distractors to draw: give "
+                         "--distractor-ratio above 0")
     import torch
 
     torch.set_num_threads(args.threads)
