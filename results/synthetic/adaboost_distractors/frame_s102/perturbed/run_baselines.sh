@@ -6,7 +6,8 @@
 # copy-paste cell, next in the runner, did not fit in the session)
 seed=$1
 cd /work/main
-export PYTHONPATH=. OMP_NUM_THREADS=1 PYOPENGL_PLATFORM=egl SYNTHAUG_CACHE=/work/scratch/syncache SYNTHAUG_CACHE_MAX_MB=8000
+export PYTHONPATH=. OMP_NUM_THREADS=1 PYOPENGL_PLATFORM=egl
+export SYNTHAUG_CACHE=/work/scratch/syncache SYNTHAUG_CACHE_MAX_MB=8000
 out=/work/scratch/base_seed$seed; log=/work/scratch/base_seed$seed.log
 s0=$(date +%s)
 cmd="python -m synthaug.evaluate.runner synthetic --protocol configs/protocol/halmstad_v2.json --class drone \
