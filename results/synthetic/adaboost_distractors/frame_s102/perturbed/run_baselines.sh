@@ -4,6 +4,8 @@
 # usage (repository root): results/synthetic/adaboost_distractors/frame_s102/perturbed/run_baselines.sh SEED
 # (out and log in /work/scratch/base_seedSEED; stop 102 stopped both seeds once the perturbed cell was done: the
 # copy-paste cell, next in the runner, did not fit in the session)
+# A cell already cached prints no "cell done" line: stop 103 reran seeds 0-1 (copy-paste only, perturbed cached) and
+# stopped each call on its one "seed S: cell done" line with a watcher instead (/work/scratch/watchA.sh there).
 seed=$1
 cd /work/main
 export PYTHONPATH=. OMP_NUM_THREADS=1 PYOPENGL_PLATFORM=egl
