@@ -68,6 +68,8 @@ _PC = "cnn_100_seeds_20x_synthetic_hog_twin_prop_airplane"
 _PA = "adaboost_100_seeds_20x_synthetic_hog_twin_prop_airplane"
 _ASH = ("adaboost_100_seeds_20x_synthetic_hog_quadcopter_fitted_poses_at_the_seeds_offsets_share_0.25_shapes_varied_"
         "0.3_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_seed_to_a_weak_learner_critic.json")  # stops 98-102
+_ASH_CELLS = ("adaboost_distractors/intel_cal_test/seed0/" + _ASH, "adaboost_distractors/intel_cal_test/seed1/" + _ASH,
+              "adaboost_distractors/frame_s101/seed2/" + _ASH)  # the shape cell, training seeds 0-2
 
 
 def _seeds(template: str, seeds: tuple[int | str, ...] = (0, 1, 2, 3, 4)) -> tuple[str, ...]:
@@ -323,14 +325,12 @@ FACTORS: tuple[Factor, ...] = (
            f"adaboost_background/val/{_A}.json", "adaboost_pose/val/" + _AFP, "adaboost_pose/"),
     Factor("drone", "adaboost", "negatives (rendered distractors)", "the shape cell -> + 5x rendered ellipsoids per "
            "real seed as negatives, drawn as the object (calibrated)", "test",
-           ("adaboost_distractors/intel_cal_test/seed0/" + _ASH, "adaboost_distractors/intel_cal_test/seed1/" + _ASH,
-            "adaboost_distractors/frame_s101/seed2/" + _ASH),
+           _ASH_CELLS,
            _seeds("adaboost_distractors/frame_s101/seed{s}/" + _ASH[:-5] + "_5x_rendered_distractors.json", (0, 1, 2)),
            "adaboost_distractors/"),
     Factor("drone", "adaboost", "negatives (rendered distractors)", "the shape cell -> + 5x soft rendered ellipsoids "
            "per real seed as negatives, faint and blurred against their backgrounds (calibrated)", "test",
-           ("adaboost_distractors/intel_cal_test/seed0/" + _ASH, "adaboost_distractors/intel_cal_test/seed1/" + _ASH,
-            "adaboost_distractors/frame_s101/seed2/" + _ASH),
+           _ASH_CELLS,
            _seeds("adaboost_distractors/frame_s102/soft5/seed{s}/" + _ASH[:-5] + "_5x_soft_rendered_distractors.json",
                   (0, 1, 2)),
            "adaboost_distractors/"),
