@@ -434,7 +434,7 @@ def test_runner_downscaled_copies_option_parses_and_refuses_zero(capsys):
     assert R.build_parser().parse_args(["synthetic", "--out", "x"]).object_box == ["none"]
     assert R.build_parser().parse_args(["synthetic", "--object-box", "none", "seed", "--out", "x"]).object_box == [
         "none", "seed"]
-    assert R.build_parser().parse_args(["synthetic", "--out", "x"]).shape_variation == [0.0]
+    assert R.build_parser().parse_args(["synthetic", "--out", "x"]).shape_variation == ["default"]
     # --mining-frame-scale: a training option (TrainOptions), refused at parse time when not 0 < LOW <= HIGH
     args = R.build_parser().parse_args(["learning-curve", "--mining-frame-scale", "0.75", "2", "--out", "x"])
     assert R.train_options(args).mining_frame_scale == (0.75, 2.0)
@@ -588,6 +588,10 @@ def test_runner_budget_options_reach_the_cell_key(capsys):
         assert e.value.code == 2 and bad[0] in capsys.readouterr().err
 
 
+PAPER_DRAWS = dict(pose_sampling=("uniform",), shape_variation=(0.0,), quantize=(False,), distractor_ratio=0.0)
+"""``synthetic_comparison``'s options for the paper's way of drawing synthetic positives, whatever the family's."""
+
+
 def _record_in_table_order(made):
     """A stand-in for ``R._run_into`` that lists the conditions in ``made`` as the tables do: each kind's real only
     first, although ``synthetic_comparison`` runs it after the added ones (the test below checks both orders)."""
@@ -613,7 +617,7 @@ def test_synthetic_comparison_trains_real_only_last_and_lists_it_first(monkeypat
 
     monkeypatch.setattr(R, "_run_into", run_into)
     res = R.synthetic_comparison(None, detectors=["adaboost", "hog"], seed_count=12, synthetic_ratios=[20],
-                                 params="f{seed}.json", perturb_copies=[2], realism_keep=(1.0,))
+                                 params="f{seed}.json", perturb_copies=[2], realism_keep=(1.0,), **PAPER_DRAWS)
     ada = ["adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25)",
            "adaboost / 12 seeds + 2x perturbed, share 0.25"]
     hog = ["hog / 12 seeds + 20x synthetic (f{seed})", "hog / 12 seeds + 2x perturbed"]
@@ -691,7 +695,7 @@ def test_synthetic_share_default_is_the_familys_and_keeps_the_cells_keys(monkeyp
     for share in (None, 0.25, "count"):
         R.synthetic_comparison(None, detectors=["adaboost", "hog"], seed_count=12, synthetic_ratios=[20],
                                params="f{seed}.json", perturb_copies=[5], synthetic_share=share,
-                               realism_keep=(1.0,))  # HOG's every draw: the names its cells had
+                               realism_keep=(1.0,), **PAPER_DRAWS)  # the paper's draws: the names the cells had
     default, explicit, count = (made[i * 6:(i + 1) * 6] for i in range(3))
     assert [(c.kind, c.synthetic_share) for c in default] == [
         ("adaboost", None), ("adaboost", 0.25), ("adaboost", 0.25), ("hog", None), ("hog", None), ("hog", None)]
@@ -701,7 +705,8 @@ def test_synthetic_share_default_is_the_familys_and_keeps_the_cells_keys(monkeyp
     assert default[2].name == "adaboost / 12 seeds + 5x perturbed, share 0.25"
     assert explicit[4].identity()["synthetic_share"] == 0.25 and explicit[4].name.endswith("share 0.25)")
     before = R.Condition("x", "adaboost", seed_count=12, params="f{seed}.json", synthetic_ratio=20.0,
-                         synthetic_share="count")
+                         synthetic_share="count", realism_keep=1.0, pose_sampling="uniform", shape_variation=0.0,
+                         quantize=False, distractor_ratio=0.0)
     assert count[1].identity() == before.identity() and "synthetic_share" not in before.identity()
     assert count[1].name == "adaboost / 12 seeds + 20x synthetic (f{seed})"
     assert R.Condition("x", "adaboost", synthetic_share=0.25).synthetic_share is None  # nothing added: no share
@@ -745,14 +750,14 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
     made = []
     monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           quantize=(False, True, True))
+                           realism_keep=(1.0,), **{**PAPER_DRAWS, "quantize": (False, True, True)})
     real, plain, eight = made
     assert "quantize" not in plain.identity() and eight.identity()["quantize"] is True
     assert {k: v for k, v in eight.identity().items() if k != "quantize"} == plain.identity()
     assert plain.name == "adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25)"
     assert eight.name == "adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25, 8-bit)"
     parse = R.build_parser().parse_args
-    assert parse(["synthetic", "--out", "x"]).quantize == ["off"]
+    assert parse(["synthetic", "--out", "x"]).quantize == ["default"]
     assert parse(["synthetic", "--quantize", "off", "on", "--out", "x"]).quantize == ["off", "on"]
     # the cell's training gets it: AddedPositives.quantize as the condition says (stopped before any training)
     assert [a.quantize for a in _added_positives(ws, monkeypatch, plain, eight)] == [False, True]
@@ -766,11 +771,12 @@ def test_distractors_join_every_synthetic_condition_and_keep_the_former_keys(ws,
     made = []
     monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           perturb_copies=[5])
+                           perturb_copies=[5], realism_keep=(1.0,), **PAPER_DRAWS)
     real, plain, perturbed = made
     made.clear()
     R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           perturb_copies=[5], distractor_ratio=5)
+                           perturb_copies=[5], realism_keep=(1.0,), **{**PAPER_DRAWS, "distractor_ratio": 5},
+                           distractor_style="drawn")
     real2, dist, perturbed2 = made
     assert "distractor_ratio" not in plain.identity() and dist.identity()["distractor_ratio"] == 5.0
     assert {k: v for k, v in dist.identity().items() if k != "distractor_ratio"} == plain.identity()
@@ -780,13 +786,13 @@ def test_distractors_join_every_synthetic_condition_and_keep_the_former_keys(ws,
     with pytest.raises(ValueError, match="distractor_ratio"):
         R.Condition("x", "adaboost", seed_count=12, perturb_copies=5, distractor_ratio=5.0)
     parse = R.build_parser().parse_args
-    assert parse(["synthetic", "--out", "x"]).distractor_ratio == 0.0
+    assert parse(["synthetic", "--out", "x"]).distractor_ratio == "default"
     assert parse(["synthetic", "--distractor-ratio", "2.5", "--out", "x"]).distractor_ratio == 2.5
     _refused(parse, ["synthetic", "--distractor-ratio", "-1", "--out", "x"], "--distractor-ratio", capsys)
     # --distractor-style soft: its own cell and name; the drawn style (the default) keeps the key above
     made.clear()
     R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           distractor_ratio=5, distractor_style="soft")
+                           realism_keep=(1.0,), **{**PAPER_DRAWS, "distractor_ratio": 5}, distractor_style="soft")
     soft = made[1]
     assert soft.identity() == {**dist.identity(), "distractor_style": "soft"}
     assert soft.name == dist.name.replace("5x rendered", "5x soft rendered")
@@ -794,10 +800,61 @@ def test_distractors_join_every_synthetic_condition_and_keep_the_former_keys(ws,
     assert R.Condition("x", "adaboost", seed_count=12, distractor_style="soft").identity() == real.identity()
     with pytest.raises(ValueError, match="distractor_style"):
         R.Condition("x", "adaboost", seed_count=12, synthetic_ratio=20, distractor_ratio=5, distractor_style="cloudy")
-    assert parse(["synthetic", "--out", "x"]).distractor_style == "drawn"
+    assert parse(["synthetic", "--out", "x"]).distractor_style == "default"
     assert parse(["synthetic", "--distractor-style", "soft", "--out", "x"]).distractor_style == "soft"
     _refused(parse, ["synthetic", "--distractor-style", "cloudy", "--out", "x"], "--distractor-style", capsys)
     _refused(R.main, ["synthetic", "--distractor-style", "soft", "--out", "x"], "--distractor-ratio", capsys)
+
+
+def test_adaboost_draws_by_its_familys_recipe_and_its_default_cell_is_the_one_trained_with_the_flags(monkeypatch,
+                                                                                                    capsys):
+    """Unset, AdaBoost's synthetic positives are drawn its family's way (``FAMILY_SYNTHETIC``, with the critic's
+    quarter of ``FAMILY_REALISM_KEEP``): its default condition has the key and the name of the cell stops 101-103
+    trained with every option given (``adaboost_distractors/run_frame.sh``'s flags), so the stored cells are the
+    default's. HOG's and the CNN's stay the paper's (their former keys); an option given wins, the paper's value
+    included; real-only and perturbed cells draw nothing and keep their keys."""
+    made = []
+    monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
+    R.synthetic_comparison(None, detectors=["adaboost", "hog", "cnn"], seed_count=100, synthetic_ratios=[20],
+                           params="f{seed}.json", perturb_copies=[5])
+    (ada_real, ada, ada_perturbed), (_, hog, _), (_, cnn, _) = made[:3], made[3:6], made[6:]
+    flags = R.Condition("x", "adaboost", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0,
+                        realism_keep=0.25, realism_features="weak_learners", quantize=True,
+                        pose_sampling="fitted_at_seed", shape_variation=0.3, distractor_ratio=5.0,
+                        distractor_style="soft")
+    assert ada.identity() == flags.identity()
+    assert ada.name == ("adaboost / 100 seeds + 20x synthetic (f{seed}, fitted poses at the seeds' offsets, share 0.25, "
+                        "shapes varied 0.3, 8-bit, the 25% least synthetic of 4x drawn of each seed to a weak-learner "
+                        "critic) + 5x soft rendered distractors")
+    assert ada_real.identity() == R.Condition("x", "adaboost", seed_count=100).identity()
+    assert "distractor_ratio" not in ada_perturbed.identity() and "quantize" not in ada_perturbed.identity()
+    for cond, kind in ((hog, "hog"), (cnn, "cnn")):
+        paper = R.Condition("x", kind, seed_count=100, params="f{seed}.json", synthetic_ratio=20.0,
+                            pose_sampling="uniform", shape_variation=0.0, quantize=False, distractor_ratio=0.0,
+                            realism_features="hog")
+        assert cond.identity() == paper.identity()
+        assert not {"pose_sampling", "shape_variation", "quantize", "distractor_ratio"} & set(cond.identity())
+    made.clear()  # the paper's draws asked for AdaBoost: the key its synthetic cells had before stop 104
+    R.synthetic_comparison(None, detectors=["adaboost"], seed_count=100, synthetic_ratios=[20], params="f{seed}.json",
+                           realism_keep=(1.0,), **PAPER_DRAWS)
+    assert made[1].name == "adaboost / 100 seeds + 20x synthetic (f{seed}, share 0.25)"
+    assert not {"pose_sampling", "shape_variation", "quantize", "distractor_ratio", "realism_keep",
+                "realism_features"} & set(made[1].identity())
+    made.clear()  # one option given: the rest stays the family's; an object box keeps the fitted rotations only
+    R.synthetic_comparison(None, detectors=["adaboost"], seed_count=100, synthetic_ratios=[20], params="f{seed}.json",
+                           quantize=(False,), object_box=("seed",))
+    assert made[1].identity() == {**{k: v for k, v in flags.identity().items() if k != "quantize"},
+                                  "pose_sampling": "fitted", "object_box": "seed"}
+    # the command line: "default" is the family's, parsed as such
+    parse = R.build_parser().parse_args
+    args = parse(["synthetic", "--out", "x"])
+    assert (args.pose_sampling, args.shape_variation, args.quantize, args.realism_features, args.distractor_ratio,
+            args.distractor_style) == (["default"], ["default"], ["default"], "default", "default", "default")
+    assert parse(["synthetic", "--shape-variation", "default", "0.3", "--out", "x"]).shape_variation == [
+        "default", 0.3]
+    _refused(parse, ["synthetic", "--shape-variation", "wide", "--out", "x"], "--shape-variation", capsys)
+    _refused(R.main, ["synthetic", "--detectors", "hog", "--distractor-style", "soft", "--out", "x"],
+             "--distractor-ratio", capsys)
 
 
 def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monkeypatch, capsys):
@@ -822,8 +879,9 @@ def test_realism_keep_is_a_condition_of_its_own_and_the_familys_default(ws, monk
     assert [a.realism_keep for a in _added_positives(ws, monkeypatch, plain, kept)] == [1.0, 0.25]
     made.clear()
     R.synthetic_comparison(None, detectors=["adaboost", "cnn"], seed_count=12, synthetic_ratios=[20],
-                           params="f{seed}.json")
-    assert [c.realism_keep for c in made] == [1.0] * 4 and not any("realism_keep" in c.identity() for c in made)
+                           params="f{seed}.json")  # AdaBoost's quarter is part of its recipe (FAMILY_SYNTHETIC)
+    assert [c.realism_keep for c in made] == [1.0, 0.25, 1.0, 1.0]
+    assert [("realism_keep" in c.identity()) for c in made] == [False, True, False, False]
     assert R.Condition("x", "hog", seed_count=1, synthetic_ratio=20.0).realism_keep == 1.0  # one seed: no critic
     parse = R.build_parser().parse_args
     assert parse(["synthetic", "--out", "x"]).realism_keep == ["default"]
@@ -883,27 +941,33 @@ def test_realism_features_name_the_critic_and_keep_the_former_keys(ws, monkeypat
     made = []
     monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           realism_keep=(1.0, 0.25), realism_features="weak_learners")
+                           realism_keep=(1.0, 0.25), realism_features="weak_learners", **PAPER_DRAWS)
     real, every, wl = made
     assert "realism_features" not in every.identity() and every.realism_features == "hog"
     assert wl.identity() == {**R.Condition("x", "adaboost", seed_count=12, params="f{seed}.json",
-                                           synthetic_ratio=20.0, realism_keep=0.25).identity(),
+                                           synthetic_ratio=20.0, realism_keep=0.25, realism_features="hog",
+                                           pose_sampling="uniform", shape_variation=0.0, quantize=False,
+                                           distractor_ratio=0.0).identity(),
                              "realism_features": "weak_learners"}
     assert wl.name == ("adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25, the 25% least synthetic of 4x drawn "
                        "of each seed to a weak-learner critic)")
     assert [(a.realism_keep, a.realism_features) for a in _added_positives(ws, monkeypatch, every, wl)] == [
         (1.0, "hog"), (0.25, "weak_learners")]
     made.clear()
-    R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           realism_keep=(0.25,))
+    R.synthetic_comparison(None, detectors=["adaboost", "hog"], seed_count=12, synthetic_ratios=[20],
+                           params="f{seed}.json", realism_keep=(0.25,), realism_features="hog", **PAPER_DRAWS)
     assert "realism_features" not in made[1].identity() and "weak-learner" not in made[1].name
+    made.clear()  # unset: each family's own (AdaBoost's weak learners, HOG's own features)
+    R.synthetic_comparison(None, detectors=["adaboost", "hog"], seed_count=12, synthetic_ratios=[20],
+                           params="f{seed}.json", realism_keep=(0.25,), **PAPER_DRAWS)
+    assert [c.realism_features for c in made] == ["hog", "weak_learners", "hog", "hog"]
     with pytest.raises(ValueError, match="realism_features"):
         R.Condition("x", "hog", seed_count=12, synthetic_ratio=20.0, realism_features="cnn")
     with pytest.raises(ValueError, match="'item' scores candidates in HOG"):
         R.Condition("x", "adaboost", seed_count=12, synthetic_ratio=20.0, realism_keep=0.25,
                     realism_selection="item", realism_features="weak_learners")
     parse = R.build_parser().parse_args
-    assert parse(["synthetic", "--out", "x"]).realism_features == "hog"
+    assert parse(["synthetic", "--out", "x"]).realism_features == "default"
     assert parse(["synthetic", "--realism-features", "weak_learners", "--out", "x"]).realism_features == "weak_learners"
     with pytest.raises(SystemExit) as e:
         parse(["synthetic", "--realism-features", "cnn", "--out", "x"])

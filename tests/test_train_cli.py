@@ -739,13 +739,13 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
     monkeypatch.setattr(video_training, "synthetic_positives",
                         lambda *a, realism_keep=1.0, **k: kept_fractions.append(realism_keep) or fake(*a, **k))
     for i, (given, kind) in enumerate(((["--realism-keep", "0.5"], "hog"), (["--realism-keep", "1"], "hog"),
-                                       ([], "adaboost"))):
+                                       ([], "adaboost"))):  # AdaBoost's quarter: its family's (FAMILY_SYNTHETIC)
         out4 = ws["root"] / "runs" / f"critic_{i}.pt"
         assert _train(ws, out4, "--detector", kind, "--seedset", seedset, "--params", str(fit), "--synthetic-ratio",
                       "2", "--mining-rounds", "0", *given) == 0
         assert json.loads(out4.with_suffix(".json").read_text())["synthetic"].get("realism_keep") == (
-            0.5 if i == 0 else None)
-    assert kept_fractions == [0.5, 1.0, 1.0]
+            0.5, None, 0.25)[i]
+    assert kept_fractions == [0.5, 1.0, 0.25]
     # --realism-selection reaches the generator and the metadata (HOG's default above: seed)
     selections = []
     monkeypatch.setattr(video_training, "synthetic_positives",
@@ -785,8 +785,8 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
             ("hog", None, fit, None, None), ("adaboost", None, fit, None, None), ("cnn", (), fit, None, None),
             ("cnn", None, no_mb, ["object_noise", "material"], ["boundary_blur"])):
         ts = SimpleNamespace(seedset=_SeedSet(range(8)), positives=torch.zeros(8, 1, 40, 40), info={})
-        info = _add_from_fit(ts, AddedPositives(params=fit_file, synthetic_ratio=1.0, effects_off=off), kind, seed=0,
-                             say=lambda m: None)
+        info = _add_from_fit(ts, AddedPositives(params=fit_file, synthetic_ratio=1.0, effects_off=off,
+                                                distractor_ratio=0.0), kind, seed=0, say=lambda m: None)
         assert calls[-1] == (8, "seed", effects), (kind, off)
         assert info.get("effects_off") == recorded and ts.positives.shape[0] == 16
     ts = SimpleNamespace(seedset=_SeedSet(range(8)), positives=torch.zeros(8, 1, 40, 40), info={})  # no synthetic
@@ -873,6 +873,40 @@ def test_the_cnn_family_puts_its_synthetic_objects_on_other_seeds_backgrounds(ws
     assert parser.parse_args([*base, "--background-sampling", "seed"]).background_sampling == "seed"
 
 
+def test_added_positives_resolve_to_the_familys_recipe_only_where_synthetic_positives_are_drawn() -> None:
+    """``AddedPositives.resolved``: each option ``FAMILY_SYNTHETIC`` may set, left at None, becomes the family's
+    where there are synthetic positives (AdaBoost's recipe; HOG's and the CNN's the paper's) and the paper's where
+    there are none; a value given is kept; a family's pose at the seeds' offsets yields to an object box; resolving
+    twice changes nothing; the command line leaves each at None unless given."""
+    import argparse
+
+    from synthaug.detectors.train_cli import add_arguments
+    from synthaug.detectors.video_training import FAMILY_SYNTHETIC, PAPER_SYNTHETIC, AddedPositives
+
+    synthetic = AddedPositives(params="fit.json", synthetic_ratio=2.0)
+    ada = synthetic.resolved("adaboost")
+    assert {k: getattr(ada, k) for k in PAPER_SYNTHETIC} == {
+        "pose_sampling": "fitted_at_seed", "shape_variation": 0.3, "quantize": True,
+        "realism_features": "weak_learners", "distractor_ratio": 5.0, "distractor_style": "soft"} \
+        == FAMILY_SYNTHETIC["adaboost"]
+    assert ada.resolved("adaboost") == ada and ada.resolved("hog") == ada  # resolved values are given values
+    for kind in ("hog", "cnn"):
+        assert {k: getattr(synthetic.resolved(kind), k) for k in PAPER_SYNTHETIC} == PAPER_SYNTHETIC
+    perturbed = AddedPositives(perturb_copies=2).resolved("adaboost")  # nothing drawn: the paper's
+    assert {k: getattr(perturbed, k) for k in PAPER_SYNTHETIC} == PAPER_SYNTHETIC
+    given = AddedPositives(params="fit.json", synthetic_ratio=2.0, quantize=False, distractor_ratio=0.0,
+                           object_box="seed").resolved("adaboost")
+    assert (given.quantize, given.distractor_ratio, given.distractor_style, given.pose_sampling,
+            given.shape_variation) == (False, 0.0, "drawn", "fitted", 0.3)
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    args = parser.parse_args(["--detector", "adaboost", "--class", "drone", "--videos", "v", "--labels", "l",
+                              "--out", "o"])
+    assert [getattr(args, k) for k in PAPER_SYNTHETIC] == [None] * 6
+    assert parser.parse_args(["--detector", "adaboost", "--class", "drone", "--videos", "v", "--labels", "l",
+                              "--out", "o", "--no-quantize"]).quantize is False
+
+
 def test_distractors_are_drawn_as_the_synthetic_positives_and_join_the_negatives(
         ws: dict[str, Path], trained: dict[str, Any], monkeypatch: pytest.MonkeyPatch,
         capsys: pytest.CaptureFixture[str]) -> None:
@@ -903,9 +937,9 @@ def test_distractors_are_drawn_as_the_synthetic_positives_and_join_the_negatives
     common = ["--detector", "adaboost", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
               "--pose-sampling", "fitted_at_seed", "--effects-off", "motion_blur", "--quantize", "--mining-rounds", "0"]
     out0, out1 = ws["root"] / "runs" / "ada_no_distractors.pt", ws["root"] / "runs" / "ada_distractors.pt"
-    assert _train(ws, out0, *common) == 0
+    assert _train(ws, out0, *common, "--distractor-ratio", "0") == 0
     assert [d[0] for d in drawn] == ["positives"]
-    assert _train(ws, out1, *common, "--distractor-ratio", "1.5") == 0
+    assert _train(ws, out1, *common, "--distractor-ratio", "1.5", "--distractor-style", "drawn") == 0
     (_, n_pos, s_pos, how_pos), (_, n_dist, s_dist, how_dist) = drawn[1:]
     kept = [e for e in theta.effects if e != "motion_blur"]
     assert (n_pos, n_dist) == (16, 12) and s_dist != s_pos
@@ -926,8 +960,14 @@ def test_distractors_are_drawn_as_the_synthetic_positives_and_join_the_negatives
     assert styles[1:] == [None, "drawn", None, "soft"] and drawn[-1][:2] == ("distractors", 12)
     m2 = json.loads(out2.with_suffix(".json").read_text())
     assert m2["synthetic"]["distractors"] == {"ratio": 1.5, "count": 12, "style": "soft"}
+    # unset: AdaBoost's own (FAMILY_SYNTHETIC: 5 soft distractors per seed); HOG's none
+    out3 = ws["root"] / "runs" / "ada_family_distractors.pt"
+    assert _train(ws, out3, *common) == 0
+    assert styles[-1] == "soft" and drawn[-1][:2] == ("distractors", 40)
+    assert json.loads(out3.with_suffix(".json").read_text())["synthetic"]["distractors"] == {
+        "ratio": 5.0, "count": 40, "style": "soft"}
     with pytest.raises(TrainingInputError, match="--distractor-style.*--distractor-ratio"):
-        _check_options("adaboost", AddedPositives(params=fit, synthetic_ratio=1.0, distractor_style="soft"),
+        _check_options("hog", AddedPositives(params=fit, synthetic_ratio=1.0, distractor_style="soft"),
                        frame_step=1, all_frames=False, seedset=None, seed_count=8)
     with pytest.raises(TrainingInputError, match="--distractor-style.*cloudy"):
         _check_options("adaboost", AddedPositives(params=fit, synthetic_ratio=1.0, distractor_ratio=1.0,

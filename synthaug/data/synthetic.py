@@ -166,7 +166,9 @@ class SyntheticObjectDataset(Dataset):
             or a pose sampler object:
             ``UniformPose(ranges)`` / ``FittedPose(params, jitter_deg, ranges)`` for other ranges or spread,
             or any object with ``sample(generator, seed_index, u) -> {"alpha", "beta", "gamma", "t_x", "t_y"}``
-            (:class:`~synthaug.data.poses.PoseSampler`).
+            (:class:`~synthaug.data.poses.PoseSampler`). ``synthaug train`` draws AdaBoost's synthetic positives at
+            ``"fitted_at_seed"`` with ``shape_variation=0.3``, 8-bit, by default
+            (:data:`~synthaug.detectors.video_training.FAMILY_SYNTHETIC`); this dataset keeps the paper's.
         seed_geometry: patch mode: where each seed's background patch sits in its
             frame, ``{"origin": (N, 2), "frame_size": (N, 2), "frame_scale": (N,)}``
             as :func:`synthaug.data.seedset.seed_geometry` returns it, passed to

@@ -154,9 +154,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mesh", help="mesh of the synthetic object (default: the fit's mesh, else the built-in quadcopter)")
     parser.add_argument("--synthetic-ratio", type=float, default=None,
                         help="synthetic patches per real seed with --params (default 10 when --params is given, else 0)")
-    parser.add_argument("--pose-sampling", choices=list(POSE_SAMPLING), default="uniform",
+    parser.add_argument("--pose-sampling", choices=list(POSE_SAMPLING), default=None,
                         help="poses of the synthetic positives: uniform (the paper) or around each seed's fitted "
-                             "pose (fitted); *_at_seed: the same rotations with the object at its seed's fitted offset")
+                             "pose (fitted); *_at_seed: the same rotations with the object at its seed's fitted "
+                             "offset; default: the detector family's (fitted_at_seed for AdaBoost, fitted with "
+                             "--object-box; uniform for HOG and the CNN)")
     parser.add_argument("--object-box", choices=["seed", "fit"], default=None,
                         help="frame each synthetic object as ingest frames a labelled seed, its box centred and its "
                              "longest side the seed set's object_fraction of the patch (seed) or the median size of the "
@@ -164,32 +166,37 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--object-box-share", type=float_in(0.0, 1.0, low_open=True), default=1.0, metavar="SHARE",
                         help="with --object-box: the fraction of the synthetic objects it frames, the others framed as "
                              "the paper's (default 1: every one; e.g. 0.5, a mixture of the two framings)")
-    parser.add_argument("--shape-variation", type=nonneg_float, default=0.0,
+    parser.add_argument("--shape-variation", type=nonneg_float, default=None,
                         help="vary the synthetic objects' shape around the mesh (axes stretched, parts such as arms and "
-                             "rotors scaled) within +- this fraction, e.g. 0.3; default 0: the mesh alone")
-    parser.add_argument("--quantize", action="store_true",
-                        help="round the synthetic positives to 8-bit levels, as the real frames are stored (default: "
-                             "the renderer's continuous values, the paper's)")
+                             "rotors scaled) within +- this fraction, e.g. 0.3; 0: the mesh alone (the paper); "
+                             "default: the detector family's (0.3 for AdaBoost, 0 for HOG and the CNN)")
+    parser.add_argument("--quantize", action=argparse.BooleanOptionalAction, default=None,
+                        help="round the synthetic positives to 8-bit levels, as the real frames are stored; "
+                             "--no-quantize: the renderer's continuous values (the paper's); default: the detector "
+                             "family's (rounded for AdaBoost, continuous for HOG and the CNN)")
     parser.add_argument("--realism-keep", type=float_in(0.0, 1.0, low_open=True), default=None, metavar="FRACTION",
                         help="draw synthetic positives 1/FRACTION times over and keep the FRACTION that a critic in "
                              "HOG features, trained on the seed set's real patches, finds least synthetic (cross-fitted "
                              "by seed); 1: every drawn patch, the paper's; default: the detector family's (0.25 for "
-                             "HOG, 1 for AdaBoost and the CNN)")
+                             "HOG and AdaBoost, 1 for the CNN)")
     parser.add_argument("--realism-selection", choices=list(REALISM_SELECTION), default="seed",
                         help="how the critic keeps its fraction: seed (each seed keeps the same share of its own "
                              "draws, the least synthetic of them; the default), set (the least synthetic of the "
                              "whole draw; a seed may keep none) or item (each patch the least synthetic of its own "
                              "1/keep candidates, as SyntheticObjectDataset's realism_critic draws)")
-    parser.add_argument("--realism-features", choices=list(REALISM_FEATURES), default="hog",
-                        help="the critic's features (selections seed and set): hog (the default) or weak_learners "
-                             "(the edge-orientation energies of random rectangles that AdaBoost's stumps threshold)")
-    parser.add_argument("--distractor-ratio", type=nonneg_float, default=0.0, metavar="K",
+    parser.add_argument("--realism-features", choices=list(REALISM_FEATURES), default=None,
+                        help="the critic's features (selections seed and set): hog or weak_learners (the "
+                             "edge-orientation energies of random rectangles that AdaBoost's stumps threshold); "
+                             "default: the detector family's (weak_learners for AdaBoost, hog for HOG and the CNN)")
+    parser.add_argument("--distractor-ratio", type=nonneg_float, default=None, metavar="K",
                         help="add K rendered distractors per real seed to the negatives: drawn as the synthetic "
                              "positives are (their fit, poses, effects, 8 bits), an ellipsoid in place of the object "
-                             "(domain randomisation's distractors); needs --synthetic-ratio; default 0: none")
-    parser.add_argument("--distractor-style", choices=list(DISTRACTOR_STYLES), default="drawn",
-                        help="how the distractors look: drawn (the default: as the object is drawn) or soft (each "
-                             "faint and blurred against its background, like a cloud puff); needs --distractor-ratio")
+                             "(domain randomisation's distractors); needs --synthetic-ratio; 0: none; default: the "
+                             "detector family's with synthetic positives (5 for AdaBoost, 0 for HOG and the CNN)")
+    parser.add_argument("--distractor-style", choices=list(DISTRACTOR_STYLES), default=None,
+                        help="how the distractors look: drawn (as the object is drawn) or soft (each faint and blurred "
+                             "against its background, like a cloud puff); needs distractors; default: the detector "
+                             "family's (soft for AdaBoost, drawn for HOG and the CNN)")
     parser.add_argument("--background-sampling", choices=list(BACKGROUND_SAMPLING), default=None,
                         help="the synthetic objects' backgrounds: seed (the paper: each on its own seed's background) "
                              "or other (each on another seed's background, its capture parameters still its own); "
@@ -291,7 +298,7 @@ def main(args: argparse.Namespace) -> int:
     from synthaug.detectors.video_training import check_placement
 
     try:
-        check_placement([args.pose_sampling], [args.object_box])
+        check_placement([args.pose_sampling] if args.pose_sampling else [], [args.object_box])
     except ValueError as e:
         return _err(f"--pose-sampling: {e}")
     if args.object_box_share < 1 and args.object_box is None:

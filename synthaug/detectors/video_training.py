@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import math
 import time
+import dataclasses
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
@@ -50,8 +51,9 @@ from synthaug.detectors.training_sets import (
 
 __all__ = ["AddedPositives", "FAMILY_EFFECTS_OFF", "resolve_effects_off", "FAMILY_BACKGROUND_SAMPLING",
            "resolve_background_sampling", "FAMILY_REALISM_KEEP", "resolve_realism_keep", "FAMILY_SYNTHETIC_SHARE",
-           "BY_COUNT", "resolve_synthetic_share", "check_placement", "TrainingInputError", "VideoSet",
-           "discover_videos", "split_by_video", "train_from_videos", "calibrate_detector", "METADATA_FORMAT"]
+           "FAMILY_SYNTHETIC", "PAPER_SYNTHETIC", "resolve_synthetic_option", "BY_COUNT", "resolve_synthetic_share",
+           "check_placement", "TrainingInputError", "VideoSet", "discover_videos", "split_by_video",
+           "train_from_videos", "calibrate_detector", "METADATA_FORMAT"]
 
 METADATA_FORMAT = "synthaug.trained_detector"
 METADATA_VERSION = 1
@@ -114,7 +116,7 @@ def resolve_background_sampling(kind: str, background_sampling: str | None, seed
     return one_of(background_sampling, BACKGROUND_SAMPLING, "background_sampling", alternatives=" or None")
 
 
-FAMILY_REALISM_KEEP: dict[str, float] = {"hog": 0.25}
+FAMILY_REALISM_KEEP: dict[str, float] = {"hog": 0.25, "adaboost": 0.25}
 """The fraction of drawn synthetic positives each detector family keeps by default (:class:`AddedPositives`'s
 ``realism_keep=None``): those a critic in HOG features finds least synthetic against the seed set's real patches
 (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_keep``); a family not listed keeps every
@@ -122,7 +124,8 @@ draw (1, the paper). HOG keeps a quarter of 4x drawn: chosen on the validation v
 calibrated, ten training seeds, paired against every draw; ``results/synthetic/realism_critic/README.md``), +0.026
 [+0.009, +0.051] AP@0.5 there and +0.008 [-0.006, +0.022] on the test videos. Since stop 83 the quarter is taken of
 each seed's own draws (:class:`AddedPositives`' ``realism_selection="seed"``): at 12 seeds +0.017 [+0.003, +0.033] on
-validation over the whole draw's quarter, at 100 seeds level (+0.001). AdaBoost keeps every draw: with the critic's
+validation over the whole draw's quarter, at 100 seeds level (+0.001). AdaBoost keeps a quarter too since stop 104,
+scored by a critic in its own features, as one part of its recipe (:data:`FAMILY_SYNTHETIC`). Alone, with the critic's
 quarter (100 seeds, two training seeds, stop 86; ``results/synthetic/adaboost_critic/``) it was level with real only
 on the validation videos (+0.001 [-0.033, +0.029]) and below it on the test videos (-0.041 [-0.068, -0.013]); with a
 critic in its own features (``realism_features="weak_learners"``, stop 87, ``results/synthetic/adaboost_wl_critic/``)
@@ -145,6 +148,62 @@ def resolve_realism_keep(kind: str, realism_keep: float | None, seed_count: int 
         chosen = FAMILY_REALISM_KEEP.get(kind, 1.0)
         return 1.0 if seed_count is not None and seed_count < 2 else chosen
     return check_realism_keep(realism_keep)
+
+
+FAMILY_SYNTHETIC: dict[str, dict[str, Any]] = {
+    "adaboost": {"pose_sampling": "fitted_at_seed", "shape_variation": 0.3, "quantize": True,
+                 "realism_features": "weak_learners", "distractor_ratio": 5.0, "distractor_style": "soft"}}
+"""How each detector family draws its synthetic positives by default, where it differs from the paper
+(:data:`PAPER_SYNTHETIC`; :class:`AddedPositives`' fields of these names left at None, resolved by
+:func:`resolve_synthetic_option`); a family not listed draws them as the paper does. AdaBoost (stop 104): each seed's
+fitted rotation within 20 deg at its fitted offset, shapes varied +-30 % around the mesh, 8-bit levels, the quarter of
+4x drawn its own weak-learner critic finds least synthetic (with :data:`FAMILY_REALISM_KEEP`), and 5 soft rendered
+distractors per seed in the negatives (each blob faint and blurred against its background, like the cloud puffs it
+took for drones). Measured as one configuration against real only on the drone test videos, calibrated, one machine
+kind (``results/synthetic/adaboost_distractors/README.md``): 100 seeds, five training seeds, +0.024 [+0.003, +0.043]
+AP@0.5, every seed up (the paper's draws with AdaBoost's share, its defaults before: -0.006 [-0.037, +0.017] at stop
+61, uncalibrated), above + 20x copy-paste by +0.033 [+0.009, +0.059] and + 20x perturbed by +0.086 [+0.017,
++0.152]; without the distractors (the same draws) +0.029 [+0.011, +0.049] lower, and each part alone had been level
+(``results/synthetic/factors/ranking.md``). Airplanes: not measured with it."""
+
+PAPER_SYNTHETIC: dict[str, Any] = {"pose_sampling": "uniform", "shape_variation": 0.0, "quantize": False,
+                                   "realism_features": "hog", "distractor_ratio": 0.0, "distractor_style": "drawn"}
+"""The paper's way of drawing the synthetic positives, for the options :data:`FAMILY_SYNTHETIC` may set."""
+
+
+def resolve_synthetic_option(kind: str, name: str, value: Any = None, *, synthetic: bool = True,
+                             object_box: Any = None, distractor_ratio: float | None = None,
+                             realism_selection: str | None = None) -> Any:
+    """One option of how a detector family draws its synthetic positives: ``value`` itself when given, else the
+    family's (:data:`FAMILY_SYNTHETIC`) where there are synthetic positives (``synthetic``), else the paper's
+    (:data:`PAPER_SYNTHETIC`). A family's pose at the seeds' offsets keeps its rotations and leaves the placement to a
+    given ``object_box``; a family's distractor style is the paper's where the (resolved) ``distractor_ratio`` is 0;
+    a family's critic features are HOG's for the ``"item"`` selection (which scores in HOG features).
+
+    >>> resolve_synthetic_option("adaboost", "pose_sampling"), resolve_synthetic_option("hog", "pose_sampling")
+    ('fitted_at_seed', 'uniform')
+    >>> resolve_synthetic_option("adaboost", "pose_sampling", object_box="seed")
+    'fitted'
+    >>> resolve_synthetic_option("adaboost", "quantize", synthetic=False)
+    False
+    >>> resolve_synthetic_option("cnn", "quantize", True), resolve_synthetic_option("adaboost", "distractor_ratio")
+    (True, 5.0)
+    >>> resolve_synthetic_option("adaboost", "distractor_style", distractor_ratio=0)
+    'drawn'
+    """
+    if name not in PAPER_SYNTHETIC:
+        raise ValueError(f"{name!r} is not one of {sorted(PAPER_SYNTHETIC)}")
+    if value is not None:
+        return value
+    chosen = FAMILY_SYNTHETIC.get(kind, {}).get(name, PAPER_SYNTHETIC[name]) if synthetic else PAPER_SYNTHETIC[name]
+    if name == "pose_sampling" and object_box is not None:
+        chosen = chosen.removesuffix("_at_seed")
+    if name == "distractor_style" and not resolve_synthetic_option(kind, "distractor_ratio", distractor_ratio,
+                                                                   synthetic=synthetic):
+        chosen = PAPER_SYNTHETIC[name]
+    if name == "realism_features" and realism_selection == "item":
+        chosen = "hog"
+    return chosen
 
 
 BY_COUNT = "count"
@@ -227,13 +286,16 @@ class AddedPositives:
             :func:`~synthaug.detectors.training_sets.synthetic_positives`).
         pose_sampling: poses of the synthetic positives: ``"uniform"`` (the paper), ``"fitted"`` (around each
             seed's fitted pose), or either with ``"_at_seed"``: the object at its seed's fitted offset
-            (:data:`~synthaug.data.poses.POSE_SAMPLING`).
+            (:data:`~synthaug.data.poses.POSE_SAMPLING`). None (the default): the detector family's
+            (:data:`FAMILY_SYNTHETIC`: AdaBoost ``"fitted_at_seed"``, ``"fitted"`` with an ``object_box``; the others
+            ``"uniform"``).
         object_box: None (the paper) or ``"seed"`` / a fraction: each synthetic object framed as ingest frames a
             labelled seed (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box``).
         object_box_share: the fraction of the synthetic objects ``object_box`` frames (1: every one), the others
             framed as the paper's (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``object_box_share``).
         shape_variation: 0 (the paper) or > 0: the synthetic objects' shapes vary around the mesh within ± this
-            fraction (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``shape_variation``).
+            fraction (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``shape_variation``). None (the
+            default): the detector family's (:data:`FAMILY_SYNTHETIC`: AdaBoost 0.3, the others 0).
         capture_sampling: how each synthetic patch's capture parameters are drawn: ``"seed"`` (the paper: one seed's
             fitted row), ``"uniform"`` (each parameter uniform between its fitted extremes: the paper's Fig. 10
             baseline) or ``"kde"`` (:class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``capture_sampling``).
@@ -261,7 +323,8 @@ class AddedPositives:
             default). Needs synthetic positives and mining rounds.
         quantize: round the synthetic positives to 8-bit levels, as the real frames are stored
             (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``quantize``). False: the renderer's
-            continuous values.
+            continuous values. None (the default): the detector family's (:data:`FAMILY_SYNTHETIC`: AdaBoost True, the
+            others False).
         background_sampling: ``"seed"`` (the paper: each synthetic object on its own seed's background) or
             ``"other"`` (on another seed's, the capture parameters still its own seed's;
             :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``background_sampling``). None (the default):
@@ -270,15 +333,16 @@ class AddedPositives:
         realism_keep: the fraction of drawn synthetic positives kept, the ones a critic in HOG features finds least
             synthetic against the seed set's real patches
             (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_keep``); 1: every draw (the
-            paper). None (the default): the detector family's (:data:`FAMILY_REALISM_KEEP`: HOG 0.25, the others 1; a
-            one-seed set 1).
+            paper). None (the default): the detector family's (:data:`FAMILY_REALISM_KEEP`: HOG and AdaBoost 0.25, the
+            CNN 1; a one-seed set 1).
         realism_selection: with ``realism_keep`` under 1, ``"seed"`` (the default: each seed keeps the same share of
             its own draws), ``"set"`` (the least synthetic of the whole draw) or ``"item"`` (each patch the least
             synthetic of its own candidates;
             :func:`~synthaug.detectors.training_sets.synthetic_positives`' ``realism_selection``).
-        realism_features: the critic's features, ``"hog"`` (the default) or ``"weak_learners"`` (the edge-orientation
-            energies AdaBoost's stumps threshold; ``"seed"`` and ``"set"`` selections;
-            :data:`~synthaug.detectors.critic.REALISM_FEATURES`).
+        realism_features: the critic's features, ``"hog"`` or ``"weak_learners"`` (the edge-orientation energies
+            AdaBoost's stumps threshold; ``"seed"`` and ``"set"`` selections;
+            :data:`~synthaug.detectors.critic.REALISM_FEATURES`). None (the default): the detector family's
+            (:data:`FAMILY_SYNTHETIC`: AdaBoost ``"weak_learners"``, the others ``"hog"``).
         synthetic_share: the share of the positive class's training weight held by the added positives, the rest
             shared by the real ones; :data:`BY_COUNT` (``"count"``): every positive weighs the same, so the added ones
             hold ``added / (real + added)``; None (the default): the detector family's (:data:`FAMILY_SYNTHETIC_SHARE`:
@@ -288,18 +352,20 @@ class AddedPositives:
         distractor_ratio: rendered distractors per real seed added to the negatives: drawn as the synthetic
             positives are (their fit, poses, placement, effects and 8 bits), an ellipsoid in place of the object
             (:func:`~synthaug.detectors.training_sets.distractor_negatives`; domain randomisation's distractors).
-            Needs synthetic positives. 0 (the default): none.
+            Needs synthetic positives. 0: none. None (the default): the detector family's (:data:`FAMILY_SYNTHETIC`:
+            AdaBoost 5 where there are synthetic positives, the others 0).
         distractor_style: how the distractors look (:data:`~synthaug.detectors.training_sets.DISTRACTOR_STYLES`):
-            ``"drawn"`` (the default: as the object is drawn) or ``"soft"`` (each faint and blurred against its
-            background, like a cloud puff).
+            ``"drawn"`` (as the object is drawn) or ``"soft"`` (each faint and blurred against its background, like a
+            cloud puff). None (the default): the detector family's (:data:`FAMILY_SYNTHETIC`: AdaBoost ``"soft"``,
+            the others ``"drawn"``; ``"drawn"`` where there are no distractors).
     """
 
     params: str | Path | Callable[[Path], str | Path] | None = None
     mesh: str | None = None
     synthetic_ratio: float = 0.0
-    pose_sampling: str = "uniform"
+    pose_sampling: str | None = None
     object_box: float | str | None = None
-    shape_variation: float = 0.0
+    shape_variation: float | None = None
     capture_sampling: str = "seed"
     effects_off: tuple[str, ...] | None = None
     copy_paste_ratio: float = 0.0
@@ -309,14 +375,14 @@ class AddedPositives:
     faded_copies: int = 0
     faded_contrast: tuple[float, float] | None = None
     refit: Callable[[Path, Path, Any, int], str | Path] | None = None
-    quantize: bool = False
+    quantize: bool | None = None
     background_sampling: str | None = None
     object_box_share: float = 1.0
     realism_keep: float | None = None
     realism_selection: str = "seed"
-    realism_features: str = "hog"
-    distractor_ratio: float = 0.0
-    distractor_style: str = "drawn"
+    realism_features: str | None = None
+    distractor_ratio: float | None = None
+    distractor_style: str | None = None
 
     def __post_init__(self) -> None:
         from synthaug.data.captures import CAPTURE_SAMPLERS
@@ -326,8 +392,9 @@ class AddedPositives:
 
         resolve_background_sampling("", self.background_sampling)  # raises on a value that is not one
         one_of(self.capture_sampling, CAPTURE_SAMPLERS, "capture_sampling")
-        one_of(self.pose_sampling, POSE_SAMPLING, "pose_sampling")
-        check_placement([self.pose_sampling], [self.object_box])
+        if self.pose_sampling is not None:
+            one_of(self.pose_sampling, POSE_SAMPLING, "pose_sampling")
+            check_placement([self.pose_sampling], [self.object_box])
         check_object_box_share(self.object_box_share, self.object_box)
         if self.effects_off is not None:
             if isinstance(self.effects_off, str) or not all(isinstance(e, str) for e in self.effects_off):
@@ -337,7 +404,19 @@ class AddedPositives:
             resolve_synthetic_share("", self.synthetic_share)  # raises on any string but BY_COUNT
         resolve_realism_keep("", self.realism_keep)  # raises on a value that is not a fraction in (0, 1]
         check_realism_selection(self.realism_selection)
-        check_realism_features(self.realism_features, selection=self.realism_selection)
+        if self.realism_features is not None:
+            check_realism_features(self.realism_features, selection=self.realism_selection)
+
+    def resolved(self, kind: str) -> AddedPositives:
+        """These positives with every option left at None that :data:`FAMILY_SYNTHETIC` may set resolved for the
+        detector family ``kind`` (:func:`resolve_synthetic_option`: the family's where there are synthetic
+        positives, else the paper's)."""
+        synthetic = self.synthetic_ratio > 0
+        values = {name: resolve_synthetic_option(kind, name, getattr(self, name), synthetic=synthetic,
+                                                 object_box=self.object_box, distractor_ratio=self.distractor_ratio,
+                                                 realism_selection=self.realism_selection)
+                  for name in PAPER_SYNTHETIC}
+        return dataclasses.replace(self, **values)
 
 
 def discover_videos(videos_dir: str | Path, labels_dir: str | Path) -> VideoSet:
@@ -665,7 +744,9 @@ def _positive_split(sp: dict[str, Any], k: int | None, *, seed: int, seedset: st
 
 def _check_options(kind: str, added: AddedPositives, *, frame_step: int, all_frames: bool,
                    seedset: str | Path | None, seed_count: int | None) -> None:
-    """:func:`train_from_videos`' arguments on their own; :class:`TrainingInputError` names the option."""
+    """:func:`train_from_videos`' arguments on their own, ``added`` as ``kind`` resolves it
+    (:meth:`AddedPositives.resolved`); :class:`TrainingInputError` names the option."""
+    added = added.resolved(kind)
     params, synthetic_ratio, copy_paste_ratio = added.params, added.synthetic_ratio, added.copy_paste_ratio
     perturb_copies, synthetic_share = added.perturb_copies, added.synthetic_share
     if synthetic_share is not None:
@@ -869,7 +950,9 @@ def _add_faded(ts: _TrainingSet, copies: int, *, seed: int, say: Callable[[str],
 def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: int,
                   say: Callable[[str], None]) -> dict[str, Any] | None:
     """Synthetic (and copy-paste) positives made from the fit ``added.params`` of the seed set, added to ``ts``
-    (the effects ``kind``'s family leaves out when ``added.effects_off`` is None)."""
+    (the effects ``kind``'s family leaves out when ``added.effects_off`` is None, and its way of drawing them where
+    ``added`` leaves it at None: :meth:`AddedPositives.resolved`)."""
+    added = added.resolved(kind)
     ss, params, pose_sampling = ts.seedset, added.params, added.pose_sampling
     synthetic_ratio, copy_paste_ratio = added.synthetic_ratio, added.copy_paste_ratio
     if callable(params):  # ss exists: a fit without a seed set was refused before

@@ -64,7 +64,9 @@ from synthaug.detectors.video_training import (
     check_placement,
     resolve_background_sampling,
     resolve_effects_off,
+    PAPER_SYNTHETIC,
     resolve_realism_keep,
+    resolve_synthetic_option,
     resolve_synthetic_share,
     train_from_videos,
 )
@@ -175,7 +177,7 @@ class Condition:
     fit_distance: str | None = None
     fit_options: tuple[tuple[str, Any], ...] = ()
     perturb_copies: int = 0
-    pose_sampling: str = "uniform"
+    pose_sampling: str | None = None
     copy_paste_ratio: float = 0.0
     synthetic_share: float | str | None = None
     downscaled_copies: int = 0
@@ -183,20 +185,24 @@ class Condition:
     object_box: str | None = None
     faded_contrast: tuple[float, float] | None = None
     positive_videos: int | None = None
-    shape_variation: float = 0.0
+    shape_variation: float | None = None
     capture_sampling: str = "seed"
     effects_off: tuple[str, ...] | None = None
     dcnn_refit: bool = False
-    quantize: bool = False
+    quantize: bool | None = None
     background_sampling: str | None = None
     object_box_share: float = 1.0
     realism_keep: float | None = None
     realism_selection: str = "seed"
-    realism_features: str = "hog"
-    distractor_ratio: float = 0.0
-    distractor_style: str = "drawn"
+    realism_features: str | None = None
+    distractor_ratio: float | None = None
+    distractor_style: str | None = None
 
     def __post_init__(self) -> None:
+        for name in PAPER_SYNTHETIC:  # the family's way of drawing its synthetic positives, resolved into the key
+            object.__setattr__(self, name, resolve_synthetic_option(
+                self.kind, name, getattr(self, name), synthetic=bool(self.synthetic_ratio), object_box=self.object_box,
+                distractor_ratio=self.distractor_ratio, realism_selection=self.realism_selection))
         if self.distractor_ratio and not self.synthetic_ratio:
             raise ValueError("distractor_ratio: distractors are drawn as the synthetic positives are; this condition "
                              "has none")
@@ -766,24 +772,25 @@ def _distractor_name(ratio: float, style: str) -> str:
 def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], seed_count: int = 100,
                          synthetic_ratios: Sequence[float] = (), fit_distance: str | Mapping[str, str] | None = None,
                          params: str | None = None, perturb_copies: Sequence[int] = (), mesh: str | None = None,
-                         fit_options: Mapping[str, Any] | None = None, pose_sampling: Sequence[str] = ("uniform",),
+                         fit_options: Mapping[str, Any] | None = None,
+                         pose_sampling: Sequence[str | None] = (None,),
                          copy_paste_ratios: Sequence[float] = (), seeds: Sequence[int] | None = None,
                          synthetic_share: float | str | None = None, downscaled_copies: Sequence[int] = (),
                          faded_copies: Sequence[int] = (), object_box: Sequence[str | None] = (None,),
                          object_box_share: float = 1.0,
                          faded_contrast: tuple[float, float] | None = None,
-                         shape_variation: Sequence[float] = (0.0,),
+                         shape_variation: Sequence[float | None] = (None,),
                          capture_sampling: Sequence[str] = ("seed",),
                          effects_off: Sequence[str | Sequence[str] | None] = (None,),
                          dcnn_refit: Sequence[bool] = (False,),
-                         quantize: Sequence[bool] = (False,),
+                         quantize: Sequence[bool | None] = (None,),
                          background_sampling: Sequence[str | None] = (None,),
                          realism_keep: Sequence[float | None] = (None,),
                          realism_selection: Sequence[str] = ("seed",),
-                         realism_features: str = "hog",
+                         realism_features: str | None = None,
                          synthetic_downscaled: int = 0,
-                         distractor_ratio: float = 0.0,
-                         distractor_style: str = "drawn",
+                         distractor_ratio: float | None = None,
+                         distractor_style: str | None = None,
                          out: str | Path | None = None) -> dict[str, dict[str, ProtocolResult]]:
     """Issue 16 under the protocol: real seeds alone vs + synthetic positives vs + perturbed real ones.
 
@@ -835,14 +842,23 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     """
     results: dict[str, dict[str, ProtocolResult]] = {}
     refits = list(dict.fromkeys(bool(v) for v in dcnn_refit))
-    rounding = list(dict.fromkeys(bool(v) for v in quantize))
     check_dcnn_refit(detectors, refits)
-    check_placement(pose_sampling, object_box)
+    check_placement([ps for ps in pose_sampling if ps is not None], object_box)
     for kind in detectors:
+        def own(name: str, value: Any, **context: Any) -> Any:  # the family's where a value is None
+            return resolve_synthetic_option(kind, name, value, **context)
+
+        placements = list(dict.fromkeys((own("pose_sampling", ps, object_box=ob), ob)
+                                        for ps in pose_sampling for ob in object_box))
+        shapes = list(dict.fromkeys(float(own("shape_variation", sv)) for sv in shape_variation))
+        rounding = list(dict.fromkeys(bool(own("quantize", q)) for q in quantize))
+        d_ratio = float(own("distractor_ratio", distractor_ratio))
+        d_style = own("distractor_style", distractor_style, distractor_ratio=distractor_ratio)
         offs = list(dict.fromkeys(resolve_effects_off(kind, off) for off in effects_off))  # one per capture set
         grounds = list(dict.fromkeys(resolve_background_sampling(kind, bs, seed_count) for bs in background_sampling))
         keeps = realism_variants([resolve_realism_keep(kind, rk, seed_count) for rk in realism_keep],
                                  realism_selection)
+        features = {sel: own("realism_features", realism_features, realism_selection=sel) for _, sel in keeps}
         dist = fit_distance.get(kind) if isinstance(fit_distance, Mapping) else fit_distance
         base = f"{kind} / {seed_count} seeds"
         fit_opts = tuple(sorted((fit_options or {}).items())) if dist else ()
@@ -860,18 +876,17 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{', d_CNN refit every round' if rf else ''}"
                             f"{', 8-bit' if qz else ''}"
                             f"{'' if bs == 'seed' else ', backgrounds of other seeds'}"
-                            f"{_realism_name(rk, sel, realism_features)})"
+                            f"{_realism_name(rk, sel, features[sel])})"
                             f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}"
-                            f"{_distractor_name(distractor_ratio, distractor_style)}", kind,
+                            f"{_distractor_name(d_ratio, d_style)}", kind,
                             seed_count=seed_count, downscaled_copies=int(synthetic_downscaled),
                             params=params, synthetic_ratio=float(r), mesh=mesh, fit_distance=dist,
                             fit_options=fit_opts, pose_sampling=ps, synthetic_share=synthetic_share, object_box=ob,
                             object_box_share=1.0 if ob is None else float(object_box_share),
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
                             quantize=qz, background_sampling=bs, realism_keep=rk, realism_selection=sel,
-                            realism_features=realism_features, distractor_ratio=float(distractor_ratio),
-                            distractor_style=distractor_style)
-                  for r in synthetic_ratios for ps in pose_sampling for ob in object_box for sv in shape_variation
+                            realism_features=realism_features, distractor_ratio=d_ratio, distractor_style=d_style)
+                  for r in synthetic_ratios for ps, ob in placements for sv in shapes
                   for cs in capture_sampling for off in offs for rf in refits
                   for qz in rounding for bs in grounds for rk, sel in keeps]
         conds += [Condition(f"{base} + {c}x perturbed{share}", kind, seed_count=seed_count, perturb_copies=int(c),
@@ -1021,21 +1036,25 @@ def build_parser() -> argparse.ArgumentParser:
                     help="fit missing --params files with this distance (default: each detector's own: hog, wl_learned, cnn)")
     sy.add_argument("--mesh", default=None, help="mesh of the synthetic object (default: the fit's)")
     sy.add_argument("--perturb-copies", type=int, nargs="*", default=[], help="perturbed copies per real positive")
-    sy.add_argument("--pose-sampling", nargs="+", default=["uniform"], choices=list(POSE_SAMPLING),
-                    help="poses of the synthetic positives: uniform (the paper), fitted (around each seed's fitted "
-                         "pose); *_at_seed: the same rotations with the object at its seed's fitted offset")
+    sy.add_argument("--pose-sampling", nargs="+", default=["default"], choices=["default", *POSE_SAMPLING],
+                    help="poses of the synthetic positives, one condition per value: uniform (the paper), fitted "
+                         "(around each seed's fitted pose); *_at_seed: the same rotations with the object at its "
+                         "seed's fitted offset; default: the family's (fitted_at_seed for AdaBoost, uniform for the "
+                         "others)")
     sy.add_argument("--copy-paste-ratios", type=float, nargs="*", default=[],
                     help="copy-paste baseline: patches per real seed, the seeds' objects cut out with the fit's "
                          "silhouettes and pasted on other seeds' backgrounds")
     sy.add_argument("--synthetic-downscaled-copies", type=int_at_least(0), default=0, metavar="K",
                     help="every synthetic condition also trains on K downscaled copies of each real seed (the two "
                          "together; compare with --downscaled-copies K, the copies alone)")
-    sy.add_argument("--distractor-ratio", type=nonneg_float, default=0.0, metavar="K",
+    sy.add_argument("--distractor-ratio", type=_or_default(nonneg_float), default="default", metavar="K",
                     help="every synthetic condition also adds K rendered distractors per real seed to its negatives: "
-                         "drawn as its synthetic positives are, an ellipsoid in place of the object")
-    sy.add_argument("--distractor-style", choices=list(DISTRACTOR_STYLES), default="drawn",
-                    help="how the distractors look: drawn (the default: as the object is drawn) or soft (each faint "
-                         "and blurred against its background, like a cloud puff)")
+                         "drawn as its synthetic positives are, an ellipsoid in place of the object; default: the "
+                         "family's (5 for AdaBoost, 0 for the others)")
+    sy.add_argument("--distractor-style", choices=["default", *DISTRACTOR_STYLES], default="default",
+                    help="how the distractors look: drawn (as the object is drawn) or soft (each faint and blurred "
+                         "against its background, like a cloud puff); default: the family's (soft for AdaBoost, "
+                         "drawn for the others)")
     sy.add_argument("--downscaled-copies", type=int_at_least(1), nargs="*", default=[],
                     help="copies of every real seed shown as a smaller, farther object (longest side 16-24 px), cut "
                          "the way the pyramid sees it; one condition per count")
@@ -1054,9 +1073,10 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--object-box-share", type=float_in(0.0, 1.0, low_open=True), default=1.0, metavar="SHARE",
                     help="the fraction of the synthetic objects that a framing other than none frames, the others "
                          "framed as the paper's (default 1: every one; e.g. 0.5, a mixture of the two framings)")
-    sy.add_argument("--shape-variation", type=nonneg_float, nargs="+", default=[0.0],
+    sy.add_argument("--shape-variation", type=_or_default(nonneg_float), nargs="+", default=["default"],
                     help="the synthetic objects' shape variation around the mesh (axes stretched, parts such as arms "
-                         "and rotors scaled within +- this fraction), one condition per value; 0: the mesh alone")
+                         "and rotors scaled within +- this fraction), one condition per value; 0: the mesh alone; "
+                         "default: the family's (0.3 for AdaBoost, 0 for the others)")
     sy.add_argument("--capture-sampling", nargs="+", choices=list(CAPTURE_SAMPLERS), default=["seed"],
                     help="how the synthetic positives' capture parameters are drawn, one condition per value: seed "
                          "(the paper: one seed's fitted row), uniform (each between its fitted extremes: Fig. 10), kde")
@@ -1069,9 +1089,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the d_CNN refit, one condition per value: on refits each seed's fit with the CNN just trained "
                          "as the distance after every mining round and redraws the next round's synthetic positives "
                          "from it (CNN only); off keeps one fit")
-    sy.add_argument("--quantize", nargs="+", choices=["off", "on"], default=["off"],
+    sy.add_argument("--quantize", nargs="+", choices=["default", "off", "on"], default=["default"],
                     help="the synthetic positives rounded to 8-bit levels as the real frames are (on) or left with "
-                         "the renderer's continuous values (off, the paper), one condition per value")
+                         "the renderer's continuous values (off, the paper), one condition per value; default: the "
+                         "family's (on for AdaBoost, off for the others)")
     sy.add_argument("--background-sampling", nargs="+", choices=["default", *BACKGROUND_SAMPLING], default=["default"],
                     help="the synthetic objects' backgrounds, one condition per value: seed (the paper: each on its "
                          "own seed's background), other (each on another seed's, its capture parameters its own) or "
@@ -1081,18 +1102,31 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the synthetic positives drawn 1/FRACTION times over, the FRACTION that a critic in HOG "
                          "features finds least synthetic against the seed set's real patches kept (cross-fitted by "
                          "seed), one condition per value; 1: every drawn positive (the paper); default: the family's "
-                         "(0.25 for HOG, 1 for AdaBoost and the CNN)")
+                         "(0.25 for HOG and AdaBoost, 1 for the CNN)")
     sy.add_argument("--realism-selection", nargs="+", choices=list(REALISM_SELECTION), default=["seed"],
                     help="how the critic keeps its fraction, one condition per value (for --realism-keep under 1): "
                          "seed (each seed keeps the same share of its own draws, the least synthetic of them; the "
                          "default), set (the least synthetic of the whole draw; a seed may keep none) or item (each "
                          "patch the least synthetic of its own 1/keep candidates, as SyntheticObjectDataset's "
                          "realism_critic draws)")
-    sy.add_argument("--realism-features", choices=list(REALISM_FEATURES), default="hog",
-                    help="the critic's features (for --realism-keep under 1; selections seed and set): hog (the "
-                         "default) or weak_learners (the edge-orientation energies of random rectangles that "
-                         "AdaBoost's stumps threshold)")
+    sy.add_argument("--realism-features", choices=["default", *REALISM_FEATURES], default="default",
+                    help="the critic's features (for --realism-keep under 1; selections seed and set): hog or "
+                         "weak_learners (the edge-orientation energies of random rectangles that AdaBoost's stumps "
+                         "threshold); default: the family's (weak_learners for AdaBoost, hog for the others)")
     return p
+
+
+def _or_default(kind: Callable[[str], Any]) -> Callable[[str], Any]:
+    """An option's type that also takes ``default`` (the detector family's value, resolved per family)."""
+    def parse(text: str) -> Any:
+        return text if text == "default" else kind(text)
+    parse.__name__ = getattr(kind, "__name__", "value")
+    return parse
+
+
+def _given(value: Any) -> Any:
+    """An option's value, None for ``default`` (the detector family's)."""
+    return None if value == "default" else value
 
 
 def _fraction_or_default(text: str) -> float | str:
@@ -1135,13 +1169,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ValueError as e:
             parser.error(f"--dcnn-refit on: {e}")
         try:
-            check_placement(args.pose_sampling, [None if b == "none" else b for b in args.object_box])
+            check_placement([p for p in args.pose_sampling if p != "default"],
+                            [None if b == "none" else b for b in args.object_box])
         except ValueError as e:
             parser.error(f"--pose-sampling: {e}")
         if args.object_box_share < 1 and all(b == "none" for b in args.object_box):
             parser.error(f"--object-box-share {args.object_box_share:g} is the share of the objects a framing frames: "
                          "give --object-box seed or fit")
-        if args.distractor_style != "drawn" and not args.distractor_ratio:
+        ratio = _given(args.distractor_ratio)
+        if args.distractor_style not in ("default", "drawn") and not all(
+                resolve_synthetic_option(kind, "distractor_ratio", ratio) for kind in args.detectors):
             parser.error(f"--distractor-style {args.distractor_style}: there are no distractors to draw: give "
                          "--distractor-ratio above 0")
     import torch
@@ -1164,25 +1201,27 @@ def main(argv: Sequence[str] | None = None) -> int:
         dist = args.fit_distance or (None if args.params else OWN_DISTANCE)
         synthetic_comparison(runner, detectors=args.detectors, seed_count=args.seed_counts,
                              synthetic_ratios=args.synthetic_ratios, fit_distance=dist, params=args.params,
-                             perturb_copies=args.perturb_copies, mesh=args.mesh, pose_sampling=args.pose_sampling,
+                             perturb_copies=args.perturb_copies, mesh=args.mesh,
+                             pose_sampling=tuple(_given(p) for p in args.pose_sampling),
                              copy_paste_ratios=args.copy_paste_ratios, seeds=args.training_seeds,
                              synthetic_share=args.synthetic_share, downscaled_copies=args.downscaled_copies,
                              synthetic_downscaled=args.synthetic_downscaled_copies,
-                             distractor_ratio=args.distractor_ratio, distractor_style=args.distractor_style,
+                             distractor_ratio=_given(args.distractor_ratio),
+                             distractor_style=_given(args.distractor_style),
                              faded_copies=args.faded_copies,
                              faded_contrast=None if args.faded_contrast is None else tuple(args.faded_contrast),
                              object_box=tuple(None if b == "none" else b for b in args.object_box),
                              object_box_share=args.object_box_share,
-                             shape_variation=tuple(args.shape_variation),
+                             shape_variation=tuple(_given(v) for v in args.shape_variation),
                              capture_sampling=tuple(args.capture_sampling),
                              effects_off=tuple(None if e == "default" else () if e == "none" else tuple(e.split("+"))
                                                for e in args.effects_off),
                              dcnn_refit=tuple(v == "on" for v in args.dcnn_refit),
-                             quantize=tuple(v == "on" for v in args.quantize),
+                             quantize=tuple(None if v == "default" else v == "on" for v in args.quantize),
                              background_sampling=tuple(None if b == "default" else b for b in args.background_sampling),
                              realism_keep=tuple(None if k == "default" else k for k in args.realism_keep),
                              realism_selection=tuple(args.realism_selection),
-                             realism_features=args.realism_features,
+                             realism_features=_given(args.realism_features),
                              out=args.out)
     print(json.dumps({"out": args.out, "seconds": round(time.perf_counter() - t0, 1)}))
     return 0
