@@ -850,6 +850,7 @@ def test_the_cnn_family_puts_its_synthetic_objects_on_other_seeds_backgrounds(ws
 
     def add(kind: str, n: int, **added: Any) -> dict[str, Any]:
         ts = SimpleNamespace(seedset=_SeedSet(range(n)), positives=torch.zeros(n, 1, 40, 40), info={})
+        added = {"distractor_ratio": 0.0, **added}  # AdaBoost's own distractors: their own test
         info = _add_from_fit(ts, AddedPositives(params=fits[n], **added), kind, seed=0, say=lambda m: None)
         assert info is not None
         return info
