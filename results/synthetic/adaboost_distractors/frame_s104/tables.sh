@@ -7,7 +7,7 @@ set -e
 D=results/synthetic/adaboost_distractors
 F=$D/frame_s104 N=$D/frame_s103/new_seeds
 real=adaboost_12_seeds.json real100=adaboost_100_seeds.json
-seeds=$(ls -d $F/seed* 2>/dev/null | sed 's/.*seed//' | sort -n)
+seeds=$(for d in $F/seed*/; do d=${d%/}; echo ${d##*seed}; done | sort -n)
 soft=$(ls $F/seed$(echo $seeds | cut -d' ' -f1) | grep synthetic)
 R=() S=() few="" added="" many=""
 for s in $seeds; do
