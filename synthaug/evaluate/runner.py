@@ -59,12 +59,12 @@ from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
 from synthaug.detectors.training_sets import DISTRACTOR_STYLES
 from synthaug.detectors.video_training import (
     BY_COUNT,
+    PAPER_SYNTHETIC,
     AddedPositives,
     calibrate_detector,
     check_placement,
     resolve_background_sampling,
     resolve_effects_off,
-    PAPER_SYNTHETIC,
     resolve_realism_keep,
     resolve_synthetic_option,
     resolve_synthetic_share,
@@ -125,7 +125,11 @@ class Condition:
             (:func:`~synthaug.detectors.training_sets.faded_positives`).
         faded_contrast: their contrast range (None: the default; a negative range inverts the object's contrast).
         pose_sampling: poses of the synthetic positives (``"uniform"``: the paper; ``"fitted"``: around
-            each seed's fitted pose; either with ``"_at_seed"``: the object at its seed's fitted offset).
+            each seed's fitted pose; either with ``"_at_seed"``: the object at its seed's fitted offset). None (the
+            default), like ``shape_variation``, ``quantize``, ``realism_features``, ``distractor_ratio`` and
+            ``distractor_style`` left at None: the family's
+            (:data:`~synthaug.detectors.video_training.FAMILY_SYNTHETIC`, the paper's where nothing is drawn), resolved
+            here, so a family's default cell has the key of the same options given.
         copy_paste_ratio: copy-paste patches per real seed (the real objects cut out with the fit's
             silhouettes, pasted on other seeds' backgrounds; a user's baseline).
         synthetic_share: the added positives' share of the positive class's training weight: a number,
