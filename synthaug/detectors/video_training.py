@@ -164,7 +164,8 @@ kind (``results/synthetic/adaboost_distractors/README.md``): 100 seeds, five tra
 AP@0.5, every seed up (the paper's draws with AdaBoost's share, its defaults before: -0.006 [-0.037, +0.017] at stop
 61, uncalibrated), above + 20x copy-paste by +0.033 [+0.009, +0.059] and + 20x perturbed by +0.086 [+0.017,
 +0.152]; without the distractors (the same draws) +0.029 [+0.011, +0.049] lower, and each part alone had been level
-(``results/synthetic/factors/ranking.md``). Airplanes: not measured with it."""
+(``results/synthetic/factors/ranking.md``); 12 seeds, four training seeds, +0.093 [+0.061, +0.122] over 12 real, every
+test video up, 0.62 [0.44, 0.84] of the 12 -> 100 real-seed gap. Airplanes: not measured with it."""
 
 PAPER_SYNTHETIC: dict[str, Any] = {"pose_sampling": "uniform", "shape_variation": 0.0, "quantize": False,
                                    "realism_features": "hog", "distractor_ratio": 0.0, "distractor_style": "drawn"}
