@@ -889,7 +889,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             object_box_share=1.0 if ob is None else float(object_box_share),
                             shape_variation=float(sv), capture_sampling=cs, effects_off=off, dcnn_refit=rf,
                             quantize=qz, background_sampling=bs, realism_keep=rk, realism_selection=sel,
-                            realism_features=realism_features, distractor_ratio=d_ratio, distractor_style=d_style)
+                            realism_features=features[sel], distractor_ratio=d_ratio, distractor_style=d_style)
                   for r in synthetic_ratios for ps, ob in placements for sv in shapes
                   for cs in capture_sampling for off in offs for rf in refits
                   for qz in rounding for bs in grounds for rk, sel in keeps]
@@ -1101,8 +1101,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the synthetic objects' backgrounds, one condition per value: seed (the paper: each on its "
                          "own seed's background), other (each on another seed's, its capture parameters its own) or "
                          "default (the family's: other for the CNN, seed for the others)")
-    sy.add_argument("--realism-keep", nargs="+", type=_fraction_or_default, default=["default"],
-                    metavar="FRACTION",
+    sy.add_argument("--realism-keep", nargs="+", type=_or_default(float_in(0.0, 1.0, low_open=True)),
+                    default=["default"], metavar="FRACTION",
                     help="the synthetic positives drawn 1/FRACTION times over, the FRACTION that a critic in HOG "
                          "features finds least synthetic against the seed set's real patches kept (cross-fitted by "
                          "seed), one condition per value; 1: every drawn positive (the paper); default: the family's "
@@ -1131,11 +1131,6 @@ def _or_default(kind: Callable[[str], Any]) -> Callable[[str], Any]:
 def _given(value: Any) -> Any:
     """An option's value, None for ``default`` (the detector family's)."""
     return None if value == "default" else value
-
-
-def _fraction_or_default(text: str) -> float | str:
-    """``--realism-keep`` values: ``default`` or a fraction in (0, 1]."""
-    return text if text == "default" else float_in(0.0, 1.0, low_open=True)(text)
 
 
 def _effect_or_none(name: str) -> str:
@@ -1222,8 +1217,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                                                for e in args.effects_off),
                              dcnn_refit=tuple(v == "on" for v in args.dcnn_refit),
                              quantize=tuple(None if v == "default" else v == "on" for v in args.quantize),
-                             background_sampling=tuple(None if b == "default" else b for b in args.background_sampling),
-                             realism_keep=tuple(None if k == "default" else k for k in args.realism_keep),
+                             background_sampling=tuple(_given(b) for b in args.background_sampling),
+                             realism_keep=tuple(_given(k) for k in args.realism_keep),
                              realism_selection=tuple(args.realism_selection),
                              realism_features=_given(args.realism_features),
                              out=args.out)
