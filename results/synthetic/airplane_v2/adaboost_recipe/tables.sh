@@ -1,0 +1,35 @@
+#!/bin/bash
+# stop 105: AdaBoost on the airplanes, 12 seeds, calibrated test cells: real only, + 20x synthetic drawn by AdaBoost's
+# recipe (its family default) and by the former defaults (the paper's draws, share 0.25), paired by training seed;
+# the share of the 12 -> 100 real-seed gap the recipe closes (the 100-seed real-only cells of real100_s*).
+# usage (repository root): results/synthetic/airplane_v2/adaboost_recipe/tables.sh
+set -e
+A=results/synthetic/airplane_v2/adaboost_recipe
+export PYTHONPATH=.
+T=results/learning_curve/video_diversity/table.py
+seeds=$(for d in $A/twelve_s*/; do d=${d%/}; echo ${d##*_s}; done | sort -n)
+R=() S=() few="" added="" many="" gap_seeds=""
+for s in $seeds; do
+  syn=$(ls $A/twelve_s$s | grep synthetic)
+  R+=("$A/twelve_s$s/adaboost_12_seeds.json=12 real"); S+=("$A/twelve_s$s/$syn=12 real + 20x synthetic (AdaBoost's recipe)")
+  if [ -f $A/real100_s$s/adaboost_100_seeds.json ]; then
+    few+="${few:+,}$A/twelve_s$s/adaboost_12_seeds.json"; added+="${added:+,}$A/twelve_s$s/$syn"
+    many+="${many:+,}$A/real100_s$s/adaboost_100_seeds.json"; gap_seeds+=" $s"
+  fi
+done
+python $T "${R[@]}" "${S[@]}" --out $A/recipe12_vs_real12.md
+if [ -n "$many" ]; then
+  python results/synthetic/gap_closed.py --few "$few" --added "$added" --many "$many" \
+    --title "AdaBoost, airplanes, 12 -> 100 real seeds, calibrated (seeds$gap_seeds)" --out $A/gap_closed.md
+fi
+F=() FR=() FS=()
+for d in $A/former12_s*/; do
+  d=${d%/}; s=${d##*_s}; syn=$(ls $d | grep synthetic) || continue
+  F+=("$d/$syn=12 real + 20x synthetic (former defaults: the paper's draws)")
+  FR+=("$A/twelve_s$s/adaboost_12_seeds.json=12 real")
+  FS+=("$A/twelve_s$s/$(ls $A/twelve_s$s | grep synthetic)=12 real + 20x synthetic (AdaBoost's recipe)")
+done
+if [ ${#F[@]} -gt 0 ]; then
+  python $T "${FR[@]}" "${F[@]}" --out $A/former12_vs_real12.md
+  python $T "${F[@]}" "${FS[@]}" --out $A/recipe12_vs_former12.md
+fi
