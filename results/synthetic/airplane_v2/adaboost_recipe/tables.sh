@@ -33,3 +33,22 @@ if [ ${#F[@]} -gt 0 ]; then
   python $T "${FR[@]}" "${F[@]}" --out $A/former12_vs_real12.md
   python $T "${F[@]}" "${FS[@]}" --out $A/recipe12_vs_former12.md
 fi
+# one factor of the recipe put back to the former defaults' (probes, two seeds): its distractors left out
+# (run.sh recipe SEED nodistr12_sSEED --distractor-ratio 0) and its poses uniform, the paper's
+# (run.sh recipe SEED uniform12_sSEED --pose-sampling uniform); each against the recipe and the former defaults
+probe() {  # TAG LABEL
+  local P=() PR=() PF=() d s f
+  for d in $A/$1_s*/; do
+    [ -d "$d" ] || continue
+    d=${d%/}; s=${d##*_s}; syn=$(ls $d | grep synthetic) || continue
+    P+=("$d/$syn=12 real + 20x synthetic ($2)")
+    PR+=("$A/twelve_s$s/$(ls $A/twelve_s$s | grep synthetic)=12 real + 20x synthetic (AdaBoost's recipe)")
+    f=$A/former12_s$s; PF+=("$f/$(ls $f | grep synthetic)=12 real + 20x synthetic (former defaults: the paper's draws)")
+  done
+  if [ ${#P[@]} -gt 0 ]; then
+    python $T "${PR[@]}" "${P[@]}" --out $A/$1_vs_recipe12.md
+    python $T "${PF[@]}" "${P[@]}" --out $A/$1_vs_former12.md
+  fi
+}
+probe nodistr12 "the recipe without distractors"
+probe uniform12 "the recipe with the paper's poses"
