@@ -36,7 +36,8 @@ fi
 # one factor of the recipe put back to the former defaults' (probes, two seeds): its distractors left out
 # (run.sh recipe SEED nodistr12_sSEED --distractor-ratio 0) and its poses uniform, the paper's
 # (run.sh recipe SEED uniform12_sSEED --pose-sampling uniform) and the mesh alone, no shape variation
-# (run.sh recipe SEED meshalone12_sSEED --shape-variation 0); each against the recipe and the former defaults
+# (run.sh recipe SEED meshalone12_sSEED --shape-variation 0) and float renders (run.sh recipe SEED float12_sSEED
+# --quantize off); each against the recipe and the former defaults
 probe() {  # TAG LABEL
   local P=() PR=() PF=() d s f
   for d in $A/$1_s*/; do
@@ -54,3 +55,4 @@ probe() {  # TAG LABEL
 probe nodistr12 "the recipe without distractors"
 probe uniform12 "the recipe with the paper's poses"
 probe meshalone12 "the recipe with the mesh alone"
+probe float12 "the recipe in float"
