@@ -165,7 +165,10 @@ AP@0.5, every seed up (the paper's draws with AdaBoost's share, its defaults bef
 61, uncalibrated), above + 20x copy-paste by +0.033 [+0.009, +0.059] and + 20x perturbed by +0.086 [+0.017,
 +0.152]; without the distractors (the same draws) +0.029 [+0.011, +0.049] lower, and each part alone had been level
 (``results/synthetic/factors/ranking.md``); 12 seeds, four training seeds, +0.093 [+0.061, +0.122] over 12 real, every
-test video up, 0.62 [0.44, 0.84] of the 12 -> 100 real-seed gap. Airplanes: not measured with it."""
+test video up, 0.62 [0.44, 0.84] of the 12 -> 100 real-seed gap. Airplanes, 12 seeds (stop 105,
+``results/synthetic/airplane_v2/adaboost_recipe/``): +0.229 [+0.092, +0.420] over 12 real, 0.56 of the gap, but -0.038
+[-0.075, -0.008] against the paper's draws; a two-seed probe names the 8-bit rounding (float +0.062 [+0.024,
++0.097])."""
 
 PAPER_SYNTHETIC: dict[str, Any] = {"pose_sampling": "uniform", "shape_variation": 0.0, "quantize": False,
                                    "realism_features": "hog", "distractor_ratio": 0.0, "distractor_style": "drawn"}
