@@ -1,0 +1,20 @@
+#!/bin/bash
+# stop 106: AdaBoost's recipe in float (--quantize off) at 100 drone seeds, calibrated test cells, paired by training
+# seed against the recipe itself (8-bit; frame_s102/soft5, frame_s103/new_seeds) and real only (intel_cal_test,
+# frame_s101, frame_s103/new_seeds): the same machine kind, so the stored cells repeat bit for bit.
+# usage (repository root): results/synthetic/adaboost_distractors/frame_s106/tables.sh
+set -e
+D=results/synthetic/adaboost_distractors
+F=$D/frame_s106/float5 real=adaboost_100_seeds.json
+R=() S=() Q=()
+for d in $F/seed*/; do
+  d=${d%/}; s=${d##*seed}; fl=$(ls $d | grep synthetic) || continue
+  case $s in 0|1) r=$D/intel_cal_test/seed$s; q=$D/frame_s102/soft5/seed$s;; 2) r=$D/frame_s101/seed2
+    q=$D/frame_s102/soft5/seed2;; *) r=$D/frame_s103/new_seeds/seed$s; q=$r;; esac
+  R+=("$r/$real=real only"); Q+=("$q/$(ls $q | grep soft)=the recipe (8-bit)")
+  S+=("$d/$fl=the recipe in float")
+done
+export PYTHONPATH=.
+T="python results/learning_curve/video_diversity/table.py"
+$T "${Q[@]}" "${S[@]}" --out $D/frame_s106/float5_vs_recipe.md
+$T "${R[@]}" "${S[@]}" --out $D/frame_s106/float5_vs_real.md
