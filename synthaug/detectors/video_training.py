@@ -167,8 +167,9 @@ AP@0.5, every seed up (the paper's draws with AdaBoost's share, its defaults bef
 (``results/synthetic/factors/ranking.md``); 12 seeds, four training seeds, +0.093 [+0.061, +0.122] over 12 real, every
 test video up, 0.62 [0.44, 0.84] of the 12 -> 100 real-seed gap. Airplanes, 12 seeds (stop 105,
 ``results/synthetic/airplane_v2/adaboost_recipe/``): +0.229 [+0.092, +0.420] over 12 real, 0.56 of the gap, but -0.038
-[-0.075, -0.008] against the paper's draws; a two-seed probe names the 8-bit rounding (float +0.062 [+0.024,
-+0.097])."""
+[-0.075, -0.008] against the paper's draws; the 8-bit rounding is the factor there (float, three seeds, +0.042
+[+0.004, +0.076]), but not on the drones at 100 seeds (float -0.019 [-0.053, +0.008], stop 106,
+``results/synthetic/quantize_scale/``): the rounding stays."""
 
 PAPER_SYNTHETIC: dict[str, Any] = {"pose_sampling": "uniform", "shape_variation": 0.0, "quantize": False,
                                    "realism_features": "hog", "distractor_ratio": 0.0, "distractor_style": "drawn"}
