@@ -18,3 +18,12 @@ export PYTHONPATH=.
 T="python results/learning_curve/video_diversity/table.py"
 $T "${Q[@]}" "${S[@]}" --out $D/frame_s106/float5_vs_recipe.md
 $T "${R[@]}" "${S[@]}" --out $D/frame_s106/float5_vs_real.md
+# 12 seeds (SEED_COUNT=12 run_frame.sh 5 S float12/seedS --distractor-style soft --quantize off): against stop 104's
+# recipe cells of the same training seeds
+Q=() S=()
+for d in $D/frame_s106/float12/seed*/; do
+  d=${d%/}; s=${d##*seed}; fl=$(ls $d | grep synthetic) || continue
+  Q+=("$D/frame_s104/seed$s/$(ls $D/frame_s104/seed$s | grep synthetic)=12 real + the recipe (8-bit)")
+  S+=("$d/$fl=12 real + the recipe in float")
+done
+$T "${Q[@]}" "${S[@]}" --out $D/frame_s106/float12_vs_recipe12.md
