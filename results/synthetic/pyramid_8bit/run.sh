@@ -4,7 +4,8 @@
 # usage (repository root): results/synthetic/pyramid_8bit/run.sh SEED OUT [runner options]
 seed=$1; out=$2; shift 2
 export PYTHONPATH=${PYTHONPATH:-.} OMP_NUM_THREADS=1 PYOPENGL_PLATFORM=egl
-export SYNTHAUG_CACHE=${SYNTHAUG_CACHE:-data/sprite_cache_distractors} SYNTHAUG_CACHE_MAX_MB=${SYNTHAUG_CACHE_MAX_MB:-8000}
+export SYNTHAUG_CACHE=${SYNTHAUG_CACHE:-data/sprite_cache_distractors}
+export SYNTHAUG_CACHE_MAX_MB=${SYNTHAUG_CACHE_MAX_MB:-8000}
 W=${WORK:-data/runs_pyr8}
 mkdir -p $W
 [ -e $W/fits ] || ln -s ../runs/fits $W/fits   # the same d_HOG fits (they never read the pyramid)

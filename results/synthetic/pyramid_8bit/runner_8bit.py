@@ -12,6 +12,7 @@ another ``--work`` folder: the cell keys do not know of the change.
 import sys
 
 import synthaug.detectors.sliding as sliding
+from synthaug.effects.camera_functional import quantize_levels
 
 _resize = sliding.resize_image
 
@@ -21,7 +22,7 @@ def resize_image_8bit(image, scale: float):
     out = _resize(image, scale)
     if scale == 1.0 or not out.is_floating_point():
         return out
-    return out.mul(255).round_().div_(255)
+    return quantize_levels(out)
 
 
 sliding.resize_image = resize_image_8bit

@@ -15,8 +15,8 @@ def buckets(pattern: str) -> tuple[dict[str, float], dict[str, int], float]:
         sys.exit(f"{pattern!r}: {len(paths)} files, want 1")
     r = ProtocolResult.load(paths[0])
     p = r.protocol
-    return ({b.label: r.mean_ap(p.main_iou, b) for b in p.size_buckets}, {b.label: r.n_objects(b) for b in p.size_buckets},
-            r.mean_ap(p.main_iou))
+    return ({b.label: r.mean_ap(p.main_iou, b) for b in p.size_buckets},
+            {b.label: r.n_objects(b) for b in p.size_buckets}, r.mean_ap(p.main_iou))
 
 
 def main(args: list[str]) -> None:

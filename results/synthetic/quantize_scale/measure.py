@@ -7,8 +7,9 @@ at every size); at test time the sliding window reads the frame through the pyra
 seed patches' 28 px. A small object is read near its native pixels (scales 1.25 / 1.0: lattice values, flat areas
 kept); a large one averaged down (scales <= 0.64: off the lattice, few exactly flat pairs). Synthetic positives are
 float (the paper) or rounded at P (``quantize``). Per seed of a seed set: the training patch, the window the pyramid
-shows of the same object, and synthetic patches drawn from the set's fit both ways (8 per seed on average, each seed's own); means by the object's longest
-side. Reads ``data/runs/ingest_*`` and ``data/runs/fits`` (made by the runner).
+shows of the same object, and synthetic patches drawn from the set's fit both ways (8 per seed on average, each
+seed's own); means by the object's longest side. Reads ``data/runs/ingest_*`` and ``data/runs/fits`` (made by the
+runner).
 
     PYTHONPATH=. python results/synthetic/quantize_scale/measure.py SEEDSET FIT MESH SCALES... > OUT.txt
 """
@@ -20,6 +21,7 @@ import torch
 from synthaug.data.seedset import SeedSet
 from synthaug.detectors.sliding import resize_image
 from synthaug.detectors.training_sets import synthetic_positives
+from synthaug.effects.camera_functional import quantize_levels
 
 BUCKETS = ((0, 24), (24, 48), (48, 96), (96, 1e9))
 
@@ -37,15 +39,16 @@ def lattice_offset(x: np.ndarray) -> float:
 
 def main(seedset_dir: str, fit: str, mesh: str, scales: list[float]) -> None:
     s = SeedSet.load(seedset_dir)
-    p = int(s.patch_size)
-    inner = slice(6, p - 6)  # the object's 28 px
+    p, side = s.patch_size, s.object_fraction * s.patch_size  # the patch and the object's side in it (40, 28 px)
+    margin = round((p - side) / 2)
+    inner = slice(margin, p - margin)  # the object's square
     syn, idx = synthetic_positives(s, mesh, fit, 8 * len(s), seed=0, return_seed_index=True)
-    synq = torch.round(syn * 255) / 255
+    synq = quantize_levels(syn)
     rows = []
     for i in range(len(s)):
         box = np.asarray(s.boxes[i], np.float64).reshape(-1, 4)[0]
         longest = float(max(box[2], box[3]))
-        scale = min(scales, key=lambda f: abs(np.log(longest * f / (0.7 * p))))
+        scale = min(scales, key=lambda f: abs(np.log(longest * f / side)))
         frame = torch.from_numpy(s.frame(i).astype(np.float32) / 255)[None, None]
         level = resize_image(frame, scale)[0, 0].numpy()
         cx, cy = (box[0] + box[2] / 2) * scale, (box[1] + box[3] / 2) * scale
@@ -62,15 +65,17 @@ def main(seedset_dir: str, fit: str, mesh: str, scales: list[float]) -> None:
         stats = [longest, scale]
         for a in (train, view):
             stats += [flat_share(a[inner, inner]), lattice_offset(a[inner, inner])]
-        stats.append(flat_share(np.round(view[inner, inner] * 255)))  # the level rounded to 8 bits
-        stats += [np.mean([flat_share(x[inner, inner]) for x in q]), np.mean([flat_share(x[inner, inner]) for x in f]),
+        stats.append(flat_share(quantize_levels(torch.from_numpy(view[inner, inner])).numpy()))  # the level, 8-bit
+        stats += [np.mean([flat_share(x[inner, inner]) for x in q]),
+                  np.mean([flat_share(x[inner, inner]) for x in f]),
                   np.mean([lattice_offset(x[inner, inner]) for x in f])]
         rows.append(stats)
     r = np.array(rows)
-    print(f"# {seedset_dir}: {len(r)} of {len(s)} seeds (the rest too near the frame's edge at their scale, or not drawn); "
-          f"the object's 28 px, means per bucket")
-    print("| longest side | seeds | pyramid scales | flat pairs: training patch (uint8) | test view | test view rounded | "
-          "synthetic 8-bit | synthetic float | off-lattice (levels): training | test view | synthetic float |")
+    print(f"# {seedset_dir}: {len(r)} of {len(s)} seeds (the rest too near the frame's edge at their scale, or not "
+          f"drawn); the object's {side:g} px, means per bucket")
+    print("| longest side | seeds | pyramid scales | flat pairs: training patch (uint8) | test view | "
+          "test view rounded | synthetic 8-bit | synthetic float | off-lattice (levels): training | test view | "
+          "synthetic float |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for lo, hi in BUCKETS:
         m = (r[:, 0] >= lo) & (r[:, 0] < hi)

@@ -7,6 +7,7 @@ python $M/measure.py data/runs/ingest_airplane_seed2/seedsets/airplane_12 \
   data/runs/fits/airplane_12_seed2_hog_twin_prop_airplane.json ../shared/data/meshes/twin_prop_airplane.glb \
   1.25 1.0 0.8 0.64 0.51 0.41 0.33 0.26 > $M/airplane_12_seed2.md
 for s in 0 1 2; do
-  python $M/measure.py data/runs/ingest_drone_seed$s/seedsets/drone_100 data/runs/fits/drone_100_seed${s}_hog_quadcopter.json \
-    ../shared/data/meshes/quadcopter.glb 1.25 1.0 0.8 0.64 0.51 0.41 > $M/drone_100_seed$s.md
+  python $M/measure.py data/runs/ingest_drone_seed$s/seedsets/drone_100 \
+    data/runs/fits/drone_100_seed${s}_hog_quadcopter.json ../shared/data/meshes/quadcopter.glb \
+    1.25 1.0 0.8 0.64 0.51 0.41 > $M/drone_100_seed$s.md
 done
