@@ -1,0 +1,46 @@
+#!/bin/bash
+# stop 107: AdaBoost's recipe with its rounding moved or split (run.sh MODE ...), calibrated test cells, paired by
+# training seed against the stored cells of the same machine kind: the recipe (8-bit), the recipe in float and real
+# only. Airplanes, 12 seeds: ../airplane_v2/adaboost_recipe (twelve_s*, float12_s*); drones, 100 seeds:
+# ../adaboost_distractors (frame_s102/soft5 and frame_s103/new_seeds: 8-bit; frame_s106/float5: float; intel_cal_test,
+# frame_s101, frame_s103/new_seeds: real only).
+# usage (repository root): results/synthetic/rounding_parts/tables.sh
+set -e
+P=results/synthetic/rounding_parts A=results/synthetic/airplane_v2/adaboost_recipe D=results/synthetic/adaboost_distractors
+export PYTHONPATH=.
+T="python results/learning_curve/video_diversity/table.py"
+syn() { echo "$1/$(ls $1 | grep synthetic)"; }
+declare -A LABEL
+LABEL[critic_float]="the critic on float draws, the kept rounded"
+LABEL[positives_float]="positives in float, distractors 8-bit"
+LABEL[view]="rounded where seen near scale 1"
+for mode in critic_float positives_float view; do
+  label=${LABEL[$mode]}
+  R=() Q=() F=() M=()  # airplanes, 12 seeds
+  for d in $P/${mode}12/seed*/; do
+    [ -d "$d" ] || continue
+    d=${d%/}; s=${d##*seed}; [ -n "$(ls $d | grep synthetic)" ] || continue
+    M+=("$(syn $d)=12 real + the recipe, $label"); R+=("$A/twelve_s$s/adaboost_12_seeds.json=12 real")
+    Q+=("$(syn $A/twelve_s$s)=12 real + the recipe (8-bit)"); F+=("$(syn $A/float12_s$s)=12 real + the recipe in float")
+  done
+  if [ ${#M[@]} -gt 0 ]; then
+    $T "${Q[@]}" "${M[@]}" --out $P/${mode}12_vs_recipe12.md
+    $T "${F[@]}" "${M[@]}" --out $P/${mode}12_vs_float12.md
+    $T "${R[@]}" "${M[@]}" --out $P/${mode}12_vs_real12.md
+  fi
+  R=() Q=() F=() M=()  # drones, 100 seeds
+  for d in $P/${mode}100/seed*/; do
+    [ -d "$d" ] || continue
+    d=${d%/}; s=${d##*seed}; [ -n "$(ls $d | grep synthetic)" ] || continue
+    case $s in 0|1) r=$D/intel_cal_test/seed$s q=$D/frame_s102/soft5/seed$s;; 2) r=$D/frame_s101/seed2
+      q=$D/frame_s102/soft5/seed2;; *) r=$D/frame_s103/new_seeds/seed$s q=$r;; esac
+    M+=("$(syn $d)=the recipe, $label"); R+=("$r/adaboost_100_seeds.json=real only")
+    Q+=("$q/$(ls $q | grep soft)=the recipe (8-bit)")
+    [ -d $D/frame_s106/float5/seed$s ] && F+=("$(syn $D/frame_s106/float5/seed$s)=the recipe in float")
+  done
+  if [ ${#M[@]} -gt 0 ]; then
+    $T "${Q[@]}" "${M[@]}" --out $P/${mode}100_vs_recipe100.md
+    [ ${#F[@]} -eq ${#M[@]} ] && $T "${F[@]}" "${M[@]}" --out $P/${mode}100_vs_float100.md
+    $T "${R[@]}" "${M[@]}" --out $P/${mode}100_vs_real100.md
+  fi
+done
