@@ -1,5 +1,6 @@
 """AP@0.5 by the object's size (the protocol's buckets), 8-bit against float synthetic positives, per training seed,
-from stored cells (stop 106). Each argument: ``LABEL=ROUNDED_GLOB,FLOAT_GLOB`` (one training seed's two cells).
+from stored cells (stop 106). Each argument: ``LABEL=ROUNDED_GLOB,FLOAT_GLOB`` (one training seed's two cells);
+``--names=A,B`` names the two cells of each pair otherwise (default ``8-bit,float``; stop 107's ``../rounding_parts``).
 
     PYTHONPATH=. python results/synthetic/quantize_scale/by_size.py "drones 100, seed 0=A*.json,B*.json" ... > OUT.md
 """
@@ -20,6 +21,9 @@ def buckets(pattern: str) -> tuple[dict[str, float], dict[str, int], float]:
 
 
 def main(args: list[str]) -> None:
+    a, b = "8-bit", "float"
+    if args and args[0].startswith("--names="):
+        a, b = args.pop(0).split("=", 1)[1].split(",")
     rows, labels, counts = [], [], {}
     for arg in args:
         name, pair = arg.split("=", 1)
@@ -27,7 +31,7 @@ def main(args: list[str]) -> None:
         labels += [k for k in rounded[1] if k not in labels]
         counts.setdefault(name.split(",")[0], rounded[1])
         rows.append((name, rounded, flt))
-    print("| cell pair | AP@0.5 8-bit / float | " + " | ".join(f"{k}: 8-bit / float (Δ)" for k in labels) + " |")
+    print(f"| cell pair | AP@0.5 {a} / {b} | " + " | ".join(f"{k}: {a} / {b} (Δ)" for k in labels) + " |")
     print("|---|---|" + "---|" * len(labels))
     for name, q, f in rows:
         cells = [f"{q[0][k]:.3f} / {f[0][k]:.3f} ({f[0][k] - q[0][k]:+.3f})" if q[1][k] else "–" for k in labels]

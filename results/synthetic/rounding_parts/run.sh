@@ -5,8 +5,8 @@
 # (../airplane_v2/adaboost_recipe/run.sh recipe S OUT). The runner trains real only after the added cell (stored
 # already): the call is stopped once its log shows the added cell done, and the cell's JSON written from the cache by
 # the same call with --read-only. Each mode works in its own folder (data/runs_MODE; ingests made again there).
-# usage (repository root): results/synthetic/rounding_parts/run.sh critic_float|positives_float|view drone|airplane SEED
-# OUT (the log: OUT.log)
+# usage (repository root): results/synthetic/rounding_parts/run.sh MODE drone|airplane SEED OUT (the log: OUT.log)
+# MODE: critic_float, positives_float, distractors_float or view (runner_rounding.py)
 mode=$1; cls=$2; seed=$3; out=$4; shift 4
 export PYTHONPATH=${PYTHONPATH:-.} OMP_NUM_THREADS=1 PYOPENGL_PLATFORM=egl
 export SYNTHAUG_CACHE=${SYNTHAUG_CACHE:-data/sprite_cache_distractors}

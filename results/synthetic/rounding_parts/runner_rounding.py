@@ -9,6 +9,8 @@ and changes one thing, the distractors (drawn by ``training_sets.distractor_nega
 - ``critic_float``: the critic scores the float draws, the quarter it keeps is rounded after (the float recipe's
   positives, on the 8-bit lattice);
 - ``positives_float``: the positives in float as the float recipe's (critic on float, kept float); distractors 8-bit;
+- ``distractors_float``: the positives as the recipe's (8-bit), the distractors in float (as the float recipe's): the
+  complement of ``positives_float`` (this mode wraps ``video_training.distractor_negatives`` instead);
 - ``view``: each seed's draws rounded where the pyramid sees that seed's object near scale 1 (its crop's frame scale,
   ``seed_geometry``'s ``frame_scale`` = crop side / P, at most :data:`VIEW_FRAME_SCALE`: the pyramid level nearest to
   ``1 / frame_scale`` is 1.0 or above when the levels step by 0.8), float where the pyramid shrinks it; the critic
@@ -29,13 +31,21 @@ from synthaug.data.seedset import seed_geometry
 from synthaug.detectors.critic import least_synthetic
 from synthaug.effects.camera_functional import quantize_levels
 
-MODES = ("critic_float", "positives_float", "view")
+MODES = ("critic_float", "positives_float", "distractors_float", "view")
 VIEW_FRAME_SCALE = 1 / math.sqrt(0.8)
 """``view`` rounds the seeds whose crop side is at most this many P: the geometric midpoint of pyramid levels 1.0 and
 0.8, so a seed is rounded where the level nearest to its object's is 1.0 or larger."""
 
 _draw = video_training.synthetic_positives
+_distractors = video_training.distractor_negatives
 MODE = ""
+
+
+def distractor_negatives_float(*args, **draw):
+    """``distractor_negatives`` with the rounding left out (``distractors_float``)."""
+    if draw.get("quantize"):
+        print("rounding_parts distractors_float: the distractors kept in float", flush=True)
+    return _distractors(*args, **{**draw, "quantize": False})
 
 
 def rounded_seeds(seedset) -> np.ndarray:
@@ -46,8 +56,8 @@ def rounded_seeds(seedset) -> np.ndarray:
 def synthetic_positives_moved(seedset, mesh, fit_file, count, *, quantize: bool = False, realism_keep: float = 1.0,
                               realism_selection: str = "seed", realism_features: str = "hog", seed: int = 0,
                               return_seed_index: bool = False, **kwargs):
-    """``synthetic_positives`` with the rounding changed as :data:`MODE` says (a plain call where nothing is
-    rounded)."""
+    """``synthetic_positives`` with the rounding changed as :data:`MODE` says (``critic_float``, ``positives_float``,
+    ``view``; a plain call where nothing is rounded)."""
     if not quantize:
         return _draw(seedset, mesh, fit_file, count, realism_keep=realism_keep, realism_selection=realism_selection,
                      realism_features=realism_features, seed=seed, return_seed_index=return_seed_index, **kwargs)
@@ -85,5 +95,8 @@ if __name__ == "__main__":
     MODE = sys.argv[1]
     if "--work" not in sys.argv:
         sys.exit("give --work (a folder of its own: the cell keys do not know of the change)")
-    video_training.synthetic_positives = synthetic_positives_moved
+    if MODE == "distractors_float":
+        video_training.distractor_negatives = distractor_negatives_float
+    else:
+        video_training.synthetic_positives = synthetic_positives_moved
     sys.exit(main(sys.argv[2:]))

@@ -13,15 +13,18 @@ syn() { echo "$1/$(ls $1 | grep synthetic)"; }
 declare -A LABEL
 LABEL[critic_float]="the critic on float draws, the kept rounded"
 LABEL[positives_float]="positives in float, distractors 8-bit"
+LABEL[distractors_float]="distractors in float, positives 8-bit"
 LABEL[view]="rounded where seen near scale 1"
-for mode in critic_float positives_float view; do
+for mode in critic_float positives_float distractors_float view; do
   label=${LABEL[$mode]}
+  B=()  # by the object's size, against the recipe (8-bit)
   R=() Q=() F=() M=()  # airplanes, 12 seeds
   for d in $P/${mode}12/seed*/; do
     [ -d "$d" ] || continue
     d=${d%/}; s=${d##*seed}; [ -n "$(ls $d | grep synthetic)" ] || continue
     M+=("$(syn $d)=12 real + the recipe, $label"); R+=("$A/twelve_s$s/adaboost_12_seeds.json=12 real")
     Q+=("$(syn $A/twelve_s$s)=12 real + the recipe (8-bit)"); F+=("$(syn $A/float12_s$s)=12 real + the recipe in float")
+    B+=("airplanes, 12 seeds, seed $s=$(syn $A/twelve_s$s),$(syn $d)")
   done
   if [ ${#M[@]} -gt 0 ]; then
     $T "${Q[@]}" "${M[@]}" --out $P/${mode}12_vs_recipe12.md
@@ -35,7 +38,7 @@ for mode in critic_float positives_float view; do
     case $s in 0|1) r=$D/intel_cal_test/seed$s q=$D/frame_s102/soft5/seed$s;; 2) r=$D/frame_s101/seed2
       q=$D/frame_s102/soft5/seed2;; *) r=$D/frame_s103/new_seeds/seed$s q=$r;; esac
     M+=("$(syn $d)=the recipe, $label"); R+=("$r/adaboost_100_seeds.json=real only")
-    Q+=("$q/$(ls $q | grep soft)=the recipe (8-bit)")
+    Q+=("$q/$(ls $q | grep soft)=the recipe (8-bit)"); B+=("drones, 100 seeds, seed $s=$q/$(ls $q | grep soft),$(syn $d)")
     [ -d $D/frame_s106/float5/seed$s ] && F+=("$(syn $D/frame_s106/float5/seed$s)=the recipe in float")
   done
   if [ ${#M[@]} -gt 0 ]; then
@@ -43,4 +46,6 @@ for mode in critic_float positives_float view; do
     [ ${#F[@]} -eq ${#M[@]} ] && $T "${F[@]}" "${M[@]}" --out $P/${mode}100_vs_float100.md
     $T "${R[@]}" "${M[@]}" --out $P/${mode}100_vs_real100.md
   fi
+  [ ${#B[@]} -gt 0 ] && python results/synthetic/quantize_scale/by_size.py "--names=8-bit,$mode" "${B[@]}" \
+    > $P/${mode}_by_size.md
 done
