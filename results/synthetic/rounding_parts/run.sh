@@ -24,7 +24,8 @@ case $cls in
 esac
 call=(python results/synthetic/rounding_parts/runner_rounding.py "$mode" synthetic --work $W
       --protocol configs/protocol/halmstad_v2.json --detectors adaboost --no-scale-check --no-patches --threads 1
-      --synthetic-ratios 20 --fit-distance hog "${args[@]}" --eval-split test --training-seeds "$seed" --out "$out" "$@")
+      --synthetic-ratios 20 --fit-distance hog "${args[@]}" --eval-split test --training-seeds "$seed" --out "$out"
+      "$@")
 s0=$(date +%s)
 : > "$out.log"
 "${call[@]}" >> "$out.log" 2>&1 &

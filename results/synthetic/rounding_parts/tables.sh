@@ -6,7 +6,8 @@
 # frame_s101, frame_s103/new_seeds: real only).
 # usage (repository root): results/synthetic/rounding_parts/tables.sh
 set -e
-P=results/synthetic/rounding_parts A=results/synthetic/airplane_v2/adaboost_recipe D=results/synthetic/adaboost_distractors
+P=results/synthetic/rounding_parts A=results/synthetic/airplane_v2/adaboost_recipe
+D=results/synthetic/adaboost_distractors
 export PYTHONPATH=.
 T="python results/learning_curve/video_diversity/table.py"
 syn() { echo "$1/$(ls $1 | grep synthetic)"; }
@@ -38,7 +39,8 @@ for mode in critic_float positives_float distractors_float view; do
     case $s in 0|1) r=$D/intel_cal_test/seed$s q=$D/frame_s102/soft5/seed$s;; 2) r=$D/frame_s101/seed2
       q=$D/frame_s102/soft5/seed2;; *) r=$D/frame_s103/new_seeds/seed$s q=$r;; esac
     M+=("$(syn $d)=the recipe, $label"); R+=("$r/adaboost_100_seeds.json=real only")
-    Q+=("$q/$(ls $q | grep soft)=the recipe (8-bit)"); B+=("drones, 100 seeds, seed $s=$q/$(ls $q | grep soft),$(syn $d)")
+    Q+=("$q/$(ls $q | grep soft)=the recipe (8-bit)")
+    B+=("drones, 100 seeds, seed $s=$q/$(ls $q | grep soft),$(syn $d)")
     [ -d $D/frame_s106/float5/seed$s ] && F+=("$(syn $D/frame_s106/float5/seed$s)=the recipe in float")
   done
   if [ ${#M[@]} -gt 0 ]; then
@@ -49,3 +51,29 @@ for mode in critic_float positives_float distractors_float view; do
   [ ${#B[@]} -gt 0 ] && python results/synthetic/quantize_scale/by_size.py "--names=8-bit,$mode" "${B[@]}" \
     > $P/${mode}_by_size.md
 done
+# drones, 12 seeds (SEED_COUNT=12 run.sh view drone S view_drones12/seedS): against stop 104's recipe and 12-real cells
+# (../adaboost_distractors/frame_s104) and stop 106's float recipe (frame_s106/float12) of the same training seeds
+R=() Q=() F=() M=() B=()
+for d in $P/view_drones12/seed*/; do
+  [ -d "$d" ] || continue
+  d=${d%/}; s=${d##*seed}; [ -n "$(ls $d | grep synthetic)" ] || continue
+  M+=("$(syn $d)=12 real + the recipe, ${LABEL[view]}"); R+=("$D/frame_s104/seed$s/adaboost_12_seeds.json=12 real")
+  Q+=("$(syn $D/frame_s104/seed$s)=12 real + the recipe (8-bit)")
+  B+=("drones, 12 seeds, seed $s=${Q[-1]%=*},$(syn $d)")
+  [ -d $D/frame_s106/float12/seed$s ] && F+=("$(syn $D/frame_s106/float12/seed$s)=12 real + the recipe in float")
+done
+if [ ${#M[@]} -gt 0 ]; then
+  $T "${Q[@]}" "${M[@]}" --out $P/view_drones12_vs_recipe12.md
+  [ ${#F[@]} -eq ${#M[@]} ] && $T "${F[@]}" "${M[@]}" --out $P/view_drones12_vs_float12.md
+  $T "${R[@]}" "${M[@]}" --out $P/view_drones12_vs_real12.md
+  python results/synthetic/quantize_scale/by_size.py "--names=8-bit,view" "${B[@]}" > $P/view_drones12_by_size.md
+fi
+# the share of the airplanes' 12 -> 100 real-seed gap the view rule closes (../airplane_v2/adaboost_recipe/real100_s*)
+few="" added="" many=""
+for d in $P/view12/seed*/; do
+  d=${d%/}; s=${d##*seed}; [ -f $A/real100_s$s/adaboost_100_seeds.json ] || continue
+  few+="${few:+,}$A/twelve_s$s/adaboost_12_seeds.json"; added+="${added:+,}$(syn $d)"
+  many+="${many:+,}$A/real100_s$s/adaboost_100_seeds.json"
+done
+[ -n "$many" ] && python results/synthetic/gap_closed.py --few "$few" --added "$added" --many "$many" \
+  --title "AdaBoost, airplanes, 12 -> 100 real seeds, the recipe rounded where seen near scale 1" --out $P/view12_gap_closed.md
