@@ -10,7 +10,18 @@ P=results/synthetic/rounding_parts A=results/synthetic/airplane_v2/adaboost_reci
 D=results/synthetic/adaboost_distractors
 export PYTHONPATH=.
 T="python results/learning_curve/video_diversity/table.py"
+. $D/stored_cells.sh
 syn() { echo "$1/$(ls $1 | grep synthetic)"; }
+tables() {  # NAME BASE: the array M (the mode's cells) against Q (the 8-bit recipe), F (float; where every seed has
+  # one) and R (real only), paired by training seed, to NAME_vs_{recipe,float,real}BASE.md
+  [ ${#M[@]} -gt 0 ] || return 0
+  $T "${Q[@]}" "${M[@]}" --out $P/$1_vs_recipe$2.md
+  [ ${#F[@]} -ne ${#M[@]} ] || $T "${F[@]}" "${M[@]}" --out $P/$1_vs_float$2.md
+  $T "${R[@]}" "${M[@]}" --out $P/$1_vs_real$2.md
+}
+by_size() {  # MODE OUT: the array B, the recipe (8-bit) against MODE by the object's size
+  [ ${#B[@]} -eq 0 ] || python results/synthetic/quantize_scale/by_size.py "--names=8-bit,$1" "${B[@]}" > $P/$2
+}
 declare -A LABEL
 LABEL[critic_float]="the critic on float draws, the kept rounded"
 LABEL[positives_float]="positives in float, distractors 8-bit"
@@ -27,29 +38,18 @@ for mode in critic_float positives_float distractors_float view; do
     Q+=("$(syn $A/twelve_s$s)=12 real + the recipe (8-bit)"); F+=("$(syn $A/float12_s$s)=12 real + the recipe in float")
     B+=("airplanes, 12 seeds, seed $s=$(syn $A/twelve_s$s),$(syn $d)")
   done
-  if [ ${#M[@]} -gt 0 ]; then
-    $T "${Q[@]}" "${M[@]}" --out $P/${mode}12_vs_recipe12.md
-    $T "${F[@]}" "${M[@]}" --out $P/${mode}12_vs_float12.md
-    $T "${R[@]}" "${M[@]}" --out $P/${mode}12_vs_real12.md
-  fi
+  tables ${mode}12 12
   R=() Q=() F=() M=()  # drones, 100 seeds
   for d in $P/${mode}100/seed*/; do
     [ -d "$d" ] || continue
     d=${d%/}; s=${d##*seed}; [ -n "$(ls $d | grep synthetic)" ] || continue
-    case $s in 0|1) r=$D/intel_cal_test/seed$s q=$D/frame_s102/soft5/seed$s;; 2) r=$D/frame_s101/seed2
-      q=$D/frame_s102/soft5/seed2;; *) r=$D/frame_s103/new_seeds/seed$s q=$r;; esac
-    M+=("$(syn $d)=the recipe, $label"); R+=("$r/adaboost_100_seeds.json=real only")
-    Q+=("$q/$(ls $q | grep soft)=the recipe (8-bit)")
-    B+=("drones, 100 seeds, seed $s=$q/$(ls $q | grep soft),$(syn $d)")
+    stored_cells $s; q=$recipe_dir/$(ls $recipe_dir | grep soft)
+    M+=("$(syn $d)=the recipe, $label"); R+=("$real_dir/adaboost_100_seeds.json=real only")
+    Q+=("$q=the recipe (8-bit)"); B+=("drones, 100 seeds, seed $s=$q,$(syn $d)")
     [ -d $D/frame_s106/float5/seed$s ] && F+=("$(syn $D/frame_s106/float5/seed$s)=the recipe in float")
   done
-  if [ ${#M[@]} -gt 0 ]; then
-    $T "${Q[@]}" "${M[@]}" --out $P/${mode}100_vs_recipe100.md
-    [ ${#F[@]} -eq ${#M[@]} ] && $T "${F[@]}" "${M[@]}" --out $P/${mode}100_vs_float100.md
-    $T "${R[@]}" "${M[@]}" --out $P/${mode}100_vs_real100.md
-  fi
-  [ ${#B[@]} -gt 0 ] && python results/synthetic/quantize_scale/by_size.py "--names=8-bit,$mode" "${B[@]}" \
-    > $P/${mode}_by_size.md
+  tables ${mode}100 100
+  by_size $mode ${mode}_by_size.md
 done
 # drones, 12 seeds (SEED_COUNT=12 run.sh view drone S view_drones12/seedS): against stop 104's recipe and 12-real cells
 # (../adaboost_distractors/frame_s104) and stop 106's float recipe (frame_s106/float12) of the same training seeds
@@ -62,12 +62,8 @@ for d in $P/view_drones12/seed*/; do
   B+=("drones, 12 seeds, seed $s=${Q[-1]%=*},$(syn $d)")
   [ -d $D/frame_s106/float12/seed$s ] && F+=("$(syn $D/frame_s106/float12/seed$s)=12 real + the recipe in float")
 done
-if [ ${#M[@]} -gt 0 ]; then
-  $T "${Q[@]}" "${M[@]}" --out $P/view_drones12_vs_recipe12.md
-  [ ${#F[@]} -eq ${#M[@]} ] && $T "${F[@]}" "${M[@]}" --out $P/view_drones12_vs_float12.md
-  $T "${R[@]}" "${M[@]}" --out $P/view_drones12_vs_real12.md
-  python results/synthetic/quantize_scale/by_size.py "--names=8-bit,view" "${B[@]}" > $P/view_drones12_by_size.md
-fi
+tables view_drones12 12
+by_size view view_drones12_by_size.md
 # the share of the airplanes' 12 -> 100 real-seed gap the view rule closes (../airplane_v2/adaboost_recipe/real100_s*)
 few="" added="" many=""
 for d in $P/view12/seed*/; do
@@ -76,4 +72,5 @@ for d in $P/view12/seed*/; do
   many+="${many:+,}$A/real100_s$s/adaboost_100_seeds.json"
 done
 [ -n "$many" ] && python results/synthetic/gap_closed.py --few "$few" --added "$added" --many "$many" \
-  --title "AdaBoost, airplanes, 12 -> 100 real seeds, the recipe rounded where seen near scale 1" --out $P/view12_gap_closed.md
+  --title "AdaBoost, airplanes, 12 -> 100 real seeds, the recipe rounded where seen near scale 1" \
+  --out $P/view12_gap_closed.md

@@ -5,7 +5,8 @@
 # usage (repository root): results/synthetic/adaboost_distractors/frame_s104/tables.sh
 set -e
 D=results/synthetic/adaboost_distractors
-F=$D/frame_s104 N=$D/frame_s103/new_seeds
+F=$D/frame_s104
+. $D/stored_cells.sh
 real=adaboost_12_seeds.json real100=adaboost_100_seeds.json
 seeds=$(for d in $F/seed*/; do d=${d%/}; echo ${d##*seed}; done | sort -n)
 soft=$(ls $F/seed$(echo $seeds | cut -d' ' -f1) | grep synthetic)
@@ -13,8 +14,8 @@ R=() S=() few="" added="" many=""
 for s in $seeds; do
   R+=("$F/seed$s/$real=12 real"); S+=("$F/seed$s/$soft=12 real + 20x synthetic (AdaBoost's recipe)")
   few+="${few:+,}$F/seed$s/$real"; added+="${added:+,}$F/seed$s/$soft"
-  case $s in 0|1) m=$D/intel_cal_test/seed$s;; 2) m=$D/frame_s101/seed2;; *) m=$N/seed$s;; esac
-  many+="${many:+,}$m/$real100"
+  stored_cells $s
+  many+="${many:+,}$real_dir/$real100"
 done
 export PYTHONPATH=.
 python results/learning_curve/video_diversity/table.py "${R[@]}" "${S[@]}" --out $F/recipe12_vs_real12.md

@@ -6,12 +6,12 @@
 set -e
 D=results/synthetic/adaboost_distractors
 F=$D/frame_s106/float5 real=adaboost_100_seeds.json
+. $D/stored_cells.sh
 R=() S=() Q=()
 for d in $F/seed*/; do
   d=${d%/}; s=${d##*seed}; fl=$(ls $d | grep synthetic) || continue
-  case $s in 0|1) r=$D/intel_cal_test/seed$s; q=$D/frame_s102/soft5/seed$s;; 2) r=$D/frame_s101/seed2
-    q=$D/frame_s102/soft5/seed2;; *) r=$D/frame_s103/new_seeds/seed$s; q=$r;; esac
-  R+=("$r/$real=real only"); Q+=("$q/$(ls $q | grep soft)=the recipe (8-bit)")
+  stored_cells $s
+  R+=("$real_dir/$real=real only"); Q+=("$recipe_dir/$(ls $recipe_dir | grep soft)=the recipe (8-bit)")
   S+=("$d/$fl=the recipe in float")
 done
 export PYTHONPATH=.
