@@ -323,6 +323,58 @@ def test_a_one_seed_set_cannot_be_filtered(tmp_path):
         synthetic_positives(SeedSet.load(tmp_path / "s"), "quadcopter", fit, 4, realism_keep=0.5)
 
 
+@pytest.mark.slow
+def test_native_scale_rounds_the_seeds_seen_at_their_own_size_before_the_critic(tmp_path, monkeypatch):
+    """``quantize="native_scale"``: the draws of the seeds whose crop side is at most 1/sqrt(0.8) patch sides are
+    rounded to 8 bits, the others stay float, then the critic keeps its least synthetic (what training sees), the
+    same items as the plain draw; every seed rounded is ``quantize=True``'s draw, none the float draw."""
+    import synthaug.detectors.training_sets as training_sets
+    from synthaug.data.procedural import sky_backgrounds
+    from synthaug.data.seedset import SeedSet, write_seedset
+    from synthaug.detectors.training_sets import native_scale_seeds, synthetic_positives
+    from synthaug.params import CaptureParams
+
+    sides = [40, 60, 44, 45, 30, 56]  # / 40: 1.0, 1.5, 1.1, 1.125, 0.75, 1.4; the threshold 1.118
+    n, p = len(sides), 40
+    bgs = sky_backgrounds(n, (p, p), seed=0)
+    write_seedset(tmp_path / "s", patches=bgs, backgrounds=bgs, boxes=[[0, 0, 16, 16]] * n, centres=[[32, 32]] * n,
+                  crops=[[32, 32, s] for s in sides], records=[{"video": "v"}] * n,
+                  frames=list(sky_backgrounds(n, (64, 64), seed=1)),
+                  background_frames=list(sky_backgrounds(n, (64, 64), seed=1)),
+                  metadata={"patch_size": p, "object_fraction": 0.7})
+    seeds = SeedSet.load(tmp_path / "s")
+    fit = tmp_path / "fit.json"
+    CaptureParams.sample(n, generator=torch.Generator().manual_seed(0)).save(fit)
+    rounded = np.array([s / p <= 1 / np.sqrt(0.8) for s in sides])
+    np.testing.assert_array_equal(native_scale_seeds(seeds), rounded)
+    np.testing.assert_array_equal(rounded, [True, False, True, False, True, False])
+    # the reference: every candidate drawn in float, the rounded seeds' rows rounded (numpy), the critic's quarter
+    pool, idx = synthetic_positives(seeds, "quadcopter", fit, 48, seed=3, return_seed_index=True)
+    ref = pool.numpy().copy()
+    ref[rounded[idx]] = np.round(ref[rounded[idx]] * 255) / 255
+    keep = least_synthetic(np.asarray(seeds.patches), torch.from_numpy(ref), idx, 12, seed=3,
+                           features="weak_learners")
+    out, out_idx = synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, realism_keep=0.25,
+                                       realism_features="weak_learners", quantize="native_scale",
+                                       return_seed_index=True)
+    np.testing.assert_array_equal(out_idx, idx[keep])
+    np.testing.assert_allclose(out.numpy(), ref[keep], atol=1e-6, rtol=0)
+    on_lattice = np.abs(out.numpy() * 255 - np.round(out.numpy() * 255)).max(axis=(1, 2, 3)) < 1e-4
+    np.testing.assert_array_equal(on_lattice, rounded[out_idx])  # rendered values are off the lattice
+    plain = synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, quantize="native_scale")
+    torch.testing.assert_close(plain[torch.from_numpy(rounded[idx[:12]])],
+                               torch.from_numpy(ref[:12][rounded[idx[:12]]]), atol=1e-6, rtol=0)
+    # the two ends: every seed rounded is quantize=True's draw, none the float draw
+    for limit, quantize in ((np.inf, True), (0.0, False)):
+        monkeypatch.setattr(training_sets, "NATIVE_SCALE_MAX", limit)
+        torch.testing.assert_close(
+            synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, realism_keep=0.25, quantize="native_scale"),
+            synthetic_positives(seeds, "quadcopter", fit, 12, seed=3, realism_keep=0.25, quantize=quantize))
+    for bad in ("on", 1, None):
+        with pytest.raises(ValueError, match="quantize must be one of"):
+            synthetic_positives(seeds, "quadcopter", fit, 4, quantize=bad)
+
+
 # ------------------------------------------------------------------ the critic in SyntheticObjectDataset (lazy form)
 class _Brightness:
     """A toy critic (picklable, module level): a patch looks the more synthetic the brighter it is."""

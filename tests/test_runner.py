@@ -750,17 +750,27 @@ def test_quantize_is_a_condition_of_its_own_and_keeps_the_former_keys(ws, monkey
     made = []
     monkeypatch.setattr(R, "_run_into", _record_in_table_order(made))
     R.synthetic_comparison(None, detectors=["adaboost"], seed_count=12, synthetic_ratios=[20], params="f{seed}.json",
-                           realism_keep=(1.0,), **{**PAPER_DRAWS, "quantize": (False, True, True)})
-    real, plain, eight = made
+                           realism_keep=(1.0,), **{**PAPER_DRAWS, "quantize": (False, True, True, "native_scale")})
+    real, plain, eight, native = made
     assert "quantize" not in plain.identity() and eight.identity()["quantize"] is True
     assert {k: v for k, v in eight.identity().items() if k != "quantize"} == plain.identity()
+    assert native.identity() == {**eight.identity(), "quantize": "native_scale"}
     assert plain.name == "adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25)"
     assert eight.name == "adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25, 8-bit)"
+    assert native.name == "adaboost / 12 seeds + 20x synthetic (f{seed}, share 0.25, 8-bit at native scale)"
     parse = R.build_parser().parse_args
     assert parse(["synthetic", "--out", "x"]).quantize == ["default"]
     assert parse(["synthetic", "--quantize", "off", "on", "--out", "x"]).quantize == ["off", "on"]
+    with pytest.raises(SystemExit):
+        parse(["synthetic", "--quantize", "sometimes", "--out", "x"])
     # the cell's training gets it: AddedPositives.quantize as the condition says (stopped before any training)
-    assert [a.quantize for a in _added_positives(ws, monkeypatch, plain, eight)] == [False, True]
+    assert [a.quantize for a in _added_positives(ws, monkeypatch, plain, eight, native)] == [False, True,
+                                                                                              "native_scale"]
+    # the command line's word reaches the comparison as the value
+    seen = []
+    monkeypatch.setattr(R, "synthetic_comparison", lambda *a, **k: seen.append(k["quantize"]) or {})
+    R.main(["synthetic", "--quantize", "default", "off", "on", "native_scale", "--out", str(ws["root"] / "q")])
+    assert seen == [(None, False, True, "native_scale")]
 
 
 def test_distractors_join_every_synthetic_condition_and_keep_the_former_keys(ws, monkeypatch, capsys):

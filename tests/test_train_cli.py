@@ -732,6 +732,11 @@ def test_capture_sampling_and_effects_off_reach_the_synthetic_positives(ws: dict
     assert _train(ws, out3, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio", "2",
                   "--mining-rounds", "0", "--quantize") == 0
     assert quantized == [True] and json.loads(out3.with_suffix(".json").read_text())["synthetic"]["quantize"] is True
+    out3n = ws["root"] / "runs" / "hog_fig9_native.pt"
+    assert _train(ws, out3n, "--detector", "hog", "--seedset", seedset, "--params", str(fit), "--synthetic-ratio",
+                  "2", "--mining-rounds", "0", "--quantize", "native_scale") == 0
+    assert quantized == [True, "native_scale"]
+    assert json.loads(out3n.with_suffix(".json").read_text())["synthetic"]["quantize"] == "native_scale"
     # --realism-keep likewise: HOG's default a quarter (above, syn2), a value given itself; 1 (the paper) is not in
     # the metadata
     assert syn2["realism_keep"] == 0.25
@@ -906,6 +911,10 @@ def test_added_positives_resolve_to_the_familys_recipe_only_where_synthetic_posi
     assert [getattr(args, k) for k in PAPER_SYNTHETIC] == [None] * 6
     assert parser.parse_args(["--detector", "adaboost", "--class", "drone", "--videos", "v", "--labels", "l",
                               "--out", "o", "--no-quantize"]).quantize is False
+    for words, value in ((["--quantize"], True), (["--quantize", "on"], True), (["--quantize", "off"], False),
+                         (["--quantize", "native_scale"], "native_scale")):
+        assert parser.parse_args(["--detector", "adaboost", "--class", "drone", "--videos", "v", "--labels", "l",
+                                  "--out", "o", *words]).quantize == value
 
 
 def test_distractors_are_drawn_as_the_synthetic_positives_and_join_the_negatives(

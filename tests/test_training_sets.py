@@ -50,7 +50,12 @@ def test_distractors_split_evenly_over_the_shapes_each_at_its_own_seed(monkeypat
             distractor_negatives(None, "fit.json", 8, **bad)
     with pytest.raises(ValueError, match="count"):
         distractor_negatives(None, "fit.json", -1)
+    with pytest.raises(ValueError, match="quantize must be one of"):
+        distractor_negatives(None, "fit.json", 8, quantize="sometimes")
     assert not calls
+    # rounded wherever quantize is not False: every distractor with "native_scale" (a blob is seen at no object size)
+    distractor_negatives(None, "fit.json", 8, quantize="native_scale")
+    assert [c[3]["quantize"] for c in calls] == [True] * 8
 
 
 def _eigen_ratio(diff: np.ndarray) -> float:

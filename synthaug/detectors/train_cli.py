@@ -84,6 +84,17 @@ def synthetic_share_arg(text: str) -> float | str:
     return BY_COUNT if text == BY_COUNT else finite_float(text)
 
 
+QUANTIZE_ARGS: dict[str, bool | str] = {"on": True, "off": False, "native_scale": "native_scale"}
+"""``--quantize``'s words and the :data:`~synthaug.detectors.training_sets.QUANTIZE` value each stands for."""
+
+
+def quantize_arg(text: str) -> bool | str:
+    """An argparse type: ``--quantize``'s word (:data:`QUANTIZE_ARGS`) as ``AddedPositives``' ``quantize``."""
+    if text not in QUANTIZE_ARGS:
+        raise argparse.ArgumentTypeError(f"invalid choice {text!r}; choose from {', '.join(QUANTIZE_ARGS)}")
+    return QUANTIZE_ARGS[text]
+
+
 def _effects_off(values: list[str] | None) -> tuple[str, ...] | None:
     """``--effects-off`` as :class:`~synthaug.detectors.video_training.AddedPositives` takes it (None: the family's)."""
     from synthaug.detectors.video_training import TrainingInputError
@@ -170,10 +181,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="vary the synthetic objects' shape around the mesh (axes stretched, parts such as arms and "
                              "rotors scaled) within +- this fraction, e.g. 0.3; 0: the mesh alone (the paper); "
                              "default: the detector family's (0.3 for AdaBoost, 0 for HOG and the CNN)")
-    parser.add_argument("--quantize", action=argparse.BooleanOptionalAction, default=None,
-                        help="round the synthetic positives to 8-bit levels, as the real frames are stored; "
-                             "--no-quantize: the renderer's continuous values (the paper's); default: the detector "
-                             "family's (rounded for AdaBoost, continuous for HOG and the CNN)")
+    parser.add_argument("--quantize", nargs="?", const=True, type=quantize_arg, default=None,
+                        metavar="{on,off,native_scale}",
+                        help="round the synthetic positives to 8-bit levels, as the real frames are stored (on, the "
+                             "value when none is given); off: the renderer's continuous values (the paper's); "
+                             "native_scale: round those of the seeds the pyramid sees at about their own size, the "
+                             "others continuous; default: the detector family's (rounded for AdaBoost, continuous "
+                             "for HOG and the CNN)")
+    parser.add_argument("--no-quantize", dest="quantize", action="store_const", const=False,
+                        help="the same as --quantize off")
     parser.add_argument("--realism-keep", type=float_in(0.0, 1.0, low_open=True), default=None, metavar="FRACTION",
                         help="draw synthetic positives 1/FRACTION times over and keep the FRACTION that a critic in "
                              "HOG features, trained on the seed set's real patches, finds least synthetic (cross-fitted "

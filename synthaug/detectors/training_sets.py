@@ -266,6 +266,50 @@ def check_realism_keep(realism_keep: Any) -> float:
     return float(realism_keep)
 
 
+QUANTIZE: tuple[bool | str, ...] = (False, True, "native_scale")
+"""How :func:`synthetic_positives` rounds its draws to the 256 levels of 8 bits: False (the paper: the renderer's
+continuous values), True (every draw, as a camera delivers its frames) or ``"native_scale"`` (the draws of the seeds
+whose object the detector's pyramid sees at about its own size, :func:`native_scale_seeds`; the others in float)."""
+
+NATIVE_SCALE_MAX: float = 1 / math.sqrt(0.8)
+"""``quantize="native_scale"`` rounds the seeds whose crop side is at most this many patch sides: the geometric
+midpoint of the pyramid levels 1.0 and 0.8 (the project's pyramids step by 0.8), so a seed is rounded where the level
+nearest to its object's scale is 1.0 or above — where a detector sees its real object as it was stored, on the
+8-bit lattice — and left in float where the pyramid shrinks it (a resized level is off the lattice)."""
+
+
+def check_quantize(quantize: Any) -> bool | str:
+    """``quantize`` (:func:`synthetic_positives`) checked: one of :data:`QUANTIZE`, else ``ValueError``.
+
+    >>> check_quantize(True), check_quantize("native_scale")
+    (True, 'native_scale')
+    """
+    if isinstance(quantize, (bool, np.bool_)):
+        return bool(quantize)
+    if isinstance(quantize, str) and quantize in QUANTIZE:
+        return quantize
+    raise ValueError(f"quantize must be one of {QUANTIZE}, got {quantize!r}")
+
+
+def quantize_name(quantize: bool | str) -> str:
+    """How ``quantize`` reads in a cell's or a training set's name (``""`` where nothing is rounded).
+
+    >>> quantize_name(False), quantize_name(True), quantize_name("native_scale")
+    ('', ', 8-bit', ', 8-bit at native scale')
+    """
+    quantize = check_quantize(quantize)
+    return ", 8-bit at native scale" if quantize == "native_scale" else ", 8-bit" if quantize else ""
+
+
+def native_scale_seeds(seedset: Any) -> np.ndarray:
+    """A bool per seed of ``seedset``: True where its crop side (``frame_scale``,
+    :func:`~synthaug.data.seedset.seed_geometry`) is at most :data:`NATIVE_SCALE_MAX` patch sides, the seeds
+    ``quantize="native_scale"`` rounds."""
+    from synthaug.data.seedset import seed_geometry as seed_places
+
+    return seed_places(seedset)["frame_scale"].numpy() <= NATIVE_SCALE_MAX + 1e-9
+
+
 def synthetic_positives(
     seedset: Any,
     mesh: Any,
@@ -281,7 +325,7 @@ def synthetic_positives(
     object_box: float | str | None = None,
     object_box_share: float = 1.0,
     shape_variation: float = 0.0,
-    quantize: bool = False,
+    quantize: bool | str = False,
     background_sampling: str = "seed",
     realism_keep: float = 1.0,
     realism_selection: str = "seed",
@@ -316,9 +360,11 @@ def synthetic_positives(
         shape_variation: 0 (the paper: the mesh alone) or > 0: each patch's object one of
             :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s shapes around the mesh (its
             ``shape_variation``: stretched axes, parts scaled, within ± this fraction).
-        quantize: round every patch to the 256 levels of 8 bits, as a camera delivers its frames and as the real
-            positives and negatives are stored. False (the paper): the renderer's continuous values, so no
-            synthetic patch has the exactly flat areas that real ones have.
+        quantize: True: round every patch to the 256 levels of 8 bits, as a camera delivers its frames and as the
+            real positives and negatives are stored. False (the paper): the renderer's continuous values, so no
+            synthetic patch has the exactly flat areas that real ones have. ``"native_scale"``: round the patches
+            of the seeds the detector sees at about their own size (:func:`native_scale_seeds`), leave the others
+            in float (:data:`QUANTIZE`).
         background_sampling: ``"seed"`` (the paper: each object on its own seed's background) or ``"other"`` (on
             another seed's; :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``background_sampling``).
         realism_keep: 1 (the paper: every drawn patch) or the fraction of drawn patches kept: ``ceil(count /
@@ -340,7 +386,8 @@ def synthetic_positives(
             (:func:`synthaug.diagnose.gap.training_samples`).
 
     Returns:
-        Float patches ``(count, 1, P, P)`` in [0, 1] (with ``quantize``: multiples of 1/255); with
+        Float patches ``(count, 1, P, P)`` in [0, 1] (with ``quantize``: multiples of 1/255, those of the rounded
+        seeds with ``"native_scale"``); with
         ``return_seed_index``, ``(patches, seed_index (count,) int64)``.
     """
     from synthaug.data.synthetic import SyntheticObjectDataset
@@ -351,6 +398,7 @@ def synthetic_positives(
     from synthaug.detectors.critic import check_realism_features, check_realism_selection
 
     realism_keep = check_realism_keep(realism_keep)
+    quantize = check_quantize(quantize)
     check_realism_selection(realism_selection)
     check_realism_features(realism_features, selection=realism_selection if realism_keep < 1 else None)
     drawn = count if realism_keep == 1 else int(math.ceil(count / realism_keep - 1e-9))
@@ -381,9 +429,12 @@ def synthetic_positives(
         out.append(torch.stack([img for img, _ in items]))
         seed_index += [int(t["seed_index"]) for _, t in items]
     patches = torch.cat(out).float().clamp(0, 1)
-    if quantize:
-        patches = quantize_levels(patches)
     groups = np.array(seed_index, dtype=np.int64)
+    if quantize is True:
+        patches = quantize_levels(patches)
+    elif quantize == "native_scale":
+        rounded = torch.from_numpy(native_scale_seeds(seedset)[groups])
+        patches = torch.where(rounded[:, None, None, None], quantize_levels(patches), patches)
     if drawn > count:  # "seed" and "set": the count least synthetic of the larger draw
         from synthaug.detectors.critic import least_synthetic
 
@@ -478,6 +529,10 @@ def distractor_negatives(seedset: Any, fit_file: str | Path, count: int, *, seed
     it): the look of a low-contrast cloud puff rather than of the object. ``"soft"`` needs each blob on its own
     seed's background (``background_sampling="seed"``).
 
+    The distractors are rounded to 8 bits wherever ``draw``'s ``quantize`` is not False: every one of them with
+    ``"native_scale"`` too (a blob is no object seen at a size; so the measured cells drew them,
+    ``results/synthetic/rounding_parts/``).
+
     Returns:
         Float patches ``(count, 1, P, P)`` in [0, 1], the shapes in :data:`DISTRACTOR_AXES` order.
     """
@@ -485,6 +540,7 @@ def distractor_negatives(seedset: Any, fit_file: str | Path, count: int, *, seed
         raise ValueError(f"count must be >= 0, got {count}")
     if style not in DISTRACTOR_STYLES:
         raise ValueError(f"style must be one of {DISTRACTOR_STYLES}, got {style!r}")
+    draw = {**draw, "quantize": bool(check_quantize(draw.get("quantize", False)))}
     for key, off in (("realism_keep", 1.0), ("shape_variation", 0.0)):
         if draw.get(key, off) != off:
             raise ValueError(f"distractors are drawn without {key} (got {draw[key]!r})")

@@ -39,12 +39,14 @@ from synthaug.detectors.frames import VideoFrames
 from synthaug.detectors.training import DETECTORS, TrainOptions, train_with_mining
 from synthaug.detectors.training_sets import (
     bird_hard_negatives,
+    check_quantize,
     check_realism_keep,
     DISTRACTOR_STYLES,
     distractor_negatives,
     frames_training_set,
     mining_frames,
     negative_pool,
+    quantize_name,
     real_positives,
     synthetic_positives,
 )
@@ -327,9 +329,10 @@ class AddedPositives:
             the copy-paste positives keep ``params``' silhouettes). None: one fit for every round (the paper's
             default). Needs synthetic positives and mining rounds.
         quantize: round the synthetic positives to 8-bit levels, as the real frames are stored
-            (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``quantize``). False: the renderer's
-            continuous values. None (the default): the detector family's (:data:`FAMILY_SYNTHETIC`: AdaBoost True, the
-            others False).
+            (:func:`~synthaug.detectors.training_sets.synthetic_positives`' ``quantize``); ``"native_scale"``: only
+            those of the seeds the pyramid sees at about their own size
+            (:data:`~synthaug.detectors.training_sets.QUANTIZE`). False: the renderer's continuous values. None (the
+            default): the detector family's (:data:`FAMILY_SYNTHETIC`: AdaBoost True, the others False).
         background_sampling: ``"seed"`` (the paper: each synthetic object on its own seed's background) or
             ``"other"`` (on another seed's, the capture parameters still its own seed's;
             :class:`~synthaug.data.synthetic.SyntheticObjectDataset`'s ``background_sampling``). None (the default):
@@ -380,7 +383,7 @@ class AddedPositives:
     faded_copies: int = 0
     faded_contrast: tuple[float, float] | None = None
     refit: Callable[[Path, Path, Any, int], str | Path] | None = None
-    quantize: bool | None = None
+    quantize: bool | str | None = None
     background_sampling: str | None = None
     object_box_share: float = 1.0
     realism_keep: float | None = None
@@ -408,6 +411,8 @@ class AddedPositives:
         if isinstance(self.synthetic_share, str):
             resolve_synthetic_share("", self.synthetic_share)  # raises on any string but BY_COUNT
         resolve_realism_keep("", self.realism_keep)  # raises on a value that is not a fraction in (0, 1]
+        if self.quantize is not None:
+            check_quantize(self.quantize)
         check_realism_selection(self.realism_selection)
         if self.realism_features is not None:
             check_realism_features(self.realism_features, selection=self.realism_selection)
@@ -1007,7 +1012,7 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
         ts.redraw_synthetic = draw
         ts.positives = torch.cat([ts.positives, syn])
         say(f"synthetic: {n_syn} patches from {params}"
-            f"{', without ' + ' and '.join(effects_off) if effects_off else ''}{', 8-bit' if added.quantize else ''}"
+            f"{', without ' + ' and '.join(effects_off) if effects_off else ''}{quantize_name(added.quantize)}"
             f"{where}{f', the {realism_keep:.0%} least synthetic kept' if realism_keep < 1 else ''}"
             f"{' of each seed' if realism_keep < 1 and added.realism_selection == 'seed' else ''}"
             f"{' (critic in weak-learner features)' if realism_keep < 1 and added.realism_features != 'hog' else ''}"
@@ -1019,7 +1024,7 @@ def _add_from_fit(ts: _TrainingSet, added: AddedPositives, kind: str, *, seed: i
                             **({"shape_variation": added.shape_variation} if added.shape_variation else {}),
                             **({"capture_sampling": added.capture_sampling} if added.capture_sampling != "seed" else {}),
                             **({"effects_off": list(effects_off)} if effects_off else {}),
-                            **({"quantize": True} if added.quantize else {}),
+                            **({"quantize": added.quantize} if added.quantize else {}),
                             **({"background_sampling": background_sampling} if background_sampling != "seed" else {}),
                             **({"realism_keep": realism_keep} if realism_keep < 1 else {}),
                             **({"realism_selection": added.realism_selection} if realism_keep < 1 else {}),

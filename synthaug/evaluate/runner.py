@@ -56,7 +56,7 @@ from synthaug.detectors.box_calibration import CALIBRATION_FORMS, CALIBRATION_VE
 from synthaug.detectors.critic import (REALISM_FEATURES, REALISM_SELECTION, check_realism_features,
                                        check_realism_selection, realism_variants)
 from synthaug.detectors.training import BOX_MODELS, MINING_SELECT, TrainOptions
-from synthaug.detectors.training_sets import DISTRACTOR_STYLES
+from synthaug.detectors.training_sets import check_quantize, DISTRACTOR_STYLES, quantize_name
 from synthaug.detectors.video_training import (
     BY_COUNT,
     PAPER_SYNTHETIC,
@@ -151,7 +151,8 @@ class Condition:
             trained as its distance (:func:`~synthaug.fit.refit.refit_with_network`, the fit's own options otherwise)
             and the next round's synthetic positives are redrawn from it (``AddedPositives.refit``). False: one fit.
         quantize: the synthetic positives rounded to 8-bit levels, as the real frames are (``AddedPositives``'
-            ``quantize``). False: the renderer's continuous values.
+            ``quantize``; ``"native_scale"``: those of the seeds seen at about their own size). False: the renderer's
+            continuous values.
         background_sampling: ``"seed"`` (the paper: each synthetic object on its own seed's background) or
             ``"other"`` (on another seed's; ``AddedPositives``' ``background_sampling``); None (the default): the
             family's (:data:`~synthaug.detectors.video_training.FAMILY_BACKGROUND_SAMPLING`), resolved here as the
@@ -193,7 +194,7 @@ class Condition:
     capture_sampling: str = "seed"
     effects_off: tuple[str, ...] | None = None
     dcnn_refit: bool = False
-    quantize: bool | None = None
+    quantize: bool | str | None = None
     background_sampling: str | None = None
     object_box_share: float = 1.0
     realism_keep: float | None = None
@@ -787,7 +788,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                          capture_sampling: Sequence[str] = ("seed",),
                          effects_off: Sequence[str | Sequence[str] | None] = (None,),
                          dcnn_refit: Sequence[bool] = (False,),
-                         quantize: Sequence[bool | None] = (None,),
+                         quantize: Sequence[bool | str | None] = (None,),
                          background_sampling: Sequence[str | None] = (None,),
                          realism_keep: Sequence[float | None] = (None,),
                          realism_selection: Sequence[str] = ("seed",),
@@ -824,7 +825,8 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
     (the detector family's default), ``()`` (every fitted effect), an effect's name, or several names left out
     together (Fig. 9). ``dcnn_refit``: each synthetic ratio once per value (True: the fit refitted against the CNN
     after every mining round, :class:`Condition`'s ``dcnn_refit``; CNN only). ``quantize``: each synthetic ratio
-    once per value (True: the synthetic positives rounded to 8-bit levels, :class:`Condition`'s ``quantize``).
+    once per value (True: the synthetic positives rounded to 8-bit levels; ``"native_scale"``: those of the seeds
+    seen at about their own size; :class:`Condition`'s ``quantize``).
     ``background_sampling``: each synthetic ratio once per value (``"seed"``: the paper, each object on its own
     seed's background; ``"other"``: on another seed's; None: the family's, :class:`Condition`'s
     ``background_sampling``). ``realism_keep``: each synthetic ratio once per value (1: every drawn positive; under
@@ -855,7 +857,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
         placements = list(dict.fromkeys((own("pose_sampling", ps, object_box=ob), ob)
                                         for ps in pose_sampling for ob in object_box))
         shapes = list(dict.fromkeys(float(own("shape_variation", sv)) for sv in shape_variation))
-        rounding = list(dict.fromkeys(bool(own("quantize", q)) for q in quantize))
+        rounding = list(dict.fromkeys(check_quantize(own("quantize", q)) for q in quantize))
         d_ratio = float(own("distractor_ratio", distractor_ratio))
         d_style = own("distractor_style", distractor_style, distractor_ratio=distractor_ratio)
         offs = list(dict.fromkeys(resolve_effects_off(kind, off) for off in effects_off))  # one per capture set
@@ -878,7 +880,7 @@ def synthetic_comparison(runner: ProtocolRunner, *, detectors: Sequence[str], se
                             f"{'' if cs == 'seed' else f', capture {cs}'}"
                             f"{'' if not off else ', without ' + ' and '.join(off)}"
                             f"{', d_CNN refit every round' if rf else ''}"
-                            f"{', 8-bit' if qz else ''}"
+                            f"{quantize_name(qz)}"
                             f"{'' if bs == 'seed' else ', backgrounds of other seeds'}"
                             f"{_realism_name(rk, sel, features[sel])})"
                             f"{f' + {synthetic_downscaled}x downscaled' if synthetic_downscaled else ''}"
@@ -1093,9 +1095,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the d_CNN refit, one condition per value: on refits each seed's fit with the CNN just trained "
                          "as the distance after every mining round and redraws the next round's synthetic positives "
                          "from it (CNN only); off keeps one fit")
-    sy.add_argument("--quantize", nargs="+", choices=["default", "off", "on"], default=["default"],
-                    help="the synthetic positives rounded to 8-bit levels as the real frames are (on) or left with "
-                         "the renderer's continuous values (off, the paper), one condition per value; default: the "
+    sy.add_argument("--quantize", nargs="+", choices=["default", "off", "on", "native_scale"], default=["default"],
+                    help="the synthetic positives rounded to 8-bit levels as the real frames are (on), left with "
+                         "the renderer's continuous values (off, the paper) or rounded where the pyramid sees the "
+                         "seed's object at about its own size (native_scale), one condition per value; default: the "
                          "family's (on for AdaBoost, off for the others)")
     sy.add_argument("--background-sampling", nargs="+", choices=["default", *BACKGROUND_SAMPLING], default=["default"],
                     help="the synthetic objects' backgrounds, one condition per value: seed (the paper: each on its "
@@ -1216,7 +1219,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              effects_off=tuple(None if e == "default" else () if e == "none" else tuple(e.split("+"))
                                                for e in args.effects_off),
                              dcnn_refit=tuple(v == "on" for v in args.dcnn_refit),
-                             quantize=tuple(None if v == "default" else v == "on" for v in args.quantize),
+                             quantize=tuple({"default": None, "off": False, "on": True}.get(v, v)
+                                            for v in args.quantize),
                              background_sampling=tuple(_given(b) for b in args.background_sampling),
                              realism_keep=tuple(_given(k) for k in args.realism_keep),
                              realism_selection=tuple(args.realism_selection),

@@ -12,29 +12,24 @@ and changes one thing, the distractors (drawn by ``training_sets.distractor_nega
 - ``distractors_float``: the positives as the recipe's (8-bit), the distractors in float (as the float recipe's): the
   complement of ``positives_float`` (this mode wraps ``video_training.distractor_negatives`` instead);
 - ``view``: each seed's draws rounded where the pyramid sees that seed's object near scale 1 (its crop's frame scale,
-  ``seed_geometry``'s ``frame_scale`` = crop side / P, at most :data:`VIEW_FRAME_SCALE`: the pyramid level nearest to
+  ``seed_geometry``'s ``frame_scale`` = crop side / P, at most 1/sqrt(0.8): the pyramid level nearest to
   ``1 / frame_scale`` is 1.0 or above when the levels step by 0.8), float where the pyramid shrinks it; the critic
-  scores what training sees.
+  scores what training sees. Since stop 108 the library's ``quantize="native_scale"``
+  (``synthaug.detectors.training_sets.NATIVE_SCALE_MAX``, ``native_scale_seeds``); this mode draws through it (the
+  stop-107 version, which rounded here, gave the same patches bit for bit: checked on a generated seed set with
+  fitted poses, shapes and the weak-learner critic).
 
 The cell keys do not know of the change: give each mode a ``--work`` folder of its own.
 
     PYTHONPATH=. python results/synthetic/rounding_parts/runner_rounding.py MODE synthetic --work data/runs_MODE ...
 """
-import math
 import sys
 
-import numpy as np
-import torch
-
 import synthaug.detectors.video_training as video_training
-from synthaug.data.seedset import seed_geometry
-from synthaug.detectors.critic import least_synthetic
+from synthaug.detectors.training_sets import NATIVE_SCALE_MAX, native_scale_seeds
 from synthaug.effects.camera_functional import quantize_levels
 
 MODES = ("critic_float", "positives_float", "distractors_float", "view")
-VIEW_FRAME_SCALE = 1 / math.sqrt(0.8)
-"""``view`` rounds the seeds whose crop side is at most this many P: the geometric midpoint of pyramid levels 1.0 and
-0.8, so a seed is rounded where the level nearest to its object's is 1.0 or larger."""
 
 _draw = video_training.synthetic_positives
 _distractors = video_training.distractor_negatives
@@ -46,11 +41,6 @@ def distractor_negatives_float(*args, **draw):
     if draw.get("quantize"):
         print("rounding_parts distractors_float: the distractors kept in float", flush=True)
     return _distractors(*args, **{**draw, "quantize": False})
-
-
-def rounded_seeds(seedset) -> np.ndarray:
-    """``view``: a bool per seed, True where its object is seen near scale 1 (rounded)."""
-    return (seed_geometry(seedset)["frame_scale"].numpy() <= VIEW_FRAME_SCALE + 1e-9)
 
 
 def synthetic_positives_moved(seedset, mesh, fit_file, count, *, quantize: bool = False, realism_keep: float = 1.0,
@@ -70,20 +60,12 @@ def synthetic_positives_moved(seedset, mesh, fit_file, count, *, quantize: bool 
         if MODE == "critic_float":
             out = quantize_levels(out)
         return (out, idx) if return_seed_index else out
-    # view: draw every candidate in float (the same items as the library's draw), round the seeds seen near scale 1,
-    # then the critic's quarter as synthetic_positives takes it
-    drawn = count if realism_keep == 1 else int(math.ceil(count / realism_keep - 1e-9))
-    out, idx = _draw(seedset, mesh, fit_file, drawn, quantize=False, realism_keep=1.0, return_seed_index=True,
-                     **common)
-    small = rounded_seeds(seedset)
-    mask = torch.from_numpy(small[idx])
-    out = torch.where(mask[:, None, None, None], quantize_levels(out), out)
+    # view: the library's rounding by the seed's frame scale
+    out, idx = _draw(seedset, mesh, fit_file, count, quantize="native_scale", realism_keep=realism_keep,
+                     return_seed_index=True, **common)
+    small = native_scale_seeds(seedset)
     print(f"rounding_parts view: {int(small.sum())} of {len(small)} seeds rounded (crop side <= "
-          f"{VIEW_FRAME_SCALE:.3f} P), {float(mask.float().mean()):.2f} of the draws", flush=True)
-    if drawn > count:
-        keep = least_synthetic(np.asarray(seedset.patches), out, idx, count, seed=seed, selection=realism_selection,
-                               features=realism_features)
-        out, idx = out[torch.from_numpy(keep)], idx[keep]
+          f"{NATIVE_SCALE_MAX:.3f} P), {float(small[idx].mean()):.2f} of the kept draws", flush=True)
     return (out, idx) if return_seed_index else out
 
 
