@@ -16,8 +16,10 @@ from synthaug.detectors.hog_dpm import HOGDetector
 
 DRONES = ["V_DRONE_003", "V_DRONE_010", "V_DRONE_027"]
 # small budgets: tiny frames, one pyramid level pair, every 3rd frame mined and validated
+# --threads 1: every training at one thread, whatever ran before it in this process (synthaug detect sets torch's
+# threads to 1 for the process; a training's floating point depends on the thread count)
 FAST = ["--scales", "1.0", "0.8", "--mining-stride", "3", "--val-stride", "3", "--mining-rounds", "2", "--hog-components", "2",
-        "--extra-negatives", "300", "--workers", "1", "--quiet"]
+        "--extra-negatives", "300", "--workers", "1", "--quiet", "--threads", "1"]
 
 
 @pytest.fixture(scope="module")
