@@ -829,13 +829,13 @@ def test_adaboost_draws_by_its_familys_recipe_and_its_default_cell_is_the_one_tr
                            params="f{seed}.json", perturb_copies=[5])
     (ada_real, ada, ada_perturbed), (_, hog, _), (_, cnn, _) = made[:3], made[3:6], made[6:]
     flags = R.Condition("x", "adaboost", seed_count=100, params="f{seed}.json", synthetic_ratio=20.0,
-                        realism_keep=0.25, realism_features="weak_learners", quantize=True,
+                        realism_keep=0.25, realism_features="weak_learners", quantize="native_scale",
                         pose_sampling="fitted_at_seed", shape_variation=0.3, distractor_ratio=5.0,
                         distractor_style="soft")
     assert ada.identity() == flags.identity()
     assert ada.name == ("adaboost / 100 seeds + 20x synthetic (f{seed}, fitted poses at the seeds' offsets, share 0.25, "
-                        "shapes varied 0.3, 8-bit, the 25% least synthetic of 4x drawn of each seed to a weak-learner "
-                        "critic) + 5x soft rendered distractors")
+                        "shapes varied 0.3, 8-bit at native scale, the 25% least synthetic of 4x drawn of each seed to "
+                        "a weak-learner critic) + 5x soft rendered distractors")
     assert ada_real.identity() == R.Condition("x", "adaboost", seed_count=100).identity()
     assert "distractor_ratio" not in ada_perturbed.identity() and "quantize" not in ada_perturbed.identity()
     for cond, kind in ((hog, "hog"), (cnn, "cnn")):

@@ -894,7 +894,7 @@ def test_added_positives_resolve_to_the_familys_recipe_only_where_synthetic_posi
     synthetic = AddedPositives(params="fit.json", synthetic_ratio=2.0)
     ada = synthetic.resolved("adaboost")
     assert {k: getattr(ada, k) for k in PAPER_SYNTHETIC} == {
-        "pose_sampling": "fitted_at_seed", "shape_variation": 0.3, "quantize": True,
+        "pose_sampling": "fitted_at_seed", "shape_variation": 0.3, "quantize": "native_scale",
         "realism_features": "weak_learners", "distractor_ratio": 5.0, "distractor_style": "soft"} \
         == FAMILY_SYNTHETIC["adaboost"]
     assert ada.resolved("adaboost") == ada and ada.resolved("hog") == ada  # resolved values are given values

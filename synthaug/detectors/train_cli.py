@@ -186,8 +186,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="round the synthetic positives to 8-bit levels, as the real frames are stored (on, the "
                              "value when none is given); off: the renderer's continuous values (the paper's); "
                              "native_scale: round those of the seeds the pyramid sees at about their own size, the "
-                             "others continuous; default: the detector family's (rounded for AdaBoost, continuous "
-                             "for HOG and the CNN)")
+                             "others continuous; default: the detector family's (native_scale for AdaBoost, "
+                             "continuous for HOG and the CNN)")
     parser.add_argument("--no-quantize", dest="quantize", action="store_const", const=False,
                         help="the same as --quantize off")
     parser.add_argument("--realism-keep", type=float_in(0.0, 1.0, low_open=True), default=None, metavar="FRACTION",

@@ -1099,7 +1099,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the synthetic positives rounded to 8-bit levels as the real frames are (on), left with "
                          "the renderer's continuous values (off, the paper) or rounded where the pyramid sees the "
                          "seed's object at about its own size (native_scale), one condition per value; default: the "
-                         "family's (on for AdaBoost, off for the others)")
+                         "family's (native_scale for AdaBoost, off for the others)")
     sy.add_argument("--background-sampling", nargs="+", choices=["default", *BACKGROUND_SAMPLING], default=["default"],
                     help="the synthetic objects' backgrounds, one condition per value: seed (the paper: each on its "
                          "own seed's background), other (each on another seed's, its capture parameters its own) or "
