@@ -12,11 +12,13 @@ export PYTHONPATH=.
 T="python results/learning_curve/video_diversity/table.py"
 . $D/stored_cells.sh
 syn() { echo "$1/$(ls $1 | grep synthetic)"; }
-tables() {  # NAME BASE: the array M (the mode's cells) against Q (the 8-bit recipe), F (float; where every seed has
-  # one) and R (real only), paired by training seed, to NAME_vs_{recipe,float,real}BASE.md
+tables() {  # NAME BASE: the array M (the mode's cells) against Q (the 8-bit recipe), F (float) and O (the former
+  # defaults; each where every seed has one) and R (real only), paired by training seed, to
+  # NAME_vs_{recipe,float,former,real}BASE.md
   [ ${#M[@]} -gt 0 ] || return 0
   $T "${Q[@]}" "${M[@]}" --out $P/$1_vs_recipe$2.md
   [ ${#F[@]} -ne ${#M[@]} ] || $T "${F[@]}" "${M[@]}" --out $P/$1_vs_float$2.md
+  [ ${#O[@]} -ne ${#M[@]} ] || $T "${O[@]}" "${M[@]}" --out $P/$1_vs_former$2.md
   $T "${R[@]}" "${M[@]}" --out $P/$1_vs_real$2.md
 }
 by_size() {  # MODE OUT: the array B, the recipe (8-bit) against MODE by the object's size
@@ -30,16 +32,18 @@ LABEL[view]="rounded where seen near scale 1"
 for mode in critic_float positives_float distractors_float view; do
   label=${LABEL[$mode]}
   B=()  # by the object's size, against the recipe (8-bit)
-  R=() Q=() F=() M=()  # airplanes, 12 seeds
+  R=() Q=() F=() O=() M=()  # airplanes, 12 seeds
   for d in $P/${mode}12/seed*/; do
     [ -d "$d" ] || continue
     d=${d%/}; s=${d##*seed}; [ -n "$(ls $d | grep synthetic)" ] || continue
     M+=("$(syn $d)=12 real + the recipe, $label"); R+=("$A/twelve_s$s/adaboost_12_seeds.json=12 real")
-    Q+=("$(syn $A/twelve_s$s)=12 real + the recipe (8-bit)"); F+=("$(syn $A/float12_s$s)=12 real + the recipe in float")
+    Q+=("$(syn $A/twelve_s$s)=12 real + the recipe (8-bit)")
+    [ -d $A/float12_s$s ] && F+=("$(syn $A/float12_s$s)=12 real + the recipe in float")
+    [ -d $A/former12_s$s ] && O+=("$(syn $A/former12_s$s)=12 real + the former defaults (the paper's draws)")
     B+=("airplanes, 12 seeds, seed $s=$(syn $A/twelve_s$s),$(syn $d)")
   done
   tables ${mode}12 12
-  R=() Q=() F=() M=()  # drones, 100 seeds
+  R=() Q=() F=() O=() M=()  # drones, 100 seeds
   for d in $P/${mode}100/seed*/; do
     [ -d "$d" ] || continue
     d=${d%/}; s=${d##*seed}; [ -n "$(ls $d | grep synthetic)" ] || continue
@@ -53,7 +57,7 @@ for mode in critic_float positives_float distractors_float view; do
 done
 # drones, 12 seeds (SEED_COUNT=12 run.sh view drone S view_drones12/seedS): against stop 104's recipe and 12-real cells
 # (../adaboost_distractors/frame_s104) and stop 106's float recipe (frame_s106/float12) of the same training seeds
-R=() Q=() F=() M=() B=()
+R=() Q=() F=() O=() M=() B=()
 for d in $P/view_drones12/seed*/; do
   [ -d "$d" ] || continue
   d=${d%/}; s=${d##*seed}; [ -n "$(ls $d | grep synthetic)" ] || continue
