@@ -174,9 +174,9 @@ test video up, 0.62 [0.44, 0.84] of the 12 -> 100 real-seed gap. Airplanes, 12 s
 is ``"native_scale"`` (:data:`~synthaug.detectors.training_sets.QUANTIZE`): 8-bit only the seeds the pyramid sees at
 about their own size, float where it shrinks them (the distractors 8-bit), ``results/synthetic/rounding_parts/``,
 paired against the 8-bit recipe: airplanes, 12 seeds, five training seeds, +0.037 [+0.003, +0.072] (every seed up;
-seeds resampled too [-0.019, +0.095]); drones, 100 seeds, three training seeds, +0.000 [-0.019, +0.016]; drones,
-12 seeds, two training seeds, +0.024 [-0.011, +0.062]. The decision rule (airplanes' paired CI above 0, the drones at
-100 seeds losing nothing) was written before airplane seeds 3-4 ran."""
+seeds resampled too [-0.019, +0.095]; 0.83 [0.66, 1.06] of the 12 -> 100 gap); drones, 100 seeds, three training
+seeds, +0.000 [-0.019, +0.016]; drones, 12 seeds, four training seeds, -0.001 [-0.019, +0.018]. The decision rule
+(airplanes' paired CI above 0, the drones at 100 seeds losing nothing) was written before airplane seeds 3-4 ran."""
 
 PAPER_SYNTHETIC: dict[str, Any] = {"pose_sampling": "uniform", "shape_variation": 0.0, "quantize": False,
                                    "realism_features": "hog", "distractor_ratio": 0.0, "distractor_style": "drawn"}

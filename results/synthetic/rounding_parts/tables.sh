@@ -78,3 +78,16 @@ done
 [ -n "$many" ] && python results/synthetic/gap_closed.py --few "$few" --added "$added" --many "$many" \
   --title "AdaBoost, airplanes, 12 -> 100 real seeds, the recipe rounded where seen near scale 1" \
   --out $P/view12_gap_closed.md
+# the share of the drones' 12 -> 100 real-seed gap the view rule closes (stop 108; the 100-seed real-only cells of
+# stored_cells.sh, as ../adaboost_distractors/frame_s104/tables.sh pairs the 8-bit recipe)
+few="" added="" many=""
+for d in $P/view_drones12/seed*/; do
+  [ -d "$d" ] || continue
+  d=${d%/}; s=${d##*seed}; [ -n "$(ls $d | grep synthetic)" ] || continue
+  stored_cells $s
+  few+="${few:+,}$D/frame_s104/seed$s/adaboost_12_seeds.json"; added+="${added:+,}$(syn $d)"
+  many+="${many:+,}$real_dir/adaboost_100_seeds.json"
+done
+[ -n "$many" ] && python results/synthetic/gap_closed.py --few "$few" --added "$added" --many "$many" \
+  --title "AdaBoost, drones, 12 -> 100 real seeds, the recipe rounded where seen near scale 1" \
+  --out $P/view_drones12_gap_closed.md
