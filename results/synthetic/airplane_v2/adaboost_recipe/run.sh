@@ -6,6 +6,8 @@
 # seed a call, two calls side by side on the 2 cores. The runner trains the added cell, then real only (cached).
 # usage (repository root): results/synthetic/airplane_v2/adaboost_recipe/run.sh recipe|former SEED OUT [--read-only]
 # SEED_COUNT=100 for the 100-seed sets (default 12).
+# `recipe` is AdaBoost's default: its 8-bit rounding until stop 107 (the stored twelve_s* cells, seeds 3-4 included),
+# native-scale rounding since stop 108; add --quantize on to repeat the 8-bit cells.
 mode=$1; seed=$2; out=$3; shift 3
 export PYTHONPATH=${PYTHONPATH:-.} OMP_NUM_THREADS=1 PYOPENGL_PLATFORM=egl
 # 8 shapes of the airplane + 8 blobs: the default 1 GB sprite cache would evict them in turn
