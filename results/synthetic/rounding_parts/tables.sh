@@ -24,6 +24,13 @@ tables() {  # NAME BASE: the array M (the mode's cells) against Q (the 8-bit rec
 by_size() {  # MODE OUT: the array B, the recipe (8-bit) against MODE by the object's size
   [ ${#B[@]} -eq 0 ] || python results/synthetic/quantize_scale/by_size.py "--names=8-bit,$1" "${B[@]}" > $P/$2
 }
+gap_table() {  # CLASS OUT: the share of the 12 -> 100 real-seed gap the view rule closes (few, added, many: the
+  # comma-separated cells, paired by position)
+  if [ -n "$many" ]; then
+    python results/synthetic/gap_closed.py --few "$few" --added "$added" --many "$many" \
+      --title "AdaBoost, $1, 12 -> 100 real seeds, the recipe rounded where seen near scale 1" --out $P/$2
+  fi
+}
 declare -A LABEL
 LABEL[critic_float]="the critic on float draws, the kept rounded"
 LABEL[positives_float]="positives in float, distractors 8-bit"
@@ -75,9 +82,7 @@ for d in $P/view12/seed*/; do
   few+="${few:+,}$A/twelve_s$s/adaboost_12_seeds.json"; added+="${added:+,}$(syn $d)"
   many+="${many:+,}$A/real100_s$s/adaboost_100_seeds.json"
 done
-[ -n "$many" ] && python results/synthetic/gap_closed.py --few "$few" --added "$added" --many "$many" \
-  --title "AdaBoost, airplanes, 12 -> 100 real seeds, the recipe rounded where seen near scale 1" \
-  --out $P/view12_gap_closed.md
+gap_table airplanes view12_gap_closed.md
 # the share of the drones' 12 -> 100 real-seed gap the view rule closes (stop 108; the 100-seed real-only cells of
 # stored_cells.sh, as ../adaboost_distractors/frame_s104/tables.sh pairs the 8-bit recipe)
 few="" added="" many=""
@@ -88,6 +93,4 @@ for d in $P/view_drones12/seed*/; do
   few+="${few:+,}$D/frame_s104/seed$s/adaboost_12_seeds.json"; added+="${added:+,}$(syn $d)"
   many+="${many:+,}$real_dir/adaboost_100_seeds.json"
 done
-[ -n "$many" ] && python results/synthetic/gap_closed.py --few "$few" --added "$added" --many "$many" \
-  --title "AdaBoost, drones, 12 -> 100 real seeds, the recipe rounded where seen near scale 1" \
-  --out $P/view_drones12_gap_closed.md
+gap_table drones view_drones12_gap_closed.md
