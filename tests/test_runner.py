@@ -1242,3 +1242,25 @@ def test_box_calibration_scores_the_stored_detector_with_its_own_correction(ws, 
     with pytest.raises(SystemExit):
         R.build_parser().parse_args(["synthetic", "--box-calibration", "-2", "--out", "x"])
     capsys.readouterr()
+
+
+def test_a_long_condition_name_gets_a_file_name_the_file_system_takes(tmp_path):
+    """A cell's JSON is named by its condition: names whose stem passes ``SLUG_MAX`` (AdaBoost's default at 100 seeds
+    with native-scale rounding) are cut and end in a hash of the whole name, distinct per name, and the atomic write
+    (a ``.NAME.XXXXXXXX.tmp`` beside it) succeeds; shorter names keep their stems."""
+    from synthaug.params import atomic_write_text
+
+    base = ("adaboost / 100 seeds + 20x synthetic (hog, twin_prop_airplane, fitted poses at the seeds' offsets, share "
+            "0.25, shapes varied 0.3, 8-bit{}, the 25% least synthetic of 4x drawn of each seed to a weak-learner "
+            "critic) + 5x soft rendered distractors")
+    short, native, other = base.format(""), base.format(" at native scale"), base.format(" at native scale!")
+    assert R._slug(short) == ("adaboost_100_seeds_20x_synthetic_hog_twin_prop_airplane_fitted_poses_at_the_seeds_"
+                              "offsets_share_0.25_shapes_varied_0.3_8_bit_the_25_least_synthetic_of_4x_drawn_of_each_"
+                              "seed_to_a_weak_learner_critic_5x_soft_rendered_distractors")  # the stored cells' names
+    assert len(R._slug(short)) <= R.SLUG_MAX < len(native)
+    stems = {R._slug(native), R._slug(other)}
+    assert len(stems) == 2 and all(len(s) == R.SLUG_MAX for s in stems)
+    assert R._slug(native).startswith(R._slug(short)[:100])
+    for stem in stems:
+        atomic_write_text(tmp_path / f"{stem}_x0.51.json", "{}")
+        assert (tmp_path / f"{stem}_x0.51.json").read_text() == "{}"

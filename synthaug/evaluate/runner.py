@@ -665,10 +665,26 @@ def _write_tables(results: Mapping[str, Mapping[str, ProtocolResult]], out: Path
     atomic_write_text(out / name, "\n".join(lines) + "\n")
 
 
+SLUG_MAX = 230
+"""The longest file-name stem a cell's JSON gets (:func:`_slug`): with a scale suffix, ``.json`` and the atomic
+write's temporary ``.NAME.XXXXXXXX.tmp`` it stays within the 255 bytes of a file name."""
+
+
 def _slug(name: str) -> str:
+    """A condition's name as a file-name stem: runs of other characters than letters, digits and dots as ``_``; a
+    stem over :data:`SLUG_MAX` characters cut and ended by 16 hex digits of the full name's SHA-256 (shorter names
+    keep the stems they always had).
+
+    >>> _slug("hog / 12 seeds + 20x synthetic (hog, share 0.25)")
+    'hog_12_seeds_20x_synthetic_hog_share_0.25'
+    """
+    import hashlib
     import re
 
-    return re.sub(r"[^A-Za-z0-9.]+", "_", name).strip("_")
+    stem = re.sub(r"[^A-Za-z0-9.]+", "_", name).strip("_")
+    if len(stem) <= SLUG_MAX:
+        return stem
+    return f"{stem[:SLUG_MAX - 17]}_{hashlib.sha256(name.encode()).hexdigest()[:16]}"
 
 
 def _plot_learning_curve(results: Mapping[str, Mapping[str, ProtocolResult]], path: Path) -> None:
