@@ -85,7 +85,8 @@ def synthetic_share_arg(text: str) -> float | str:
 
 
 QUANTIZE_ARGS: dict[str, bool | str] = {"on": True, "off": False, "native_scale": "native_scale"}
-"""``--quantize``'s words and the :data:`~synthaug.detectors.training_sets.QUANTIZE` value each stands for."""
+"""``--quantize``'s words and the :data:`~synthaug.detectors.training_sets.QUANTIZE` value each stands for (``synthaug
+train``'s and the runner's)."""
 
 
 def quantize_arg(text: str) -> bool | str:

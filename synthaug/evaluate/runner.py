@@ -46,6 +46,7 @@ from synthaug.data.items import BACKGROUND_SAMPLING
 from synthaug.data.poses import POSE_SAMPLING
 from synthaug.data.synthetic import check_object_box_share
 from synthaug.detectors.train_cli import (
+    QUANTIZE_ARGS,
     add_adaboost_options,
     add_budget_options,
     budget_options,
@@ -1111,7 +1112,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the d_CNN refit, one condition per value: on refits each seed's fit with the CNN just trained "
                          "as the distance after every mining round and redraws the next round's synthetic positives "
                          "from it (CNN only); off keeps one fit")
-    sy.add_argument("--quantize", nargs="+", choices=["default", "off", "on", "native_scale"], default=["default"],
+    sy.add_argument("--quantize", nargs="+", choices=["default", *QUANTIZE_ARGS], default=["default"],
                     help="the synthetic positives rounded to 8-bit levels as the real frames are (on), left with "
                          "the renderer's continuous values (off, the paper) or rounded where the pyramid sees the "
                          "seed's object at about its own size (native_scale), one condition per value; default: the "
@@ -1235,8 +1236,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                              effects_off=tuple(None if e == "default" else () if e == "none" else tuple(e.split("+"))
                                                for e in args.effects_off),
                              dcnn_refit=tuple(v == "on" for v in args.dcnn_refit),
-                             quantize=tuple({"default": None, "off": False, "on": True}.get(v, v)
-                                            for v in args.quantize),
+                             quantize=tuple(None if v == "default" else QUANTIZE_ARGS[v] for v in args.quantize),
                              background_sampling=tuple(_given(b) for b in args.background_sampling),
                              realism_keep=tuple(_given(k) for k in args.realism_keep),
                              realism_selection=tuple(args.realism_selection),
