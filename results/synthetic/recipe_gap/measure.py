@@ -9,7 +9,8 @@ two-sample test of :mod:`synthaug.diagnose.gap` (0.5 = indistinguishable):
   unseen  real drones no critic saw: seed set s + OTHER's patches, minus every frame within GAP frames of one of seed
           set s's in the same video (``../realism_critic/heldout_real.py``'s measure).
 Conditions: the paper's draws (issue 16's "today's synthetic images"), HOG's default (the HOG critic's quarter), the
-recipe, and the recipe with one factor put back to the paper's at a time (which factor does it).
+recipe (8-bit, AdaBoost's default of stops 104-107), the recipe rounded at native scale (its default since stop 108),
+and the recipe with one factor put back to the paper's at a time (which factor does it).
 
     OMP_NUM_THREADS=1 PYOPENGL_PLATFORM=egl PYTHONPATH=. python results/synthetic/recipe_gap/measure.py \
         --out results/synthetic/recipe_gap/gap.json
@@ -38,6 +39,7 @@ CONDITIONS = {
     "paper": PAPER,
     "hog_default": {**PAPER, "realism_keep": 0.25},
     "recipe": RECIPE,
+    "recipe_native": {**RECIPE, "quantize": "native_scale"},  # AdaBoost's default since stop 108
     "recipe_uniform_poses": {**RECIPE, "pose_sampling": "uniform"},
     "recipe_fitted_poses_uniform_offsets": {**RECIPE, "pose_sampling": "fitted"},
     "recipe_mesh_alone": {**RECIPE, "shape_variation": 0.0},
