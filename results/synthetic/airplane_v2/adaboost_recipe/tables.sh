@@ -56,3 +56,18 @@ probe nodistr12 "the recipe without distractors"
 probe uniform12 "the recipe with the paper's poses"
 probe meshalone12 "the recipe with the mesh alone"
 probe float12 "the recipe in float"
+# stops 108-109: 100 seeds, the recipe at native scale (run.sh recipe SEED native100_sSEED, the default) and rounding
+# every seed (run.sh recipe SEED eightbit100_sSEED --quantize on), each stopped after its added cell, against the
+# stored 100-real cells (real100_sSEED), paired by training seed
+N=() E=() R=()
+for d in $A/native100_s*/; do
+  [ -d "$d" ] || continue
+  d=${d%/}; s=${d##*_s}; [ -d $A/eightbit100_s$s ] && [ -f $A/real100_s$s/adaboost_100_seeds.json ] || continue
+  R+=("$A/real100_s$s/adaboost_100_seeds.json=100 real")
+  E+=("$A/eightbit100_s$s/$(ls $A/eightbit100_s$s | grep synthetic)=100 real + the recipe (8-bit)")
+  N+=("$d/$(ls $d | grep synthetic)=100 real + the recipe at native scale")
+done
+if [ ${#N[@]} -gt 0 ]; then
+  python $T "${R[@]}" "${E[@]}" "${N[@]}" --out $A/native100_vs_real100.md
+  python $T "${E[@]}" "${N[@]}" --out $A/native100_vs_eightbit100.md
+fi
