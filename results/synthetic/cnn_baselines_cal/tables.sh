@@ -1,15 +1,23 @@
 #!/bin/bash
 # stop 109: the CNN's defaults at 100 drone seeds against real only and the two baselines, every cell trained on this
-# machine (run.sh), paired by training seed and test-video resample.
+# machine (run.sh), paired by training seed and test-video resample. Seeds 0-2: synthetic/ and baselines/; seed 3
+# (real only, ours and copy-paste, no perturbed cell): seed3/ (run.sh synthetic "3" seed3 --copy-paste-ratios 20).
 # usage (repository root): results/synthetic/cnn_baselines_cal/tables.sh
 set -e
 C=results/synthetic/cnn_baselines_cal
 export PYTHONPATH=.
 T="python results/learning_curve/video_diversity/table.py"
-real="$C/synthetic/cnn_100_seeds.json=real only"
-ours="$C/synthetic/$(ls $C/synthetic | grep synthetic)=+ 20x synthetic (the CNN's defaults)"
+real=() ours=() copy=()
+for d in $C/synthetic $C/seed3; do
+  [ -f $d/cnn_100_seeds.json ] || continue
+  real+=("$d/cnn_100_seeds.json=real only")
+  ours+=("$d/$(ls $d | grep synthetic)=+ 20x synthetic (the CNN's defaults)")
+done
+for d in $C/baselines $C/seed3; do
+  f=$(ls $d 2>/dev/null | grep copy_paste) || continue
+  copy+=("$d/$f=+ 20x copy-paste")
+done
 pert="$C/baselines/$(ls $C/baselines | grep perturbed)=+ 20x perturbed"
-copy="$C/baselines/$(ls $C/baselines | grep copy_paste)=+ 20x copy-paste"
-$T "$real" "$pert" "$copy" "$ours" --out $C/vs_real.md
-$T "$pert" "$ours" --out $C/ours_vs_perturbed.md
-$T "$copy" "$ours" --out $C/ours_vs_copy_paste.md
+$T "${real[@]}" "$pert" "${copy[@]}" "${ours[@]}" --out $C/vs_real.md
+$T "$pert" "${ours[@]}" --out $C/ours_vs_perturbed.md
+$T "${copy[@]}" "${ours[@]}" --out $C/ours_vs_copy_paste.md
