@@ -12,8 +12,8 @@ real=() pert=() copy=() native=()
 for s in 0 1 2; do
   stored_cells $s
   real+=("$real_dir/adaboost_100_seeds.json=real only")
-  f=$(ls $D/frame_s102/perturbed/seed$s/*perturbed*.json $D/frame_s103/baselines/seed$s/*perturbed*.json 2>/dev/null || true)
-  pert+=("$(echo "$f" | head -1)=+ 20x perturbed")
+  pert+=("$(ls $D/frame_s102/perturbed/seed$s/*perturbed*.json \
+             $D/frame_s103/baselines/seed$s/*perturbed*.json 2>/dev/null | head -1)=+ 20x perturbed")  # 0-1, 2
   copy+=("$(ls $D/frame_s103/baselines/seed$s/*copy_paste*.json)=+ 20x copy-paste")
   name="+ 20x the recipe rounded at native scale (AdaBoost's default since stop 108)"
   native+=("$(ls $P/view100/seed$s/*.json)=$name")

@@ -27,13 +27,5 @@ call=(python results/synthetic/rounding_parts/runner_rounding.py "$mode" synthet
       --synthetic-ratios 20 --fit-distance hog "${args[@]}" --eval-split test --training-seeds "$seed" --out "$out"
       "$@")
 s0=$(date +%s)
-: > "$out.log"
-"${call[@]}" >> "$out.log" 2>&1 &
-pid=$!
-while kill -0 $pid 2>/dev/null; do
-  if grep -q "cell done" "$out.log" 2>/dev/null; then kill $pid; break; fi
-  sleep 15
-done
-wait $pid
-"${call[@]}" --read-only >> "$out.log" 2>&1
+results/synthetic/stop_after_added_cell.sh "$out.log" "cell done" "${call[@]}"
 echo "$cls, $mode, seed $seed: $(( $(date +%s) - s0 )) s" | tee -a "$out.log"
