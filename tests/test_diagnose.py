@@ -1046,3 +1046,53 @@ def test_the_periodic_peak_is_sought_in_frame_frequencies_above_the_shape_band()
     # searched from 0.15, the shape band's anisotropy (exp(3) on 12 seeds) would have been the peak
     low, _, _ = periodic_peak(a, b, fs, min_frequency=0.1)
     assert low == pytest.approx(0.2, abs=0.0125)
+
+
+def test_highlight_strength_reads_an_added_highlight_whatever_the_albedo(tmp_path):
+    """Issue 20, specular (stop 110): the highlight channel's amplitude. Hand-built patches over a reference-camera
+    seed set's layers (fit at the truth): the model's render with a Blinn-Phong highlight (ks 0.4 at the template's
+    exponent) added on objects of albedo 0.1-0.5 reads k 0.4, seed by seed as numpy's least squares of the same
+    renders; the model's render with every albedo 30 % brighter (a shading mismatch that scales with the albedo)
+    reads k near 0; a channel without a calibrated floor names nothing."""
+    from synthaug.diagnose.diagnosis_data import render_with
+    from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
+    from synthaug.diagnose.residuals import load_diagnosis_data
+    from synthaug.diagnose.screening import HIGHLIGHT_SHININESS, highlight_channel, highlight_strength
+    from synthaug.effects.registry import PAPER_EFFECTS
+    from synthaug.params import CaptureParams
+
+    p = make_measured_seedset(tmp_path / "m", n_seeds=16, frame_size=(96, 128), object_px=(16, 20),
+                              view_step_deg=30, sprite_size=48, seed=3, paper_ranges={"w_d": (0.1, 0.5)})
+    truth, textra, _ = load_truth(p)
+    theta = CaptureParams(truth.as_dict(), effects=PAPER_EFFECTS)
+    extra = [{"distance": 1.0, "generator_seed": 7 + i, "object_scale": float(e["object_scale"])}
+             for i, e in enumerate(textra)]
+    theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
+    data = load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
+    w = truth.as_dict()["w_d"][:, 0]
+    gen = torch.Generator().manual_seed(0)
+    spec = {"specular": {"specular_ks": 0.4, "specular_shininess": HIGHLIGHT_SHININESS}}
+    data.real = (render_with(data, spec, w_d=w, clamp=False) + 0.003 * torch.randn(data.real.shape, generator=gen))
+    hl = highlight_strength(data)
+    assert hl["k"] == pytest.approx(0.4, abs=0.02) and hl["n"] >= 12 and hl["t"] > 10
+
+    # seed by seed: numpy's least squares of real - A(0.2) on [dA/dw, the template] over the same renders
+    n = len(data)
+    a0 = render_with(data, None, w_d=torch.full((n,), 0.2), clamp=False).double().flatten(1).numpy()
+    a1 = render_with(data, None, w_d=torch.full((n,), 0.6), clamp=False).double().flatten(1).numpy()
+    one = {"specular": {"specular_ks": 1.0, "specular_shininess": HIGHLIGHT_SHININESS}}
+    h = render_with(data, one, w_d=torch.full((n,), 0.2), clamp=False).double().flatten(1).numpy() - a0
+    y = data.real.double().flatten(1).numpy() - a0
+    ref = [np.linalg.lstsq(np.stack([(a1[i] - a0[i]) / 0.4, h[i]], 1), y[i], rcond=None)[0][1] for i in range(n)
+           if (h[i] ** 2).sum() > 1e-8]
+    np.testing.assert_allclose(hl["per_seed_k"], ref, rtol=1e-6, atol=1e-8)
+
+    data.real = (render_with(data, None, w_d=1.3 * w) + 0.003 * torch.randn(data.real.shape, generator=gen)).clamp(0, 1)
+    assert abs(highlight_strength(data)["k"]) < 0.02
+    uncalibrated = dict(hl, p=1e-12)
+    ch = highlight_channel("specular", uncalibrated, 49, 0.01)
+    assert ch["setting"] == {"specular_ks": round(hl["k"], 3), "specular_shininess": HIGHLIGHT_SHININESS}
+    if ch["floor"] is None:
+        assert not ch["significant"]
+    else:  # calibrated: 0.4 lies above every clean material's amplitude
+        assert ch["significant"] and ch["floor"] < 0.4
