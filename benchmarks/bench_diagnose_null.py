@@ -324,9 +324,11 @@ def pool_floors(a: argparse.Namespace) -> int:
         seeds.add(d["seeds"])
         refresh = d.get("frame_refresh")  # frame_recalibrate.py's copy: its frame statistics remade without a refit
         remade = d.get("structure_refresh")  # periodic_s96/recalibrate.py's copy: periodic measures remade
+        highlight = d.get("highlight_refresh")  # highlight_s110/recalibrate.py's copy: the highlight statistic added
         sources.append(f"{d['command']} [{d['fit']} fit, {d['cases']} cases"
                        + (f"; frame statistics remade by {refresh['by']}" if refresh else "")
-                       + (f"; {', '.join(remade['statistics'])} remade by {remade['by']}" if remade else "") + "]")
+                       + (f"; {', '.join(remade['statistics'])} remade by {remade['by']}" if remade else "")
+                       + (f"; screen:specular:highlight added by {highlight['by']}" if highlight else "") + "]")
     colour_rows, colour_cases, colour_sources = [], 0, []
     for path in getattr(a, "colour_floors_from", None) or []:
         r, d = stats_from_output(path)

@@ -4,8 +4,8 @@ The rule that uses them: :mod:`synthaug.diagnose.calibration`.
 """
 
 SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
-            'results/diagnose/null/centre_s100/calibration/calibration_set_hand.json '
-            'results/diagnose/null/centre_s100/calibration/full_fit_calibrated.json --write-floors '
+            'results/diagnose/null/highlight_s110/calibration/calibration_set_hand.json '
+            'results/diagnose/null/highlight_s110/calibration/full_fit_calibrated.json --write-floors '
             'synthaug/diagnose/null_floors.py <- python benchmarks/bench_diagnose_null.py --cases 24 --rules '
             'hand --out results/diagnose/null/calibration_set_hand.json [converged fit, 24 cases; frame '
             'statistics remade by python results/diagnose/null/frame_recalibrate.py --calibration '
@@ -18,11 +18,15 @@ SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
             'clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
             'full4000=results/diagnose/null/frame_refresh/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
             '--write-dir results/diagnose/null/periodic_s96/calibration --out '
-            'results/diagnose/null/periodic_s96/recalibrate.json] + python benchmarks/bench_diagnose_null.py '
-            '--cases 20 --base-seed 4000 --fit full --budget 800 --step-deg 10 --sprite-size 64 --workdir '
-            'outputs/bench_diagnose_null_full --out results/diagnose/null/full_fit_calibrated.json [full '
-            'fit, 20 cases; frame statistics remade by python results/diagnose/null/frame_recalibrate.py '
-            '--calibration '
+            'results/diagnose/null/periodic_s96/recalibrate.json; screen:specular:highlight added by python '
+            'results/diagnose/null/highlight_s110/recalibrate.py --calibration '
+            'results/diagnose/null/centre_s100/calibration/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
+            'results/diagnose/null/centre_s100/calibration/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
+            '--write-dir results/diagnose/null/highlight_s110/calibration] + python '
+            'benchmarks/bench_diagnose_null.py --cases 20 --base-seed 4000 --fit full --budget 800 '
+            '--step-deg 10 --sprite-size 64 --workdir outputs/bench_diagnose_null_full --out '
+            'results/diagnose/null/full_fit_calibrated.json [full fit, 20 cases; frame statistics remade by '
+            'python results/diagnose/null/frame_recalibrate.py --calibration '
             'clean:2000:24=results/diagnose/null/clip_s99/calibration/calibration_set_hand.json '
             'clean:4000:20:full=results/diagnose/null/clip_s99/calibration/full_fit_calibrated.json '
             '--write-dir results/diagnose/null/centre_s100/calibration --out '
@@ -32,68 +36,72 @@ SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
             'clean2000=results/diagnose/null/frame_refresh/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
             'full4000=results/diagnose/null/frame_refresh/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
             '--write-dir results/diagnose/null/periodic_s96/calibration --out '
-            'results/diagnose/null/periodic_s96/recalibrate.json]',
- 'date': '2026-12-06',
+            'results/diagnose/null/periodic_s96/recalibrate.json; screen:specular:highlight added by python '
+            'results/diagnose/null/highlight_s110/recalibrate.py --calibration '
+            'results/diagnose/null/centre_s100/calibration/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
+            '--write-dir results/diagnose/null/highlight_s110/calibration --tol 5e-3]',
+ 'date': '2026-12-07',
  'family_rate': 0.05,
  'n_cases': 44,
  'n_seeds': 60,
- 'n_statistics': 48,
- 'z_one_sided': 3.0781,
- 'z_two_sided': 3.279}
+ 'n_statistics': 49,
+ 'z_one_sided': 3.0842,
+ 'z_two_sided': 3.2848}
 
 # residual structure measure -> [lo, hi]: the range of its value on clean nuisance-varied data
-STRUCTURE = {'background_bias': [-0.002495, 0.001976],
- 'block_8x8': [-0.18425, 0.155828],
- 'boundary_bias': [-0.01346, 0.009946],
- 'column_pattern': [-0.083874, 0.082064],
- 'high_frequency': [-0.803442, 0.612925],
- 'interior_bias': [-0.028596, 0.028321],
- 'motion_direction': [-0.85368, 0.670645],
- 'noise_vs_signal': [-0.012297, 0.019111],
- 'periodic_columns': [-0.250366, 0.355366],
- 'periodic_rows': [-0.253582, 0.34942],
- 'radial': [-0.506516, 0.512673],
- 'rotor_parts': [-0.047099, 0.050745],
- 'row_pattern': [-0.128693, 0.118591],
- 'tone_curve': [-0.541204, 0.314035]}
+STRUCTURE = {'background_bias': [-0.002499, 0.001979],
+ 'block_8x8': [-0.184527, 0.156104],
+ 'boundary_bias': [-0.013478, 0.009963],
+ 'column_pattern': [-0.084019, 0.082209],
+ 'high_frequency': [-0.804529, 0.614012],
+ 'interior_bias': [-0.028646, 0.028321],
+ 'motion_direction': [-0.85487, 0.671834],
+ 'noise_vs_signal': [-0.012319, 0.019133],
+ 'periodic_columns': [-0.25081, 0.35581],
+ 'periodic_rows': [-0.254031, 0.349869],
+ 'radial': [-0.507414, 0.513571],
+ 'rotor_parts': [-0.047183, 0.050829],
+ 'row_pattern': [-0.128903, 0.118801],
+ 'tone_curve': [-0.541761, 0.314592]}
 
 # 'effect:channel' -> floor of its held-out gain (absorbed: held-out R2; noise_level: slope in the
 # candidate's direction; frame: the frames' fall-off k, block-grid log ratio or edge ratio; distance:colour:
 # the chroma gain, from clean colour cases) on clean nuisance-varied data
-SCREEN = {'compression:distance:feature': 0.031781,
- 'compression:distance:pixel': 0.017194,
- 'compression:frame': 0.004288,
- 'defocus:absorbed': 0.113382,
- 'defocus:distance:feature': 0.024919,
- 'defocus:distance:pixel': 0.040831,
- 'exposure:absorbed': 0.158915,
- 'exposure:distance:feature': 0.005363,
- 'exposure:distance:pixel': 0.006254,
- 'gamma:distance:feature': 0.011465,
- 'gamma:distance:pixel': 0.01293,
- 'gamma:noise_level': 0.046359,
- 'haze:distance:feature': 0.012905,
- 'haze:distance:pixel': 0.01511,
- 'lens_distortion:distance:feature': 0.008726,
- 'lens_distortion:distance:pixel': 0.010808,
+SCREEN = {'compression:distance:feature': 0.031845,
+ 'compression:distance:pixel': 0.017228,
+ 'compression:frame': 0.004296,
+ 'defocus:absorbed': 0.113608,
+ 'defocus:distance:feature': 0.024969,
+ 'defocus:distance:pixel': 0.040902,
+ 'exposure:absorbed': 0.159232,
+ 'exposure:distance:feature': 0.005373,
+ 'exposure:distance:pixel': 0.006266,
+ 'gamma:distance:feature': 0.011488,
+ 'gamma:distance:pixel': 0.012956,
+ 'gamma:noise_level': 0.046439,
+ 'haze:distance:feature': 0.01293,
+ 'haze:distance:pixel': 0.01514,
+ 'lens_distortion:distance:feature': 0.008744,
+ 'lens_distortion:distance:pixel': 0.010829,
  'lens_distortion:frame': 0.032613,
- 'rolling_shutter:distance:feature': 0.032085,
- 'rolling_shutter:distance:pixel': 0.046691,
- 'rotor_blur:distance:feature': 0.049188,
- 'rotor_blur:distance:pixel': 0.088326,
+ 'rolling_shutter:distance:feature': 0.032149,
+ 'rolling_shutter:distance:pixel': 0.046785,
+ 'rotor_blur:distance:feature': 0.049286,
+ 'rotor_blur:distance:pixel': 0.088502,
  'sharpening:absorbed': 0.207789,
- 'sharpening:distance:feature': 0.012362,
- 'sharpening:distance:pixel': 0.010182,
- 'sharpening:frame': 0.647943,
- 'shot_noise:distance:feature': 0.005942,
- 'shot_noise:distance:pixel': 0.00237,
- 'shot_noise:noise_level': 0.039994,
- 'specular:distance:feature': 0.009069,
- 'specular:distance:pixel': 0.008033,
- 'vignetting:absorbed': 0.080074,
- 'vignetting:distance:feature': 0.000791,
- 'vignetting:distance:pixel': 0.001088,
- 'vignetting:frame': 0.146499}
+ 'sharpening:distance:feature': 0.012387,
+ 'sharpening:distance:pixel': 0.010202,
+ 'sharpening:frame': 0.64797,
+ 'shot_noise:distance:feature': 0.005954,
+ 'shot_noise:distance:pixel': 0.002375,
+ 'shot_noise:noise_level': 0.040074,
+ 'specular:distance:feature': 0.009087,
+ 'specular:distance:pixel': 0.008049,
+ 'specular:highlight': 0.322561,
+ 'vignetting:absorbed': 0.080234,
+ 'vignetting:distance:feature': 0.000793,
+ 'vignetting:distance:pixel': 0.00109,
+ 'vignetting:frame': 0.146792}
 
 # 'effect:channel' -> the mean of that statistic on the clean cases (the 'no effect' value of a statistic
 # without a physical zero: the frames' edge sharpness)
@@ -127,6 +135,7 @@ CENTRE = {'compression:distance:feature': -0.038248,
  'shot_noise:noise_level': -0.006365,
  'specular:distance:feature': -0.011225,
  'specular:distance:pixel': -0.010818,
+ 'specular:highlight': 0.015412,
  'vignetting:absorbed': -0.02631,
  'vignetting:distance:feature': -0.005075,
  'vignetting:distance:pixel': -0.00511,
@@ -134,37 +143,38 @@ CENTRE = {'compression:distance:feature': -0.038248,
 
 # 'effect:channel' -> max(mean + z sd, max) of that statistic on the clean cases, not clamped at 0: what a
 # clean case's value stays under (a sharpening the frames show must fit the objects better than that)
-UPPER = {'compression:distance:feature': -0.006467,
- 'compression:distance:pixel': 0.008695,
- 'compression:frame': -0.003544,
- 'defocus:absorbed': 0.087001,
- 'defocus:distance:feature': 0.016234,
- 'defocus:distance:pixel': 0.040831,
+UPPER = {'compression:distance:feature': -0.006403,
+ 'compression:distance:pixel': 0.00873,
+ 'compression:frame': -0.003535,
+ 'defocus:absorbed': 0.087227,
+ 'defocus:distance:feature': 0.016284,
+ 'defocus:distance:pixel': 0.040902,
  'exposure:absorbed': 0.141837,
  'exposure:distance:feature': -0.003225,
  'exposure:distance:pixel': -0.000423,
  'gamma:distance:feature': 0.007639,
  'gamma:distance:pixel': 0.01292,
- 'gamma:noise_level': 0.046359,
+ 'gamma:noise_level': 0.046439,
  'haze:distance:feature': 0.011546,
  'haze:distance:pixel': 0.011472,
- 'lens_distortion:distance:feature': 0.000147,
- 'lens_distortion:distance:pixel': 0.003707,
+ 'lens_distortion:distance:feature': 0.000164,
+ 'lens_distortion:distance:pixel': 0.003729,
  'lens_distortion:frame': 0.032613,
- 'rolling_shutter:distance:feature': -0.000707,
- 'rolling_shutter:distance:pixel': 0.009179,
- 'rotor_blur:distance:feature': 0.029331,
- 'rotor_blur:distance:pixel': 0.060796,
+ 'rolling_shutter:distance:feature': -0.000643,
+ 'rolling_shutter:distance:pixel': 0.009272,
+ 'rotor_blur:distance:feature': 0.029429,
+ 'rotor_blur:distance:pixel': 0.060972,
  'sharpening:absorbed': 0.207789,
- 'sharpening:distance:feature': -0.008914,
- 'sharpening:distance:pixel': -0.024182,
- 'sharpening:frame': 0.647943,
- 'shot_noise:distance:feature': -0.001904,
- 'shot_noise:distance:pixel': -0.004281,
- 'shot_noise:noise_level': 0.033629,
- 'specular:distance:feature': -0.002156,
- 'specular:distance:pixel': -0.002785,
- 'vignetting:absorbed': 0.053765,
+ 'sharpening:distance:feature': -0.00889,
+ 'sharpening:distance:pixel': -0.024161,
+ 'sharpening:frame': 0.64797,
+ 'shot_noise:distance:feature': -0.001892,
+ 'shot_noise:distance:pixel': -0.004276,
+ 'shot_noise:noise_level': 0.033709,
+ 'specular:distance:feature': -0.002138,
+ 'specular:distance:pixel': -0.002769,
+ 'specular:highlight': 0.322561,
+ 'vignetting:absorbed': 0.053924,
  'vignetting:distance:feature': -0.004095,
  'vignetting:distance:pixel': -0.003755,
- 'vignetting:frame': 0.137724}
+ 'vignetting:frame': 0.138016}
