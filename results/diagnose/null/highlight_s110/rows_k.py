@@ -52,7 +52,8 @@ def main() -> int:
             ks.append({"k": hl["k"], "se": hl["se"], "p": hl["p"]})
         over = sum(1 for r in ks if floor is not None and r["k"] > floor)
         out["rows"][row] = {"cases": ks, "over_floor": over, "seconds": time.perf_counter() - t0}
-        print(f"{row}: k {' '.join(format(r['k'], '+.3f') for r in ks)}; over the floor {floor}: {over}/{n}", flush=True)
+        print(f"{row}: k {' '.join(format(r['k'], '+.3f') for r in ks)}; over the floor {floor}: {over}/{n}",
+              flush=True)
         Path(a.out).write_text(json.dumps(out, indent=1))
     return 0
 
