@@ -718,6 +718,24 @@ def test_gray_screening_drops_colour_only_candidates_asked_for(tmp_path):
     assert pix["p_adjusted"] == pytest.approx(min(1.0, rows[0]["screen"]["pixel"]["p"] * n_screening_tests(asked)))
 
 
+def _seed_set_fitted_at_truth(tmp_path, w_d_range):
+    """A small gray reference-camera seed set (16 seeds, data seed 3, albedos drawn in ``w_d_range``, nothing hidden)
+    fitted at its truth (no fitting run): its :class:`DiagnosisData` and the true per-seed w_d."""
+    from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
+    from synthaug.diagnose.residuals import load_diagnosis_data
+    from synthaug.effects.registry import PAPER_EFFECTS
+    from synthaug.params import CaptureParams
+
+    p = make_measured_seedset(tmp_path / "m", n_seeds=16, frame_size=(96, 128), object_px=(16, 20),
+                              view_step_deg=30, sprite_size=48, seed=3, paper_ranges={"w_d": w_d_range})
+    truth, textra, _ = load_truth(p)
+    theta = CaptureParams(truth.as_dict(), effects=PAPER_EFFECTS)
+    extra = [{"distance": 1.0, "generator_seed": 7 + i, "object_scale": float(e["object_scale"])}
+             for i, e in enumerate(textra)]
+    theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
+    return load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter"), truth.as_dict()["w_d"][:, 0]
+
+
 def test_tone_evidence_sees_a_tone_curve_and_not_added_noise(tmp_path):
     """Issue 20: a rising noise level function is shot noise or an expansive tone curve; only the tone curve
     changes the signal. Hand-built patches over a reference-camera seed set's layers: the fitted model's render
@@ -725,21 +743,9 @@ def test_tone_evidence_sees_a_tone_curve_and_not_added_noise(tmp_path):
     (sd 0.04·sqrt(I)); the tone curve the NLF implies (slope +0.57 -> g = 1.4) must lower the pixel distance of
     the first and raise that of the second, and name each one's noise-level channel accordingly."""
     from synthaug.diagnose.diagnosis_data import pixel_distance, render_with
-    from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
-    from synthaug.diagnose.residuals import load_diagnosis_data
     from synthaug.diagnose.screening import base_render, noise_level_channel, tone_evidence
-    from synthaug.effects.registry import PAPER_EFFECTS
-    from synthaug.params import CaptureParams
 
-    p = make_measured_seedset(tmp_path / "m", n_seeds=16, frame_size=(96, 128), object_px=(16, 20),
-                              view_step_deg=30, sprite_size=48, seed=3, paper_ranges={"w_d": (0.3, 0.45)})
-    truth, textra, _ = load_truth(p)
-    theta = CaptureParams(truth.as_dict(), effects=PAPER_EFFECTS)
-    extra = [{"distance": 1.0, "generator_seed": 7 + i, "object_scale": float(e["object_scale"])}
-             for i, e in enumerate(textra)]
-    theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
-    data = load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
-    w = truth.as_dict()["w_d"][:, 0]
+    data, w = _seed_set_fitted_at_truth(tmp_path, (0.3, 0.45))
     gen = torch.Generator().manual_seed(0)
     clean = render_with(data, None, w_d=w)
     noise = lambda sd: sd * torch.randn(clean.shape, generator=gen)  # noqa: E731
@@ -1072,21 +1078,9 @@ def test_highlight_strength_reads_an_added_highlight_whatever_the_albedo(tmp_pat
     renders; the model's render with every albedo 30 % brighter (a shading mismatch that scales with the albedo)
     reads k near 0; a channel without a calibrated floor names nothing."""
     from synthaug.diagnose.diagnosis_data import render_with
-    from synthaug.diagnose.reference_camera import load_truth, make_measured_seedset
-    from synthaug.diagnose.residuals import load_diagnosis_data
     from synthaug.diagnose.screening import HIGHLIGHT_SHININESS, highlight_channel, highlight_strength
-    from synthaug.effects.registry import PAPER_EFFECTS
-    from synthaug.params import CaptureParams
 
-    p = make_measured_seedset(tmp_path / "m", n_seeds=16, frame_size=(96, 128), object_px=(16, 20),
-                              view_step_deg=30, sprite_size=48, seed=3, paper_ranges={"w_d": (0.1, 0.5)})
-    truth, textra, _ = load_truth(p)
-    theta = CaptureParams(truth.as_dict(), effects=PAPER_EFFECTS)
-    extra = [{"distance": 1.0, "generator_seed": 7 + i, "object_scale": float(e["object_scale"])}
-             for i, e in enumerate(textra)]
-    theta.save(tmp_path / "fit.json", extra=extra, metadata={"config": {"step_deg": 30, "sprite_size": 48}})
-    data = load_diagnosis_data(p, tmp_path / "fit.json", "quadcopter")
-    w = truth.as_dict()["w_d"][:, 0]
+    data, w = _seed_set_fitted_at_truth(tmp_path, (0.1, 0.5))
     gen = torch.Generator().manual_seed(0)
     spec = {"specular": {"specular_ks": 0.4, "specular_shininess": HIGHLIGHT_SHININESS}}
     data.real = (render_with(data, spec, w_d=w, clamp=False) + 0.003 * torch.randn(data.real.shape, generator=gen))
