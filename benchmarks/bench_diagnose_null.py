@@ -176,7 +176,8 @@ def summarise(stats: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def main() -> int:
+def parser() -> argparse.ArgumentParser:
+    """The command line (also read back from a recorded ``command`` to make its cases again)."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--cases", type=int, default=24)
     ap.add_argument("--seeds", type=int, default=60)
@@ -209,6 +210,11 @@ def main() -> int:
     ap.add_argument("--colour-floors-from", nargs="+", default=[], metavar="JSON",
                     help="with --floors-from: clean colour cases' outputs (--colour, nothing hidden) whose colour "
                          "channels (distance:colour) are floored too")
+    return ap
+
+
+def main() -> int:
+    ap = parser()
     a = ap.parse_args()
     if a.colour_floors_from and not a.floors_from:
         ap.error("--colour-floors-from needs --floors-from (the gray floors are written with them)")

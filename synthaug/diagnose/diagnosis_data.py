@@ -28,6 +28,8 @@ __all__ = [
     "object_colour_factors",
     "solve_albedo",
     "solve_albedo_rgb",
+    "albedo_renders",
+    "ALBEDO_POINTS",
     "pairwise_distance",
     "pixel_distance",
     "chroma_distance",
@@ -405,9 +407,22 @@ def solve_albedo(data: DiagnosisData, extension: dict[str, dict[str, Any]] | Non
     nonlinear extension it is the secant solution. With ``rgb``: one w_d for the three channels
     of a neutral object, least squares over RGB.
     """
-    a = render_with(data, extension, w_d=torch.full((len(data),), 0.2), clamp=False, rgb=rgb)
-    b = render_with(data, extension, w_d=torch.full((len(data),), 0.6), clamp=False, rgb=rgb)
-    slope = (b - a) / 0.4
+    a, b = albedo_renders(data, extension, rgb=rgb)
+    w0, w1 = ALBEDO_POINTS
+    slope = (b - a) / (w1 - w0)
     num = (((data.real_rgb if rgb else data.real) - a) * slope).flatten(1).sum(1)
     den = (slope * slope).flatten(1).sum(1).clamp_min(1e-9)
-    return (0.2 + num / den).clamp(lo, hi)
+    return (w0 + num / den).clamp(lo, hi)
+
+
+ALBEDO_POINTS = (0.2, 0.6)
+"""The two albedos every seed is rendered at where its image is solved as a line in w_d (:func:`albedo_renders`)."""
+
+
+def albedo_renders(data: DiagnosisData, extension: dict[str, dict[str, Any]] | None = None, *,
+                   rgb: bool = False) -> tuple[torch.Tensor, torch.Tensor]:
+    """The model (+ ``extension``) rendered unclamped at the two albedos :data:`ALBEDO_POINTS` on every seed: the
+    image is affine in w_d (exactly for the paper's effects), so the two give it at any w_d
+    (:func:`solve_albedo`; the highlight's joint fit, :func:`synthaug.diagnose.screening.highlight_strength`)."""
+    return tuple(render_with(data, extension, w_d=torch.full((len(data),), w), clamp=False, rgb=rgb)
+                 for w in ALBEDO_POINTS)

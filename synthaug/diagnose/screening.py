@@ -91,7 +91,8 @@ import torch
 
 from synthaug.diagnose.calibration import HAND_MIN_GAIN, gain_centre, gain_floor, gain_upper
 from synthaug.diagnose.noise import NOISE_CANDIDATES, SHAPE_MIN_SHARE, SLOPE_FLOOR, noise_channel
-from synthaug.diagnose.diagnosis_data import DiagnosisData, pairwise_distance, pixel_distance, render_with, solve_albedo
+from synthaug.diagnose.diagnosis_data import (ALBEDO_POINTS, DiagnosisData, albedo_renders, pairwise_distance,
+                                              pixel_distance, render_with, solve_albedo)
 from synthaug.diagnose.residuals import seed_metadata
 from synthaug.params import EFFECT_PARAM_SPECS
 
@@ -495,10 +496,11 @@ def highlight_strength(data: DiagnosisData, given: dict[str, Setting] | None = N
 
     n = len(data)
     gv = given_values(data, given)
-    a0 = render_with(data, gv or None, w_d=torch.full((n,), 0.2), clamp=False).double().flatten(1)
-    s = (render_with(data, gv or None, w_d=torch.full((n,), 0.6), clamp=False).double().flatten(1) - a0) / 0.4
+    (w0, w1), (r0, r1) = ALBEDO_POINTS, albedo_renders(data, gv or None)
+    a0 = r0.double().flatten(1)
+    s = (r1.double().flatten(1) - a0) / (w1 - w0)
     ext = {**gv, **extension_values(data, "specular", {"specular_ks": 1.0, "specular_shininess": shininess})}
-    h = render_with(data, ext, w_d=torch.full((n,), 0.2), clamp=False).double().flatten(1) - a0
+    h = render_with(data, ext, w_d=torch.full((n,), w0), clamp=False).double().flatten(1) - a0
     y = data.real.double().flatten(1) - a0
     ss, sh, hh = (s * s).sum(1), (s * h).sum(1), (h * h).sum(1)
     sy, hy = (s * y).sum(1), (h * y).sum(1)

@@ -28,23 +28,11 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 
 def case_args(command: str) -> argparse.Namespace:
-    """The case-making arguments of a recorded bench command (its own defaults where the command left them)."""
-    from bench_diagnose_null import FULL_FIT_VIEWS
+    """The arguments of a recorded bench command, parsed by the bench's own command line (its defaults where the
+    command left them)."""
+    from bench_diagnose_null import parser
 
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--cases", type=int, default=24)
-    ap.add_argument("--seeds", type=int, default=60)
-    ap.add_argument("--base-seed", type=int, default=2000)
-    ap.add_argument("--fit", default="converged")
-    ap.add_argument("--budget", type=int, default=800)
-    ap.add_argument("--step-deg", type=float, default=FULL_FIT_VIEWS[0])
-    ap.add_argument("--sprite-size", type=int, default=FULL_FIT_VIEWS[1])
-    ap.add_argument("--no-nuisances", action="store_true")
-    ap.add_argument("--strength", default="default")
-    ap.add_argument("--colour", action="store_true")
-    ap.add_argument("--hidden", default=None)
-    words = shlex.split(command.split(" <- ")[0])
-    return ap.parse_known_args(words[2:])[0]
+    return parser().parse_args(shlex.split(command.split(" <- ")[0])[2:])
 
 
 def main() -> int:

@@ -30,7 +30,7 @@ def main() -> int:
     import torch
 
     torch.set_num_threads(1)
-    from bench_diagnose_null import FULL_FIT_VIEWS, make_case
+    from bench_diagnose_null import make_case, parser
     from synthaug.diagnose.calibration import gain_centre, gain_floor
     from synthaug.diagnose.diagnosis_data import load_diagnosis_data
     from synthaug.diagnose.screening import highlight_strength
@@ -40,10 +40,11 @@ def main() -> int:
     out = {"command": " ".join(["python"] + sys.argv), "centre": centre, "floor": floor, "rows": {}}
     for row in a.rows:
         effect = None if row == "clean" else row.removesuffix("_alt").removesuffix("_colour")
-        ns = argparse.Namespace(seeds=60, base_seed=a.base_seed, fit="converged", budget=800,
-                                step_deg=FULL_FIT_VIEWS[0], sprite_size=FULL_FIT_VIEWS[1], no_nuisances=False,
-                                hidden=effect, colour=row.endswith("_colour") or "_colour_" in row,
-                                strength="alt" if row.endswith("_alt") else "default")
+        # the bench's own arguments, as run_rows.sh passes them (its defaults for the rest)
+        ns = parser().parse_args(["--base-seed", str(a.base_seed), "--strength",
+                                  "alt" if row.endswith("_alt") else "default"]
+                                 + (["--hidden", effect] if effect else [])
+                                 + (["--colour"] if row.endswith("_colour") or "_colour_" in row else []))
         n = 20 if row == "clean" else a.cases
         ks, t0 = [], time.perf_counter()
         for k in range(n):
