@@ -4,8 +4,8 @@ The rule that uses them: :mod:`synthaug.diagnose.calibration`.
 """
 
 SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
-            'results/diagnose/null/highlight_s110/calibration/calibration_set_hand.json '
-            'results/diagnose/null/highlight_s110/calibration/full_fit_calibrated.json --write-floors '
+            'results/diagnose/null/highlight_s111/calibration/calibration_set_hand.json '
+            'results/diagnose/null/highlight_s111/calibration/full_fit_calibrated.json --write-floors '
             'synthaug/diagnose/null_floors.py <- python benchmarks/bench_diagnose_null.py --cases 24 --rules '
             'hand --out results/diagnose/null/calibration_set_hand.json [converged fit, 24 cases; frame '
             'statistics remade by python results/diagnose/null/frame_recalibrate.py --calibration '
@@ -21,8 +21,7 @@ SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
             'results/diagnose/null/periodic_s96/recalibrate.json; screen:specular:highlight added by python '
             'results/diagnose/null/highlight_s110/recalibrate.py --calibration '
             'results/diagnose/null/centre_s100/calibration/calibration_set_hand.json=outputs/bench_diagnose_null_hand2000 '
-            'results/diagnose/null/centre_s100/calibration/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
-            '--write-dir results/diagnose/null/highlight_s110/calibration] + python '
+            '--write-dir results/diagnose/null/highlight_s111/calibration --tol 5e-3] + python '
             'benchmarks/bench_diagnose_null.py --cases 20 --base-seed 4000 --fit full --budget 800 '
             '--step-deg 10 --sprite-size 64 --workdir outputs/bench_diagnose_null_full --out '
             'results/diagnose/null/full_fit_calibrated.json [full fit, 20 cases; frame statistics remade by '
@@ -39,7 +38,7 @@ SOURCE = {'command': 'python benchmarks/bench_diagnose_null.py --floors-from '
             'results/diagnose/null/periodic_s96/recalibrate.json; screen:specular:highlight added by python '
             'results/diagnose/null/highlight_s110/recalibrate.py --calibration '
             'results/diagnose/null/centre_s100/calibration/full_fit_calibrated.json=outputs/bench_diagnose_null_full '
-            '--write-dir results/diagnose/null/highlight_s110/calibration --tol 5e-3]',
+            '--write-dir results/diagnose/null/highlight_s111/calibration --tol 5e-3]',
  'date': '2026-12-07',
  'family_rate': 0.05,
  'n_cases': 44,
@@ -97,7 +96,7 @@ SCREEN = {'compression:distance:feature': 0.031845,
  'shot_noise:noise_level': 0.040074,
  'specular:distance:feature': 0.009087,
  'specular:distance:pixel': 0.008049,
- 'specular:highlight': 0.322561,
+ 'specular:highlight': 0.364811,
  'vignetting:absorbed': 0.080234,
  'vignetting:distance:feature': 0.000793,
  'vignetting:distance:pixel': 0.00109,
@@ -135,7 +134,7 @@ CENTRE = {'compression:distance:feature': -0.038248,
  'shot_noise:noise_level': -0.006365,
  'specular:distance:feature': -0.011225,
  'specular:distance:pixel': -0.010818,
- 'specular:highlight': 0.015412,
+ 'specular:highlight': 0.009128,
  'vignetting:absorbed': -0.02631,
  'vignetting:distance:feature': -0.005075,
  'vignetting:distance:pixel': -0.00511,
@@ -173,7 +172,7 @@ UPPER = {'compression:distance:feature': -0.006403,
  'shot_noise:noise_level': 0.033709,
  'specular:distance:feature': -0.002138,
  'specular:distance:pixel': -0.002769,
- 'specular:highlight': 0.322561,
+ 'specular:highlight': 0.364811,
  'vignetting:absorbed': 0.053924,
  'vignetting:distance:feature': -0.004095,
  'vignetting:distance:pixel': -0.003755,

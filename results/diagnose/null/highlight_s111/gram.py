@@ -1,0 +1,76 @@
+"""Issue 20, stop 111: per-seed normal equations of highlight estimators, cached for offline comparison.
+
+For each case: the regressors of every seed (flattened patch pixels) — the albedo slope s, the specular template at
+exponents SHINES (ks 1, the model's light and normals), the object layer's shift derivatives gx, gy and its scale
+derivative gs — with y = real − render(w_d 0.2). Saves X'X, X'y, y'y, the pixel count, the hidden ks and the clean
+nuisance ks per seed, so any subset model (and its per-seed standard errors) is solved offline (compare.py).
+
+    PYTHONPATH=. python results/diagnose/null/highlight_s111/gram.py OUT.npz CASE_DIR...
+    SHINES=120,160,240 PYTHONPATH=. python ...  # other exponents (default 10,20,30,45,80)
+"""
+import os
+import sys
+
+import numpy as np
+import torch
+
+from synthaug.data.seedset import SeedSet
+from synthaug.diagnose import screening as S
+from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data, render_with
+
+SHINES = tuple(float(e) for e in os.environ.get("SHINES", "10,20,30,45,80").split(","))
+COLS = ["s"] + [f"h{int(e)}" for e in SHINES] + ["gx", "gy", "gs"]
+
+
+def case_gram(case: str) -> dict:
+    seeds = SeedSet.load(f"{case}/seeds")
+    data = load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
+    n = len(data)
+    (w0, w1), (r0, r1) = ALBEDO_POINTS, albedo_renders(data, None)
+    a0 = r0.double()
+    s = (r1.double() - a0) / (w1 - w0)
+    cols = [s]
+    for e in SHINES:
+        ext = S.extension_values(data, "specular", {"specular_ks": 1.0, "specular_shininess": e})
+        cols.append(render_with(data, ext, w_d=torch.full((n,), w0), clamp=False).double() - a0)
+    r = render_with(data, None, clamp=False).double()  # at the fitted w_d
+    bg, al = data.background.double(), data.coverage.double()
+    dx = lambda t: (torch.roll(t, -1, -1) - torch.roll(t, 1, -1)) / 2  # noqa: E731
+    dy = lambda t: (torch.roll(t, -1, -2) - torch.roll(t, 1, -2)) / 2  # noqa: E731
+    gx, gy = dx(r) - (1 - al) * dx(bg), dy(r) - (1 - al) * dy(bg)
+    for t in (gx, gy):
+        t[..., 0] = 0; t[..., -1] = 0; t[..., 0, :] = 0; t[..., -1, :] = 0
+    p = r.shape[-1]
+    yy_, xx_ = torch.meshgrid(torch.arange(p, dtype=torch.float64), torch.arange(p, dtype=torch.float64), indexing="ij")
+    m = al.sum((-1, -2), keepdim=True).clamp_min(1e-6)
+    cx, cy = (al * xx_).sum((-1, -2), keepdim=True) / m, (al * yy_).sum((-1, -2), keepdim=True) / m
+    gs = (xx_ - cx) * gx + (yy_ - cy) * gy
+    cols += [gx, gy, gs]
+    X = torch.stack([c.flatten(1) for c in cols], -1)  # (N, P, K)
+    y = (data.real.double() - a0).flatten(1)
+    G = torch.einsum("npk,npl->nkl", X, X).numpy()
+    b = torch.einsum("npk,np->nk", X, y).numpy()
+    yy = (y * y).sum(1).numpy()
+    hid = np.array([rec["truth"]["hidden"].get("specular", {}).get("specular_ks", 0.0) for rec in seeds.records])
+    import json, pathlib
+    cj = pathlib.Path(case) / "case.json"
+    nz = json.loads(cj.read_text())["key"].get("nuisances") or {} if cj.exists() else {}
+    nks = np.array([nz.get("specular_ks", np.nan), nz.get("specular_shininess", np.nan)], float)
+    return {"G": G, "b": b, "yy": yy, "npix": y.shape[1], "hidden_ks": hid, "nuis_ks": nks}
+
+
+def main() -> int:
+    torch.set_num_threads(1)
+    out, cases = sys.argv[1], sys.argv[2:]
+    res = {}
+    for i, c in enumerate(cases):
+        g = case_gram(c)
+        for k, v in g.items():
+            res[f"{i}:{k}"] = v
+        print(c, len(g["yy"]), flush=True)
+    np.savez(out, cases=np.array(cases), cols=np.array(COLS), **res)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
