@@ -6,7 +6,8 @@ mean) is read on each; the row's k values are printed against the calibrated flo
 
     PYTHONPATH=. python results/diagnose/null/highlight_s110/rows_k.py --base-seed 8000 --out OUT.json ROW...
 
-ROW: effect or effect_alt (e.g. haze haze_alt), clean (20 cases), effect_colour for colour cases.
+ROW: effect or effect_alt (e.g. haze haze_alt), clean (20 cases), effect_colour for colour cases. ``--seeds 240``
+(stop 111): the same cases' nuisances and draws with 240 seeds each, made in their own folders.
 """
 from __future__ import annotations
 
@@ -25,6 +26,9 @@ def main() -> int:
     ap.add_argument("rows", nargs="+")
     ap.add_argument("--base-seed", type=int, required=True)
     ap.add_argument("--cases", type=int, default=5)
+    ap.add_argument("--seeds", type=int, default=60,
+                    help="seeds a case (stop 111); other than 60 the cases go to outputs/<row dir>_s<seeds>")
+    ap.add_argument("--clean-cases", type=int, default=20)
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
     import torch
@@ -41,14 +45,15 @@ def main() -> int:
     for row in a.rows:
         effect = None if row == "clean" else row.removesuffix("_alt").removesuffix("_colour")
         # the bench's own arguments, as run_rows.sh passes them (its defaults for the rest)
-        ns = parser().parse_args(["--base-seed", str(a.base_seed), "--strength",
+        ns = parser().parse_args(["--base-seed", str(a.base_seed), "--seeds", str(a.seeds), "--strength",
                                   "alt" if row.endswith("_alt") else "default"]
                                  + (["--hidden", effect] if effect else [])
                                  + (["--colour"] if row.endswith("_colour") or "_colour_" in row else []))
-        n = 20 if row == "clean" else a.cases
+        n = a.clean_cases if row == "clean" else a.cases
+        work = ROOT / "outputs" / (f"{pre}_{row}" + ("" if a.seeds == 60 else f"_s{a.seeds}"))
         ks, t0 = [], time.perf_counter()
         for k in range(n):
-            seeds, fit, _, _ = make_case(ROOT / "outputs" / f"{pre}_{row}", k, ns)
+            seeds, fit, _, _ = make_case(work, k, ns)
             hl = highlight_strength(load_diagnosis_data(seeds, fit, "quadcopter"), centre=centre)
             ks.append({"k": hl["k"], "se": hl["se"], "p": hl["p"]})
         over = sum(1 for r in ks if floor is not None and r["k"] > floor)
