@@ -95,7 +95,8 @@ def main():
     groups = {"calib": lambda n: "null_hand2000" in n or "null_full" in n}
     for how in sys.argv[0:0] or ("mean", "median", "huber"):
         print(f"\n## pooling: {how}")
-        print("| model | hand μ±σ | full μ±σ | floor | clean power >floor (max) | default named | alt named | alt k |")
+        print("| model | hand μ±σ | full μ±σ | floor | clean power >floor (max) | default named | alt named "
+              "| alt k |")
         print("|---|---|---|---|---|---|---|---|")
         for name, (cs, c) in models.items():
             idx = [ci[x] for x in cs]
