@@ -7,6 +7,7 @@ nuisance ks per seed, so any subset model (and its per-seed standard errors) is 
 
     PYTHONPATH=. python results/diagnose/null/highlight_s111/gram.py OUT.npz CASE_DIR...
     SHINES=120,160,240 PYTHONPATH=. python ...  # other exponents (default 10,20,30,45,80)
+    MASK=rotor ROTOR_MAX=0.5 PYTHONPATH=. python ...  # pixels of the model's rotor parts (> ROTOR_MAX) left out
 """
 import os
 import sys
@@ -48,6 +49,9 @@ def case_gram(case: str) -> dict:
     cols += [gx, gy, gs]
     X = torch.stack([c.flatten(1) for c in cols], -1)  # (N, P, K)
     y = (data.real.double() - a0).flatten(1)
+    if os.environ.get("MASK") == "rotor" and data.part_rotor is not None:  # the rotors' pixels left out
+        keep = (data.part_rotor.double().flatten(1) <= float(os.environ.get("ROTOR_MAX", "0.5"))).double()
+        X, y = X * keep[..., None], y * keep
     G = torch.einsum("npk,npl->nkl", X, X).numpy()
     b = torch.einsum("npk,np->nk", X, y).numpy()
     yy = (y * y).sum(1).numpy()
