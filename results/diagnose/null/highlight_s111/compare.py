@@ -45,6 +45,42 @@ def per_seed(case, idx, c):
     return np.array(out_k), np.array(out_v)
 
 
+def load_all(paths):
+    """The cases of several gram.py outputs (the same columns) and the columns' index."""
+    cols, cases = [], []
+    for p in paths:
+        cols, cs = load(p)
+        cases += cs
+    return {c: i for i, c in enumerate(cols)}, cases
+
+
+def is_calibration(name):
+    """A case of the 44 clean calibration cases (24 converged, 20 full fits)."""
+    return "null_hand2000" in name or "null_full" in name
+
+
+def case_pooled(cases, ci, columns, c, how="mean"):
+    """{case name: (pooled statistic, its error, seeds used)} of the model ``columns`` (gram.py's names), statistic
+    ``c`` (one weight per column)."""
+    idx, c = [ci[x] for x in columns], np.asarray(c, float)
+    out = {}
+    for case in cases:
+        k, v = per_seed(case, idx, c)
+        out[case["name"]] = (*pooled(k, v, how), len(k))
+    return out
+
+
+def channel_names(k, se, n, centre, floor):
+    """The channel's test: k over the floor and the one-sided t-test against the centre rejecting (Bonferroni)."""
+    return k > floor and stats.t.sf((k - centre) / se, n - 1) * NTEST < ALPHA
+
+
+def spread_parts(ks, ses):
+    """The cases' spread of k split into a seed-level part (the rms of their own errors) and the case-level rest."""
+    seed = float(np.sqrt((np.asarray(ses) ** 2).mean()))
+    return seed, float(np.sqrt(max(np.var(ks, ddof=1) - seed ** 2, 0.0)))
+
+
 def pooled(k, v, how):
     w = 1 / v
     if how == "median":
@@ -66,11 +102,7 @@ def pooled(k, v, how):
 
 
 def main():
-    cols, cases = [], []
-    for p in sys.argv[1:]:
-        cols, cs = load(p)
-        cases += cs
-    ci = {c: i for i, c in enumerate(cols)}
+    ci, cases = load_all(sys.argv[1:])
     models = {
         "h45 (adopted)": (["s", "h45"], [0, 1]),
         "h30": (["s", "h30"], [0, 1]),
@@ -92,37 +124,27 @@ def main():
         for e in os.environ["SHINES"].split(","):
             models[f"h{e}"] = (["s", f"h{e}"], [0, 1])
             models[f"h{e}+shift"] = (["s", f"h{e}", "gx", "gy"], [0, 1, 0, 0])
-    groups = {"calib": lambda n: "null_hand2000" in n or "null_full" in n}
-    for how in sys.argv[0:0] or ("mean", "median", "huber"):
+    for how in ("mean", "median", "huber"):
         print(f"\n## pooling: {how}")
         print("| model | hand μ±σ | full μ±σ | floor | clean power >floor (max) | default named | alt named "
               "| alt k |")
         print("|---|---|---|---|---|---|---|---|")
         for name, (cs, c) in models.items():
-            idx = [ci[x] for x in cs]
-            res = []
-            for case in cases:
-                k, v = per_seed(case, idx, np.array(c, float))
-                m, se = pooled(k, v, how)
-                res.append((case["name"], m, se, len(k)))
-            cal = np.array([m for n, m, *_ in res if groups["calib"](n)])
-            hand = np.array([m for n, m, *_ in res if "hand2000" in n])
-            full = np.array([m for n, m, *_ in res if "null_full" in n])
-            centre = cal.mean()
-            floor = one_sided_floor(cal, Z)
-            clean = np.array([m for n, m, *_ in res if "_clean/" in n])
-
-            def named(n, m, se, nn):
-                t = (m - centre) / se
-                return m > floor and stats.t.sf(t, nn - 1) * NTEST < ALPHA
-            dflt = [named(*r) for r in res if "specular/" in r[0]]
-            per_set = lambda rows: "+".join(str(sum(rows[i:i + 5])) for i in range(0, len(rows), 5))
-            alt = [r for r in res if "specular_alt/" in r[0]]
-            altn = [named(*r) for r in alt]
+            res = case_pooled(cases, ci, cs, c, how)
+            cal = np.array([r[0] for n, r in res.items() if is_calibration(n)])
+            hand = np.array([r[0] for n, r in res.items() if "hand2000" in n])
+            full = np.array([r[0] for n, r in res.items() if "null_full" in n])
+            centre, floor = cal.mean(), one_sided_floor(cal, Z)
+            named = {n: channel_names(*r, centre, floor) for n, r in res.items()}
+            clean = [n for n in res if "_clean/" in n]
+            dflt = [named[n] for n in res if "specular/" in n]
+            alt = [n for n in res if "specular_alt/" in n]
+            altn = [named[n] for n in alt]
+            per_set = lambda rows: "+".join(str(sum(rows[i:i + 5])) for i in range(0, len(rows), 5))  # noqa: E731
             print(f"| {name} | {hand.mean():.3f}±{hand.std(ddof=1):.3f} | {full.mean():.3f}±{full.std(ddof=1):.3f} | "
-                  f"{floor:.3f} | {sum(named(*r) for r in res if '_clean/' in r[0])}/{len(clean)} ({clean.max():.3f}) "
+                  f"{floor:.3f} | {sum(named[n] for n in clean)}/{len(clean)} ({max(res[n][0] for n in clean):.3f}) "
                   f"| {sum(dflt)}/{len(dflt)} ({per_set(dflt)}) | {sum(altn)}/{len(altn)} ({per_set(altn)}) | "
-                  f"{' '.join(f'{r[1]:.2f}' for r in alt)} |", flush=True)
+                  f"{' '.join(f'{res[n][0]:.2f}' for n in alt)} |", flush=True)
 
 
 if __name__ == "__main__":

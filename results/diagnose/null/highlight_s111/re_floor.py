@@ -9,37 +9,26 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from scipy import stats
 
 sys.path.insert(0, str(Path(__file__).parent))
-from compare import ALPHA, NTEST, Z, load, per_seed, pooled  # noqa: E402
+from compare import Z, case_pooled, channel_names, is_calibration, load_all, spread_parts  # noqa: E402
 
 
 def main():
-    cases = []
-    for p in sys.argv[1:]:
-        cols, cs = load(p)
-        cases += cs
-    ci = {c: i for i, c in enumerate(cols)}
+    ci, cases = load_all(sys.argv[1:])
     for shin in ("45", "80"):
-        idx = [ci["s"], ci[f"h{shin}"]]
-        res = {}
-        for case in cases:
-            k, v = per_seed(case, idx, np.array([0.0, 1.0]))
-            res[case["name"]] = (*pooled(k, v, "mean"), len(k))
-        cal = [res[n] for n in res if "null_hand2000" in n or "null_full" in n]
+        res = case_pooled(cases, ci, ["s", f"h{shin}"], [0.0, 1.0])
+        cal = [r for n, r in res.items() if is_calibration(n)]
         m = np.array([r[0] for r in cal])
-        se = np.array([r[1] for r in cal])
         centre = m.mean()
-        tau = float(np.sqrt(max(m.var(ddof=1) - (se ** 2).mean(), 0.0)))
+        tau = spread_parts(m, [r[1] for r in cal])[1]
 
         def named(r):
-            floor = max(centre, 0.0) + Z * np.sqrt(tau ** 2 + r[1] ** 2)
-            return r[0] > floor and stats.t.sf((r[0] - centre) / r[1], r[2] - 1) * NTEST < ALPHA
+            return channel_names(*r, centre, max(centre, 0.0) + Z * np.sqrt(tau ** 2 + r[1] ** 2))
         cal_over = sum(named(r) for r in cal)
-        clean = [named(res[n]) for n in res if "_clean/" in n]
-        dflt = [named(res[n]) for n in sorted(res) if "specular/" in n]
-        alt = [named(res[n]) for n in sorted(res) if "specular_alt/" in n]
+        clean = [named(r) for n, r in res.items() if "_clean/" in n]
+        dflt = [named(r) for n, r in res.items() if "specular/" in n]
+        alt = [named(r) for n, r in res.items() if "specular_alt/" in n]
         print(f"exponent {shin}: centre {centre:.3f}, tau {tau:.3f}; calibration cases over their floor {cal_over}/44; "
               f"clean power {sum(clean)}/60; default {sum(dflt)}/15; wider {sum(alt)}/15")
 

@@ -15,36 +15,25 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from compare import load, per_seed, pooled  # noqa: E402
+from compare import case_pooled, load_all, spread_parts  # noqa: E402
 
 SHIN = os.environ.get("SHIN", "80")
 
 
 def main():
-    cases = []
-    for p in sys.argv[1:]:
-        cols, cs = load(p)
-        cases += cs
-    ci = {c: i for i, c in enumerate(cols)}
-    idx, c = [ci["s"], ci[f"h{SHIN}"]], np.array([0.0, 1.0])
-    k_of, se_of = {}, {}
-    for case in cases:
-        k, v = per_seed(case, idx, c)
-        k_of[case["name"]], se_of[case["name"]] = pooled(k, v, "mean")
+    ci, cases = load_all(sys.argv[1:])
+    res = case_pooled(cases, ci, ["s", f"h{SHIN}"], [0.0, 1.0])
     print(f"## exponent {SHIN}: specular cases against their clean twins")
     for pre in ("bench_diagnose_power5", "fresh13000", "fresh11000"):
         for i in range(5):
-            t = k_of[f"outputs/{pre}_clean/case_{i:03d}"]
-            d, a = k_of[f"outputs/{pre}_specular/case_{i:03d}"], k_of[f"outputs/{pre}_specular_alt/case_{i:03d}"]
+            t, d, a = (res[f"outputs/{pre}_{row}/case_{i:03d}"][0] for row in ("clean", "specular", "specular_alt"))
             print(f"{pre} case {i}: twin {t:+.3f}; default {d:.3f} (+{d - t:.3f}); wider {a:.3f} (+{a - t:.3f})")
     print("## the clean spread: seed-level and case-level parts")
     for name, sel in (("converged calibration", "null_hand2000"), ("full-fit calibration", "null_full"),
                       ("clean power cases", "_clean/")):
-        ks = np.array([k_of[n] for n in k_of if sel in n])
-        ses = np.array([se_of[n] for n in k_of if sel in n])
-        seed = float(np.sqrt((ses ** 2).mean()))
-        case = float(np.sqrt(max(ks.var(ddof=1) - seed ** 2, 0.0)))
-        print(f"{name} ({len(ks)}): sd {ks.std(ddof=1):.3f} = seed-level {seed:.3f} (+) case-level {case:.3f}")
+        ks, ses = zip(*[r[:2] for n, r in res.items() if sel in n])
+        seed, case = spread_parts(ks, ses)
+        print(f"{name} ({len(ks)}): sd {np.std(ks, ddof=1):.3f} = seed-level {seed:.3f} (+) case-level {case:.3f}")
 
 
 if __name__ == "__main__":
