@@ -1,0 +1,110 @@
+"""Issue 20, stop 112: per-seed normal equations of the highlight estimator with regressors for the clean material's
+shading nuisances, cached for offline comparison (stop 111's compare.py solves them).
+
+Stop 111 measured that the clean cases' own spread of the highlight amplitude k (case-level, not seeds' noise) sets
+the specular floor. The nuisances that move the diffuse shading of the real object away from the model's (each video's
+light tilted by up to 40 degrees, smooth normals, another ambient) are linear (to first order) in a few renders of the
+model; this script adds them as columns beside stop 111's:
+
+- ``s``: the albedo slope; ``h80``, ``h45``: the specular template (ks 1) at exponents 80 and 45;
+- ``lx``, ``ly``: the diffuse shading's derivative in the light's direction (the model's normals rotated by ±δ about
+  the camera's x and y axes: a rotated light), at the fitted w_d;
+- ``sm``: smooth shading (the normal map blurred by 1.3 frame px inside the object, renormalised) minus the model's;
+- ``amb``: the object at uniform full light (normals toward the light) minus the model's: with ``s``, an ambient change;
+- ``gx``, ``gy``: the object layer's shift derivatives (as stop 111's).
+
+    PYTHONPATH=. python results/diagnose/null/highlight_s112/gram.py OUT.npz CASE_DIR...
+"""
+import dataclasses
+import json
+import math
+import pathlib
+import sys
+
+import numpy as np
+import torch
+
+from synthaug.data.seedset import SeedSet
+from synthaug.diagnose import screening as S
+from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data, render_with
+from synthaug.diagnose.nuisances import MODEL_LIGHT
+from synthaug.effects.functional import gaussian_blur_fft
+
+COLS = ["s", "h80", "h45", "lx", "ly", "sm", "amb", "gx", "gy"]
+DELTA = 0.1  # rad, the light's central difference
+SMOOTH_FRAME_PX = 1.3
+
+
+def rotated(normals, axis, angle):
+    c, s = math.cos(angle), math.sin(angle)
+    n = normals.clone()
+    i, j = (1, 2) if axis == "x" else (0, 2)
+    n[:, i], n[:, j] = c * normals[:, i] - s * normals[:, j], s * normals[:, i] + c * normals[:, j]
+    return n
+
+
+def smoothed(normals, coverage, sigma):
+    """smooth_normals with one σ (patch px) per seed."""
+    pad = int(math.ceil(3 * float(sigma.max()))) + 2
+    w = (coverage > 0).to(normals.dtype)
+    num = gaussian_blur_fft(normals * w, sigma.to(normals.dtype), pad=pad, border="constant")
+    den = gaussian_blur_fft(w, sigma.to(normals.dtype), pad=pad, border="constant").clamp_min(1e-6)
+    n = num / den
+    n = n / n.norm(dim=1, keepdim=True).clamp_min(1e-6)
+    return torch.where(w > 0, n, torch.zeros_like(n))
+
+
+def case_gram(case: str) -> dict:
+    seeds = SeedSet.load(f"{case}/seeds")
+    data = load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
+    n = len(data)
+    (w0, w1), (r0, r1) = ALBEDO_POINTS, albedo_renders(data, None)
+    a0 = r0.double()
+    s = (r1.double() - a0) / (w1 - w0)
+    cols = [s]
+    for e in (80.0, 45.0):
+        ext = S.extension_values(data, "specular", {"specular_ks": 1.0, "specular_shininess": e})
+        cols.append(render_with(data, ext, w_d=torch.full((n,), w0), clamp=False).double() - a0)
+    r = render_with(data, None, clamp=False).double()  # at the fitted w_d
+    with_normals = lambda nrm: render_with(dataclasses.replace(data, normals=nrm), None, clamp=False).double()  # noqa
+    for axis in ("x", "y"):
+        cols.append((with_normals(rotated(data.normals, axis, DELTA))
+                     - with_normals(rotated(data.normals, axis, -DELTA))) / (2 * DELTA))
+    sig = (SMOOTH_FRAME_PX / data.frame_scale.double()).float()
+    cols.append(with_normals(smoothed(data.normals, data.coverage, sig)) - r)
+    light = torch.tensor(MODEL_LIGHT, dtype=data.normals.dtype).reshape(1, 3, 1, 1)
+    cols.append(with_normals(light * (data.coverage > 0).to(data.normals.dtype)) - r)
+    bg, al = data.background.double(), data.coverage.double()
+    dx = lambda t: (torch.roll(t, -1, -1) - torch.roll(t, 1, -1)) / 2  # noqa: E731
+    dy = lambda t: (torch.roll(t, -1, -2) - torch.roll(t, 1, -2)) / 2  # noqa: E731
+    gx, gy = dx(r) - (1 - al) * dx(bg), dy(r) - (1 - al) * dy(bg)
+    for t in (gx, gy):
+        t[..., 0] = 0; t[..., -1] = 0; t[..., 0, :] = 0; t[..., -1, :] = 0  # noqa: E702
+    cols += [gx, gy]
+    X = torch.stack([c.flatten(1) for c in cols], -1)  # (N, P, K)
+    y = (data.real.double() - a0).flatten(1)
+    G = torch.einsum("npk,npl->nkl", X, X).numpy()
+    b = torch.einsum("npk,np->nk", X, y).numpy()
+    yy = (y * y).sum(1).numpy()
+    hid = np.array([rec["truth"]["hidden"].get("specular", {}).get("specular_ks", 0.0) for rec in seeds.records])
+    cj = pathlib.Path(case) / "case.json"
+    nz = json.loads(cj.read_text())["key"].get("nuisances") or {} if cj.exists() else {}
+    nks = np.array([nz.get("specular_ks", np.nan), nz.get("specular_shininess", np.nan)], float)
+    return {"G": G, "b": b, "yy": yy, "npix": y.shape[1], "hidden_ks": hid, "nuis_ks": nks}
+
+
+def main() -> int:
+    torch.set_num_threads(1)
+    out, cases = sys.argv[1], sys.argv[2:]
+    res = {}
+    for i, c in enumerate(cases):
+        g = case_gram(c)
+        for k, v in g.items():
+            res[f"{i}:{k}"] = v
+        print(c, len(g["yy"]), flush=True)
+    np.savez(out, cases=np.array(cases), cols=np.array(COLS), **res)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,63 @@
+"""Issue 20, stop 112: a location-free highlight statistic tried offline — the object's brightest excess over the
+model's diffuse shading. Per seed: y = real − render(w_d 0.2), the albedo slope s fitted by least squares on the
+object's interior (coverage ≥ 0.99, eroded by one pixel), and of the residual on the interior its maximum, its
+mean over the 3 and 5 largest pixels and its 95th percentile. A highlight adds a localised peak whatever its place
+(each video's light, smooth normals, a finer mesh move it); the shading's mismatches spread over the object.
+
+    PYTHONPATH=. python results/diagnose/null/highlight_s112/peaks.py OUT.npz CASE_DIR...
+"""
+import json
+import pathlib
+import sys
+
+import numpy as np
+import torch
+
+from synthaug.data.seedset import SeedSet
+from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data
+
+STATS = ["max", "top3", "top5", "p95", "rms", "npix"]
+
+
+def case_peaks(case: str) -> dict:
+    seeds = SeedSet.load(f"{case}/seeds")
+    data = load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
+    (w0, w1), (r0, r1) = ALBEDO_POINTS, albedo_renders(data, None)
+    a0 = r0.double()
+    s = (r1.double() - a0) / (w1 - w0)
+    y = data.real.double() - a0
+    cov = (data.coverage.double() >= 0.99).double()
+    inner = -torch.nn.functional.max_pool2d(-cov, 3, 1, 1)  # eroded by one pixel
+    out = np.zeros((len(data), len(STATS)))
+    for i in range(len(data)):
+        m = inner[i, 0] > 0.5
+        if int(m.sum()) < 8:
+            out[i] = np.nan
+            continue
+        si, yi = s[i, 0][m], y[i, 0][m]
+        w = float((si * yi).sum() / (si * si).sum().clamp_min(1e-12))
+        r = (yi - w * si).numpy()
+        r = r - np.median(r)
+        srt = np.sort(r)[::-1]
+        out[i] = [srt[0], srt[:3].mean(), srt[:5].mean(), np.percentile(r, 95), np.sqrt((r ** 2).mean()), len(r)]
+    hid = np.array([rec["truth"]["hidden"].get("specular", {}).get("specular_ks", 0.0) for rec in seeds.records])
+    cj = pathlib.Path(case) / "case.json"
+    nz = json.loads(cj.read_text())["key"].get("nuisances") or {} if cj.exists() else {}
+    return {"stats": out, "hidden_ks": hid, "nuis_ks": np.array([nz.get("specular_ks", np.nan),
+                                                                   nz.get("specular_shininess", np.nan)])}
+
+
+def main() -> int:
+    torch.set_num_threads(1)
+    out, cases = sys.argv[1], sys.argv[2:]
+    res = {}
+    for i, c in enumerate(cases):
+        for k, v in case_peaks(c).items():
+            res[f"{i}:{k}"] = v
+        print(c, flush=True)
+    np.savez(out, cases=np.array(cases), stats=np.array(STATS), **res)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
