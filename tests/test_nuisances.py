@@ -169,6 +169,27 @@ def test_reference_camera_with_nuisances(tmp_path):
         make_measured_seedset(tmp_path / "x", nuisances={"ambient": 0.3}, **FAST)  # type: ignore[arg-type]
 
 
+def test_a_hidden_highlight_is_the_real_materials_own_gloss(tmp_path):
+    """Stop 112: with nuisances, a hidden ``specular`` is lit by its video's light on the real material's (smooth)
+    normals, so it is the same highlight as that material's own gloss of the same ks and exponent (the clean cases'
+    nuisance): the two seed sets agree up to 8-bit rounding, and both differ from the material without gloss."""
+    from synthaug.data.seedset import SeedSet
+    from synthaug.diagnose.reference_camera import make_measured_seedset
+
+    kw = dict(FAST, n_seeds=4)
+    nz = Nuisances(ambient=0.3, normal_smoothing_px=1.2, light_spread_deg=35.0)
+    spec = {"specular": {"specular_ks": 0.2, "specular_shininess": 20.0}}
+    hidden = SeedSet.load(make_measured_seedset(tmp_path / "h", hidden=spec, nuisances=nz, **kw))
+    glossy = SeedSet.load(make_measured_seedset(
+        tmp_path / "g", nuisances=Nuisances(**{**nz.as_dict(), "specular_ks": 0.2, "specular_shininess": 20.0}), **kw))
+    matte = SeedSet.load(make_measured_seedset(tmp_path / "m", nuisances=nz, **kw))
+    # the videos' lights are tilted away from the model's (0, 0.5, 0.866)
+    assert max(abs(r["truth"]["nuisance"]["light_dir"][0]) for r in hidden.records) > 0.05
+    d_hg = np.abs(hidden.patches.astype(int) - glossy.patches.astype(int))
+    d_hm = np.abs(hidden.patches.astype(int) - matte.patches.astype(int))
+    assert d_hg.max() <= 1 and d_hm.max() >= 10, (d_hg.max(), d_hm.max())
+
+
 def test_paint_tint_keeps_luma_and_has_its_saturation_and_hue():
     from synthaug.diagnose.nuisances import PAINT_SATURATION, paint_tint
     from synthaug.effects.camera_functional import LUMA_WEIGHTS

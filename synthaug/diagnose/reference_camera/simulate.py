@@ -15,7 +15,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import torch
 
-from synthaug.diagnose.nuisances import Nuisances, SeedNuisance, drift_scene, shade_object
+from synthaug.diagnose.nuisances import Nuisances, SeedNuisance, drift_scene, shade_object, smooth_normals
 from synthaug.diagnose.reference_camera.capture import capture, to_u8
 from synthaug.diagnose.reference_camera.real_object import real_object
 from synthaug.diagnose.reference_camera.settings import (
@@ -328,7 +328,11 @@ def _object_on_frame(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, cov: 
         values.update({s.name: cam[eff][s.name] for s in get_effect(eff).params})
     obj_names = (() if not nz.shading_is_model else ("material",)) + ("motion_blur",) + tuple(object_effects)
     theta = CaptureParams(values, effects=PAPER_EFFECTS + tuple(object_effects), validate=False).to(torch.float64)
-    extras = {} if rotor is None else {"part_rotor": rotor}
+    extras: dict[str, torch.Tensor] = {} if rotor is None else {"part_rotor": rotor}
+    obj_normals = nrm
+    if not nz.shading_is_model:  # a hidden highlight is on the real material: its video's light, its (smooth) normals
+        extras["light_dir"] = torch.tensor(draw.nuisance.light_dir, dtype=torch.float64)
+        obj_normals = smooth_normals(nrm, cov, nz.normal_smoothing_px)
     paint = nz.paint_rgb if shot.shape[1] == 3 else np.ones(1)
     neutral = bool(np.all(paint == 1.0))
     colour0 = _object_radiance(nz, draw, cov, nrm, side)
@@ -340,7 +344,7 @@ def _object_on_frame(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, cov: 
                                validate=False).to(torch.float64)
         elif not neutral:
             col = _object_radiance(nz, draw, cov, nrm, side, float(paint[c]))
-        state = RenderState(object_color=col, coverage=cov, normals=nrm, background=bg_crop[:, c:c + 1],
+        state = RenderState(object_color=col, coverage=cov, normals=obj_normals, background=bg_crop[:, c:c + 1],
                             extras=extras, fields={"noise": draw.object_noise})
         state = apply_effects(state, th, obj_names, clamp=False)
         if "interlacing" in cam:
