@@ -170,18 +170,19 @@ def test_reference_camera_with_nuisances(tmp_path):
 
 
 def test_a_hidden_highlight_is_the_real_materials_own_gloss(tmp_path):
-    """Stop 112: with nuisances, a hidden ``specular`` is lit by its video's light on the real material's (smooth)
-    normals, so it is the same highlight as that material's own gloss of the same ks and exponent (the clean cases'
-    nuisance): the two seed sets agree up to 8-bit rounding, and both differ from the material without gloss."""
+    """Stop 112: with nuisances, a hidden ``specular`` is lit by its video's light (direction and strength) on the real
+    material's (smooth) normals, so it is the same highlight as that material's own gloss of the same ks and exponent
+    (the clean cases' nuisance): the two seed sets agree up to 8-bit rounding, and both differ from the material
+    without gloss."""
     from synthaug.data.seedset import SeedSet
     from synthaug.diagnose.reference_camera import make_measured_seedset
 
     kw = dict(FAST, n_seeds=4)
-    nz = Nuisances(ambient=0.3, normal_smoothing_px=1.2, light_spread_deg=35.0)
-    spec = {"specular": {"specular_ks": 0.2, "specular_shininess": 20.0}}
+    nz = Nuisances(ambient=0.3, normal_smoothing_px=1.2, light_spread_deg=35.0, light_strength_spread=0.15)
+    spec = {"specular": {"specular_ks": 0.15, "specular_shininess": 20.0}}
     hidden = SeedSet.load(make_measured_seedset(tmp_path / "h", hidden=spec, nuisances=nz, **kw))
     glossy = SeedSet.load(make_measured_seedset(
-        tmp_path / "g", nuisances=Nuisances(**{**nz.as_dict(), "specular_ks": 0.2, "specular_shininess": 20.0}), **kw))
+        tmp_path / "g", nuisances=Nuisances(**{**nz.as_dict(), "specular_ks": 0.15, "specular_shininess": 20.0}), **kw))
     matte = SeedSet.load(make_measured_seedset(tmp_path / "m", nuisances=nz, **kw))
     # the videos' lights are tilted away from the model's (0, 0.5, 0.866)
     assert max(abs(r["truth"]["nuisance"]["light_dir"][0]) for r in hidden.records) > 0.05

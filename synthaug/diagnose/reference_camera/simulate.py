@@ -326,6 +326,8 @@ def _object_on_frame(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, cov: 
     object_effects = [e.name for e in ordered([e for e in OBJECT_ONLY_EFFECTS if e in cam and e in CAMERA_EFFECTS])]
     for eff in object_effects:
         values.update({s.name: cam[eff][s.name] for s in get_effect(eff).params})
+    if "specular" in object_effects and not nz.shading_is_model:  # the real material's highlight: its video's light
+        values["specular_ks"] = values["specular_ks"] * draw.nuisance.light_strength  # strength scales it too
     obj_names = (() if not nz.shading_is_model else ("material",)) + ("motion_blur",) + tuple(object_effects)
     theta = CaptureParams(values, effects=PAPER_EFFECTS + tuple(object_effects), validate=False).to(torch.float64)
     extras: dict[str, torch.Tensor] = {} if rotor is None else {"part_rotor": rotor}
