@@ -1,0 +1,91 @@
+"""Issue 20, stop 112: the highlight's normal equations with the template and the albedo slope rendered at each
+video's TRUE light (an oracle: the seed records' nuisance light), beside the model's light — what a light-following
+template could gain at best, once the reference camera lights a hidden highlight by its video's light (stop 112).
+
+Columns: ``s``, ``h80``, ``h45`` (the model's light, as the library) and ``sL``, ``h80L``, ``h45L`` (each seed's video
+light; the diffuse shading too).
+
+    PYTHONPATH=. python results/diagnose/null/highlight_s112/gram_light.py OUT.npz CASE_DIR...
+"""
+import json
+import pathlib
+import sys
+
+import numpy as np
+import torch
+
+import synthaug.effects.pipeline as pipeline
+from synthaug.data.seedset import SeedSet
+from synthaug.diagnose import screening as S
+from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data, render_with
+
+COLS = ["s", "h80", "h45", "sL", "h80L", "h45L"]
+_simulate = pipeline.simulate
+LIGHT: list = [None]
+
+
+def _lit(*a, extras=None, **k):
+    extras = dict(extras or {})
+    if LIGHT[0] is not None:
+        extras["light_dir"] = LIGHT[0]
+    return _simulate(*a, extras=extras, **k)
+
+
+pipeline.simulate = _lit
+
+
+def columns(data, n):
+    (w0, w1), (r0, r1) = ALBEDO_POINTS, albedo_renders(data, None)
+    a0 = r0.double()
+    cols = [(r1.double() - a0) / (w1 - w0)]
+    for e in (80.0, 45.0):
+        ext = S.extension_values(data, "specular", {"specular_ks": 1.0, "specular_shininess": e})
+        cols.append(render_with(data, ext, w_d=torch.full((n,), w0), clamp=False).double() - a0)
+    return a0, cols
+
+
+def case_gram(case: str) -> dict:
+    seeds = SeedSet.load(f"{case}/seeds")
+    data = load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
+    n = len(data)
+    LIGHT[0] = None
+    a0, cols = columns(data, n)
+    light = [r["truth"].get("nuisance", {}).get("light_dir", (0.0, 0.5, 0.8660254)) for r in seeds.records]
+    LIGHT[0] = torch.tensor(light, dtype=torch.float32)
+    a0L, colsL = columns(data, n)
+    LIGHT[0] = None
+    y = (data.real.double() - a0).flatten(1)
+    # the light-following model's columns are taken against the same a0 (the model's render at w_d 0.2): add the
+    # difference of the two renders at w_d 0.2 to the slope's span by fitting y - (a0L - a0) instead
+    yL = (data.real.double() - a0L).flatten(1)
+    X = torch.stack([c.flatten(1) for c in cols], -1)
+    XL = torch.stack([c.flatten(1) for c in colsL], -1)
+    G = torch.einsum("npk,npl->nkl", X, X).numpy()
+    b = torch.einsum("npk,np->nk", X, y).numpy()
+    GL = torch.einsum("npk,npl->nkl", XL, XL).numpy()
+    bL = torch.einsum("npk,np->nk", XL, yL).numpy()
+    Gf, bf = np.zeros((n, 6, 6)), np.zeros((n, 6))
+    Gf[:, :3, :3], Gf[:, 3:, 3:], bf[:, :3], bf[:, 3:] = G, GL, b, bL  # two separate models in one block matrix
+    yy = (y * y).sum(1).numpy()
+    yyL = (yL * yL).sum(1).numpy()
+    hid = np.array([rec["truth"]["hidden"].get("specular", {}).get("specular_ks", 0.0) for rec in seeds.records])
+    cj = pathlib.Path(case) / "case.json"
+    nz = json.loads(cj.read_text())["key"].get("nuisances") or {} if cj.exists() else {}
+    nks = np.array([nz.get("specular_ks", np.nan), nz.get("specular_shininess", np.nan)], float)
+    return {"G": Gf, "b": bf, "yy": yy, "yyL": yyL, "npix": y.shape[1], "hidden_ks": hid, "nuis_ks": nks}
+
+
+def main() -> int:
+    torch.set_num_threads(1)
+    out, cases = sys.argv[1], sys.argv[2:]
+    res = {}
+    for i, c in enumerate(cases):
+        for k, v in case_gram(c).items():
+            res[f"{i}:{k}"] = v
+        print(c, flush=True)
+    np.savez(out, cases=np.array(cases), cols=np.array(COLS), **res)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
