@@ -35,12 +35,8 @@ def case_gram(case: str) -> dict:
         ext = S.extension_values(data, "specular", {"specular_ks": 1.0, "specular_shininess": e})
         cols.append(render_with(data, ext, w_d=torch.full((n,), w0), clamp=False).double() - a0)
     r = render_with(data, None, clamp=False).double()  # at the fitted w_d
-    bg, al = data.background.double(), data.coverage.double()
-    dx = lambda t: (torch.roll(t, -1, -1) - torch.roll(t, 1, -1)) / 2  # noqa: E731
-    dy = lambda t: (torch.roll(t, -1, -2) - torch.roll(t, 1, -2)) / 2  # noqa: E731
-    gx, gy = dx(r) - (1 - al) * dx(bg), dy(r) - (1 - al) * dy(bg)
-    for t in (gx, gy):
-        t[..., 0] = 0; t[..., -1] = 0; t[..., 0, :] = 0; t[..., -1, :] = 0
+    al = data.coverage.double()
+    gx, gy = shift_derivatives(data, r)
     p = r.shape[-1]
     yy_, xx_ = torch.meshgrid(torch.arange(p, dtype=torch.float64), torch.arange(p, dtype=torch.float64), indexing="ij")
     m = al.sum((-1, -2), keepdim=True).clamp_min(1e-6)
@@ -55,12 +51,31 @@ def case_gram(case: str) -> dict:
     G = torch.einsum("npk,npl->nkl", X, X).numpy()
     b = torch.einsum("npk,np->nk", X, y).numpy()
     yy = (y * y).sum(1).numpy()
+    return {"G": G, "b": b, "yy": yy, "npix": y.shape[1], **specular_truth(seeds, case)}
+
+
+def shift_derivatives(data, r):
+    """The object layer's shift derivatives (x, y) of the render ``r`` over its background: central differences, 0 on
+    the patch's border."""
+    bg, al = data.background.double(), data.coverage.double()
+    dx = lambda t: (torch.roll(t, -1, -1) - torch.roll(t, 1, -1)) / 2  # noqa: E731
+    dy = lambda t: (torch.roll(t, -1, -2) - torch.roll(t, 1, -2)) / 2  # noqa: E731
+    gx, gy = dx(r) - (1 - al) * dx(bg), dy(r) - (1 - al) * dy(bg)
+    for t in (gx, gy):
+        t[..., 0] = 0; t[..., -1] = 0; t[..., 0, :] = 0; t[..., -1, :] = 0  # noqa: E702
+    return gx, gy
+
+
+def specular_truth(seeds, case):
+    """What the case hides: each seed's hidden ``specular_ks`` (0 without) and the clean material's (ks, exponent)."""
+    import json
+    import pathlib
+
     hid = np.array([rec["truth"]["hidden"].get("specular", {}).get("specular_ks", 0.0) for rec in seeds.records])
-    import json, pathlib
     cj = pathlib.Path(case) / "case.json"
     nz = json.loads(cj.read_text())["key"].get("nuisances") or {} if cj.exists() else {}
-    nks = np.array([nz.get("specular_ks", np.nan), nz.get("specular_shininess", np.nan)], float)
-    return {"G": G, "b": b, "yy": yy, "npix": y.shape[1], "hidden_ks": hid, "nuis_ks": nks}
+    return {"hidden_ks": hid, "nuis_ks": np.array([nz.get("specular_ks", np.nan), nz.get("specular_shininess", np.nan)],
+                                                  float)}
 
 
 def main() -> int:

@@ -10,10 +10,10 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
-from compare import Z, channel_names, is_calibration, pooled, spread_parts  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from table import HEADER, row  # noqa: E402
 
-from synthaug.diagnose.calibration import one_sided_floor  # noqa: E402
+from compare import pooled  # noqa: E402  (stop 111's, on the path table.py puts it)
 
 MODELS = {"s,h80 at the model's light (library)": ([0, 1], "yy"), "s,h45 at the model's light": ([0, 2], "yy"),
           "sL,h80L at the video's true light": ([3, 4], "yyL"), "sL,h45L at the video's true light": ([3, 5], "yyL")}
@@ -38,26 +38,13 @@ def main():
         d = np.load(p)
         cases += [{"name": str(c), **{k: d[f"{i}:{k}"] for k in ("G", "b", "yy", "yyL", "npix")}}
                   for i, c in enumerate(d["cases"])]
-    print("| model | converged μ±σ | full fits μ±σ | floor | clean > floor (max) | clean seed ⊕ case sd "
-          "| default named | wider named | wider k |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(HEADER)
     for name, (idx, yk) in MODELS.items():
-        res = {c["name"]: (*pooled(*per_seed(c, idx, yk), "mean"), len(per_seed(c, idx, yk)[0])) for c in cases}
-        cal = np.array([r[0] for n, r in res.items() if is_calibration(n)])
-        hand = np.array([r[0] for n, r in res.items() if "hand2000" in n])
-        full = np.array([r[0] for n, r in res.items() if "null_full" in n])
-        centre, floor = cal.mean(), one_sided_floor(cal, Z)
-        named = {n: channel_names(*r, centre, floor) for n, r in res.items()}
-        clean = [n for n in res if "_clean/" in n]
-        seed, casel = spread_parts([res[n][0] for n in clean], [res[n][1] for n in clean])
-        dflt = [named[n] for n in res if "specular_default/" in n]
-        alt = [n for n in res if "specular_alt/" in n]
-        altn = [named[n] for n in alt]
-        per_set = lambda rows: "+".join(str(sum(rows[i:i + 5])) for i in range(0, len(rows), 5))  # noqa: E731
-        print(f"| {name} | {hand.mean():.3f}±{hand.std(ddof=1):.3f} | {full.mean():.3f}±{full.std(ddof=1):.3f} "
-              f"| {floor:.3f} | {sum(named[n] for n in clean)}/{len(clean)} ({max(res[n][0] for n in clean):.3f}) "
-              f"| {seed:.3f} ⊕ {casel:.3f} | {sum(dflt)}/{len(dflt)} ({per_set(dflt)}) "
-              f"| {sum(altn)}/{len(altn)} ({per_set(altn)}) | {' '.join(f'{res[n][0]:.2f}' for n in alt)} |")
+        res = {}
+        for c in cases:
+            k, v = per_seed(c, idx, yk)
+            res[c["name"]] = (*pooled(k, v, "mean"), len(k))
+        print(row(name, res, default_key="specular_default/"))
 
 
 if __name__ == "__main__":

@@ -16,7 +16,6 @@ model; this script adds them as columns beside stop 111's:
     PYTHONPATH=. python results/diagnose/null/highlight_s112/gram.py OUT.npz CASE_DIR...
 """
 import dataclasses
-import json
 import math
 import pathlib
 import sys
@@ -29,6 +28,9 @@ from synthaug.diagnose import screening as S
 from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data, render_with
 from synthaug.diagnose.nuisances import MODEL_LIGHT
 from synthaug.effects.functional import gaussian_blur_fft
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
+from gram import shift_derivatives, specular_truth  # noqa: E402  (stop 111's)
 
 COLS = ["s", "h80", "h45", "lx", "ly", "sm", "amb", "gx", "gy"]
 DELTA = 0.1  # rad, the light's central difference
@@ -74,23 +76,13 @@ def case_gram(case: str) -> dict:
     cols.append(with_normals(smoothed(data.normals, data.coverage, sig)) - r)
     light = torch.tensor(MODEL_LIGHT, dtype=data.normals.dtype).reshape(1, 3, 1, 1)
     cols.append(with_normals(light * (data.coverage > 0).to(data.normals.dtype)) - r)
-    bg, al = data.background.double(), data.coverage.double()
-    dx = lambda t: (torch.roll(t, -1, -1) - torch.roll(t, 1, -1)) / 2  # noqa: E731
-    dy = lambda t: (torch.roll(t, -1, -2) - torch.roll(t, 1, -2)) / 2  # noqa: E731
-    gx, gy = dx(r) - (1 - al) * dx(bg), dy(r) - (1 - al) * dy(bg)
-    for t in (gx, gy):
-        t[..., 0] = 0; t[..., -1] = 0; t[..., 0, :] = 0; t[..., -1, :] = 0  # noqa: E702
-    cols += [gx, gy]
+    cols += list(shift_derivatives(data, r))
     X = torch.stack([c.flatten(1) for c in cols], -1)  # (N, P, K)
     y = (data.real.double() - a0).flatten(1)
     G = torch.einsum("npk,npl->nkl", X, X).numpy()
     b = torch.einsum("npk,np->nk", X, y).numpy()
     yy = (y * y).sum(1).numpy()
-    hid = np.array([rec["truth"]["hidden"].get("specular", {}).get("specular_ks", 0.0) for rec in seeds.records])
-    cj = pathlib.Path(case) / "case.json"
-    nz = json.loads(cj.read_text())["key"].get("nuisances") or {} if cj.exists() else {}
-    nks = np.array([nz.get("specular_ks", np.nan), nz.get("specular_shininess", np.nan)], float)
-    return {"G": G, "b": b, "yy": yy, "npix": y.shape[1], "hidden_ks": hid, "nuis_ks": nks}
+    return {"G": G, "b": b, "yy": yy, "npix": y.shape[1], **specular_truth(seeds, case)}
 
 
 def main() -> int:

@@ -7,7 +7,6 @@ light; the diffuse shading too).
 
     PYTHONPATH=. python results/diagnose/null/highlight_s112/gram_light.py OUT.npz CASE_DIR...
 """
-import json
 import pathlib
 import sys
 
@@ -18,6 +17,9 @@ import synthaug.effects.pipeline as pipeline
 from synthaug.data.seedset import SeedSet
 from synthaug.diagnose import screening as S
 from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data, render_with
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
+from gram import specular_truth  # noqa: E402  (stop 111's)
 
 COLS = ["s", "h80", "h45", "sL", "h80L", "h45L"]
 _simulate = pipeline.simulate
@@ -68,11 +70,7 @@ def case_gram(case: str) -> dict:
     Gf[:, :3, :3], Gf[:, 3:, 3:], bf[:, :3], bf[:, 3:] = G, GL, b, bL  # two separate models in one block matrix
     yy = (y * y).sum(1).numpy()
     yyL = (yL * yL).sum(1).numpy()
-    hid = np.array([rec["truth"]["hidden"].get("specular", {}).get("specular_ks", 0.0) for rec in seeds.records])
-    cj = pathlib.Path(case) / "case.json"
-    nz = json.loads(cj.read_text())["key"].get("nuisances") or {} if cj.exists() else {}
-    nks = np.array([nz.get("specular_ks", np.nan), nz.get("specular_shininess", np.nan)], float)
-    return {"G": Gf, "b": bf, "yy": yy, "yyL": yyL, "npix": y.shape[1], "hidden_ks": hid, "nuis_ks": nks}
+    return {"G": Gf, "b": bf, "yy": yy, "yyL": yyL, "npix": y.shape[1], **specular_truth(seeds, case)}
 
 
 def main() -> int:

@@ -6,7 +6,6 @@ mean over the 3 and 5 largest pixels and its 95th percentile. A highlight adds a
 
     PYTHONPATH=. python results/diagnose/null/highlight_s112/peaks.py OUT.npz CASE_DIR...
 """
-import json
 import pathlib
 import sys
 
@@ -15,6 +14,9 @@ import torch
 
 from synthaug.data.seedset import SeedSet
 from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
+from gram import specular_truth  # noqa: E402  (stop 111's)
 
 STATS = ["max", "top3", "top5", "p95", "rms", "npix"]
 
@@ -40,11 +42,7 @@ def case_peaks(case: str) -> dict:
         r = r - np.median(r)
         srt = np.sort(r)[::-1]
         out[i] = [srt[0], srt[:3].mean(), srt[:5].mean(), np.percentile(r, 95), np.sqrt((r ** 2).mean()), len(r)]
-    hid = np.array([rec["truth"]["hidden"].get("specular", {}).get("specular_ks", 0.0) for rec in seeds.records])
-    cj = pathlib.Path(case) / "case.json"
-    nz = json.loads(cj.read_text())["key"].get("nuisances") or {} if cj.exists() else {}
-    return {"stats": out, "hidden_ks": hid, "nuis_ks": np.array([nz.get("specular_ks", np.nan),
-                                                                   nz.get("specular_shininess", np.nan)])}
+    return {"stats": out, **specular_truth(seeds, case)}
 
 
 def main() -> int:

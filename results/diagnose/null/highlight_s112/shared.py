@@ -15,10 +15,10 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
-from compare import Z, channel_names, is_calibration, load_all, pooled, spread_parts  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from table import HEADER, row  # noqa: E402
 
-from synthaug.diagnose.calibration import one_sided_floor  # noqa: E402
+from compare import load_all, pooled  # noqa: E402  (stop 111's, on the path table.py puts it)
 
 
 def videos(case):
@@ -80,30 +80,13 @@ MODELS = {
 
 def main():
     ci, cases = load_all(sys.argv[1:])
-    print("| model | converged μ±σ | full fits μ±σ | floor | clean power > floor (max) | clean seed ⊕ case sd "
-          "| default named | wider named | wider k |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(HEADER)
     for name, (sc, vc, cc) in MODELS.items():
         res = {}
         for case in cases:
             k, v = joint_k(case, ci, sc, vc, cc, stat=sc[1])
             res[case["name"]] = (*pooled(k, v, "mean"), len(k))
-        cal = np.array([r[0] for n, r in res.items() if is_calibration(n)])
-        hand = np.array([r[0] for n, r in res.items() if "hand2000" in n])
-        full = np.array([r[0] for n, r in res.items() if "null_full" in n])
-        centre, floor = cal.mean(), one_sided_floor(cal, Z)
-        named = {n: channel_names(*r, centre, floor) for n, r in res.items()}
-        clean = [n for n in res if "_clean/" in n]
-        seed, casel = spread_parts([res[n][0] for n in clean], [res[n][1] for n in clean])
-        dflt = [named[n] for n in res if "specular/" in n]
-        alt = [n for n in res if "specular_alt/" in n]
-        altn = [named[n] for n in alt]
-        per_set = lambda rows: "+".join(str(sum(rows[i:i + 5])) for i in range(0, len(rows), 5))  # noqa: E731
-        print(f"| {name} | {hand.mean():.3f}±{hand.std(ddof=1):.3f} | {full.mean():.3f}±{full.std(ddof=1):.3f} "
-              f"| {floor:.3f} | {sum(named[n] for n in clean)}/{len(clean)} "
-              f"({max(res[n][0] for n in clean):.3f}) | {seed:.3f} ⊕ {casel:.3f} "
-              f"| {sum(dflt)}/{len(dflt)} ({per_set(dflt)}) | {sum(altn)}/{len(altn)} ({per_set(altn)}) | "
-              f"{' '.join(f'{res[n][0]:.2f}' for n in alt)} |", flush=True)
+        print(row(name, res), flush=True)
 
 
 if __name__ == "__main__":
