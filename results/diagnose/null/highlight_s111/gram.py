@@ -78,17 +78,24 @@ def specular_truth(seeds, case):
                                                   float)}
 
 
-def main() -> int:
+def run_cases(fn, label, names, echo=None) -> int:
+    """``OUT.npz CASE_DIR...`` from the command line: ``fn(case)`` (a dict of arrays) for each case, saved as
+    ``{i}:{key}`` beside ``cases`` and ``label`` = ``names`` (the columns); ``echo(result)`` printed after each case's
+    name."""
     torch.set_num_threads(1)
     out, cases = sys.argv[1], sys.argv[2:]
     res = {}
     for i, c in enumerate(cases):
-        g = case_gram(c)
+        g = fn(c)
         for k, v in g.items():
             res[f"{i}:{k}"] = v
-        print(c, len(g["yy"]), flush=True)
-    np.savez(out, cases=np.array(cases), cols=np.array(COLS), **res)
+        print(c, *([echo(g)] if echo else []), flush=True)
+    np.savez(out, cases=np.array(cases), **{label: np.array(names)}, **res)
     return 0
+
+
+def main() -> int:
+    return run_cases(case_gram, "cols", COLS, echo=lambda g: len(g["yy"]))
 
 
 if __name__ == "__main__":

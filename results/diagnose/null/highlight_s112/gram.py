@@ -20,7 +20,6 @@ import math
 import pathlib
 import sys
 
-import numpy as np
 import torch
 
 from synthaug.data.seedset import SeedSet
@@ -30,7 +29,7 @@ from synthaug.diagnose.nuisances import MODEL_LIGHT
 from synthaug.effects.functional import gaussian_blur_fft
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
-from gram import shift_derivatives, specular_truth  # noqa: E402  (stop 111's)
+from gram import run_cases, shift_derivatives, specular_truth  # noqa: E402  (stop 111's)
 
 COLS = ["s", "h80", "h45", "lx", "ly", "sm", "amb", "gx", "gy"]
 DELTA = 0.1  # rad, the light's central difference
@@ -86,16 +85,7 @@ def case_gram(case: str) -> dict:
 
 
 def main() -> int:
-    torch.set_num_threads(1)
-    out, cases = sys.argv[1], sys.argv[2:]
-    res = {}
-    for i, c in enumerate(cases):
-        g = case_gram(c)
-        for k, v in g.items():
-            res[f"{i}:{k}"] = v
-        print(c, len(g["yy"]), flush=True)
-    np.savez(out, cases=np.array(cases), cols=np.array(COLS), **res)
-    return 0
+    return run_cases(case_gram, "cols", COLS, echo=lambda g: len(g["yy"]))
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ from synthaug.diagnose import screening as S
 from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data, render_with
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
-from gram import specular_truth  # noqa: E402  (stop 111's)
+from gram import run_cases, specular_truth  # noqa: E402  (stop 111's)
 
 COLS = ["s", "h80", "h45", "sL", "h80L", "h45L"]
 _simulate = pipeline.simulate
@@ -74,15 +74,7 @@ def case_gram(case: str) -> dict:
 
 
 def main() -> int:
-    torch.set_num_threads(1)
-    out, cases = sys.argv[1], sys.argv[2:]
-    res = {}
-    for i, c in enumerate(cases):
-        for k, v in case_gram(c).items():
-            res[f"{i}:{k}"] = v
-        print(c, flush=True)
-    np.savez(out, cases=np.array(cases), cols=np.array(COLS), **res)
-    return 0
+    return run_cases(case_gram, "cols", COLS)
 
 
 if __name__ == "__main__":

@@ -16,7 +16,7 @@ from synthaug.data.seedset import SeedSet
 from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
-from gram import specular_truth  # noqa: E402  (stop 111's)
+from gram import run_cases, specular_truth  # noqa: E402  (stop 111's)
 
 STATS = ["max", "top3", "top5", "p95", "rms", "npix"]
 
@@ -46,15 +46,7 @@ def case_peaks(case: str) -> dict:
 
 
 def main() -> int:
-    torch.set_num_threads(1)
-    out, cases = sys.argv[1], sys.argv[2:]
-    res = {}
-    for i, c in enumerate(cases):
-        for k, v in case_peaks(c).items():
-            res[f"{i}:{k}"] = v
-        print(c, flush=True)
-    np.savez(out, cases=np.array(cases), stats=np.array(STATS), **res)
-    return 0
+    return run_cases(case_peaks, "stats", STATS)
 
 
 if __name__ == "__main__":
