@@ -326,15 +326,14 @@ def _object_on_frame(setup: _Setup, draw: MeasuredSeed, scene: np.ndarray, cov: 
     object_effects = [e.name for e in ordered([e for e in OBJECT_ONLY_EFFECTS if e in cam and e in CAMERA_EFFECTS])]
     for eff in object_effects:
         values.update({s.name: cam[eff][s.name] for s in get_effect(eff).params})
-    if "specular" in object_effects and not nz.shading_is_model:  # the real material's highlight: its video's light
-        values["specular_ks"] = values["specular_ks"] * draw.nuisance.light_strength  # strength scales it too
+    extras: dict[str, torch.Tensor] = {} if rotor is None else {"part_rotor": rotor}
+    obj_normals = nrm  # only a hidden highlight reads them (the real material is shaded by _object_radiance)
+    if "specular" in object_effects and not nz.shading_is_model:  # a hidden highlight is on the real material:
+        values["specular_ks"] = values["specular_ks"] * draw.nuisance.light_strength  # its video's light strength,
+        extras["light_dir"] = torch.tensor(draw.nuisance.light_dir, dtype=torch.float64)  # direction
+        obj_normals = smooth_normals(nrm, cov, nz.normal_smoothing_px)  # and (smooth) normals
     obj_names = (() if not nz.shading_is_model else ("material",)) + ("motion_blur",) + tuple(object_effects)
     theta = CaptureParams(values, effects=PAPER_EFFECTS + tuple(object_effects), validate=False).to(torch.float64)
-    extras: dict[str, torch.Tensor] = {} if rotor is None else {"part_rotor": rotor}
-    obj_normals = nrm
-    if not nz.shading_is_model:  # a hidden highlight is on the real material: its video's light, its (smooth) normals
-        extras["light_dir"] = torch.tensor(draw.nuisance.light_dir, dtype=torch.float64)
-        obj_normals = smooth_normals(nrm, cov, nz.normal_smoothing_px)
     paint = nz.paint_rgb if shot.shape[1] == 3 else np.ones(1)
     neutral = bool(np.all(paint == 1.0))
     colour0 = _object_radiance(nz, draw, cov, nrm, side)
