@@ -81,6 +81,27 @@ def spread_parts(ks, ses):
     return seed, float(np.sqrt(max(np.var(ks, ddof=1) - seed ** 2, 0.0)))
 
 
+def judged(res, default_key="specular/"):
+    """The library's rule applied to ``res`` ({case name: (pooled k, its error, seeds)}): the floor over the 44
+    calibration cases (``one_sided_floor`` at z Z), the channel's test on every case; the calibration cases' k
+    (``hand``: converged, ``full``: full fits), the clean and wider cases' names, how many clean cases are named, and
+    the default (``default_key`` in the name) and wider (``specular_alt/``) rows named, as "named/cases (per set of 5)".
+    """
+    cal = np.array([r[0] for n, r in res.items() if is_calibration(n)])
+    centre, floor = cal.mean(), one_sided_floor(cal, Z)
+    named = {n: channel_names(*r, centre, floor) for n, r in res.items()}
+    clean = [n for n in res if "_clean/" in n]
+    alt = [n for n in res if "specular_alt/" in n]
+
+    def count(rows):
+        return f"{sum(rows)}/{len(rows)} (" + "+".join(str(sum(rows[i:i + 5])) for i in range(0, len(rows), 5)) + ")"
+
+    return {"hand": np.array([r[0] for n, r in res.items() if "hand2000" in n]),
+            "full": np.array([r[0] for n, r in res.items() if "null_full" in n]), "floor": floor,
+            "clean": clean, "alt": alt, "clean_named": sum(named[n] for n in clean),
+            "default": count([named[n] for n in res if default_key in n]), "wider": count([named[n] for n in alt])}
+
+
 def pooled(k, v, how):
     w = 1 / v
     if how == "median":
@@ -131,20 +152,11 @@ def main():
         print("|---|---|---|---|---|---|---|---|")
         for name, (cs, c) in models.items():
             res = case_pooled(cases, ci, cs, c, how)
-            cal = np.array([r[0] for n, r in res.items() if is_calibration(n)])
-            hand = np.array([r[0] for n, r in res.items() if "hand2000" in n])
-            full = np.array([r[0] for n, r in res.items() if "null_full" in n])
-            centre, floor = cal.mean(), one_sided_floor(cal, Z)
-            named = {n: channel_names(*r, centre, floor) for n, r in res.items()}
-            clean = [n for n in res if "_clean/" in n]
-            dflt = [named[n] for n in res if "specular/" in n]
-            alt = [n for n in res if "specular_alt/" in n]
-            altn = [named[n] for n in alt]
-            per_set = lambda rows: "+".join(str(sum(rows[i:i + 5])) for i in range(0, len(rows), 5))  # noqa: E731
+            j = judged(res)
+            hand, full, clean, alt = j["hand"], j["full"], j["clean"], j["alt"]
             print(f"| {name} | {hand.mean():.3f}±{hand.std(ddof=1):.3f} | {full.mean():.3f}±{full.std(ddof=1):.3f} | "
-                  f"{floor:.3f} | {sum(named[n] for n in clean)}/{len(clean)} ({max(res[n][0] for n in clean):.3f}) "
-                  f"| {sum(dflt)}/{len(dflt)} ({per_set(dflt)}) | {sum(altn)}/{len(altn)} ({per_set(altn)}) | "
-                  f"{' '.join(f'{res[n][0]:.2f}' for n in alt)} |", flush=True)
+                  f"{j['floor']:.3f} | {j['clean_named']}/{len(clean)} ({max(res[n][0] for n in clean):.3f}) "
+                  f"| {j['default']} | {j['wider']} | {' '.join(f'{res[n][0]:.2f}' for n in alt)} |", flush=True)
 
 
 if __name__ == "__main__":

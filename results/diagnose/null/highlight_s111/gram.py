@@ -23,17 +23,27 @@ SHINES = tuple(float(e) for e in os.environ.get("SHINES", "10,20,30,45,80").spli
 COLS = ["s"] + [f"h{int(e)}" for e in SHINES] + ["gx", "gy", "gs"]
 
 
-def case_gram(case: str) -> dict:
+def load_case(case: str):
+    """A cached case's seed set and its diagnosis data (its fit, the built-in quadcopter)."""
     seeds = SeedSet.load(f"{case}/seeds")
-    data = load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
-    n = len(data)
-    (w0, w1), (r0, r1) = ALBEDO_POINTS, albedo_renders(data, None)
+    return seeds, load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
+
+
+def slope_and_templates(data, shines):
+    """The model's render at w_d 0.2 (``a0``) and the columns against it: the albedo slope, then the specular template
+    (ks 1) at each exponent of ``shines``, all (N, 1, P, P) float64."""
+    n, (w0, w1), (r0, r1) = len(data), ALBEDO_POINTS, albedo_renders(data, None)
     a0 = r0.double()
-    s = (r1.double() - a0) / (w1 - w0)
-    cols = [s]
-    for e in SHINES:
+    cols = [(r1.double() - a0) / (w1 - w0)]
+    for e in shines:
         ext = S.extension_values(data, "specular", {"specular_ks": 1.0, "specular_shininess": e})
         cols.append(render_with(data, ext, w_d=torch.full((n,), w0), clamp=False).double() - a0)
+    return a0, cols
+
+
+def case_gram(case: str) -> dict:
+    seeds, data = load_case(case)
+    a0, cols = slope_and_templates(data, SHINES)
     r = render_with(data, None, clamp=False).double()  # at the fitted w_d
     al = data.coverage.double()
     gx, gy = shift_derivatives(data, r)

@@ -32,19 +32,28 @@ def per_seed(case, idx, yy_key):
     return np.array(ks), np.array(vs)
 
 
-def main():
+def load_cases(paths, keys):
+    """The cached cases of several gram_light.py / light_grid.py outputs: their name and the arrays ``keys``."""
     cases = []
-    for p in sys.argv[1:]:
+    for p in paths:
         d = np.load(p)
-        cases += [{"name": str(c), **{k: d[f"{i}:{k}"] for k in ("G", "b", "yy", "yyL", "npix")}}
-                  for i, c in enumerate(d["cases"])]
+        cases += [{"name": str(c), **{k: d[f"{i}:{k}"] for k in keys}} for i, c in enumerate(d["cases"])]
+    return cases
+
+
+def print_rows(cases, models, default_key="specular/"):
+    """The table (table.py) of ``models`` ({label: (two column indices, the y'y key)}) over ``cases``."""
     print(HEADER)
-    for name, (idx, yk) in MODELS.items():
+    for name, (idx, yk) in models.items():
         res = {}
         for c in cases:
             k, v = per_seed(c, idx, yk)
             res[c["name"]] = (*pooled(k, v, "mean"), len(k))
-        print(row(name, res, default_key="specular_default/"))
+        print(row(name, res, default_key=default_key))
+
+
+def main():
+    print_rows(load_cases(sys.argv[1:], ("G", "b", "yy", "yyL", "npix")), MODELS, default_key="specular_default/")
 
 
 if __name__ == "__main__":

@@ -22,14 +22,13 @@ import sys
 
 import torch
 
-from synthaug.data.seedset import SeedSet
-from synthaug.diagnose import screening as S
-from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data, render_with
+from synthaug.diagnose.diagnosis_data import render_with
 from synthaug.diagnose.nuisances import MODEL_LIGHT
 from synthaug.effects.functional import gaussian_blur_fft
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
-from gram import run_cases, shift_derivatives, specular_truth  # noqa: E402  (stop 111's)
+from gram import (load_case, run_cases, shift_derivatives, slope_and_templates,  # noqa: E402  (stop 111's)
+                  specular_truth)
 
 COLS = ["s", "h80", "h45", "lx", "ly", "sm", "amb", "gx", "gy"]
 DELTA = 0.1  # rad, the light's central difference
@@ -56,16 +55,8 @@ def smoothed(normals, coverage, sigma):
 
 
 def case_gram(case: str) -> dict:
-    seeds = SeedSet.load(f"{case}/seeds")
-    data = load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
-    n = len(data)
-    (w0, w1), (r0, r1) = ALBEDO_POINTS, albedo_renders(data, None)
-    a0 = r0.double()
-    s = (r1.double() - a0) / (w1 - w0)
-    cols = [s]
-    for e in (80.0, 45.0):
-        ext = S.extension_values(data, "specular", {"specular_ks": 1.0, "specular_shininess": e})
-        cols.append(render_with(data, ext, w_d=torch.full((n,), w0), clamp=False).double() - a0)
+    seeds, data = load_case(case)
+    a0, cols = slope_and_templates(data, (80.0, 45.0))
     r = render_with(data, None, clamp=False).double()  # at the fitted w_d
     with_normals = lambda nrm: render_with(dataclasses.replace(data, normals=nrm), None, clamp=False).double()  # noqa
     for axis in ("x", "y"):

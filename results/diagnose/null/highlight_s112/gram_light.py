@@ -14,12 +14,9 @@ import numpy as np
 import torch
 
 import synthaug.effects.pipeline as pipeline
-from synthaug.data.seedset import SeedSet
-from synthaug.diagnose import screening as S
-from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data, render_with
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
-from gram import run_cases, specular_truth  # noqa: E402  (stop 111's)
+from gram import load_case, run_cases, slope_and_templates, specular_truth  # noqa: E402  (stop 111's)
 
 COLS = ["s", "h80", "h45", "sL", "h80L", "h45L"]
 _simulate = pipeline.simulate
@@ -36,25 +33,14 @@ def _lit(*a, extras=None, **k):
 pipeline.simulate = _lit
 
 
-def columns(data, n):
-    (w0, w1), (r0, r1) = ALBEDO_POINTS, albedo_renders(data, None)
-    a0 = r0.double()
-    cols = [(r1.double() - a0) / (w1 - w0)]
-    for e in (80.0, 45.0):
-        ext = S.extension_values(data, "specular", {"specular_ks": 1.0, "specular_shininess": e})
-        cols.append(render_with(data, ext, w_d=torch.full((n,), w0), clamp=False).double() - a0)
-    return a0, cols
-
-
 def case_gram(case: str) -> dict:
-    seeds = SeedSet.load(f"{case}/seeds")
-    data = load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
+    seeds, data = load_case(case)
     n = len(data)
     LIGHT[0] = None
-    a0, cols = columns(data, n)
+    a0, cols = slope_and_templates(data, (80.0, 45.0))
     light = [r["truth"].get("nuisance", {}).get("light_dir", (0.0, 0.5, 0.8660254)) for r in seeds.records]
     LIGHT[0] = torch.tensor(light, dtype=torch.float32)
-    a0L, colsL = columns(data, n)
+    a0L, colsL = slope_and_templates(data, (80.0, 45.0))
     LIGHT[0] = None
     y = (data.real.double() - a0).flatten(1)
     # the light-following model's columns are taken against the same a0 (the model's render at w_d 0.2): add the

@@ -10,28 +10,15 @@ import sys
 import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from gl_compare import per_seed  # noqa: E402
-from table import HEADER, row  # noqa: E402
-
-from compare import pooled  # noqa: E402  (stop 111's, on the path table.py puts it)
+from gl_compare import load_cases, print_rows  # noqa: E402
 
 MODELS = {"s,h80 at the model's light (library)": ([0, 1], "yy"),
           "sE,h80E at each video's estimated light": ([2, 3], "yyE")}
 
 
 def main():
-    cases = []
-    for p in sys.argv[1:]:
-        d = np.load(p)
-        cases += [{"name": str(c), **{k: d[f"{i}:{k}"] for k in ("G", "b", "yy", "yyE", "npix", "tilt_deg")}}
-                  for i, c in enumerate(d["cases"])]
-    print(HEADER)
-    for name, (idx, yk) in MODELS.items():
-        res = {}
-        for c in cases:
-            k, v = per_seed(c, idx, yk)
-            res[c["name"]] = (*pooled(k, v, "mean"), len(k))
-        print(row(name, res))
+    cases = load_cases(sys.argv[1:], ("G", "b", "yy", "yyE", "npix", "tilt_deg"))
+    print_rows(cases, MODELS)
     tilts = np.concatenate([c["tilt_deg"] for c in cases])
     share = ", ".join(f"{t:.0f}° {np.mean(np.round(tilts) == t):.0%}" for t in (0, 15, 30))
     print(f"\nestimated tilts over all seeds: {share}")

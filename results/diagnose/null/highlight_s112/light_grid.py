@@ -16,13 +16,12 @@ import numpy as np
 import torch
 
 from gram_light import LIGHT  # importing it patches the pipeline's simulate to take LIGHT
-from synthaug.data.seedset import SeedSet
 from synthaug.diagnose import screening as S
-from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data, render_with
+from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, render_with
 from synthaug.diagnose.nuisances import MODEL_LIGHT
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
-from gram import run_cases, specular_truth  # noqa: E402  (stop 111's)
+from gram import load_case, run_cases, specular_truth  # noqa: E402  (stop 111's)
 
 COLS = ["s", "h80", "sE", "h80E"]
 
@@ -42,8 +41,7 @@ GRID = [np.asarray(MODEL_LIGHT, float)] + [tilted(t, a * math.pi / 3) for t in (
 
 
 def case_gram(case: str) -> dict:
-    seeds = SeedSet.load(f"{case}/seeds")
-    data = load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
+    seeds, data = load_case(case)
     n, (w0, w1) = len(data), ALBEDO_POINTS
     vids = [r["video"] for r in json.loads((pathlib.Path(case) / "seeds" / "seedset.json").read_text())["records"]]
     real = data.real.double().flatten(1)

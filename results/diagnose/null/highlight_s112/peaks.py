@@ -12,18 +12,16 @@ import sys
 import numpy as np
 import torch
 
-from synthaug.data.seedset import SeedSet
-from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders, load_diagnosis_data
+from synthaug.diagnose.diagnosis_data import ALBEDO_POINTS, albedo_renders
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "highlight_s111"))
-from gram import run_cases, specular_truth  # noqa: E402  (stop 111's)
+from gram import load_case, run_cases, specular_truth  # noqa: E402  (stop 111's)
 
 STATS = ["max", "top3", "top5", "p95", "rms", "npix"]
 
 
 def case_peaks(case: str) -> dict:
-    seeds = SeedSet.load(f"{case}/seeds")
-    data = load_diagnosis_data(seeds, f"{case}/fit.json", "quadcopter")
+    seeds, data = load_case(case)
     (w0, w1), (r0, r1) = ALBEDO_POINTS, albedo_renders(data, None)
     a0 = r0.double()
     s = (r1.double() - a0) / (w1 - w0)
