@@ -19,8 +19,9 @@ Per seed:
    may also drift against the background's), hidden
    ``specular`` (with ``nuisances``, on that material: its video's light,
    direction and strength, and its smooth normals), ``rotor_blur`` (true
-   rotor parts of the built-in quadcopter), the paper's motion blur, hidden ``rolling_shutter`` (along the motion
-   direction), the out-of-list ``interlacing``; overlay on b, then the paper's
+   rotor parts of the built-in quadcopter), the paper's motion blur, hidden
+   ``rolling_shutter`` (along the motion direction), the out-of-list
+   ``interlacing``; overlay on b, then the paper's
    boundary blur and object noise (all at frame scale);
 3. the camera on the WHOLE frame, in physical order: haze → defocus →
    chromatic aberration → lens distortion → vignetting → exposure → white
