@@ -317,6 +317,20 @@ def test_edge_ratio_under_a_column_pattern_with_a_saturated_sky(sigma):
         assert lo <= float(np.diff(np.median(left, 0)).std()) < hi
 
 
+def test_destripe_line_median_is_numpys_nanmedian_to_the_bit():
+    # destripe's line gains are medians over each line's unclipped pixels: one sort with the NaNs last, not numpy's
+    # masked-array path for short lines; the same values to the bit, odd and even counts, one or all pixels valid
+    from synthaug.diagnose.frame_pattern import _column_nanmedian
+
+    rng = np.random.default_rng(3)
+    for shape, p_nan in (((192, 256), 0.1), ((256, 192), 0.6), ((7, 40), 0.5), ((1, 5), 0.0)):
+        x = rng.standard_normal(shape)
+        x[rng.random(shape) < p_nan] = np.nan
+        x[0, :] = rng.standard_normal(shape[1])  # every column keeps a value
+        x[1:, 0] = np.nan  # a column of one value
+        np.testing.assert_array_equal(_column_nanmedian(x), np.nanmedian(x, axis=0))
+
+
 def test_edge_ratio_is_not_applicable_without_an_independent_look_or_edges():
     from synthaug.diagnose.frame_pattern import edge_ratio
 

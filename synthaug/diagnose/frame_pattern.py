@@ -401,6 +401,21 @@ def _corr(a: np.ndarray, b: np.ndarray) -> float:
     return float((a * b).sum() / den) if den > 0 else 0.0
 
 
+def _column_nanmedian(x: np.ndarray) -> np.ndarray:
+    """Each column's median over its non-NaN entries (every column holding one): ``np.nanmedian(x, axis=0)`` to the
+    bit, by one sort (NaNs sort last) instead of numpy's masked-array path for short columns, 4-5x faster on a
+    frame's lines (``tests/test_frame_pattern.py`` checks it against numpy).
+
+    Example:
+        >>> x = np.array([[1.0, np.nan], [3.0, 5.0], [np.nan, 2.0], [2.0, np.nan]])
+        >>> _column_nanmedian(x).tolist(), np.nanmedian(x, axis=0).tolist()
+        ([2.0, 3.5], [2.0, 3.5])
+    """
+    s = np.sort(x, axis=0)
+    n = np.count_nonzero(~np.isnan(x), axis=0)
+    cols = np.arange(x.shape[1])
+    return (s[(n - 1) // 2, cols] + s[n // 2, cols]) / 2
+
 
 def destripe(frame: np.ndarray, background: np.ndarray, *, valid: np.ndarray | None = None,
              passes: int = DESTRIPE_PASSES, width: int = HIGH_PASS) -> tuple[np.ndarray, np.ndarray]:
@@ -436,17 +451,19 @@ def destripe(frame: np.ndarray, background: np.ndarray, *, valid: np.ndarray | N
     f, b = np.asarray(frame, np.float64), np.asarray(background, np.float64)
     ok = _unclipped(b) if valid is None else np.asarray(valid, bool)
     m, every = ok.astype(np.float64), bool(ok.all())
+    # the valid pixels' share of each running window and the lines with enough of them: fixed over the passes
+    near = {axis: np.maximum(ndimage.uniform_filter1d(m, width, axis=axis, mode="nearest"), 1e-12) for axis in (1, 0)}
+    enough = {axis: ok.sum(axis=1 - axis) >= DESTRIPE_MIN_PIXELS for axis in (1, 0)}
     for _ in range(passes):
         for axis in (1, 0):
             lb = np.log(np.clip(b, 1.0 / 255.0, None))
-            near = ndimage.uniform_filter1d(m, width, axis=axis, mode="nearest")
-            mean = ndimage.uniform_filter1d(lb * m, width, axis=axis, mode="nearest") / np.maximum(near, 1e-12)
+            mean = ndimage.uniform_filter1d(lb * m, width, axis=axis, mode="nearest") / near[axis]
             hp = np.where(ok, lb - mean, np.nan)
             hp_lines = hp if axis == 1 else hp.T  # each gain's line a column of hp_lines
-            enough = ok.sum(axis=1 - axis) >= DESTRIPE_MIN_PIXELS
-            g = np.zeros(enough.shape)
-            if enough.any():  # (a frame without a clipped pixel: the plain median, 2x faster)
-                g[enough] = (np.median if every else np.nanmedian)(hp_lines[:, enough], axis=0)
+            g = np.zeros(enough[axis].shape)
+            if enough[axis].any():  # (a frame without a clipped pixel: the plain median, 2x faster)
+                g[enough[axis]] = (np.median(hp_lines[:, enough[axis]], axis=0) if every
+                                   else _column_nanmedian(hp_lines[:, enough[axis]]))
             g = np.exp(-g)[None, :] if axis == 1 else np.exp(-g)[:, None]
             f, b = f * g, b * g
     return f, b
@@ -526,7 +543,8 @@ def edge_steps(frame: np.ndarray, background: np.ndarray, *, outside: np.ndarray
     inner[m:h - m, m:w - m] = True
     usable = ok & valid
     if not usable.all():  # away from the crop (the object's edges are not the scene's) and the clipped pixels
-        inner &= ~ndimage.binary_dilation(~usable, np.ones((2 * o2 + 1, 2 * o2 + 1), bool))  # by the profile's reach
+        # by the profile's reach (a square's dilation: the separable max filter, the same pixels 4x faster)
+        inner &= ~ndimage.maximum_filter(~usable, size=2 * o2 + 1, mode="constant", cval=False)
     if inner.sum() < MIN_EDGES:
         return None
     ys, xs = np.nonzero(inner & (g >= np.quantile(g[inner], EDGE_QUANTILE)) & (g > 0))
