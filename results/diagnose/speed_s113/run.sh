@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Diagnosis time per 60-seed case before and after stop 113's frame-evidence speed-up, side by side on the same
-# cached cases (the cases' data and fits are made once; only the diagnosis is timed, one thread).
+# cached cases (a missing case is made by the first run, its data and converged fit untimed; only the diagnosis is
+# timed, one thread).
 # BASE: a checkout of the code before (git worktree add BASE <commit>); run from the repository root.
 # Usage: BASE=/work/base bash results/diagnose/speed_s113/run.sh
 set -euo pipefail
