@@ -561,3 +561,23 @@ def test_jpeg_on_the_frame_grid_matches_opencv_through_a_crop():
     assert out.shape == two.shape and torch.equal(out[0], two[0])
     with pytest.raises(ValueError, match="frame_scale"):
         jpeg_difference_on_frame_grid(two, two, 40.0, origin=torch.zeros(2, 2), frame_scale=torch.tensor([1.0, 0.0]))
+
+
+def test_jpeg_on_the_frame_grid_codes_each_seed_alone_whatever_its_batch():
+    # a seed's coding on the frame's grid is its own: the same to the bit alone and beside crops 1x to 12x its
+    # size (the canvas was the batch's largest crop's before stop 113: a 100-seed real set coded 25x the blocks, and
+    # a seed's pixels moved with its neighbours' sizes)
+    from synthaug.effects.camera_functional import jpeg_difference_on_frame_grid
+
+    g = torch.Generator().manual_seed(0)
+    img = torch.rand(4, 1, 24, 24, generator=g)
+    bg = torch.rand(4, 1, 24, 24, generator=g)
+    origin = torch.tensor([[13.0, 5.5], [200.2, 90.0], [3.0, 300.7], [57.5, 41.0]])
+    scale = torch.tensor([0.8, 12.0, 2.5, 1.1])
+    q = torch.tensor([30.0, 50.0, 70.0, 40.0])
+    batch = jpeg_difference_on_frame_grid(img, bg, q, origin=origin, frame_scale=scale)
+    for i in range(4):
+        alone = jpeg_difference_on_frame_grid(img[i:i + 1], bg[i:i + 1], q[i:i + 1], origin=origin[i:i + 1],
+                                              frame_scale=scale[i:i + 1])
+        assert torch.equal(batch[i:i + 1], alone)
+    assert not torch.equal(batch, img)  # the coding did something
