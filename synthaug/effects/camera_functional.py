@@ -704,7 +704,6 @@ def _frame_grid_error(image: torch.Tensor, background: torch.Tensor, q: torch.Te
     bx = (org[:, 0, None] + (pu[None] + 0.5) * fs[:, None] - 0.5 - start[:, 0, None]).to(dt)
     by = (org[:, 1, None] + (pv[None] + 0.5) * fs[:, None] - 0.5 - start[:, 1, None]).to(dt)
     return _sample(err, bx[:, None, None, :], by[:, None, :, None], "zeros")
-    return image + back
 
 
 def _jpeg_blocks(image: torch.Tensor, quality: torch.Tensor, py: int, px: int) -> torch.Tensor:
