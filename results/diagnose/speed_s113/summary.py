@@ -19,10 +19,9 @@ def main():
             runs = [json.loads((HERE / f"{row}_{which}_{k}.json").read_text()) for k in (1, 2)]
             t = [c["diagnosis_seconds"] for d in runs for c in d["per_case"]]
             alls[which] += t
+            found = [[c["findings"] for c in d["per_case"]] for d in runs]
             r[which] = {"median_s": round(float(np.median(t)), 1), "max_s": round(float(np.max(t)), 1),
-                        "findings": [c["findings"] for c in runs[0]["per_case"]],
-                        "same_findings_both_repeats": runs[0]["per_case"] == runs[1]["per_case"] or
-                        [c["findings"] for c in runs[0]["per_case"]] == [c["findings"] for c in runs[1]["per_case"]]}
+                        "findings": found[0], "same_findings_both_repeats": found[0] == found[1]}
         r["same_findings_before_after"] = r["before"]["findings"] == r["after"]["findings"]
         r["speedup_median"] = round(r["before"]["median_s"] / r["after"]["median_s"], 2)
         out[row] = r

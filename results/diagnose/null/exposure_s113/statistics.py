@@ -9,7 +9,8 @@ Per statistic: the floor by the calibration's rule (calibration.one_sided_floor,
 sign counts as -|R²|) over the 44 calibration cases (24 converged of base 2000, 20 full fits of base 4000; the larger
 of the two sets' floors, as the library's floors are the larger over its sets), the clean power and fresh cases over
 it, and per exposure row the cases named (p_adj < 0.01 by permutation within videos, Bonferroni over the gray
-screening's count; right sign; held-out R² above the floor). ``lin`` is the library's statistic.
+screening's count; right sign; held-out R² above the floor). ``lin`` is the library's statistic; ``w_one`` is the
+weighted code with equal weights, a check that it reproduces ``lin``.
 """
 import glob
 import sys
