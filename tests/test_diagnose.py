@@ -527,6 +527,26 @@ def test_a_pincushion_lens_whose_scene_does_not_move_is_not_named_sharpening(tmp
 
 
 @pytest.mark.slow
+def test_a_tone_curve_whose_objects_read_blurrier_is_not_named_defocus(tmp_path, bench_null):
+    # gamma 1.4 (its second realistic strength) on the 13000 set's case 2: the real material's normals smoothed by
+    # 1.94 px sit at defocus's pixel floor and the tone curve lifts them over it (stop 113), so rendering a defocus
+    # fits the objects better, past its test and its floor. But a defocus blurs the whole frame, and these frames'
+    # edges are sharper than clean frames': the finding is withheld, the tone curve named first, the report says why
+    from synthaug.diagnose.report import write_markdown
+
+    report = _diagnosed_bench_case(tmp_path, bench_null, 13000, 2, "gamma", "alt")
+    assert (report["findings"][0]["effect"], report["findings"][0]["channel"]) == ("gamma", "noise_level"), \
+        report["findings"]
+    assert "defocus" not in [f["effect"] for f in report["findings"]]
+    row = next(r for r in report["screened"] if r["effect"] == "defocus")
+    ch = next(c for c in row["channels"] if c["channel"] == "distance:pixel")
+    assert ch["gain"] > ch["floor"] and ch["p_adjusted"] < 0.01 and not ch["significant"]  # withheld, not failed
+    veto = ch["frames_veto"]
+    assert not veto["blurred"] and veto["ratio"] > veto["clean_lower"] + 0.02
+    assert "Defocus is not named: rendering it fits the objects better" in write_markdown(report)
+
+
+@pytest.mark.slow
 def test_a_fixed_column_pattern_is_unexplained_with_its_structure(tmp_path):
     # a sensor's fixed column pattern at its realistic strength (each frame column's gain 1 + 0.02 N(0, 1)), on a
     # nuisance-varied camera: not a candidate, so "unexplained", described as gains fixed in the frame's columns
@@ -894,11 +914,15 @@ def test_screened_rows_name_no_effect_another_candidate_out_explains(tmp_path):
     """On a screening of measured seeds (defocus hidden, gray): every significant distance channel has the largest
     valid gain of its space, every row's significance is that of its channels, and the rule is in the report."""
     from synthaug.diagnose.report import _residual_sections
-    from synthaug.diagnose.screening import OBJECTS_RULE, RIVAL_RULE, RIVAL_SPACES, screen_candidates
+    from synthaug.diagnose.screening import (BLUR_RULE, OBJECTS_RULE, RIVAL_RULE, RIVAL_SPACES, frame_evidence,
+                                             frames_blurred, screen_candidates)
 
     data = _gray_case_fitted_at_truth(tmp_path, "defocus", {"defocus_sigma": 1.5}, n_seeds=24)
     rows = screen_candidates(data, ["defocus", "haze", "gamma", "rotor_blur"], k=4)
     assert len(rows) == 4 and rows[0]["significant"]  # something to out-explain
+    # the defocus blurs the scene's edges as well: the frames read blurrier than clean frames, nothing withheld
+    assert frames_blurred("defocus", frame_evidence(data))["blurred"]
+    assert not any(c.get("frames_veto") for r in rows for c in r["channels"])
     for space in RIVAL_SPACES:
         valid = {r["effect"]: c["gain"] for r in rows for c in r["channels"] if c["channel"] == space and c["other_ok"]}
         for r in rows:
@@ -913,6 +937,7 @@ def test_screened_rows_name_no_effect_another_candidate_out_explains(tmp_path):
     sections = _residual_sections(data, {"structure": {}, "fmap": None, "dependence": []}, [])
     assert sections["significance"]["rule"].endswith(RIVAL_RULE)
     assert OBJECTS_RULE in sections["significance"]["rule"]  # one rule, written where it applies
+    assert BLUR_RULE in sections["significance"]["rule"]
 
 
 def test_a_gain_explained_better_is_screened_again_on_top_of_the_better_explanation(monkeypatch):

@@ -356,7 +356,7 @@ def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str], not_of
     """The report's sections on the base residual, its colour (and the colour-only candidates not offered on
     single-channel data) and the significance rule."""
     from synthaug.diagnose.calibration import describe as describe_floors, rule_text
-    from synthaug.diagnose.screening import OBJECTS_RULE, RIVAL_RULE
+    from synthaug.diagnose.screening import BLUR_RULE, OBJECTS_RULE, RIVAL_RULE
 
     fmap = res["fmap"]
     return {
@@ -368,7 +368,7 @@ def _residual_sections(data: Any, res: dict[str, Any], hinted: list[str], not_of
         "hinted_candidates": hinted,
         "colour": {"screened": data.real_rgb is not None, "note": data.colour_note,
                    "not_offered": list(not_offered)},
-        "significance": {"rule": f"{rule_text()} {OBJECTS_RULE} {RIVAL_RULE}",
+        "significance": {"rule": f"{rule_text()} {OBJECTS_RULE} {BLUR_RULE} {RIVAL_RULE}",
                          "calibration": describe_floors()["source"]},
         "parameter_dependence": [d for d in res["dependence"] if d["significant"]],
     }
@@ -726,6 +726,16 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
                       f"clean frames', but rendering it does not fit the objects better than it fits clean ones "
                       f"(held-out gain {obj}); an in-camera {r['effect']} filters the object as well, so the "
                       "frames' edges point at something else (a lens's change of scale steepens them too)."]
+        vetoed = [c for c in r.get("channels") or [] if c.get("frames_veto")]
+        if vetoed:
+            fb = vetoed[0]["frames_veto"]
+            gains = ", ".join(f"{c['channel']} {100 * c['gain']:+.1f} %" for c in vetoed)
+            undone = f", read through the tone curve γ {fb['tone_undone']:.2f} undone" if fb.get("tone_undone") else ""
+            lines += ["", f"{r['effect'].capitalize()} is not named: rendering it fits the objects better ({gains}), "
+                      f"but the whole frames' edges are as sharp as clean frames' (edge sharpness {fb['ratio']:.3f} "
+                      f"over {fb['scenes']} scenes{undone}; a blur of the frame reads below {fb['clean_lower']:.3f}). "
+                      f"A {r['effect']} blurs the scene as it blurs the object; the objects' extra blur is their own "
+                      "(their material or shape, a tone curve bending their facets)."]
         ch = next((c for c in r.get("channels") or [] if c.get("corroborated_by")), None)
         if ch is not None:
             from synthaug.diagnose.calibration import HAND_MIN_GAIN

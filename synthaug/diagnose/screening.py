@@ -101,6 +101,7 @@ __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "PAINT_GRID", "PAINT_
            "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
            "frame_evidence", "frame_channel", "frame_corroboration", "distance_channel", "explained_better",
            "RIVAL_SPACES", "RIVAL_RULE", "OBJECTS_SHOW", "OBJECTS_RULE", "objects_agree", "shape_verdict",
+           "FRAME_BLUR", "BLUR_RULE", "frames_blurred",
            "HIGHLIGHT_CANDIDATES", "HIGHLIGHT_SHININESS", "highlight_strength", "highlight_channel"]
 
 Setting = dict[str, float]
@@ -814,6 +815,44 @@ def objects_agree(effect: str, channels: Sequence[dict[str, Any]]) -> dict[str, 
     return {"agree": any(v["gain"] > v["clean_upper"] for v in spaces.values()), "spaces": spaces}
 
 
+# Candidates that blur the whole frame, the scene's edges as much as the object's: a defocus of the camera. Where the
+# frames' edges can be read (two independent looks), a blur the objects show and the frames do not is not the camera's.
+FRAME_BLUR: tuple[str, ...] = ("defocus",)
+# ... in the report's words (its significance rule)
+BLUR_RULE = ("A defocus (a blur of the whole frame) is named only where the frames' edges, where they can be read, are "
+             "blurrier than clean frames' ever are.")
+
+
+def frames_blurred(effect: str, ev: dict[str, dict[str, Any] | None] | None) -> dict[str, Any] | None:
+    """Whether the whole frames show the blur ``effect`` (:data:`FRAME_BLUR`) would give them: the frames' edge
+    sharpness (``ratio``, the edges' ``A(2) / A(4)`` over scenes, :func:`~synthaug.diagnose.frame_pattern.sharp_edges`,
+    read through an accepted tone curve's inverse as :func:`frame_evidence` reads it) below ``clean_lower``, the
+    mirror under the clean mean of where clean frames' ratio stays above it (:func:`~synthaug.diagnose.calibration.
+    gain_upper`: ``centre − (upper − centre)``). A defocus of σ 1 frame px reads 0.54-0.59 on the reference camera
+    where clean frames read 0.63-0.64 (bound 0.622); a tone curve that bends the objects' facets (gamma 1.4) reads
+    0.65-0.66, an interlaced frame 0.63-0.64 (results/diagnose/README.md, stop 114). ``blurred`` False: the frames'
+    edges are as sharp as clean frames' (the objects' extra blur is their own). None: not a blur of the frame, no
+    reading (fewer than 3 scenes, no independent look) or no calibration.
+
+    Example:
+        >>> from synthaug.diagnose.calibration import gain_centre, gain_upper
+        >>> c, up = gain_centre("sharpening", "frame"), gain_upper("sharpening", "frame")
+        >>> frames_blurred("defocus", {"sharpening": {"ratio": c - 2 * (up - c)}})["blurred"]
+        True
+        >>> frames_blurred("defocus", {"sharpening": {"ratio": c}})["blurred"]
+        False
+        >>> frames_blurred("haze", {"sharpening": {"ratio": c}}), frames_blurred("defocus", {"sharpening": None})
+        (None, None)
+    """
+    e = None if ev is None or effect not in FRAME_BLUR else ev.get("sharpening")
+    centre, upper = gain_centre("sharpening", "frame"), gain_upper("sharpening", "frame")
+    if e is None or centre is None or upper is None or not math.isfinite(float(e.get("ratio", float("nan")))):
+        return None
+    lower = 2.0 * centre - upper
+    return {"ratio": float(e["ratio"]), "clean_lower": lower, "blurred": bool(e["ratio"] < lower),
+            "scenes": e.get("scenes"), "tone_undone": e.get("tone_undone")}
+
+
 def frame_setting(effect: str, fc: dict[str, Any] | None) -> Setting | None:
     """The camera setting a frame channel implies: vignetting's fall-off ``k``; compression's JPEG quality
     read from the frames' DCT steps, within the screening grid's range (None when the frames show no JPEG
@@ -942,7 +981,8 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
         nc = noise_channel(data.noise_levels, folds)
         if tone is None:
             tone = tone_evidence(data, nc, base[1], given=given)
-    frame_ev = frame_evidence(data, given) if any(c in FRAME_CANDIDATES for c in names) else None
+    frame_ev = (frame_evidence(data, given) if any(c in FRAME_CANDIDATES or c in FRAME_BLUR for c in names)
+                else None)
     hl = (highlight_strength(data, given, centre=gain_centre("specular", "highlight"))
           if any(c in HIGHLIGHT_CANDIDATES for c in names) else None)
     base_colour, paint_gains, tints = None, None, None
@@ -982,6 +1022,11 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
                              "gain": ab["gain"], "rho": ab["rho"], "floor": floor,
                              "significant": bool(p_adj < alpha and ab["sign_ok"] and ab["gain"] > max(floor or 0.0,
                                                                                                       0.0))})
+        blur = frames_blurred(name, frame_ev)
+        if blur is not None and not blur["blurred"]:  # the objects' blur is not the frame's
+            for c in channels:  # frames_veto says it withheld the finding (as objects_veto does; the report's reason)
+                if c["significant"]:
+                    c.update(significant=False, frames_veto=blur)
         nl = noise_level_channel(name, nc, n_tests, alpha, tone)
         if nl is not None:
             channels.append(nl)
