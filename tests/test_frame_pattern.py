@@ -593,26 +593,36 @@ def test_sharpening_frame_channel_is_not_named_when_the_edges_steepen_toward_the
     assert "not named from the frames" not in write_markdown({**base, "screened": [{**row, "channels": [ch]}]})
 
 
-def test_defocus_is_withheld_where_the_frames_edges_are_as_sharp_as_clean_frames():
-    # a defocus blurs the whole frame: its finding needs the frames' edge sharpness below where clean frames' stays,
-    # the mirror under the clean mean of the calibrated upper bound; gamma 1.4 (the facets bent) reads 0.656 on the
-    # 13000 set's case 2, whose objects' pixel gain named defocus before stop 114
-    from synthaug.diagnose.calibration import gain_centre, gain_upper
+def test_defocus_is_withheld_where_the_frames_edges_are_not_blurrier_than_clean_frames():
+    # a defocus blurs the whole frame: its finding needs the frames' edges blurrier than the clean mean, the t-test
+    # over scenes of sharp_edges read the other way (scipy's one-sided test "less" on the scenes' ratios); gamma 1.4
+    # (the facets bent) reads 0.656 on the 13000 set's case 2, whose objects' pixel gain named defocus before stop 114
+    from synthaug.diagnose.frame_pattern import sharp_edges
     from synthaug.diagnose.report import write_markdown
-    from synthaug.diagnose.screening import frames_blurred
+    from synthaug.diagnose.screening import BLUR_ALPHA, frames_blurred
 
-    c, up = gain_centre("sharpening", "frame"), gain_upper("sharpening", "frame")
-    assert c is not None and up > c  # the calibration ships with the package
-    lower = c - (up - c)
-    ev = lambda r, **kw: {"sharpening": {"ratio": r, "scenes": 12, **kw}}  # noqa: E731
-    below, above = frames_blurred("defocus", ev(lower - 1e-4)), frames_blurred("defocus", ev(lower + 1e-4))
-    assert below["blurred"] and not above["blurred"]
-    assert below["clean_lower"] == pytest.approx(lower, abs=1e-12) and above["ratio"] == lower + 1e-4
-    # not a blur of the frame, or nothing to read: no check
-    for effect, e in (("haze", ev(c)), ("sharpening", ev(c)), ("defocus", {"sharpening": None}), ("defocus", None),
-                      ("defocus", ev(float("nan")))):
+    rng = np.random.default_rng(3)
+    def frames(mean: float) -> list[dict]:
+        return [{"edge_ratio": mean + 0.03 * rng.standard_normal(), "repeat": 0.0, "shape": (48, 64),
+                 "texture": rng.standard_normal((12, 16))} for _ in range(40)]
+
+    for mean in (0.62, 0.628, 0.635, 0.656):
+        f = frames(mean)
+        groups = [f"v{i}" for i in range(len(f))]  # textureless frames, one video each: every frame its own scene
+        ev = {"sharpening": sharp_edges(f, groups, centre=0.635)}
+        fb = frames_blurred("defocus", ev)
+        want = stats.ttest_1samp([x["edge_ratio"] for x in f], 0.635, alternative="less").pvalue
+        assert fb["p_blurrier"] == pytest.approx(want, rel=1e-6, abs=1e-12) and fb["scenes"] == 40
+        assert fb["blurred"] == (want < BLUR_ALPHA) and fb["centre"] == 0.635
+    assert frames_blurred("defocus", {"sharpening": sharp_edges(frames(0.60), groups, centre=0.635)})["blurred"]
+    assert not frames_blurred("defocus", {"sharpening": sharp_edges(frames(0.656), groups, centre=0.635)})["blurred"]
+    # not a blur of the frame, or nothing to read (no calibrated centre: no test)
+    ev = {"sharpening": sharp_edges(frames(0.60), groups, centre=0.635)}
+    for effect, e in (("haze", ev), ("sharpening", ev), ("defocus", {"sharpening": None}), ("defocus", None),
+                      ("defocus", {"sharpening": sharp_edges(frames(0.60), groups, centre=None)})):
         assert frames_blurred(effect, e) is None
-    veto = frames_blurred("defocus", ev(0.656, tone_undone=1.4))
+    veto = frames_blurred("defocus", {"sharpening": {**sharp_edges(frames(0.656), groups, centre=0.635),
+                                                     "tone_undone": 1.4}})
     ch = {"channel": "distance:pixel", "gain": 0.0457, "significant": False, "frames_veto": veto}
     base = {"inputs": {"seeds": "s", "n_seeds": 60, "mesh": "m", "fit": "f", "distance": "hog", "k_folds": 5,
                        "alpha": 0.01}, "findings": [], "residuals": {}, "parameter_dependence": [],
@@ -621,8 +631,8 @@ def test_defocus_is_withheld_where_the_frames_edges_are_as_sharp_as_clean_frames
            "gain_pixel": 0.0457}
     md = write_markdown({**base, "screened": [{**row, "channels": [ch]}]})
     assert ("Defocus is not named: rendering it fits the objects better (distance:pixel +4.6 %), but the whole frames' "
-            "edges are as sharp as clean frames' (edge sharpness 0.656 over 12 scenes, read through the tone curve "
-            f"γ 1.40 undone; a blur of the frame reads below {lower:.3f})") in md
+            f"edges are not blurrier than clean frames' (edge sharpness {veto['ratio']:.3f} over 40 scenes, read "
+            f"through the tone curve γ 1.40 undone, clean mean 0.635: t {veto['t']:+.1f}") in md
     assert "Defocus is not named" not in write_markdown({**base, "screened": [{**row, "channels": [
         {k: v for k, v in ch.items() if k != "frames_veto"}]}]})
 

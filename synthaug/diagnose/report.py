@@ -732,8 +732,9 @@ def write_markdown(report: dict[str, Any], figs: dict[str, str] | None = None) -
             gains = ", ".join(f"{c['channel']} {100 * c['gain']:+.1f} %" for c in vetoed)
             undone = f", read through the tone curve γ {fb['tone_undone']:.2f} undone" if fb.get("tone_undone") else ""
             lines += ["", f"{r['effect'].capitalize()} is not named: rendering it fits the objects better ({gains}), "
-                      f"but the whole frames' edges are as sharp as clean frames' (edge sharpness {fb['ratio']:.3f} "
-                      f"over {fb['scenes']} scenes{undone}; a blur of the frame reads below {fb['clean_lower']:.3f}). "
+                      "but the whole frames' edges are not blurrier than clean frames' (edge sharpness "
+                      f"{fb['ratio']:.3f} over {fb['scenes']} scenes{undone}, clean mean {fb['centre']:.3f}: "
+                      f"t {fb['t']:+.1f}, one-sided p of a blur {fb['p_blurrier']:.2g} ≥ {fb['alpha']:.2g}). "
                       f"A {r['effect']} blurs the scene as it blurs the object; the objects' extra blur is their own "
                       "(their material or shape, a tone curve bending their facets)."]
         ch = next((c for c in r.get("channels") or [] if c.get("corroborated_by")), None)

@@ -101,7 +101,7 @@ __all__ = ["CANDIDATE_GRIDS", "ABSORPTION", "COLOUR_ONLY", "PAINT_GRID", "PAINT_
            "realism_accuracy", "kfold", "offered_candidates", "tone_evidence", "FRAME_CANDIDATES",
            "frame_evidence", "frame_channel", "frame_corroboration", "distance_channel", "explained_better",
            "RIVAL_SPACES", "RIVAL_RULE", "OBJECTS_SHOW", "OBJECTS_RULE", "objects_agree", "shape_verdict",
-           "FRAME_BLUR", "BLUR_RULE", "frames_blurred",
+           "FRAME_BLUR", "BLUR_ALPHA", "BLUR_RULE", "frames_blurred",
            "HIGHLIGHT_CANDIDATES", "HIGHLIGHT_SHININESS", "highlight_strength", "highlight_channel"]
 
 Setting = dict[str, float]
@@ -818,39 +818,42 @@ def objects_agree(effect: str, channels: Sequence[dict[str, Any]]) -> dict[str, 
 # Candidates that blur the whole frame, the scene's edges as much as the object's: a defocus of the camera. Where the
 # frames' edges can be read (two independent looks), a blur the objects show and the frames do not is not the camera's.
 FRAME_BLUR: tuple[str, ...] = ("defocus",)
+# The level of the frames' blur test. It is a necessary condition, not a finding (the distance channel still makes
+# the finding with its own test and floor): 5 % lets a defocus of 0.7 frame px through (p ≤ 0.004 on the reference
+# camera) and withholds the finding from frames as sharp as clean ones ~90 % of the time (results/diagnose/README.md,
+# stop 114).
+BLUR_ALPHA = 0.05
 # ... in the report's words (its significance rule)
 BLUR_RULE = ("A defocus (a blur of the whole frame) is named only where the frames' edges, where they can be read, are "
-             "blurrier than clean frames' ever are.")
+             f"blurrier than clean frames' mean (one-sided test over scenes at {100 * BLUR_ALPHA:.0f} %).")
 
 
-def frames_blurred(effect: str, ev: dict[str, dict[str, Any] | None] | None) -> dict[str, Any] | None:
-    """Whether the whole frames show the blur ``effect`` (:data:`FRAME_BLUR`) would give them: the frames' edge
-    sharpness (``ratio``, the edges' ``A(2) / A(4)`` over scenes, :func:`~synthaug.diagnose.frame_pattern.sharp_edges`,
-    read through an accepted tone curve's inverse as :func:`frame_evidence` reads it) below ``clean_lower``, the
-    mirror under the clean mean of where clean frames' ratio stays above it (:func:`~synthaug.diagnose.calibration.
-    gain_upper`: ``centre − (upper − centre)``). A defocus of σ 1 frame px reads 0.54-0.59 on the reference camera
-    where clean frames read 0.63-0.64 (bound 0.622); a tone curve that bends the objects' facets (gamma 1.4) reads
-    0.65-0.66, an interlaced frame 0.63-0.64 (results/diagnose/README.md, stop 114). ``blurred`` False: the frames'
-    edges are as sharp as clean frames' (the objects' extra blur is their own). None: not a blur of the frame, no
-    reading (fewer than 3 scenes, no independent look) or no calibration.
+def frames_blurred(effect: str, ev: dict[str, dict[str, Any] | None] | None, *, alpha: float = BLUR_ALPHA
+                   ) -> dict[str, Any] | None:
+    """Whether the whole frames show the blur ``effect`` (:data:`FRAME_BLUR`) would give them: their edge sharpness
+    (``ratio``, the edges' ``A(2) / A(4)``, :func:`~synthaug.diagnose.frame_pattern.sharp_edges`, read through an
+    accepted tone curve's inverse as :func:`frame_evidence` reads it) below the clean frames' mean, by the t-test over
+    scenes that tests a sharpening the other way (``p_blurrier`` = 1 − its one-sided p, below ``alpha``). On the
+    reference camera clean frames read 0.63-0.64, a defocus of σ 0.7-1.5 frame px 0.54-0.63 (p ≤ 0.004), a tone
+    curve that bends the objects' facets (gamma 1.4) 0.65-0.66, interlaced frames 0.63-0.64 (results/diagnose/
+    README.md, stop 114). ``blurred`` False: the frames' edges are not blurrier than clean frames' (an extra blur on
+    the objects is their own). None: not a blur of the frame, or no reading (fewer than 3 scenes, no independent look,
+    no calibrated centre).
 
     Example:
-        >>> from synthaug.diagnose.calibration import gain_centre, gain_upper
-        >>> c, up = gain_centre("sharpening", "frame"), gain_upper("sharpening", "frame")
-        >>> frames_blurred("defocus", {"sharpening": {"ratio": c - 2 * (up - c)}})["blurred"]
-        True
-        >>> frames_blurred("defocus", {"sharpening": {"ratio": c}})["blurred"]
-        False
-        >>> frames_blurred("haze", {"sharpening": {"ratio": c}}), frames_blurred("defocus", {"sharpening": None})
+        >>> ev = lambda t, p: {"sharpening": {"ratio": 0.62, "t": t, "p": p, "centre": 0.635, "scenes": 60}}
+        >>> frames_blurred("defocus", ev(-2.8, 0.9962))["blurred"], frames_blurred("defocus", ev(5.6, 1e-7))["blurred"]
+        (True, False)
+        >>> frames_blurred("haze", ev(-2.8, 0.9962)), frames_blurred("defocus", {"sharpening": None})
         (None, None)
     """
     e = None if ev is None or effect not in FRAME_BLUR else ev.get("sharpening")
-    centre, upper = gain_centre("sharpening", "frame"), gain_upper("sharpening", "frame")
-    if e is None or centre is None or upper is None or not math.isfinite(float(e.get("ratio", float("nan")))):
+    if e is None or e.get("centre") is None or not math.isfinite(float(e.get("t", float("nan")))):
         return None
-    lower = 2.0 * centre - upper
-    return {"ratio": float(e["ratio"]), "clean_lower": lower, "blurred": bool(e["ratio"] < lower),
-            "scenes": e.get("scenes"), "tone_undone": e.get("tone_undone")}
+    p_blur = 1.0 - float(e["p"])  # the one-sided t-test of a sharpening (mean above the centre), the other way
+    return {"ratio": float(e["ratio"]), "centre": float(e["centre"]), "t": float(e["t"]), "p_blurrier": p_blur,
+            "alpha": alpha, "blurred": bool(p_blur < alpha), "scenes": e.get("scenes"),
+            "tone_undone": e.get("tone_undone")}
 
 
 def frame_setting(effect: str, fc: dict[str, Any] | None) -> Setting | None:
@@ -947,7 +950,9 @@ def screen_candidates(data: DiagnosisData, candidates: Sequence[str] | None = No
             having, not a detectable sliver), unless the whole frames show the effect beyond every clean frame
             (:func:`frame_corroboration`: the channel then carries ``corroborated_by``); besides, every channel must
             exceed its floor measured on clean nuisance-varied data (:mod:`synthaug.diagnose.calibration`), and the
-            other distance space must not get worse on held-out seeds.
+            other distance space must not get worse on held-out seeds. A candidate that blurs the whole frame
+            (:data:`FRAME_BLUR`) names nothing where the frames' edges are not blurrier than clean frames'
+            (:func:`frames_blurred`; the channels it withheld carry ``frames_veto``).
         given: extensions already accepted, ``{effect: setting}``: the base
             model includes them and every candidate is screened on top of them
             (the conditional gain of forward selection).

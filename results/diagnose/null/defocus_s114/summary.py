@@ -1,0 +1,42 @@
+"""Stop 114: the rows rerun with the frames' blur check beside the same rows before it, case by case, with the frames'
+edge sharpness (the sharpening frame statistic) and the bound a blur of the frame must pass.
+usage: PYTHONPATH=. python results/diagnose/null/defocus_s114/summary.py [BEFORE_DIR=...] -> summary.txt"""
+import glob
+import json
+import os
+from pathlib import Path
+
+from synthaug.diagnose.calibration import gain_centre, gain_upper
+
+HERE = Path(__file__).parent
+# the rows before the check: this machine's (stop 114, old code on the same cases) where made, else the tables' rows
+BEFORE = {"13000": ["/work/s114/13000", "results/diagnose/null/highlight_s112/video_light/13000",
+                    "results/diagnose/null/highlight_s111/13000", "results/diagnose/null/objects_s100/13000",
+                    "results/diagnose/null/centre_s100/13000", "results/diagnose/null/clip_s99/13000"],
+          "8000": ["results/diagnose/null/highlight_s112/video_light/8000", "results/diagnose/null/highlight_s111/8000",
+                   "results/diagnose/null/objects_s100/8000", "results/diagnose/null/centre_s100/8000",
+                   "results/diagnose/null/periodic_s96/8000", "results/diagnose/null"],
+          "11000": ["results/diagnose/null/highlight_s112/video_light/11000",
+                    "results/diagnose/null/highlight_s111/11000", "results/diagnose/null/objects_s100/11000",
+                    "results/diagnose/null/centre_s100/11000", "results/diagnose/null/periodic_s96/11000",
+                    "results/diagnose/null/fresh11000"]}
+c, up = gain_centre("sharpening", "frame"), gain_upper("sharpening", "frame")
+print(f"frames' edge sharpness: clean centre {c:.4f}, clean upper {up:.4f}, a blur of the frame below {2 * c - up:.4f}")
+for base in ("8000", "11000", "13000"):
+    for f in sorted(glob.glob(str(HERE / base / "power5_*.json"))):
+        name = os.path.basename(f)
+        after = json.load(open(f))
+        before = next((json.load(open(os.path.join(d, name))) for d in BEFORE[base]
+                       if os.path.exists(os.path.join(d, name))), None)
+        pw = after["power"]
+        ratio = after["null_distributions"]["screen:sharpening:frame"]["gain"]["values"]
+        print(f"\n{base} {name[7:-5]}: named first {pw['named_first']}/5, misnamed {pw['misnamed_first']}, "
+              f"missed {pw['missed']}; settings {[s.get('defocus_sigma', s) for s in pw['settings_named_first']]}"
+              if pw["hidden"] == "defocus" else
+              f"\n{base} {name[7:-5]}: named first {pw['named_first']}/5, misnamed {pw['misnamed_first']}, "
+              f"missed {pw['missed']}")
+        for i, case in enumerate(after["per_case"]):
+            old = None if before is None else before["per_case"][i]["findings"]
+            mark = "" if old is None or old == case["findings"] else "   CHANGED"
+            print(f"  case {i}: edges {ratio[i]:.4f}  {case['findings']}"
+                  + ("" if old is None or old == case["findings"] else f"  (before: {old}){mark}"))
