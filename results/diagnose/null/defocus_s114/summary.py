@@ -9,8 +9,9 @@ from pathlib import Path
 from synthaug.diagnose.calibration import gain_centre, gain_upper
 
 HERE = Path(__file__).parent
-# the rows before the check: this machine's (stop 114, old code on the same cases) where made, else the tables' rows
-BEFORE = {"13000": ["/work/s114/13000", "results/diagnose/null/highlight_s112/video_light/13000",
+# the rows before the check: before/BASE (the code before, f24a0a5, on the same cases, this machine: run_before.sh and
+# the first rows of run.sh), else the power tables' stored rows
+BEFORE = {"13000": ["results/diagnose/null/highlight_s112/video_light/13000",
                     "results/diagnose/null/highlight_s111/13000", "results/diagnose/null/objects_s100/13000",
                     "results/diagnose/null/centre_s100/13000", "results/diagnose/null/clip_s99/13000"],
           "8000": ["results/diagnose/null/highlight_s112/video_light/8000", "results/diagnose/null/highlight_s111/8000",
@@ -23,20 +24,21 @@ BEFORE = {"13000": ["/work/s114/13000", "results/diagnose/null/highlight_s112/vi
 c, up = gain_centre("sharpening", "frame"), gain_upper("sharpening", "frame")
 print(f"frames' edge sharpness: clean centre {c:.4f}, clean upper {up:.4f}, a blur of the frame below {2 * c - up:.4f}")
 for base in ("8000", "11000", "13000"):
-    for f in sorted(glob.glob(str(HERE / base / "power5_*.json"))):
+    for f in sorted(glob.glob(str(HERE / base / "power5_*.json")) + glob.glob(str(HERE / base / "clean_gray.json"))):
         name = os.path.basename(f)
         after = json.load(open(f))
-        before = next((json.load(open(os.path.join(d, name))) for d in BEFORE[base]
+        before = next((json.load(open(os.path.join(d, name))) for d in [str(HERE / "before" / base)] + BEFORE[base]
                        if os.path.exists(os.path.join(d, name))), None)
-        pw = after["power"]
-        ratio = after["null_distributions"]["screen:sharpening:frame"]["gain"]["values"]
-        print(f"\n{base} {name[7:-5]}: named first {pw['named_first']}/5, misnamed {pw['misnamed_first']}, "
-              f"missed {pw['missed']}; settings {[s.get('defocus_sigma', s) for s in pw['settings_named_first']]}"
-              if pw["hidden"] == "defocus" else
-              f"\n{base} {name[7:-5]}: named first {pw['named_first']}/5, misnamed {pw['misnamed_first']}, "
-              f"missed {pw['missed']}")
+        pw, ratio = after["power"], after["null_distributions"]["screen:sharpening:frame"]["gain"]["values"]
+        if pw is None:
+            print(f"\n{base} clean: false alarms {after['false_alarms']}/{after['cases']} "
+                  f"(before: {None if before is None else before['false_alarms']})")
+        else:
+            sigmas = ("; settings " + str([s.get("defocus_sigma") for s in pw["settings_named_first"]])
+                      if pw["hidden"] == "defocus" else "")
+            print(f"\n{base} {name[7:-5]}: named first {pw['named_first']}/5, misnamed {pw['misnamed_first']}, "
+                  f"missed {pw['missed']}{sigmas}")
         for i, case in enumerate(after["per_case"]):
             old = None if before is None else before["per_case"][i]["findings"]
-            mark = "" if old is None or old == case["findings"] else "   CHANGED"
             print(f"  case {i}: edges {ratio[i]:.4f}  {case['findings']}"
-                  + ("" if old is None or old == case["findings"] else f"  (before: {old}){mark}"))
+                  + ("" if old is None or old == case["findings"] else f"  (before: {old})   CHANGED"))
