@@ -819,9 +819,9 @@ def objects_agree(effect: str, channels: Sequence[dict[str, Any]]) -> dict[str, 
 # frames' edges can be read (two independent looks), a blur the objects show and the frames do not is not the camera's.
 FRAME_BLUR: tuple[str, ...] = ("defocus",)
 # The level of the frames' blur test. It is a necessary condition, not a finding (the distance channel still makes
-# the finding with its own test and floor): 5 % lets a defocus of 0.7 frame px through (p ≤ 0.004 on the reference
-# camera) and withholds the finding from frames as sharp as clean ones ~90 % of the time (results/diagnose/README.md,
-# stop 114).
+# the finding with its own test and floor): 5 % lets a defocus of 0.7 frame px through (p ≤ 0.004 in the 5 cases of
+# base 13000 where it is faintest) and would withhold it from the frames of 19 of 20 clean cases there (one reads
+# p 0.023; results/diagnose/README.md, stop 114).
 BLUR_ALPHA = 0.05
 # ... in the report's words (its significance rule)
 BLUR_RULE = ("A defocus (a blur of the whole frame) is named only where the frames' edges, where they can be read, are "
