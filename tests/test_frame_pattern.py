@@ -557,6 +557,12 @@ def test_sharp_edges_carries_the_scenes_mean_radial_trend():
     assert sharp_edges(old, groups, centre=0.63)["p"] == out["p"]
 
 
+# a report with nothing but its screened rows, for write_markdown's sentences on a channel
+_BARE_REPORT = {"inputs": {"seeds": "s", "n_seeds": 60, "mesh": "m", "fit": "f", "distance": "hog", "k_folds": 5,
+                           "alpha": 0.01}, "findings": [], "residuals": {}, "parameter_dependence": [],
+                "realism": {"accuracy_base": 0.5}, "seconds": 1.0}
+
+
 def test_sharpening_frame_channel_is_not_named_when_the_edges_steepen_toward_the_corners(monkeypatch):
     # lens k1 +0.1 on the reference camera raises the frames' edge ratio past sharpening's floor where its scene did
     # not move (power table, lens +0.1 case 4); its edges steepen toward the corners, which no clean frame and no
@@ -582,15 +588,12 @@ def test_sharpening_frame_channel_is_not_named_when_the_edges_steepen_toward_the
                                    0.01)["radial"] is None  # the report's JSON holds no NaN
     assert screening.frame_channel("sharpening", {"sharpening": {k: v for k, v in ev["sharpening"].items()
                                                                  if k != "radial"}}, 40, 0.01)["significant"]
-    base = {"inputs": {"seeds": "s", "n_seeds": 60, "mesh": "m", "fit": "f", "distance": "hog", "k_folds": 5,
-                       "alpha": 0.01}, "findings": [], "residuals": {}, "parameter_dependence": [],
-            "realism": {"accuracy_base": 0.5}, "seconds": 1.0}
     row = {"effect": "sharpening", "significant": False, "channel": "frame", "score": 4.0, "gain_feature": 0.0,
            "gain_pixel": 0.0}
-    md = write_markdown({**base, "screened": [{**row, "channels": [vetoed]}]})
+    md = write_markdown({**_BARE_REPORT, "screened": [{**row, "channels": [vetoed]}]})
     assert f"Sharpening is not named from the frames: their edges steepen toward the corners (edge sharpness " \
            f"trend {EDGE_RADIAL_FLOOR + 0.01:+.3f}" in md
-    assert "not named from the frames" not in write_markdown({**base, "screened": [{**row, "channels": [ch]}]})
+    assert "not named from the frames" not in write_markdown({**_BARE_REPORT, "screened": [{**row, "channels": [ch]}]})
 
 
 def test_defocus_is_withheld_where_the_frames_edges_are_not_blurrier_than_clean_frames():
@@ -624,16 +627,13 @@ def test_defocus_is_withheld_where_the_frames_edges_are_not_blurrier_than_clean_
     veto = frames_blurred("defocus", {"sharpening": {**sharp_edges(frames(0.656), groups, centre=0.635),
                                                      "tone_undone": 1.4}})
     ch = {"channel": "distance:pixel", "gain": 0.0457, "significant": False, "frames_veto": veto}
-    base = {"inputs": {"seeds": "s", "n_seeds": 60, "mesh": "m", "fit": "f", "distance": "hog", "k_folds": 5,
-                       "alpha": 0.01}, "findings": [], "residuals": {}, "parameter_dependence": [],
-            "realism": {"accuracy_base": 0.5}, "seconds": 1.0}
     row = {"effect": "defocus", "significant": False, "channel": "distance:pixel", "score": 5.0, "gain_feature": 0.0,
            "gain_pixel": 0.0457}
-    md = write_markdown({**base, "screened": [{**row, "channels": [ch]}]})
+    md = write_markdown({**_BARE_REPORT, "screened": [{**row, "channels": [ch]}]})
     assert ("Defocus is not named: rendering it fits the objects better (distance:pixel +4.6 %), but the whole frames' "
             f"edges are not blurrier than clean frames' (edge sharpness {veto['ratio']:.3f} over 40 scenes, read "
             f"through the tone curve γ 1.40 undone, clean mean 0.635: t {veto['t']:+.1f}") in md
-    assert "Defocus is not named" not in write_markdown({**base, "screened": [{**row, "channels": [
+    assert "Defocus is not named" not in write_markdown({**_BARE_REPORT, "screened": [{**row, "channels": [
         {k: v for k, v in ch.items() if k != "frames_veto"}]}]})
 
 
@@ -948,13 +948,10 @@ def test_a_lens_gain_under_the_utility_rule_is_named_when_the_frames_edges_steep
     ch = screening.distance_channel(big, "pixel", "feature", corroboration=cb, **opts)
     assert ch["significant"] and ch["corroborated_by"] is None
 
-    base = {"inputs": {"seeds": "s", "n_seeds": 60, "mesh": "m", "fit": "f", "distance": "hog", "k_folds": 5,
-                       "alpha": 0.01}, "findings": [], "residuals": {}, "parameter_dependence": [],
-            "realism": {"accuracy_base": 0.5}, "seconds": 1.0}
     row = {"effect": "lens_distortion", "significant": True, "channel": "distance:pixel", "score": 4.0,
            "gain_feature": 0.0004, "gain_pixel": 0.0123}
-    md = write_markdown({**base, "screened": [{**row, "channels": [named]}]})
+    md = write_markdown({**_BARE_REPORT, "screened": [{**row, "channels": [named]}]})
     assert (f"The lens (`lens_distortion`) is named from its distance:pixel gain of 1.7 %, under the "
             f"{100 * HAND_MIN_GAIN:.0f} % an extension is otherwise asked to give, because the whole frames show it: "
             f"their edges steepen toward the corners (edge sharpness trend {EDGE_RADIAL_FLOOR + 0.011:+.3f}") in md
-    assert "The lens (" not in write_markdown({**base, "screened": [{**row, "channels": [ch]}]})
+    assert "The lens (" not in write_markdown({**_BARE_REPORT, "screened": [{**row, "channels": [ch]}]})
