@@ -1,5 +1,5 @@
-"""Stop 114: the setting a defocus is named at against the truth over this stop's defocus rows (sigma 0.7, 1.0, 1.5 on
-the three sets, 45 cases), and what the error follows among the case's nuisances (Spearman).
+"""Stop 114: the setting a defocus is named at against the truth over this stop's defocus rows (sigma 0.7 and 1.0 on
+five sets, 1.5 on three: 65 cases), and what the error follows among the case's nuisances (Spearman).
 usage: python results/diagnose/null/defocus_s114/setting_bias.py -> setting_bias.txt"""
 import glob
 import json

@@ -23,12 +23,13 @@ BEFORE = {"13000": ["results/diagnose/null/highlight_s112/video_light/13000",
                     "results/diagnose/null/fresh11000"]}
 c, up = gain_centre("sharpening", "frame"), gain_upper("sharpening", "frame")
 print(f"frames' edge sharpness: clean centre {c:.4f}, clean upper {up:.4f}, a blur of the frame below {2 * c - up:.4f}")
-for base in ("8000", "11000", "13000"):
+for base in ("8000", "11000", "13000", "15000", "17000"):  # 15000, 17000: fresh sets (stop 112's clean)
     for f in sorted(glob.glob(str(HERE / base / "power5_*.json")) + glob.glob(str(HERE / base / "clean_gray.json"))):
         name = os.path.basename(f)
         after = json.load(open(f))
-        before = next((json.load(open(os.path.join(d, name))) for d in [str(HERE / "before" / base)] + BEFORE[base]
-                       if os.path.exists(os.path.join(d, name))), None)
+        dirs = [str(HERE / "before" / base)] + BEFORE.get(base, [])
+        before = next((json.load(open(os.path.join(d, name))) for d in dirs if os.path.exists(os.path.join(d, name))),
+                      None)
         pw, ratio = after["power"], after["null_distributions"]["screen:sharpening:frame"]["gain"]["values"]
         if pw is None:
             print(f"\n{base} clean: false alarms {after['false_alarms']}/{after['cases']} "
