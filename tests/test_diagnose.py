@@ -560,9 +560,9 @@ def test_a_defocus_at_the_low_end_of_its_range_blurs_the_frames_enough_to_be_nam
     report = _diagnosed_bench_case(tmp_path, bench_null, 13000, 0, "defocus", "default")
     assert (report["findings"][0]["effect"], report["findings"][0]["channel"]) == ("defocus", "distance:pixel"), \
         report["findings"]
-    # its setting: the truth or above it by up to 0.3 px, as in all 45 defocus cases of stop 114's rows (σ 0.7, 1.0,
-    # 1.5 on three sets; the real material's own softness adds to the blur: the error's Spearman ρ with the normals'
-    # smoothing is +0.48)
+    # its setting: the truth or above it by up to 0.3 px, as in all 65 defocus cases of stop 114's rows (σ 0.7 and
+    # 1.0 on five sets, 1.5 on three; the real object's own softness adds to the blur: the error's Spearman ρ with
+    # the normals' smoothing +0.32, the rotors' size +0.35)
     assert 0.7 <= report["findings"][0]["setting"]["defocus_sigma"] <= 1.0
     row = next(r for r in report["screened"] if r["effect"] == "defocus")
     assert not any(c.get("frames_veto") for c in row["channels"])

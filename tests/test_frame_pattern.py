@@ -605,6 +605,7 @@ def test_defocus_is_withheld_where_the_frames_edges_are_not_blurrier_than_clean_
     from synthaug.diagnose.screening import BLUR_ALPHA, frames_blurred
 
     rng = np.random.default_rng(3)
+
     def frames(mean: float) -> list[dict]:
         return [{"edge_ratio": mean + 0.03 * rng.standard_normal(), "repeat": 0.0, "shape": (48, 64),
                  "texture": rng.standard_normal((12, 16))} for _ in range(40)]
